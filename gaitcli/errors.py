@@ -1,0 +1,38 @@
+"""Exception and warning classes with the CLI exit code each maps to."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class GaitError(Exception):
+    """Base class of gaitcli's own errors; ``exit_code`` is what the CLI returns."""
+
+    exit_code = 1
+
+
+class InputError(GaitError):
+    """Bad usage or bad input (exit code 2).
+
+    The message is one line naming the file, the field and what was expected,
+    e.g. ``subject.yaml: mass_kg: got -3 (expected a number > 0)``.
+    """
+
+    exit_code = 2
+
+    def __init__(self, path: str | Path | None, field: str | None, problem: str):
+        self.path = None if path is None else Path(path)
+        self.field = field
+        self.problem = problem
+        parts = [str(p) for p in (self.path, field) if p]
+        super().__init__(": ".join(parts + [problem]))
+
+
+class NotConvergedError(GaitError):
+    """An optimization ended unconverged or infeasible (exit code 3); results were written."""
+
+    exit_code = 3
+
+
+class GaitWarning(UserWarning):
+    """Something a lab should know about (missing plates, long gaps); the stage still writes."""

@@ -1,0 +1,1 @@
+"""kinematics stage family."""

@@ -1,0 +1,1 @@
+"""muscles stage family."""
