@@ -1,0 +1,114 @@
+"""Writers for a stage's outputs: CSV tables, one HDF5 file, ``summary.json``.
+
+A stage's whole output folder is staged in a temporary sibling folder and
+renamed into place only when every file has been written (:func:`stage_folder`),
+so an interrupted or failed run never leaves outputs that look valid.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import tempfile
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+
+from gaitcli import __version__
+from gaitcli.io.atomic import atomic_path
+
+
+@contextmanager
+def stage_folder(target: str | Path):
+    """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole."""
+    target = Path(target)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent))
+    try:
+        yield tmp
+        old = None
+        if target.exists():
+            old = target.with_name(f".{target.name}.old-{tmp.name}")
+            target.rename(old)
+        tmp.rename(target)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_table(path: str | Path, columns: dict[str, np.ndarray], *, float_format: str = "%.6g") -> Path:
+    """Write a CSV table (first column ``time_s`` or ``cycle_pct`` by the caller's order)."""
+    frame = pd.DataFrame({name: np.asarray(values) for name, values in columns.items()})
+    with atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False, float_format=float_format, na_rep="NaN")
+    return Path(path)
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (np.floating, float)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def write_json(path: str | Path, data: dict) -> Path:
+    """Write ``summary.json`` (NaN/inf become null so any JSON reader accepts it)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(_jsonable(data), indent=2) + "\n")
+    return Path(path)
+
+
+@dataclass
+class Dataset:
+    """One HDF5 dataset: values, their units, and optional extra attributes (e.g. sign convention)."""
+
+    values: np.ndarray
+    units: str
+    attrs: dict = field(default_factory=dict)
+
+
+def provenance(config_yaml: str, inputs: dict[str, str]) -> dict:
+    """Root attributes every HDF5 file carries: version, resolved config, input SHA-256, creation time."""
+    return {
+        "gaitcli_version": __version__,
+        "config_yaml": config_yaml,
+        "input_sha256": json.dumps(inputs, indent=0),
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    }
+
+
+def write_h5(path: str | Path, datasets: dict[str, Dataset], root_attrs: dict) -> Path:
+    """Write one HDF5 file; dataset names may contain '/' for groups; every dataset gets ``units``."""
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w") as h5:
+            for key, value in root_attrs.items():
+                h5.attrs[key] = value
+            for name, ds in datasets.items():
+                values = np.asarray(ds.values)
+                if values.dtype.kind in "UO":
+                    values = values.astype(h5py.string_dtype())
+                d = h5.create_dataset(name, data=values)
+                d.attrs["units"] = ds.units
+                for key, value in ds.attrs.items():
+                    d.attrs[key] = value
+    return Path(path)

@@ -1,0 +1,26 @@
+"""Files shipped with the package: the bundled sample trials and pipelines.
+
+They live at the top of the repository (``sample_trials/``, ``pipelines/``) and
+are installed as ``gaitcli.sample_trials`` / ``gaitcli.pipelines``, so both an
+editable and a regular install find them.
+"""
+
+from __future__ import annotations
+
+from importlib.resources import files
+from pathlib import Path
+
+
+def sample_trials_dir() -> Path:
+    """Folder holding the bundled synthetic trials (``normal``, one per disturbance)."""
+    return Path(str(files("gaitcli.sample_trials")))
+
+
+def sample_trial(name: str = "normal") -> Path:
+    """The bundled trial folder ``name`` (default: the normal-walking sample trial)."""
+    return sample_trials_dir() / name
+
+
+def pipeline_file(name: str) -> Path:
+    """A bundled pipeline YAML by name (``standard``, ``muscles_eid``, ...)."""
+    return Path(str(files("gaitcli.pipelines"))) / f"{name}.yaml"

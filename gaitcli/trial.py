@@ -1,0 +1,227 @@
+"""Trial folders: discovery of the files, and the ``subject.yaml`` schema.
+
+A trial folder holds ``trial.c3d`` (or the file ``subject.yaml`` names under
+``trial:``, or ``markers.csv`` + ``forces.csv``), an optional ``static.c3d`` and
+``subject.yaml``. Nothing in it is ever modified.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from gaitcli.errors import InputError
+
+SEXES = ("male", "female")
+SIDES = ("r", "l")
+SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")
+
+
+@dataclass(frozen=True)
+class Disturbance:
+    """A mass added to a segment (orthosis, ankle weight, boot; Tables A.2–A.3).
+
+    ``inertia_kgm2`` are the principal moments about the added mass's own centre
+    (x, y, z of the segment frame); ``com_offset_m`` its centre relative to the
+    segment's centre of mass, in the segment frame.
+    """
+
+    segment: str
+    mass_kg: float
+    inertia_kgm2: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    com_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Subject:
+    """The subject and the trial's bookkeeping, as validated from ``subject.yaml``."""
+
+    mass_kg: float | None
+    stature_m: float
+    sex: str
+    thigh_length_m: float | None = None
+    shank_length_m: float | None = None
+    trial: str | None = None
+    static: str | None = None
+    static_frames: tuple[int, int] | None = None
+    marker_map: dict[str, str] = field(default_factory=dict)
+    disturbed_side: str | None = None
+    disturbances: tuple[Disturbance, ...] = ()
+    condition: str = "normal"
+
+
+KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "trial", "static",
+        "static_frames", "marker_map", "disturbed_side", "disturbances", "condition")
+DISTURBANCE_KEYS = ("segment", "mass_kg", "inertia_kgm2", "com_offset_m", "name")
+
+
+def _unknown_key(path, where: str, key: str, allowed) -> InputError:
+    hint = difflib.get_close_matches(str(key), allowed, n=1)
+    more = f" (did you mean '{hint[0]}'?)" if hint else ""
+    return InputError(path, f"{where}{key}", f"unknown key{more}; allowed keys are {', '.join(allowed)}")
+
+
+def _number(path, where, value, *, low=None, high=None, expected="a number") -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(path, where, f"got {value!r} (expected {expected})")
+    value = float(value)
+    if (low is not None and value <= low) or (high is not None and value > high):
+        raise InputError(path, where, f"got {value:g} (expected {expected})")
+    return value
+
+
+def _vector3(path, where, value) -> tuple[float, float, float]:
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise InputError(path, where, f"got {value!r} (expected a list of 3 numbers)")
+    return tuple(_number(path, where, v, expected="a list of 3 numbers") for v in value)
+
+
+def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
+    """Validate the parsed ``subject.yaml``; every problem is an :class:`InputError` naming the key."""
+    if not isinstance(data, dict):
+        raise InputError(path, None, "expected a YAML mapping with mass_kg, stature_m and sex")
+    for key in data:
+        if key not in KEYS:
+            raise _unknown_key(path, "", key, list(KEYS))
+    for key in ("stature_m", "sex"):
+        if key not in data:
+            raise InputError(path, key, "missing (required)")
+    mass = data.get("mass_kg", "auto")
+    if mass == "auto":
+        mass = None  # estimated from the force plates by the idyn stage
+    else:
+        mass = _number(path, "mass_kg", mass, low=0, high=500, expected="a body mass in kg, > 0 and ≤ 500, or 'auto'")
+    stature = data["stature_m"]
+    if isinstance(stature, (int, float)) and not isinstance(stature, bool) and 3 < stature <= 300:
+        raise InputError(path, "stature_m", f"got {stature:g} (expected metres, e.g. {stature / 100:.2f}; "
+                                            "this looks like centimetres)")
+    stature = _number(path, "stature_m", stature, low=0.4, high=2.6, expected="a stature in metres between 0.4 and 2.6")
+    sex = data["sex"]
+    if sex not in SEXES:
+        raise InputError(path, "sex", f"got {sex!r} (expected one of {', '.join(SEXES)})")
+    lengths = {}
+    for key in ("thigh_length_m", "shank_length_m"):
+        if data.get(key) is not None:
+            lengths[key] = _number(path, key, data[key], low=0.1, high=0.8, expected="a length in metres, 0.1–0.8")
+    for key in ("trial", "static"):
+        if data.get(key) is not None and not isinstance(data[key], str):
+            raise InputError(path, key, f"got {data[key]!r} (expected a file name)")
+    frames = data.get("static_frames")
+    if frames is not None:
+        ok = (isinstance(frames, (list, tuple)) and len(frames) == 2
+              and all(isinstance(f, int) and not isinstance(f, bool) for f in frames) and 1 <= frames[0] <= frames[1])
+        if not ok:
+            raise InputError(path, "static_frames", f"got {frames!r} (expected [first, last] frame numbers, 1-based)")
+        frames = (int(frames[0]), int(frames[1]))
+    marker_map = data.get("marker_map") or {}
+    if not isinstance(marker_map, dict) or not all(isinstance(k, str) and isinstance(v, str)
+                                                   for k, v in marker_map.items()):
+        raise InputError(path, "marker_map", "expected a mapping of lab label → model landmark (text → text)")
+    side = data.get("disturbed_side")
+    if side is not None and side not in SIDES:
+        raise InputError(path, "disturbed_side", f"got {side!r} (expected r or l)")
+    disturbances = []
+    items = data.get("disturbances") or []
+    if not isinstance(items, list):
+        raise InputError(path, "disturbances", "expected a list of {segment, mass_kg, inertia_kgm2, com_offset_m}")
+    for i, item in enumerate(items):
+        where = f"disturbances[{i}]"
+        if not isinstance(item, dict):
+            raise InputError(path, where, "expected a mapping with segment and mass_kg")
+        for key in item:
+            if key not in DISTURBANCE_KEYS:
+                raise _unknown_key(path, f"{where}.", key, list(DISTURBANCE_KEYS))
+        segment = item.get("segment")
+        if segment not in SEGMENTS:
+            raise InputError(path, f"{where}.segment", f"got {segment!r} (expected one of {', '.join(SEGMENTS)})")
+        disturbances.append(Disturbance(
+            segment=segment,
+            mass_kg=_number(path, f"{where}.mass_kg", item.get("mass_kg"), low=0, high=50,
+                            expected="an added mass in kg, > 0 and ≤ 50"),
+            inertia_kgm2=_vector3(path, f"{where}.inertia_kgm2", item.get("inertia_kgm2", [0, 0, 0])),
+            com_offset_m=_vector3(path, f"{where}.com_offset_m", item.get("com_offset_m", [0, 0, 0])),
+            name=str(item.get("name", "")),
+        ))
+    condition = data.get("condition", "normal")
+    if not isinstance(condition, str):
+        raise InputError(path, "condition", f"got {condition!r} (expected text)")
+    return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
+                   static_frames=frames, marker_map=dict(marker_map), disturbed_side=side,
+                   disturbances=tuple(disturbances), condition=condition, **lengths)
+
+
+def load_subject(path: str | Path) -> Subject:
+    """Read and validate ``subject.yaml``."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, None, "file not found (every trial folder needs a subject.yaml)")
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise InputError(path, f"line {mark.line + 1}" if mark else None, "not valid YAML") from None
+    return subject_from_dict(data, path)
+
+
+@dataclass(frozen=True)
+class TrialFolder:
+    """The files of one trial folder, checked to exist."""
+
+    folder: Path
+    subject_path: Path
+    subject: Subject
+    trial_path: Path  # the dynamic C3D, or markers.csv
+    forces_path: Path | None = None  # forces.csv when the trial is given as CSV
+    static_path: Path | None = None
+
+    @property
+    def name(self) -> str:
+        return self.folder.name
+
+    def input_files(self) -> list[Path]:
+        return [p for p in (self.subject_path, self.trial_path, self.forces_path, self.static_path) if p]
+
+
+def open_trial(folder: str | Path) -> TrialFolder:
+    """Find and validate a trial folder's files; raise :class:`InputError` naming what is missing."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(folder, None, "trial folder not found")
+    subject = load_subject(folder / "subject.yaml")
+    forces = None
+    if subject.trial:
+        trial = folder / subject.trial
+        if not trial.is_file():
+            raise InputError(folder / "subject.yaml", "trial", f"names {subject.trial}, which is not in {folder}")
+    elif (folder / "trial.c3d").is_file():
+        trial = folder / "trial.c3d"
+    elif (folder / "markers.csv").is_file():
+        trial = folder / "markers.csv"
+        forces = folder / "forces.csv" if (folder / "forces.csv").is_file() else None
+    else:
+        raise InputError(folder / "trial.c3d", None, "file not found (expected trial.c3d, markers.csv, "
+                                                     "or `trial:` in subject.yaml)")
+    static = None
+    if subject.static:
+        static = folder / subject.static
+        if not static.is_file():
+            raise InputError(folder / "subject.yaml", "static", f"names {subject.static}, which is not in {folder}")
+    elif (folder / "static.c3d").is_file():
+        static = folder / "static.c3d"
+    return TrialFolder(folder=folder, subject_path=folder / "subject.yaml", subject=subject,
+                       trial_path=trial, forces_path=forces, static_path=static)
+
+
+def sha256(path: str | Path) -> str:
+    """SHA-256 of a file's bytes (provenance in HDF5 attributes)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()

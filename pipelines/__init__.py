@@ -1,0 +1,1 @@
+"""Bundled pipeline YAML files (data only)."""

@@ -1,0 +1,1 @@
+"""Bundled synthetic sample trials (data only; see README.md here)."""
