@@ -30,7 +30,7 @@ import numpy as np
 
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
-from gaitcli.kinematics.rotations import cardan_xyz_to_matrix, rot_x, rot_y, rot_z
+from gaitcli.kinematics.rotations import rot_x, rot_y, rot_z
 
 N_BODIES = len(BODIES)
 N_JOINTS = len(JOINTS)
@@ -85,22 +85,28 @@ def _as_frames(x, name, width=N_COORDINATES):
     return x
 
 
+def _pelvis_rotation_and_axes(q):
+    """Pelvis ``S_1 = Rx Ry Rz`` (n, 3, 3) and its global Cardan axes ``e_x, Rx e_y, Rx Ry e_z`` (n, 3, 3) as rows."""
+    rx = rot_x(q[:, 3])
+    rxy = rx @ rot_y(q[:, 4])
+    axes = np.empty((q.shape[0], 3, 3))
+    axes[:, 0] = (1.0, 0.0, 0.0)
+    axes[:, 1] = rx[:, :, 1]
+    axes[:, 2] = rxy[:, :, 2]
+    return rxy @ rot_z(q[:, 5]), axes
+
+
 def _rotations_and_axes(q):
     """Body rotations ``S_i`` (n, 8, 3, 3) and the global rotation axes of the 24 Cardan coordinates.
 
-    ``axes[:, k]`` (n, 24, 3) is the unit axis of coordinate ``6 + k - 3`` … i.e. of
-    ``COORDINATES[3 + k]``: for the pelvis ``e_x``, ``Rx e_y``, ``Rx Ry e_z``; for joint
-    ``j`` ``S_p e_y``, ``S_p Ry e_x``, ``S_p Ry Rx e_z``.
+    ``axes[:, k]`` (n, 24, 3) is the unit axis of coordinate ``COORDINATES[3 + k]``: for the
+    pelvis ``e_x``, ``Rx e_y``, ``Rx Ry e_z``; for joint ``j`` with parent ``p``
+    ``S_p e_y``, ``S_p Ry e_x``, ``S_p Ry Rx e_z``.
     """
     n = q.shape[0]
     R = np.empty((n, N_BODIES, 3, 3))
     axes = np.empty((n, N_COORDINATES - 3, 3))
-    rx = rot_x(q[:, 3])
-    rxy = rx @ rot_y(q[:, 4])
-    R[:, 0] = rxy @ rot_z(q[:, 5])
-    axes[:, 0] = (1.0, 0.0, 0.0)
-    axes[:, 1] = rx[:, :, 1]
-    axes[:, 2] = rxy[:, :, 2]
+    R[:, 0], axes[:, 0:3] = _pelvis_rotation_and_axes(q)
     for j in range(N_JOINTS):
         p, c, k = JOINT_PARENT[j], JOINT_CHILD[j], 6 + 3 * j
         a = R[:, p] @ rot_y(q[:, k])
@@ -226,18 +232,7 @@ def pelvis_rotation_jacobian(q):
     block of ``J_R,pelvis`` in the pelvis-angle columns.
     """
     q = _as_frames(q, "q")
-    _, axes = _rotations_and_axes_pelvis(q)
-    return np.swapaxes(axes, 1, 2)
-
-
-def _rotations_and_axes_pelvis(q):
-    rx = rot_x(q[:, 3])
-    rxy = rx @ rot_y(q[:, 4])
-    axes = np.empty((q.shape[0], 3, 3))
-    axes[:, 0] = (1.0, 0.0, 0.0)
-    axes[:, 1] = rx[:, :, 1]
-    axes[:, 2] = rxy[:, :, 2]
-    return cardan_xyz_to_matrix(q[:, 3:6]), axes
+    return np.swapaxes(_pelvis_rotation_and_axes(q)[1], 1, 2)
 
 
 def marker_positions(q, params: BodyParameters, markers_in_body: dict) -> dict:

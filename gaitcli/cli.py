@@ -1,0 +1,169 @@
+"""The ``gait`` command: parses options, loads config, calls the pipeline, prints.
+
+Exit codes: 0 success; 2 bad usage or bad input (one line naming the file, the
+field and what was expected); 3 an optimization ended unconverged (results
+written, ``converged: false``); 1 an internal error. ``--debug`` shows tracebacks.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import traceback
+import warnings
+from pathlib import Path
+
+import click
+
+from gaitcli import __version__
+from gaitcli.errors import GaitError, GaitWarning
+
+
+class Console:
+    """Where the CLI prints: messages and warnings to stderr, the summary (``--json``) to stdout."""
+
+    def __init__(self, quiet: bool = False, as_json: bool = False):
+        self.quiet = quiet
+        self.as_json = as_json
+
+    def info(self, message: str) -> None:
+        if not self.quiet:
+            click.echo(message, err=True)
+
+    def summary(self, stage: str, summary: dict, out_dir: Path) -> None:
+        if self.as_json:
+            click.echo(json.dumps(summary, indent=2, default=str))
+        elif not self.quiet:
+            click.echo(f"{stage}: wrote {out_dir}", err=True)
+
+    def progress(self, description: str, total: int | None = None):
+        """A rich progress bar on stderr (a no-op bar when quiet)."""
+        from gaitcli.report.progress import progress_bar
+
+        return progress_bar(description, total=total, enabled=not self.quiet)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    if issubclass(category, GaitWarning):
+        click.echo(f"gait: warning: {message}", err=True)
+    else:
+        click.echo(f"gait: warning: {category.__name__}: {message}", err=True)
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="gait")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bars or messages.")
+@click.option("--json", "as_json", is_flag=True, help="Print the stage summary as JSON on stdout.")
+@click.option("--debug", is_flag=True, help="Show tracebacks on errors.")
+@click.pass_context
+def gait(ctx, quiet, as_json, debug):
+    """Gait-lab processing: filter, inverse dynamics, muscles, predictive gait."""
+    ctx.obj = Console(quiet=quiet, as_json=as_json)
+
+
+def _trial_argument(func):
+    return click.argument("trial", required=False, type=click.Path(path_type=Path))(func)
+
+
+def _out_option(func):
+    return click.option("-o", "--out", "out", type=click.Path(path_type=Path),
+                        help="Output root (default TRIAL/gait_out; ./gait_out for the bundled sample).")(func)
+
+
+def _pipeline_option(func):
+    return click.option("--pipeline", "pipeline", type=click.Path(path_type=Path),
+                        help="Pipeline YAML (default: the built-in standard pipeline).")(func)
+
+
+@gait.command("filter")
+@_trial_argument
+@_out_option
+@_pipeline_option
+@click.option("--cutoff", "cutoff_hz", type=float, help="Net cut-off of the zero-lag filter, Hz (default 6).")
+@click.pass_obj
+def filter_command(console: Console, trial, out, pipeline, cutoff_hz):
+    """Fill gaps, zero-lag filter markers and plates, find gait events."""
+    from gaitcli import pipeline as pl
+
+    cfg = pl.configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz})
+    run = pl.Run(trial, out, cfg, console)
+    run.filter()
+
+
+@gait.command("synth")
+@click.argument("out_dir", type=click.Path(path_type=Path))
+@click.option("--condition", type=click.Choice(["normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot"]),
+              default="normal", show_default=True, help="Experiment of 3.1.1 (added masses, locked joints).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the marker noise and artefact.")
+@click.option("--noise-mm", type=float, default=2.0, show_default=True, help="White marker noise (SD per axis), mm.")
+@click.option("--artefact-mm", type=float, default=10.0, show_default=True,
+              help="Low-frequency skin-artefact amplitude, mm.")
+@click.option("--strides", type=int, default=3, show_default=True, help="Gait cycles in the trial.")
+@click.pass_obj
+def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, strides):
+    """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/)."""
+    from gaitcli.synth import write_trial
+
+    if strides < 1:
+        raise click.BadParameter("expected at least 1 stride", param_hint="--strides")
+    trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
+                        strides=strides)
+    console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames, "
+                 f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates)")
+
+
+@gait.command("run")
+@_trial_argument
+@_out_option
+@_pipeline_option
+@click.pass_obj
+def run_command(console: Console, trial, out, pipeline):
+    """Run every stage of the pipeline on a trial, in order."""
+    from gaitcli import pipeline as pl
+
+    cfg = pl.configure(pipeline)
+    run = pl.Run(trial, out, cfg, console)
+    run.all()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Console-script entry point; maps errors to exit codes."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    previous = warnings.showwarning
+    warnings.showwarning = _show_warning
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", GaitWarning)
+            warnings.showwarning = _show_warning
+            gait.main(args=argv, prog_name="gait", standalone_mode=False)
+        return 0
+    except click.exceptions.Exit as exc:
+        return exc.exit_code
+    except click.ClickException as exc:
+        exc.show()
+        return exc.exit_code
+    except click.exceptions.Abort:
+        click.echo("gait: aborted", err=True)
+        return 1
+    except GaitError as exc:
+        if debug:
+            traceback.print_exc()
+        click.echo(f"gait: error: {exc}", err=True)
+        return exc.exit_code
+    except Exception as exc:  # an internal error: say so, show the traceback only with --debug
+        if debug:
+            traceback.print_exc()
+        click.echo(f"gait: internal error: {type(exc).__name__}: {exc} (run with --debug for the traceback)", err=True)
+        return 1
+    finally:
+        warnings.showwarning = previous
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+
+
+def entry() -> None:
+    """``gait`` console script."""
+    sys.exit(main())

@@ -1,0 +1,158 @@
+"""C3D writer: markers in mm and force plates as FORCE_PLATFORM TYPE 2 (Fx, Fy, Fz, Mx, My, Mz).
+
+Conventions, chosen so that :func:`gaitcli.io.c3d.read_c3d` (and ezc3d's or
+OpenSim's plate extraction) return the input wrench exactly:
+
+* Lab axes: ``v_lab = model_to_lab @ v_model`` (identity by default).
+* Corners (mm) in C3D order: with ``x = c1 - c2`` and ``y = c1 - c4`` the plate
+  axis ``z = x × y`` points into the floor. Corners given in the opposite
+  order are written as ``c1, c4, c3, c2``.
+* ORIGIN (mm, plate axes) per the C3D specification: the vector from the
+  centre of the plate's top surface to the transducer origin. With the plate z
+  pointing into the floor a transducer below the surface has ORIGIN z > 0
+  (Vicon writes 37.84 mm and 57.15 mm for the AMTI plates of walking2.c3d);
+  ezc3d reads a positive-z ORIGIN as its negative, the origin → surface vector.
+* Channels: the force the ground exerts on the subject in plate axes (N), and
+  its moment about the transducer origin (N·mm),
+  ``M_origin = M_centre + F × ORIGIN``. This is what Vicon, Qualisys, BTS and
+  the c3d.org samples store: ezc3d's ``force`` is then the ground reaction
+  (vertical positive under load) and its ``moment`` the moment about the
+  surface centre.
+* Analog rate = an integer multiple of the point rate (all plates at one rate).
+* Missing marker samples (NaN) are written as ezc3d's missing convention:
+  (0, 0, 0) with residual -1. Coordinates are stored as float32.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import ezc3d
+import numpy as np
+
+from gaitcli.errors import InputError
+from gaitcli.io.atomic import atomic_path
+from gaitcli.recording import ForcePlate, Markers
+
+__all__ = ["write_c3d", "DEFAULT_ORIGIN_MM"]
+
+DEFAULT_ORIGIN_MM = (2.0, -1.5, 40.0)
+"""Surface centre → transducer origin (mm, plate axes, z into the floor), AMTI-like."""
+
+
+def _plate_axes(corners: np.ndarray) -> np.ndarray:
+    x = corners[0] - corners[1]
+    y = corners[0] - corners[3]
+    z = np.cross(x, y)
+    y = np.cross(z, x)
+    return np.stack([v / np.linalg.norm(v) for v in (x, y, z)], axis=1)
+
+
+def _check_rotation(path: Path, R) -> np.ndarray:
+    R = np.eye(3) if R is None else np.asarray(R, dtype=float)
+    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+        raise InputError(path, "model_to_lab", "expected a proper 3x3 rotation matrix")
+    return R
+
+
+def write_c3d(
+    path,
+    markers: Markers,
+    plates: list[ForcePlate],
+    *,
+    model_to_lab=None,
+    origin_mm=DEFAULT_ORIGIN_MM,
+) -> Path:
+    """Write markers (model axes, metres) and plates (model axes, SI) to a C3D file; return its path.
+
+    ``origin_mm``: ORIGIN of every plate (surface centre → transducer origin in
+    plate axes, mm). The file appears atomically.
+    """
+    path = Path(path)
+    R = _check_rotation(path, model_to_lab)
+    n_frames = markers.n_frames
+    point_rate = float(markers.rate_hz)
+    up_lab = R @ np.array([0.0, 0.0, 1.0])
+
+    positions_mm = np.asarray(markers.positions_m, dtype=float) @ R.T * 1000.0  # (frames, markers, 3)
+    missing = ~np.isfinite(positions_mm).all(axis=2)
+    points = np.ones((4, len(markers.labels), n_frames))
+    points[:3] = np.transpose(np.where(missing[..., None], 0.0, positions_mm), (2, 1, 0))
+    residuals = np.where(missing.T, -1.0, 0.0)[None]
+
+    c = ezc3d.c3d()
+    params = c["parameters"]
+    params["POINT"]["RATE"]["value"] = np.array([point_rate])
+    params["POINT"]["LABELS"]["value"] = list(markers.labels)
+    params["POINT"]["DESCRIPTIONS"]["value"] = [""] * len(markers.labels)
+    params["POINT"]["UNITS"]["value"] = ["mm"]
+    c["header"]["points"]["first_frame"] = int(markers.first_frame) - 1
+    c["data"]["points"] = points
+    c["data"]["meta_points"]["residuals"] = residuals
+    c["data"]["meta_points"]["camera_masks"] = np.zeros((7, len(markers.labels), n_frames), dtype=bool)
+
+    if plates:
+        analogs, analog_rate, corners, origins = _plate_channels(path, plates, R, up_lab, n_frames, point_rate,
+                                                                 np.asarray(origin_mm, dtype=float))
+        n = len(plates)
+        labels = [f"{c}{k + 1}" for k in range(n) for c in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
+        params["ANALOG"]["RATE"]["value"] = np.array([analog_rate])
+        params["ANALOG"]["LABELS"]["value"] = labels
+        params["ANALOG"]["DESCRIPTIONS"]["value"] = [f"force plate {k + 1}" for k in range(n) for _ in range(6)]
+        params["ANALOG"]["UNITS"]["value"] = ["N", "N", "N", "Nmm", "Nmm", "Nmm"] * n
+        params["ANALOG"]["SCALE"]["value"] = np.ones(6 * n)
+        params["ANALOG"]["OFFSET"]["value"] = np.zeros(6 * n, dtype=int)
+        fp = params["FORCE_PLATFORM"]
+        fp["USED"]["value"] = np.array([n])
+        fp["TYPE"]["value"] = np.full(n, 2, dtype=int)
+        fp["ZERO"]["value"] = np.array([0, 0])
+        fp["CORNERS"]["value"] = corners
+        fp["ORIGIN"]["value"] = origins
+        fp["CHANNEL"]["value"] = np.arange(1, 6 * n + 1, dtype=int).reshape(n, 6).T
+        c["data"]["analogs"] = analogs
+    else:
+        params["ANALOG"]["RATE"]["value"] = np.array([point_rate])
+        c["data"]["analogs"] = np.zeros((1, 0, n_frames))
+
+    with atomic_path(path) as tmp:
+        staging = tmp.with_name(tmp.name + ".c3d")  # ezc3d appends .c3d to any other name
+        try:
+            c.write(str(staging))
+            os.replace(staging, tmp)
+        finally:
+            if staging.exists():
+                staging.unlink()
+    return path
+
+
+def _plate_channels(path, plates, R, up_lab, n_frames, point_rate, origin_mm):
+    """Analog array (1, 6 n, samples), analog rate, CORNERS (3, 4, n) and ORIGIN (3, n) in mm."""
+    rates = {float(p.rate_hz) for p in plates}
+    if len(rates) != 1:
+        raise InputError(path, "plates", f"plates at different rates {sorted(rates)} (expected one analog rate)")
+    analog_rate = rates.pop()
+    ratio = analog_rate / point_rate
+    if ratio < 1 or abs(ratio - round(ratio)) > 1e-9:
+        raise InputError(path, "plates", f"analog rate {analog_rate} Hz is not an integer multiple of {point_rate} Hz")
+    n_samples = n_frames * int(round(ratio))
+    channels, corners, origins = [], [], []
+    for plate in plates:
+        if plate.n_samples != n_samples:
+            raise InputError(path, plate.name, f"{plate.n_samples} samples (expected {n_samples} = frames x {ratio:g})")
+        c_lab = np.asarray(plate.corners_m, dtype=float) @ R.T * 1000.0
+        axes = _plate_axes(c_lab)
+        if np.dot(axes[:, 2], up_lab) > 0:  # plate z must point into the floor
+            c_lab = c_lab[[0, 3, 2, 1]]
+            axes = _plate_axes(c_lab)
+        centre_lab = R @ np.asarray(plate.centre_m, dtype=float) * 1000.0
+        if not np.allclose(centre_lab, c_lab.mean(axis=0), atol=1e-3):
+            raise InputError(path, plate.name, "centre_m is not the mean of corners_m")
+        f_plate = np.asarray(plate.force_N, dtype=float) @ R.T @ axes  # rows: R_p^T F
+        m_plate = np.asarray(plate.moment_Nm, dtype=float) @ R.T @ axes * 1000.0
+        m_origin = m_plate + np.cross(f_plate, origin_mm)
+        channels.append(np.concatenate([f_plate, m_origin], axis=1).T)
+        corners.append(c_lab.T)
+        origins.append(origin_mm)
+    analogs = np.concatenate(channels, axis=0)[None]
+    return analogs, analog_rate, np.stack(corners, axis=2), np.stack(origins, axis=1)

@@ -1,0 +1,404 @@
+"""Segment masses, centres of mass and inertias from de Leva (1996), plus disturbance masses (3.2.2, A.2, A.3).
+
+de Leva's table (MODEL_CONSTANTS section A): mass = fraction · body mass; CoM at a
+fraction of the segment length from the first (origin) endpoint; I = m (r L)². Lengths
+are de Leva's mean lengths scaled by stature / reference stature (1.741 m male,
+1.735 m female) unless measured: the thigh (HJC→KJC) and shank (KJC→AJC) lengths
+come from the static trial (3.2.2, the starred lengths of Tables A.4–A.5).
+
+The model's 8 bodies (3.2.1) split the trunk as Table A.4 does:
+
+* **pelvis** = de Leva's *lower trunk* OMPH→MIDH (11.17 % male). The lumbosacral
+  joint sits at OMPH, the hips at MIDH. This reproduces Table A.4 (subject 1:
+  8.15 kg, c1 = 0.092 m from the lumbar joint to the CoM, d2 = 0.058 m from the
+  CoM down to the hips, I = 0.0694 / 0.0557 / 0.0632 kg m²).
+* **HAT** = head + upper and middle trunk + both arms, its mass the remainder of the
+  body mass. The arms are crossed over the chest: upper arms hang vertically from
+  the shoulder joint centres (at MIDS height, ``0.112·H`` either side of the
+  midline), forearms and hands lie horizontally at elbow height, each reaching
+  across to the other side, in the frontal plane of the trunk axis. The
+  dissertation does not print its layout; this one reproduces Table A.4's
+  c2 = 0.269 m exactly and its HAT inertias within 3 % (the shoulder half-width
+  0.112·H is the value that fits them best).
+
+Inertia axes (segment axes, upright posture: x forward, y left, z up): r_sag about
+x, r_trans about y, r_long about z (MODEL_CONSTANTS A). For the foot (x along the
+foot, heel→toe) the dissertation's assignment is used — r_long about x, r_sag about
+y, r_trans about z — which reproduces Table A.5's foot inertias.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from gaitcli.errors import InputError
+from gaitcli.kinematics.model import BODIES
+
+
+@dataclass(frozen=True)
+class DeLevaSegment:
+    """One row of de Leva (1996) Table 4: mean length (mm), then percentages."""
+
+    length_mm: float
+    mass_pct: float
+    com_pct: float  # from the first (origin) endpoint
+    r_sag_pct: float
+    r_trans_pct: float
+    r_long_pct: float
+
+
+def _rows(values: dict[str, tuple]) -> dict[str, DeLevaSegment]:
+    return {k: DeLevaSegment(*v) for k, v in values.items()}
+
+
+#: de Leva (1996) Table 4 (MODEL_CONSTANTS A); keys name the endpoints used
+DE_LEVA = {
+    "male": _rows({
+        "head": (242.9, 6.94, 50.02, 30.3, 31.5, 26.1),  # VERT->CERV
+        "trunk": (531.9, 43.46, 44.86, 37.2, 34.7, 19.1),  # SUPR->MIDH
+        "trunk_cerv": (603.3, 43.46, 51.38, 32.8, 30.6, 16.9),  # CERV->MIDH
+        "trunk_mids": (515.5, 43.46, 43.10, 38.4, 35.8, 19.7),  # MIDS->MIDH
+        "upper_trunk": (170.7, 15.96, 29.99, 71.6, 45.4, 65.9),  # SUPR->XYPH
+        "middle_trunk": (215.5, 16.33, 45.02, 48.2, 38.3, 46.8),  # XYPH->OMPH
+        "lower_trunk": (145.7, 11.17, 61.15, 61.5, 55.1, 58.7),  # OMPH->MIDH
+        "upper_arm": (281.7, 2.71, 57.72, 28.5, 26.9, 15.8),  # SJC->EJC
+        "forearm": (268.9, 1.62, 45.74, 27.6, 26.5, 12.1),  # EJC->WJC
+        "hand": (86.2, 0.61, 79.00, 62.8, 51.3, 40.1),  # WJC->MET3
+        "thigh": (422.2, 14.16, 40.95, 32.9, 32.9, 14.9),  # HJC->KJC
+        "shank": (440.3, 4.33, 43.95, 25.1, 24.6, 10.2),  # KJC->AJC
+        "shank_lmal": (434.0, 4.33, 44.59, 25.5, 24.9, 10.3),  # KJC->LMAL
+        "foot": (258.1, 1.37, 44.15, 25.7, 24.5, 12.4),  # HEEL->TTIP
+    }),
+    "female": _rows({
+        "head": (243.7, 6.68, 48.41, 27.1, 29.5, 26.1),
+        "trunk": (529.3, 42.57, 41.51, 35.7, 33.9, 17.1),
+        "trunk_cerv": (614.8, 42.57, 49.64, 30.7, 29.2, 14.7),
+        "trunk_mids": (497.9, 42.57, 37.82, 37.9, 36.1, 18.2),
+        "upper_trunk": (142.5, 15.45, 20.77, 74.6, 50.2, 71.8),
+        "middle_trunk": (205.3, 14.65, 45.12, 43.3, 35.4, 41.5),
+        "lower_trunk": (181.5, 12.47, 49.20, 43.3, 40.2, 44.4),
+        "upper_arm": (275.1, 2.55, 57.54, 27.8, 26.0, 14.8),
+        "forearm": (264.3, 1.38, 45.59, 26.1, 25.7, 9.4),
+        "hand": (78.0, 0.56, 74.74, 53.1, 45.4, 33.5),
+        "thigh": (368.5, 14.78, 36.12, 36.9, 36.4, 16.2),
+        "shank": (438.6, 4.81, 43.52, 26.7, 26.3, 9.2),
+        "shank_lmal": (432.3, 4.81, 44.16, 27.1, 26.7, 9.3),
+        "foot": (228.3, 1.29, 40.14, 29.9, 27.9, 13.9),
+    }),
+}
+REFERENCE_STATURE_M = {"male": 1.741, "female": 1.735}
+#: shoulder joint centres either side of the midline, as a fraction of stature (fits Table A.4)
+SHOULDER_HALF_WIDTH_PER_STATURE = 0.112
+
+
+@dataclass(frozen=True, eq=False)
+class SegmentInertia:
+    """Mass geometry of one body in some axes (segment or body axes; SI units).
+
+    ``com_m`` is the CoM relative to the landmark ``origin`` (de Leva's first
+    endpoint: OMPH for pelvis and HAT, HJC, KJC, HEEL), ``inertia_kgm2`` the 3×3
+    tensor about the CoM, ``axis`` the unit vector from ``origin`` along the segment
+    towards its other end, ``length_m`` the segment length.
+    """
+
+    mass_kg: float
+    com_m: np.ndarray
+    inertia_kgm2: np.ndarray
+    length_m: float
+    axis: np.ndarray
+    origin: str
+    notes: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class Disturbance:
+    """A rigid mass added to a body: ``com_offset_m`` from the body's CoM before it is added,
+    ``inertia_kgm2`` (3×3) about its own CoM, both in the body's axes (Table A.2: axes
+    parallel to the global frame in the reference posture)."""
+
+    segment: str
+    mass_kg: float
+    inertia_kgm2: np.ndarray
+    com_offset_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    name: str = ""
+
+
+def normalise_sex(sex: str) -> str:
+    key = str(sex).strip().lower()
+    key = {"m": "male", "f": "female"}.get(key, key)
+    if key not in DE_LEVA:
+        raise InputError(None, "sex", f"got {sex!r} (expected 'male' or 'female')")
+    return key
+
+
+def _positive(value, name: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(None, name, f"got {value!r} (expected a number > 0)") from None
+    if not np.isfinite(v) or v <= 0:
+        raise InputError(None, name, f"got {value!r} (expected a number > 0)")
+    return v
+
+
+def _per_side(value, name: str) -> tuple[float | None, float | None]:
+    """A length given once for both sides or as (right, left); ``None`` = not measured."""
+    if value is None:
+        return None, None
+    if np.ndim(value) == 0:
+        v = _positive(value, name)
+        return v, v
+    right, left = value
+    return (None if right is None else _positive(right, name),
+            None if left is None else _positive(left, name))
+
+
+def principal_inertia(mass_kg: float, length_m: float, radii_pct) -> np.ndarray:
+    """Diagonal inertia ``m (r L)²`` about the CoM from radii of gyration in % of L."""
+    r = np.asarray(radii_pct, dtype=float) / 100.0 * length_m
+    return np.diag(mass_kg * r ** 2)
+
+
+def parallel_axis(mass_kg: float, offset_m) -> np.ndarray:
+    """Steiner term ``m (|r|² E − r rᵀ)`` for a point mass at ``offset_m``."""
+    r = np.asarray(offset_m, dtype=float)
+    return mass_kg * (r @ r * np.eye(3) - np.outer(r, r))
+
+
+def _hat(table: dict[str, DeLevaSegment], mass_kg: float, scale: float, shoulder_half_width_m: float,
+         hat_mass_kg: float) -> SegmentInertia:
+    """HAT composite about the lumbar joint (OMPH, origin), arms crossed over the chest."""
+    L = {k: row.length_mm / 1000.0 * scale for k, row in table.items()}
+    c = {k: row.com_pct / 100.0 for k, row in table.items()}
+    z_xyph = L["middle_trunk"]
+    z_supr = z_xyph + L["upper_trunk"]
+    z_cerv = z_supr + (L["trunk_cerv"] - L["trunk"])
+    z_mids = z_supr - (L["trunk"] - L["trunk_mids"])
+    z_elbow = z_mids - L["upper_arm"]
+    z_vert = z_cerv + L["head"]
+    parts = []  # (key, CoM position, long axis: 'z' upright, 'y' horizontal across the chest)
+    parts.append(("middle_trunk", [0.0, 0.0, z_xyph - c["middle_trunk"] * L["middle_trunk"]], "z"))
+    parts.append(("upper_trunk", [0.0, 0.0, z_supr - c["upper_trunk"] * L["upper_trunk"]], "z"))
+    parts.append(("head", [0.0, 0.0, z_vert - c["head"] * L["head"]], "z"))
+    for sign in (1.0, -1.0):  # left, right; each forearm reaches across to the other side
+        w = shoulder_half_width_m
+        parts.append(("upper_arm", [0.0, sign * w, z_mids - c["upper_arm"] * L["upper_arm"]], "z"))
+        parts.append(("forearm", [0.0, sign * (w - c["forearm"] * L["forearm"]), z_elbow], "y"))
+        parts.append(("hand", [0.0, sign * (w - L["forearm"] - c["hand"] * L["hand"]), z_elbow], "y"))
+    parts_mass = sum(table[k].mass_pct for k, _, _ in parts) / 100.0 * mass_kg
+    ratio = hat_mass_kg / parts_mass  # the remainder vs. the sum of de Leva parts (1 for males)
+    masses = [table[k].mass_pct / 100.0 * mass_kg * ratio for k, _, _ in parts]
+    positions = [np.asarray(p, dtype=float) for _, p, _ in parts]
+    com = sum(m * p for m, p in zip(masses, positions)) / hat_mass_kg
+    inertia = np.zeros((3, 3))
+    for (k, _, long_axis), m, p in zip(parts, masses, positions):
+        row = table[k]
+        radii = (row.r_sag_pct, row.r_trans_pct, row.r_long_pct)
+        if long_axis == "y":  # forearm/hand across the chest: long axis y, flexion axis x
+            radii = (row.r_trans_pct, row.r_long_pct, row.r_sag_pct)
+        inertia += principal_inertia(m, L[k], radii) + parallel_axis(m, p - com)
+    return SegmentInertia(hat_mass_kg, com, inertia, z_vert, np.array([0.0, 0.0, 1.0]), "OMPH",
+                          ("HAT: head, upper and middle trunk, arms crossed over the chest "
+                           f"(shoulder joint centres ±{shoulder_half_width_m:.3f} m)",))
+
+
+def segment_parameters(mass_kg: float, stature_m: float, sex: str = "male", *,
+                       thigh_length_m=None, shank_length_m=None, foot_length_m=None,
+                       shoulder_width_m: float | None = None) -> dict[str, SegmentInertia]:
+    """Mass, CoM and inertia of the 8 bodies in segment axes of the upright posture (3.2.2).
+
+    Lengths are de Leva's scaled by ``stature_m`` / reference stature unless given:
+    ``thigh_length_m`` (HJC–KJC), ``shank_length_m`` (KJC–AJC), ``foot_length_m``
+    (heel–toe tip) as one value or (right, left). ``shoulder_width_m`` is the
+    distance between the shoulder joint centres (default ``2 × 0.112 × stature``).
+    Returns ``{body: SegmentInertia}`` in :data:`BODIES` order; the HAT mass is the
+    remainder so the masses sum to ``mass_kg`` exactly.
+    """
+    mass_kg = _positive(mass_kg, "mass_kg")
+    stature_m = _positive(stature_m, "stature_m")
+    sex = normalise_sex(sex)
+    table = DE_LEVA[sex]
+    scale = stature_m / REFERENCE_STATURE_M[sex]
+    lengths = {"thigh": _per_side(thigh_length_m, "thigh_length_m"),
+               "shank": _per_side(shank_length_m, "shank_length_m"),
+               "foot": _per_side(foot_length_m, "foot_length_m")}
+    half_width = (SHOULDER_HALF_WIDTH_PER_STATURE * stature_m if shoulder_width_m is None
+                  else _positive(shoulder_width_m, "shoulder_width_m") / 2)
+    down, forward = np.array([0.0, 0.0, -1.0]), np.array([1.0, 0.0, 0.0])
+
+    def limb(key: str, measured: float | None, origin: str, axis: np.ndarray) -> SegmentInertia:
+        row = table[key]
+        L = measured if measured is not None else row.length_mm / 1000.0 * scale
+        m = row.mass_pct / 100.0 * mass_kg
+        radii = (row.r_sag_pct, row.r_trans_pct, row.r_long_pct)
+        if key == "foot":  # the dissertation's Table A.5 assignment (x along the foot)
+            radii = (row.r_long_pct, row.r_sag_pct, row.r_trans_pct)
+        how = "measured" if measured is not None else "scaled by stature"
+        return SegmentInertia(m, row.com_pct / 100.0 * L * axis, principal_inertia(m, L, radii), L, axis,
+                              origin, (f"{key} length {L:.4f} m ({how})",))
+
+    out: dict[str, SegmentInertia] = {}
+    out["pelvis"] = limb("lower_trunk", None, "OMPH", down)
+    legs = {}
+    for i, s in enumerate(("r", "l")):
+        legs[f"thigh_{s}"] = limb("thigh", lengths["thigh"][i], "HJC", down)
+        legs[f"shank_{s}"] = limb("shank", lengths["shank"][i], "KJC", down)
+        legs[f"foot_{s}"] = limb("foot", lengths["foot"][i], "HEEL", forward)
+    hat_mass = mass_kg - out["pelvis"].mass_kg - sum(seg.mass_kg for seg in legs.values())
+    out["hat"] = _hat(table, mass_kg, scale, half_width, hat_mass)
+    out.update(legs)
+    return {b: out[b] for b in BODIES}
+
+
+def rotate_segment(segment: SegmentInertia, rotation) -> SegmentInertia:
+    """Express ``segment`` in new axes: ``v_new = rotation @ v_old``, ``I_new = R I Rᵀ``."""
+    R = np.asarray(rotation, dtype=float)
+    return replace(segment, com_m=R @ segment.com_m, axis=R @ segment.axis,
+                   inertia_kgm2=R @ segment.inertia_kgm2 @ R.T)
+
+
+def _as_tensor(inertia_kgm2) -> np.ndarray:
+    a = np.asarray(inertia_kgm2, dtype=float)
+    if a.shape == (3,):
+        a = np.diag(a)
+    if a.shape != (3, 3):
+        raise InputError(None, "inertia_kgm2", f"got shape {a.shape} (expected 3 values or a 3x3 tensor)")
+    return a
+
+
+def combine(segment: SegmentInertia, mass_kg: float, inertia_kgm2, com_offset_m) -> SegmentInertia:
+    """Rigidly attach a mass to ``segment`` (parallel-axis theorem).
+
+    ``com_offset_m`` is the added mass's CoM relative to the segment's CoM,
+    ``inertia_kgm2`` (3 diagonal values or 3×3) about its own CoM, both in the
+    segment's axes. The combined CoM moves by ``c = m₂ o / (m₁ + m₂)`` and
+    ``I = I₁ + m₁ P(−c) + I₂ + m₂ P(o − c)`` with ``P(r) = |r|² E − r rᵀ``.
+    """
+    m2 = float(mass_kg)
+    if not np.isfinite(m2) or m2 < 0:
+        raise InputError(None, "mass_kg", f"got {mass_kg!r} (expected a number >= 0)")
+    I2 = _as_tensor(inertia_kgm2)
+    o = np.asarray(com_offset_m, dtype=float).reshape(3)
+    m1 = segment.mass_kg
+    m = m1 + m2
+    c = m2 * o / m
+    inertia = segment.inertia_kgm2 + parallel_axis(m1, -c) + I2 + parallel_axis(m2, o - c)
+    return replace(segment, mass_kg=m, com_m=segment.com_m + c, inertia_kgm2=inertia)
+
+
+def add_disturbance(params: Mapping[str, SegmentInertia], segment: str, mass_kg: float, inertia_kgm2,
+                    com_offset_m=(0.0, 0.0, 0.0), *, name: str = "disturbance") -> dict[str, SegmentInertia]:
+    """Return a copy of ``params`` with a disturbance added to body ``segment`` (see :func:`combine`)."""
+    if segment not in params:
+        raise InputError(None, "disturbances.segment",
+                         f"got {segment!r} (expected one of {', '.join(params)})")
+    out = dict(params)
+    seg = combine(params[segment], mass_kg, inertia_kgm2, com_offset_m)
+    out[segment] = replace(seg, notes=seg.notes + (f"+ {name} {float(mass_kg):.3f} kg",))
+    return out
+
+
+def apply_disturbances(params: Mapping[str, SegmentInertia],
+                       disturbances: Iterable[Disturbance]) -> dict[str, SegmentInertia]:
+    """Add each :class:`Disturbance` in turn (offsets relative to the CoM before each one)."""
+    out = dict(params)
+    for d in disturbances:
+        out = add_disturbance(out, d.segment, d.mass_kg, d.inertia_kgm2, d.com_offset_m,
+                              name=d.name or "disturbance")
+    return out
+
+
+#: Tables A.2–A.3: mass (kg) and moments of inertia about X, Y, Z (kg m²), axes of the reference posture
+DISTURBANCE_TABLE = {
+    "shoes_subject1": (0.319, (0.0, 0.0017, 0.0017)),
+    "shoes_subject2": (0.279, (0.0, 0.0014, 0.0014)),
+    "weight_band": (1.719, (0.0043, 0.0043, 0.0041)),
+    "knee_orthosis": (0.924, (0.026, 0.021, 0.0061)),
+    "vario_shoe_right": (0.999, (0.014, 0.015, 0.0055)),
+    "vario_shoe_left": (0.497, (0.0013, 0.0040, 0.0027)),
+    "ski_boot": (2.431, (0.020, 0.033, 0.012)),
+}
+#: where the dissertation says only "fixed to the shank just above the ankle joint" (3.1.2):
+#: the band's CoM is taken 0.07 m proximal of the ankle joint centre on the shank axis
+WEIGHT_BAND_ABOVE_ANKLE_M = 0.07
+
+PRESETS = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot", "shoes_subject1", "shoes_subject2")
+PRESET_ALIASES = {"weight_band": "ankle_weight", "fixation_shoe": "ankle_fixed", "vario": "ankle_fixed",
+                  "orthosis": "knee_orthosis", "weight": "ankle_weight", "ski": "ski_boot"}
+
+
+def _table_disturbance(key: str, segment: str, offset, inertia=None, mass=None) -> Disturbance:
+    m, diag = DISTURBANCE_TABLE[key]
+    return Disturbance(segment, m if mass is None else mass,
+                       np.diag(diag) if inertia is None else inertia, np.asarray(offset, dtype=float), key)
+
+
+def preset_disturbances(name: str, segments: Mapping[str, SegmentInertia], *, side: str = "r") -> list[Disturbance]:
+    """The disturbances of one experiment of 3.1.1 (Tables A.2–A.3), placed on ``segments``.
+
+    ``segments`` fixes the geometry (lengths, axes, CoMs) the locations refer to, in the
+    axes the disturbances should be expressed in. The disturbed side is ``side``
+    (the dissertation's experiments disturb the right leg). Locations the
+    dissertation does not give:
+
+    * ``ankle_weight``: the weight band on the shank, its CoM on the shank axis
+      :data:`WEIGHT_BAND_ABOVE_ANKLE_M` above the ankle joint centre;
+    * ``knee_orthosis``: split into a thigh half and a shank half, each of half the
+      mass with its CoM on the segment axis a distance ``a = l/4`` from the knee,
+      where ``l = sqrt(12 I_t / m)`` is the length of a uniform rod with the table's
+      mean transverse inertia ``I_t``; each half gets ``(I_x − m a²)/2``,
+      ``(I_y − m a²)/2``, ``I_z/2`` so that with the knee straight the two halves
+      recombine exactly to the table's mass, CoM (at the knee) and inertia;
+    * ``ankle_fixed`` (vario shoes): the fixing shoe on the disturbed foot and the
+      other shoe of the pair on the other foot, at the foot CoM;
+    * ``ski_boot``: on the disturbed foot at the foot CoM;
+    * ``shoes_subject1/2`` (the usual shoes of experiment 1): one on each foot, at the foot CoM;
+    * ``normal``: no disturbance (barefoot model).
+    """
+    key = PRESET_ALIASES.get(name, name)
+    if key not in PRESETS:
+        raise InputError(None, "disturbance",
+                         f"unknown preset {name!r} (expected one of {', '.join(PRESETS + tuple(PRESET_ALIASES))})")
+    if side not in ("r", "l"):
+        raise InputError(None, "side", f"got {side!r} (expected 'r' or 'l')")
+    other = "l" if side == "r" else "r"
+    zero = np.zeros(3)
+    if key == "normal":
+        return []
+    if key == "ankle_weight":
+        shank = segments[f"shank_{side}"]
+        at = shank.axis * (shank.length_m - WEIGHT_BAND_ABOVE_ANKLE_M)
+        return [_table_disturbance("weight_band", f"shank_{side}", at - shank.com_m)]
+    if key == "knee_orthosis":
+        m, (ix, iy, iz) = DISTURBANCE_TABLE["knee_orthosis"]
+        rod_length = np.sqrt(12.0 * (ix + iy) / 2.0 / m)
+        a = rod_length / 4.0
+        half = np.diag([(ix - m * a * a) / 2.0, (iy - m * a * a) / 2.0, iz / 2.0])
+        thigh, shank = segments[f"thigh_{side}"], segments[f"shank_{side}"]
+        at_thigh = thigh.axis * (thigh.length_m - a)
+        at_shank = shank.axis * a
+        return [_table_disturbance("knee_orthosis", f"thigh_{side}", at_thigh - thigh.com_m, half, m / 2),
+                _table_disturbance("knee_orthosis", f"shank_{side}", at_shank - shank.com_m, half, m / 2)]
+    if key == "ankle_fixed":
+        return [_table_disturbance("vario_shoe_right", f"foot_{side}", zero),
+                _table_disturbance("vario_shoe_left", f"foot_{other}", zero)]
+    if key == "ski_boot":
+        return [_table_disturbance("ski_boot", f"foot_{side}", zero)]
+    return [_table_disturbance(key, f"foot_{s}", zero) for s in ("r", "l")]
+
+
+def resolve_disturbances(items: Sequence[Disturbance | str], segments: Mapping[str, SegmentInertia]
+                         ) -> list[Disturbance]:
+    """Turn a mix of :class:`Disturbance` objects and preset names (``"ankle_weight"``,
+    ``"ski_boot:l"`` for the left side) into a flat list of disturbances."""
+    out: list[Disturbance] = []
+    for item in items:
+        if isinstance(item, Disturbance):
+            out.append(item)
+        else:
+            name, _, side = str(item).partition(":")
+            out.extend(preset_disturbances(name, segments, side=side or "r"))
+    return out

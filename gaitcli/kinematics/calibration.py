@@ -1,0 +1,237 @@
+"""Static calibration: from the reference posture to body parameters and marker clusters (3.2, 3.3).
+
+The reference posture is the subject standing on the force plate (3.1.3, step 4),
+from ``static.c3d`` or from named frames of the dynamic trial. In it:
+
+* joint centres are located (:mod:`gaitcli.kinematics.joint_centres`);
+* each body gets its **reference frame** (3.3, 3.3.3): origin at its CoM, axes
+  parallel to the global axes in the reference posture — the body frames of the
+  model (:class:`BodyParameters`, forward kinematics, inverse dynamics). Its
+  **anatomical frame** (Cappozzo) has the same origin; the constant rotation
+  ``reference_to_anatomical[b]`` converts: ``R_anatomical = R_reference @ C_b``;
+* the CoMs follow de Leva along the joint-centre lines (thigh HJC→KJC, shank
+  KJC→AJC, foot from CA along the foot's long axis); on the global vertical
+  through the mid-hip point MIDH lie the pelvis CoM, d2 = (1 − CoM fraction)·L
+  above MIDH, and the lumbar joint (OMPH), L above MIDH, with L the lower-trunk
+  length (Table A.4 gives these offsets in Y and Z only, i.e. no x offset); the
+  HAT CoM lies c2 above the lumbar joint;
+* segment inertias are rotated from de Leva's principal axes (the anatomical axes of
+  thigh, shank and foot; the global axes for pelvis and HAT) into body axes, then
+  disturbances (Tables A.2–A.3, body axes) are added; the CoMs move accordingly;
+* every marker is expressed in the frame of the body it is fixed to: the reference
+  cluster ``r^i_OMj`` of (3.2).
+
+A body other than the pelvis with fewer than 3 tracking markers is ``locked``:
+tracked as rigidly attached to its parent (zero joint angles), which is recorded
+and warned about.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gaitcli.errors import GaitWarning, InputError
+from gaitcli.kinematics import joint_centres as jcm
+from gaitcli.kinematics.anthropometry import (Disturbance, SegmentInertia, apply_disturbances, normalise_sex,
+                                              resolve_disturbances, rotate_segment, segment_parameters)
+from gaitcli.kinematics.markerset import (LANDMARKS, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, required_landmarks,
+                                          tracking_landmarks)
+from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
+from gaitcli.kinematics.pose import MIN_MARKERS
+from gaitcli.recording import Markers
+
+_PURPOSE = {"ASIS": "the pelvis frame and hip joint centres", "PSIS": "the pelvis frame and hip joint centres",
+            "LEF": "the knee joint centre", "MEF": "the knee joint centre", "LM": "the ankle joint centre",
+            "MM": "the ankle joint centre", "CA": "the foot", "VM": "the foot", "FM": "the foot"}
+
+
+@dataclass
+class StaticCalibration:
+    """Everything the reference posture fixes for one subject (SI units, global = model axes).
+
+    ``body``: the model's :class:`BodyParameters` (body frames = reference frames).
+    ``landmarks_in_body_m[body][landmark]``: (3,) position in that body's frame.
+    ``tracking_landmarks[body]``: the cluster fitted per frame (empty when locked).
+    ``locked``: bodies tracked as rigidly attached to their parent.
+    ``reference_to_anatomical`` (8, 3, 3): ``R_anatomical = R_reference @ C[b]``;
+    ``anatomical_from_landmarks[b]`` False where landmarks were missing and a global
+    axis stood in (identity for a locked HAT).
+    ``joint_centres_m``: static global positions of ``lumbar, HJCr, …, AJCl``.
+    ``com_m`` (8, 3): static global CoM positions. ``segments``: mass geometry per body
+    in body axes (CoM relative to the de Leva origin landmark).
+    ``static_landmarks_m``: the averaged static marker positions used.
+    """
+
+    body: BodyParameters
+    landmarks_in_body_m: dict[str, dict[str, np.ndarray]]
+    tracking_landmarks: dict[str, tuple[str, ...]]
+    locked: tuple[str, ...]
+    reference_to_anatomical: np.ndarray
+    anatomical_from_landmarks: tuple[bool, ...]
+    joint_centres_m: dict[str, np.ndarray]
+    com_m: np.ndarray
+    segments: dict[str, SegmentInertia]
+    static_landmarks_m: dict[str, np.ndarray]
+    notes: list[str] = field(default_factory=list)
+
+    def cluster(self, body: str) -> np.ndarray:
+        """Reference cluster (k, 3) of ``body`` in its frame, rows in ``tracking_landmarks[body]`` order."""
+        labels = self.tracking_landmarks[body]
+        return np.array([self.landmarks_in_body_m[body][lab] for lab in labels]).reshape(len(labels), 3)
+
+    def markers_in_body(self) -> tuple[dict[int, np.ndarray], dict[int, tuple[str, ...]]]:
+        """All landmarks as ``{body index: (k, 3)}`` (the form ``forward.marker_positions`` takes)
+        and ``{body index: labels}`` naming the rows."""
+        labels = {i: tuple(self.landmarks_in_body_m[b]) for i, b in enumerate(BODIES)}
+        arrays = {i: np.array([self.landmarks_in_body_m[b][n] for n in labels[i]]).reshape(-1, 3)
+                  for i, b in enumerate(BODIES)}
+        return arrays, labels
+
+
+def static_landmarks(markers: Markers, frames: Sequence[int] | slice | None = None) -> dict[str, np.ndarray]:
+    """Mean position (3,) of every marker over ``frames`` (default all), ignoring NaN;
+    markers never seen in those frames are left out."""
+    pos = markers.positions_m if frames is None else markers.positions_m[frames]
+    pos = np.asarray(pos, dtype=float).reshape(-1, len(markers.labels), 3)
+    seen = np.all(np.isfinite(pos), axis=-1)  # (frames, markers)
+    out = {}
+    for i, lab in enumerate(markers.labels):
+        if seen[:, i].any():
+            out[lab] = pos[seen[:, i], i].mean(axis=0)
+    return out
+
+
+def _check_required(P: Mapping[str, np.ndarray], source) -> None:
+    virtual = tuple(v for v in VIRTUAL_JOINT_CENTRES if v in P)
+    for name in required_landmarks(virtual_joint_centres=virtual):
+        if name not in P:
+            purpose = _PURPOSE[name[:-1]]
+            raise InputError(source, name, f"marker missing from the static trial (needed for {purpose})")
+
+
+def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "male",
+              frames: Sequence[int] | slice | None = None, thigh_length_m=None, shank_length_m=None,
+              foot_length_m=None, shoulder_width_m: float | None = None,
+              disturbances: Sequence[Disturbance | str] = (), hip_method: str = "bell1990",
+              ankle_method: str = "de_leva", extra_tracking_markers: Mapping[str, Sequence[str]] | None = None,
+              source: str | Path | None = None) -> StaticCalibration:
+    """Calibrate the 8-body model on the reference posture ``static`` (averaged over ``frames``).
+
+    Thigh and shank lengths are measured (HJC–KJC, KJC–AJC) unless given; other
+    lengths scale with stature (3.2.2). ``disturbances`` are :class:`Disturbance`
+    objects (body axes, offsets from the body's de Leva CoM) or preset names
+    (``"ankle_weight"``, ``"ski_boot:l"``). ``extra_tracking_markers`` adds lab
+    markers (by label) to a body's cluster. Raises :class:`InputError` naming a
+    marker the model's geometry needs.
+    """
+    sex = normalise_sex(sex)
+    P = static_landmarks(static, frames)
+    _check_required(P, source)
+    notes: list[str] = []
+    jc = jcm.joint_centres(P, hip_method=hip_method, ankle_method=ankle_method, sex=sex, source=source)
+    for name in VIRTUAL_JOINT_CENTRES:
+        notes.append(f"{name}: {'virtual marker from the lab file' if name in P else 'estimated'}")
+    if "HJCr" not in P or "HJCl" not in P:
+        notes.append(f"hip joint centres: Bell regression ({hip_method})")
+    if not all(f"AJC{s}" in P for s in "rl"):
+        notes.append(f"ankle joint centres from the malleoli ({ankle_method})")
+
+    measured_thigh = tuple(float(np.linalg.norm(jc[f"HJC{s}"] - jc[f"KJC{s}"])) for s in "rl")
+    measured_shank = tuple(float(np.linalg.norm(jc[f"KJC{s}"] - jc[f"AJC{s}"])) for s in "rl")
+    segs = segment_parameters(mass_kg, stature_m, sex,
+                              thigh_length_m=measured_thigh if thigh_length_m is None else thigh_length_m,
+                              shank_length_m=measured_shank if shank_length_m is None else shank_length_m,
+                              foot_length_m=foot_length_m, shoulder_width_m=shoulder_width_m)
+    notes.insert(0, f"de Leva (1996) {sex} table; body mass {float(mass_kg):.2f} kg, stature {float(stature_m):.3f} m")
+
+    # segment axes -> reference (= global static) axes, and the global position of each de Leva origin
+    ez = np.array([0.0, 0.0, 1.0])
+    midh = (jc["HJCr"] + jc["HJCl"]) / 2
+    omph = midh + segs["pelvis"].length_m * ez  # lumbosacral joint (3.2.1)
+    rotation = {"pelvis": np.eye(3), "hat": np.eye(3)}
+    origin = {"pelvis": omph, "hat": omph}
+    anatomical = {}
+    from_landmarks = {}
+    _, anatomical["pelvis"] = jcm.pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
+    from_landmarks["pelvis"] = True
+    for s in "rl":
+        epicondyles = (P.get(f"LEF{s}"), P.get(f"MEF{s}"))
+        malleoli = (P.get(f"LM{s}"), P.get(f"MM{s}"))
+        rotation[f"thigh_{s}"] = jcm.thigh_frame(jc[f"HJC{s}"], jc[f"KJC{s}"], *epicondyles, side=s)
+        rotation[f"shank_{s}"] = jcm.shank_frame(jc[f"KJC{s}"], jc[f"AJC{s}"], *malleoli, side=s)
+        rotation[f"foot_{s}"] = jcm.foot_frame(P[f"CA{s}"], P[f"VM{s}"], P[f"FM{s}"], side=s)
+        origin.update({f"thigh_{s}": jc[f"HJC{s}"], f"shank_{s}": jc[f"KJC{s}"], f"foot_{s}": P[f"CA{s}"]})
+        from_landmarks.update({f"thigh_{s}": all(e is not None for e in epicondyles),
+                               f"shank_{s}": all(m is not None for m in malleoli), f"foot_{s}": True})
+        for b in (f"thigh_{s}", f"shank_{s}", f"foot_{s}"):
+            anatomical[b] = rotation[b]
+    trunk = ("C7", "ST", "ACr", "ACl")
+    from_landmarks["hat"] = all(t in P for t in trunk)
+    anatomical["hat"] = jcm.trunk_frame(omph, *(P[t] for t in trunk)) if from_landmarks["hat"] else np.eye(3)
+    for b, ok in from_landmarks.items():
+        if not ok:
+            notes.append(f"{b}: anatomical frame incomplete (landmarks missing), global axes used instead")
+
+    heading = np.degrees(np.arctan2(anatomical["pelvis"][1, 0], anatomical["pelvis"][0, 0]))
+    if abs(heading) > 45.0:
+        warnings.warn(f"the subject faces {heading:.0f} deg away from +x in the static trial; reference frames "
+                      "are parallel to the global axes there (3.3.3), so angles are measured from that posture",
+                      GaitWarning, stacklevel=2)
+
+    body_segs = {b: rotate_segment(segs[b], rotation[b]) for b in BODIES}
+    items = resolve_disturbances(disturbances, body_segs)
+    body_segs = apply_disturbances(body_segs, items)
+    notes += [f"disturbance {d.name or 'custom'} on {d.segment}: {d.mass_kg:.3f} kg" for d in items]
+
+    com = np.array([origin[b] + body_segs[b].com_m for b in BODIES])
+    joint_pos = {"lumbar": omph}
+    joint_pos.update({f"hip_{s}": jc[f"HJC{s}"] for s in "rl"})
+    joint_pos.update({f"knee_{s}": jc[f"KJC{s}"] for s in "rl"})
+    joint_pos.update({f"ankle_{s}": jc[f"AJC{s}"] for s in "rl"})
+    joint_in_parent = np.array([joint_pos[j] - com[JOINT_PARENT[i]] for i, j in enumerate(JOINTS)])
+    joint_in_child = np.array([joint_pos[j] - com[JOINT_CHILD[i]] for i, j in enumerate(JOINTS)])
+    lengths = {b: float(body_segs[b].length_m) for b in BODIES}
+    for b in BODIES:
+        notes += [f"{b}: {n}" for n in body_segs[b].notes]
+    body = BodyParameters(mass_kg=np.array([body_segs[b].mass_kg for b in BODIES]),
+                          inertia_kgm2=np.array([body_segs[b].inertia_kgm2 for b in BODIES]),
+                          joint_in_parent_m=joint_in_parent, joint_in_child_m=joint_in_child,
+                          segment_length_m=lengths, notes=notes)
+
+    extra = dict(extra_tracking_markers or {})
+    unknown = [b for b in extra if b not in BODIES]
+    if unknown:
+        raise InputError(source, "extra_tracking_markers", f"unknown bodies {unknown} (expected {', '.join(BODIES)})")
+    landmarks_in_body: dict[str, dict[str, np.ndarray]] = {}
+    tracking: dict[str, tuple[str, ...]] = {}
+    locked = []
+    for i, b in enumerate(BODIES):
+        candidates = tracking_landmarks(b) + tuple(extra.get(b, ()))
+        names = [n for n in dict.fromkeys(candidates) if n in P]
+        landmarks_in_body[b] = {n: P[n] - com[i] for n in names}
+        if len(names) >= MIN_MARKERS:
+            tracking[b] = tuple(names)
+            continue
+        if b == "pelvis":
+            raise InputError(source, "pelvis", f"fewer than {MIN_MARKERS} pelvis markers in the static trial "
+                                               f"(found {', '.join(names) or 'none'} of {', '.join(SEGMENT_MARKERS[b])})")
+        tracking[b] = ()
+        locked.append(b)
+        parent = BODIES[JOINT_PARENT[JOINT_CHILD.index(i)]]
+        message = (f"{b}: fewer than {MIN_MARKERS} tracking markers in the static trial (found "
+                   f"{', '.join(names) or 'none'}); locked to {parent}")
+        notes.append(message)
+        warnings.warn(message, GaitWarning, stacklevel=2)
+
+    return StaticCalibration(
+        body=body, landmarks_in_body_m=landmarks_in_body, tracking_landmarks=tracking, locked=tuple(locked),
+        reference_to_anatomical=np.array([anatomical[b] for b in BODIES]),
+        anatomical_from_landmarks=tuple(from_landmarks[b] for b in BODIES),
+        joint_centres_m={"lumbar": omph, **jc}, com_m=com, segments=body_segs,
+        static_landmarks_m={k: v for k, v in P.items() if k in LANDMARKS or any(k in e for e in extra.values())},
+        notes=notes)

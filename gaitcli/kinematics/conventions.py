@@ -1,0 +1,65 @@
+"""The one place where the model's mathematical signs become the clinical signs of the output tables.
+
+Internally (x forward, y left, z up, Cardan y-x-z joint angles (3.1)) a positive
+rotation about y is hip extension, knee flexion and ankle plantarflexion, and the
+left side's adduction and internal rotation are negative rotations. Output tables
+follow the clinical convention on both sides alike: hip and knee flexion, ankle
+dorsiflexion, adduction and internal rotation positive, and every joint moment
+positive in the same sense as its angle (the moment the proximal segment exerts
+on the distal one). Pelvis angles and the lumbar joint keep the model's signs
+(lumbar: forward flexion, left bending, left rotation positive).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gaitcli.kinematics.model import COORDINATES, JOINTS
+
+#: sign per joint and axis (flexion about y, adduction about x, rotation about z): clinical = sign · model
+CLINICAL_SIGN = {
+    "lumbar": (1.0, 1.0, 1.0),
+    "hip_r": (-1.0, 1.0, 1.0), "knee_r": (1.0, 1.0, 1.0), "ankle_r": (-1.0, 1.0, 1.0),
+    "hip_l": (-1.0, -1.0, -1.0), "knee_l": (1.0, -1.0, -1.0), "ankle_l": (-1.0, -1.0, -1.0),
+}
+SIGNS = np.array([CLINICAL_SIGN[j] for j in JOINTS])  # (7, 3)
+CONVENTION = ("clinical: hip/knee flexion, ankle dorsiflexion, adduction and internal rotation positive on both "
+              "sides; moments positive in the sense of their angle; pelvis and lumbar in model signs")
+
+
+def coordinates_to_clinical(q: np.ndarray) -> np.ndarray:
+    """Coordinates (n, 27) in m and rad, model signs → m and degrees, clinical signs."""
+    out = np.array(q, dtype=float, copy=True)
+    out[:, 3:6] = np.degrees(out[:, 3:6])
+    out[:, 6:] = np.degrees(out[:, 6:]) * SIGNS.reshape(-1)
+    return out
+
+
+def coordinates_from_clinical(table: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`coordinates_to_clinical`."""
+    out = np.array(table, dtype=float, copy=True)
+    out[:, 3:6] = np.radians(out[:, 3:6])
+    out[:, 6:] = np.radians(out[:, 6:] * SIGNS.reshape(-1))
+    return out
+
+
+def moments_to_clinical(moments: np.ndarray) -> np.ndarray:
+    """Joint moment vectors (n, 7, 3) as (x, y, z) components in a segment frame → (n, 21) clinical columns.
+
+    Columns per joint: flexion (about y), adduction (about x), rotation (about z),
+    each with the sign of its angle.
+    """
+    moments = np.asarray(moments, dtype=float)
+    ordered = moments[:, :, [1, 0, 2]]  # (y, x, z) = flexion, adduction, rotation axes
+    return (ordered * SIGNS).reshape(moments.shape[0], -1)
+
+
+def moments_from_clinical(table: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`moments_to_clinical`: (n, 21) → (n, 7, 3) x, y, z components."""
+    ordered = np.asarray(table, dtype=float).reshape(-1, 7, 3) * SIGNS
+    return ordered[:, :, [1, 0, 2]]
+
+
+def coordinate_units() -> dict[str, str]:
+    """Units of the output coordinate columns."""
+    return {name: ("m" if i < 3 else "deg") for i, name in enumerate(COORDINATES)}

@@ -1,0 +1,190 @@
+"""Joint centres and anatomical frames from landmarks (3.2.1, 3.3; Bell 1989/1990; Cappozzo 1995).
+
+* Hip: Bell et al. regression in the pelvis frame (MODEL_CONSTANTS D). Default
+  ``"bell1990"``: from the mid-ASIS point, 0.19·PW posterior, 0.30·PW inferior,
+  0.36·PW lateral (PW = inter-ASIS distance). ``"bell1989"``: from each ASIS,
+  0.22·PW posterior, 0.30·PW distal, 0.14·PW medial (the same lateral position).
+* Knee: midpoint of the femoral epicondyle markers LEF and MEF (3.2.1).
+* Ankle: "from the malleoli using de Leva's tables" (3.2.1). Default ``"de_leva"``:
+  the knee→mid-malleoli vector lengthened by de Leva's KJC→AJC / KJC→LMAL ratio
+  (440.3/434.0 male), which puts the centre about 6 mm distal of the malleoli as in
+  de Leva's shank rows; ``"midpoint"``: the midpoint of LM and MM.
+* Lab-exported virtual centres ``HJCr``, ``KJCr``, ``AJCr`` (and ``l``) replace these.
+
+Anatomical frames (model axes: x forward, y left, z up; columns of the returned
+matrices are the frame's axes in global coordinates), following Cappozzo et al.
+(1995) as the dissertation does: pelvis from ASIS/PSIS; thigh z from KJC to HJC,
+y in the plane of HJC and the epicondyles; shank z from AJC to KJC, y in the plane
+of KJC and the malleoli; foot x from CA to the mid-metatarsal heads, z normal to
+the plane CA, VM, FM; HAT z from the lumbar joint to mid C7–ST, y along ACr→ACl.
+All functions are vectorised over leading dimensions ``(..., 3)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from gaitcli.errors import InputError
+from gaitcli.kinematics.anthropometry import DE_LEVA, normalise_sex
+
+BELL_1990 = {"posterior": 0.19, "inferior": 0.30, "lateral": 0.36}  # from mid-ASIS, × PW
+BELL_1989 = {"posterior": 0.22, "inferior": 0.30, "medial": 0.14}  # from each ASIS, × PW
+_AXES = "xyz"
+
+
+def unit(v) -> np.ndarray:
+    """Vectors scaled to unit length along the last axis."""
+    v = np.asarray(v, dtype=float)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def frame_from_axes(primary, secondary, *, primary_axis: str, secondary_axis: str) -> np.ndarray:
+    """Right-handed orthonormal frame ``(..., 3, 3)`` (columns = axes in global coordinates).
+
+    ``primary`` gives the direction of ``primary_axis`` exactly; ``secondary`` is made
+    orthogonal to it and gives ``secondary_axis``; the third axis completes the frame.
+    """
+    a = unit(primary)
+    b = np.asarray(secondary, dtype=float)
+    b = unit(b - np.sum(b * a, axis=-1, keepdims=True) * a)
+    i, j = _AXES.index(primary_axis), _AXES.index(secondary_axis)
+    k = 3 - i - j
+    c = np.cross(a, b) if (j - i) % 3 == 1 else np.cross(b, a)
+    cols = [None, None, None]
+    cols[i], cols[j], cols[k] = a, b, c
+    return np.stack(cols, axis=-1)
+
+
+def pelvis_frame(asis_r, asis_l, psis_r, psis_l) -> tuple[np.ndarray, np.ndarray]:
+    """Pelvis anatomical frame (Bell / Cappozzo): origin mid-ASIS, y along ASISr→ASISl,
+    x anterior in the plane of both ASIS and the mid-PSIS, z = x × y (superior)."""
+    asis_r, asis_l = np.asarray(asis_r, dtype=float), np.asarray(asis_l, dtype=float)
+    origin = (asis_r + asis_l) / 2
+    mid_psis = (np.asarray(psis_r, dtype=float) + np.asarray(psis_l, dtype=float)) / 2
+    R = frame_from_axes(asis_l - asis_r, origin - mid_psis, primary_axis="y", secondary_axis="x")
+    return origin, R
+
+
+def hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str = "bell1990") -> tuple[np.ndarray, np.ndarray]:
+    """Right and left hip joint centres (m) by the Bell regression, ``method`` ``"bell1990"|"bell1989"``."""
+    origin, R = pelvis_frame(asis_r, asis_l, psis_r, psis_l)
+    pw = np.linalg.norm(np.asarray(asis_l, dtype=float) - np.asarray(asis_r, dtype=float), axis=-1)[..., None]
+    x, y, z = R[..., 0], R[..., 1], R[..., 2]
+    if method == "bell1990":
+        c = BELL_1990
+        base = origin - pw * (c["posterior"] * x + c["inferior"] * z)
+        return base - pw * c["lateral"] * y, base + pw * c["lateral"] * y
+    if method == "bell1989":
+        c = BELL_1989
+        shift = -pw * (c["posterior"] * x + c["inferior"] * z)
+        return (np.asarray(asis_r, dtype=float) + shift + pw * c["medial"] * y,
+                np.asarray(asis_l, dtype=float) + shift - pw * c["medial"] * y)
+    raise InputError(None, "hip_method", f"got {method!r} (expected 'bell1990' or 'bell1989')")
+
+
+def knee_joint_centre(lef, mef) -> np.ndarray:
+    """Midpoint of the lateral and medial femoral epicondyle markers (3.2.1)."""
+    return (np.asarray(lef, dtype=float) + np.asarray(mef, dtype=float)) / 2
+
+
+def ankle_distal_ratio(sex: str = "male") -> float:
+    """de Leva's KJC→AJC / KJC→LMAL length ratio (1.0145 male, 1.0146 female)."""
+    rows = DE_LEVA[normalise_sex(sex)]
+    return rows["shank"].length_mm / rows["shank_lmal"].length_mm
+
+
+def ankle_joint_centre(lm, mm, kjc=None, *, method: str = "de_leva", sex: str = "male") -> np.ndarray:
+    """Ankle joint centre from the malleoli; ``"de_leva"`` needs the knee centre ``kjc``."""
+    mid = (np.asarray(lm, dtype=float) + np.asarray(mm, dtype=float)) / 2
+    if method == "midpoint":
+        return mid
+    if method == "de_leva":
+        if kjc is None:
+            raise ValueError("the de Leva ankle centre needs the knee joint centre")
+        kjc = np.asarray(kjc, dtype=float)
+        return kjc + ankle_distal_ratio(sex) * (mid - kjc)
+    raise InputError(None, "ankle_method", f"got {method!r} (expected 'de_leva' or 'midpoint')")
+
+
+def present(landmarks: Mapping[str, np.ndarray], name: str) -> bool:
+    """True if ``name`` is in ``landmarks`` and seen in at least one frame."""
+    return name in landmarks and bool(np.any(np.isfinite(landmarks[name])))
+
+
+def _need(landmarks: Mapping[str, np.ndarray], name: str, purpose: str, source) -> np.ndarray:
+    if not present(landmarks, name):
+        raise InputError(source, name, f"marker missing from the static trial (needed for {purpose})")
+    return np.asarray(landmarks[name], dtype=float)
+
+
+def joint_centres(landmarks: Mapping[str, np.ndarray], *, hip_method: str = "bell1990",
+                  ankle_method: str = "de_leva", sex: str = "male",
+                  source: str | Path | None = None) -> dict[str, np.ndarray]:
+    """``HJCr, HJCl, KJCr, KJCl, AJCr, AJCl`` from landmark positions ``{name: (..., 3)}``.
+
+    A virtual joint centre present in ``landmarks`` is used as is; otherwise it is
+    estimated (Bell, epicondyle midpoint, malleoli). Raises :class:`InputError`
+    naming the first marker an estimate needs but ``landmarks`` lacks.
+    """
+    out: dict[str, np.ndarray] = {}
+    if not (present(landmarks, "HJCr") and present(landmarks, "HJCl")):
+        pelvis = [_need(landmarks, n, "the hip joint centres", source) for n in ("ASISr", "ASISl", "PSISr", "PSISl")]
+        out["HJCr"], out["HJCl"] = hip_joint_centres(*pelvis, method=hip_method)
+    for s in ("r", "l"):
+        if present(landmarks, f"HJC{s}"):
+            out[f"HJC{s}"] = np.asarray(landmarks[f"HJC{s}"], dtype=float)
+        if present(landmarks, f"KJC{s}"):
+            out[f"KJC{s}"] = np.asarray(landmarks[f"KJC{s}"], dtype=float)
+        else:
+            out[f"KJC{s}"] = knee_joint_centre(_need(landmarks, f"LEF{s}", "the knee joint centre", source),
+                                               _need(landmarks, f"MEF{s}", "the knee joint centre", source))
+        if present(landmarks, f"AJC{s}"):
+            out[f"AJC{s}"] = np.asarray(landmarks[f"AJC{s}"], dtype=float)
+        else:
+            out[f"AJC{s}"] = ankle_joint_centre(_need(landmarks, f"LM{s}", "the ankle joint centre", source),
+                                                _need(landmarks, f"MM{s}", "the ankle joint centre", source),
+                                                out[f"KJC{s}"], method=ankle_method, sex=sex)
+    return {k: out[k] for k in ("HJCr", "HJCl", "KJCr", "KJCl", "AJCr", "AJCl")}
+
+
+def _leftward(lateral, medial, side: str) -> np.ndarray:
+    """Vector pointing to the subject's left from a lateral/medial landmark pair of ``side``."""
+    sign = 1.0 if side == "l" else -1.0
+    return sign * (np.asarray(lateral, dtype=float) - np.asarray(medial, dtype=float))
+
+
+_GLOBAL_Y = np.array([0.0, 1.0, 0.0])
+_GLOBAL_Z = np.array([0.0, 0.0, 1.0])
+
+
+def thigh_frame(hjc, kjc, lef=None, mef=None, *, side: str) -> np.ndarray:
+    """Thigh anatomical axes: z from KJC to HJC, y leftward in the plane of HJC, LEF, MEF
+    (global y when the epicondyles are not available), x = y × z (anterior)."""
+    hjc, kjc = np.asarray(hjc, dtype=float), np.asarray(kjc, dtype=float)
+    ml = _GLOBAL_Y if lef is None or mef is None else _leftward(lef, mef, side)
+    return frame_from_axes(hjc - kjc, np.broadcast_to(ml, hjc.shape), primary_axis="z", secondary_axis="y")
+
+
+def shank_frame(kjc, ajc, lm=None, mm=None, *, side: str) -> np.ndarray:
+    """Shank anatomical axes: z from AJC to KJC, y leftward along the malleoli (global y
+    when they are not available), x = y × z (anterior)."""
+    kjc, ajc = np.asarray(kjc, dtype=float), np.asarray(ajc, dtype=float)
+    ml = _GLOBAL_Y if lm is None or mm is None else _leftward(lm, mm, side)
+    return frame_from_axes(kjc - ajc, np.broadcast_to(ml, kjc.shape), primary_axis="z", secondary_axis="y")
+
+
+def foot_frame(ca, vm, fm, *, side: str) -> np.ndarray:
+    """Foot anatomical axes: x from CA to the mid-metatarsal heads, y leftward in the plane
+    CA, VM, FM, z = x × y (dorsal)."""
+    ca, vm, fm = (np.asarray(a, dtype=float) for a in (ca, vm, fm))
+    return frame_from_axes((vm + fm) / 2 - ca, _leftward(vm, fm, side), primary_axis="x", secondary_axis="y")
+
+
+def trunk_frame(lumbar, c7, st, ac_r, ac_l) -> np.ndarray:
+    """HAT anatomical axes: z from the lumbar joint to mid C7–ST, y along ACr→ACl, x = y × z."""
+    top = (np.asarray(c7, dtype=float) + np.asarray(st, dtype=float)) / 2
+    return frame_from_axes(top - np.asarray(lumbar, dtype=float), np.asarray(ac_l, dtype=float) - ac_r,
+                           primary_axis="z", secondary_axis="y")

@@ -1,0 +1,107 @@
+"""Wiring between the CLI and the stages: inputs → stage functions → writers.
+
+Every input is read and validated before anything is written. A later stage
+reads an earlier stage's HDF5 output when it is up to date (same input hashes
+and same stage configuration) and runs the earlier stage itself otherwise.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+import h5py
+import numpy as np
+import yaml
+
+from gaitcli.config import PipelineConfig, load_pipeline, to_yaml, with_overrides
+from gaitcli.errors import InputError
+from gaitcli.io.outputs import provenance, stage_folder
+from gaitcli.recording import Recording
+from gaitcli.resources import sample_trial
+from gaitcli.trial import TrialFolder, open_trial, sha256
+
+
+def configure(pipeline: Path | None, **sections) -> PipelineConfig:
+    """Load the pipeline file (or defaults) and apply the CLI's overrides per section."""
+    cfg = load_pipeline(pipeline)
+    for section, options in sections.items():
+        cfg = with_overrides(cfg, section, **options)
+    return cfg
+
+
+def load_recording(trial: TrialFolder) -> Recording:
+    """Read the dynamic trial (C3D or CSV) in model axes, with the subject's marker map applied."""
+    from gaitcli.io.c3d import read_c3d
+    from gaitcli.io.tables import read_csv_trial
+    from gaitcli.kinematics.markerset import apply_marker_map
+
+    if trial.trial_path.suffix.lower() == ".c3d":
+        recording = read_c3d(trial.trial_path)
+    else:
+        recording = read_csv_trial(trial.trial_path, trial.forces_path)
+    if trial.subject.marker_map:
+        recording.markers = apply_marker_map(recording.markers, trial.subject.marker_map,
+                                             source=trial.subject_path)
+    return recording
+
+
+class Run:
+    """One invocation on one trial: where inputs and outputs are, and the resolved configuration."""
+
+    def __init__(self, trial: Path | None, out: Path | None, cfg: PipelineConfig, console):
+        bundled = trial is None
+        self.trial = open_trial(sample_trial() if bundled else trial)
+        if out is None:
+            out = Path.cwd() / "gait_out" if bundled else self.trial.folder / "gait_out"
+        self.out_root = Path(out)
+        self.cfg = cfg
+        self.console = console
+        self.inputs = {p.name: sha256(p) for p in self.trial.input_files()}
+
+    # -- provenance and freshness -------------------------------------------------------------
+    def stage_key(self, stage: str) -> str:
+        """What a stage's output depends on: input hashes and the configuration of it and earlier stages."""
+        sections = {"filter": ["filter"], "idyn": ["filter", "idyn"], "muscles": ["filter", "idyn", "muscles"]}
+        cfg = {s: dataclasses.asdict(getattr(self.cfg, s)) for s in sections[stage]}
+        return json.dumps({"inputs": self.inputs, "config": cfg}, sort_keys=True)
+
+    def attrs(self, stage: str) -> dict:
+        attrs = provenance(to_yaml(self.cfg), self.inputs)
+        attrs["stage_key"] = self.stage_key(stage)
+        attrs["trial"] = str(self.trial.folder)
+        return attrs
+
+    def fresh(self, stage: str, h5_name: str) -> Path | None:
+        """The stage's HDF5 output if it exists and was made from the same inputs and configuration."""
+        path = self.out_root / stage / h5_name
+        if not path.is_file():
+            return None
+        try:
+            with h5py.File(path, "r") as h5:
+                key = h5.attrs.get("stage_key")
+        except OSError:
+            return None
+        return path if key == self.stage_key(stage) else None
+
+    # -- stages -----------------------------------------------------------------------------
+    def filter(self):
+        """Run the filter stage and write its outputs; returns the in-memory result."""
+        from gaitcli.report.filter_outputs import write_filter_outputs
+        from gaitcli.signal.stage import filter_trial
+
+        started = time.perf_counter()
+        recording = load_recording(self.trial)
+        result = filter_trial(recording, self.cfg.filter)
+        target = self.out_root / "filter"
+        with stage_folder(target) as tmp:
+            summary = write_filter_outputs(tmp, result, recording, self.attrs("filter"),
+                                           elapsed_s=time.perf_counter() - started)
+        self.console.summary("filter", summary, target)
+        return result
+
+    def all(self):
+        for stage in self.cfg.stages:
+            getattr(self, stage)()

@@ -1,0 +1,84 @@
+"""Figures a clinician can read: units on every axis, events marked, right in red / left in blue."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from gaitcli.io.atomic import atomic_path  # noqa: E402
+
+SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
+SIDE_NAME = {"r": "right", "l": "left"}
+
+
+def save(fig, path: Path) -> Path:
+    """Save a figure atomically as PNG and close it."""
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def mark_events(ax, events, *, sides=("r", "l")) -> None:
+    """Vertical lines at heel strikes (solid) and toe offs (dashed), coloured by side."""
+    for t, side, kind in zip(events.time_s, events.side, events.kind):
+        if side in sides:
+            ax.axvline(t, color=SIDE_COLOUR.get(side, "grey"), lw=0.8, alpha=0.6,
+                       ls="-" if kind == "heel_strike" else "--")
+
+
+def filter_figures(folder: Path, result, *, title: str = "") -> list[Path]:
+    """``markers.png`` (raw vs filtered, a few foot and pelvis landmarks) and ``grf.png`` (per foot, events)."""
+    folder = Path(folder)
+    written = []
+    raw, smooth = result.raw_markers, result.markers
+    wanted = [n for n in ("CAr", "FMr", "CAl", "FMl", "ASISr", "LMr") if n in smooth.labels]
+    if not wanted:
+        wanted = list(smooth.labels[:4])
+    wanted = wanted[:4]
+    if wanted:
+        fig, axes = plt.subplots(len(wanted), 2, figsize=(10, 2.2 * len(wanted)), sharex=True, squeeze=False)
+        t = smooth.time_s
+        for row, name in enumerate(wanted):
+            i = smooth.index(name)
+            for col, (k, axis) in enumerate(((0, "forward x"), (2, "vertical z"))):
+                ax = axes[row, col]
+                ax.plot(t, raw.positions_m[:, i, k] * 1000, ".", ms=2, color="0.6", label="raw")
+                ax.plot(t, smooth.positions_m[:, i, k] * 1000, color="k", lw=1.2, label="filtered")
+                mark_events(ax, result.events)
+                ax.set_ylabel(f"{name} {axis} (mm)")
+        axes[0, 0].legend(loc="best", fontsize=8)
+        for ax in axes[-1]:
+            ax.set_xlabel("time (s)")
+        fig.suptitle(f"Markers, raw vs filtered ({result.config.cutoff_hz:g} Hz zero-lag) {title}", fontsize=10)
+        written.append(save(fig, folder / "markers.png"))
+
+    loads = result.feet or {f"plate {i + 1}": p for i, p in enumerate(result.plates)}
+    if loads:
+        fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
+        for name, load in loads.items():
+            colour = SIDE_COLOUR.get(name, None)
+            label = SIDE_NAME.get(name, name)
+            t = np.arange(load.force_N.shape[0]) / load.rate_hz
+            axes[0].plot(t, load.force_N[:, 2], color=colour, label=label)
+            axes[1].plot(t, load.force_N[:, 0], color=colour, label=label)
+            axes[2].plot(t, load.cop_m[:, 0], color=colour, label=label)
+        for plate in result.plates:
+            if plate.raw_vertical_force_N is not None:
+                t = np.arange(plate.raw_vertical_force_N.shape[0]) / plate.raw_rate_hz
+                axes[0].plot(t, plate.raw_vertical_force_N, color="0.7", lw=0.6, zorder=0)
+        for ax in axes:
+            mark_events(ax, result.events)
+        axes[0].set_ylabel("vertical GRF (N)")
+        axes[1].set_ylabel("fore-aft GRF (N)")
+        axes[2].set_ylabel("COP forward x (m)")
+        axes[2].set_xlabel("time (s)  —  solid: heel strike, dashed: toe off; grey: unfiltered plates")
+        axes[0].legend(loc="upper right", fontsize=8)
+        fig.suptitle(f"Ground reactions per foot {title}", fontsize=10)
+        written.append(save(fig, folder / "grf.png"))
+    return written

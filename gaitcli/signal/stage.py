@@ -1,0 +1,123 @@
+"""The ``filter`` stage: gap filling, zero-lag filtering, plate loads, events (3.1.4).
+
+A pure function from a :class:`~gaitcli.recording.Recording` (markers and plates
+in model axes, landmark names already mapped) to a :class:`FilterResult`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitcli.config import FilterConfig
+from gaitcli.errors import GaitWarning
+from gaitcli.recording import Markers, Recording
+from gaitcli.signal.butterworth import design_frequency_hz, lowpass
+from gaitcli.signal.events import Contact, Events, detect_events
+from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
+from gaitcli.signal.gaps import Gap, fill_gaps
+
+#: foot landmarks used for events and plate-to-foot assignment: heel, toe (first choice, fallback)
+HEEL = {"r": ("CAr",), "l": ("CAl",)}
+TOE = {"r": ("FMr", "VMr"), "l": ("FMl", "VMl")}
+PELVIS = ("ASISr", "ASISl", "PSISr", "PSISl")
+
+
+@dataclass
+class FilterResult:
+    """Filtered trial at the marker rate, plus the filtered plate signals at the analog rate."""
+
+    raw_markers: Markers
+    markers: Markers  # gaps filled, filtered
+    gaps: list[Gap]
+    plates: list[PlateLoad]  # filtered, at the marker rate
+    plates_analog: list[PlateLoad]  # filtered, at the analog rate
+    feet: dict[str, PlateLoad]  # per-foot sums of the plates each foot stood on
+    plate_owner: np.ndarray  # (plates, frames) 'r', 'l' or ''
+    contacts: list[Contact]
+    events: Events
+    design_cutoff_hz: float
+    force_design_cutoff_hz: float | None
+    config: FilterConfig
+
+
+def _first_present(markers: Markers, names) -> np.ndarray | None:
+    for name in names:
+        if name in markers:
+            return markers.get(name)
+    return None
+
+
+def pelvis_centre(markers: Markers) -> np.ndarray:
+    """Mean of the available ASIS/PSIS markers per frame (or of all markers when none is there), m."""
+    present = [markers.index(n) for n in PELVIS if n in markers]
+    columns = markers.positions_m[:, present, :] if present else markers.positions_m
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN frames stay NaN
+        return np.nanmean(columns, axis=1)
+
+
+def _frames(load: PlateLoad, n: int) -> PlateLoad:
+    """Trim or NaN-pad a resampled plate load to exactly the ``n`` marker frames."""
+    def fit(x, fill):
+        x = np.asarray(x)
+        if x.shape[0] >= n:
+            return x[:n]
+        pad = np.full((n - x.shape[0],) + x.shape[1:], fill, dtype=x.dtype)
+        return np.concatenate([x, pad])
+    return dataclasses.replace(load, force_N=fit(load.force_N, 0.0), cop_m=fit(load.cop_m, np.nan),
+                               free_moment_Nm=fit(load.free_moment_Nm, np.nan), loaded=fit(load.loaded, False))
+
+
+def filter_markers(markers: Markers, cfg: FilterConfig) -> tuple[Markers, list[Gap]]:
+    """Fill gaps up to ``cfg.max_gap_frames`` by cubic interpolation, then filter (3.1.4)."""
+    filled, gaps = fill_gaps(markers.positions_m, max_gap_frames=cfg.max_gap_frames)
+    smooth = lowpass(filled, rate_hz=markers.rate_hz, cutoff_hz=cfg.cutoff_hz, order=cfg.order, axis=0)
+    return Markers(markers.labels, smooth, markers.rate_hz, markers.first_frame), gaps
+
+
+def filter_trial(recording: Recording, cfg: FilterConfig) -> FilterResult:
+    """Run the filter stage on a recording whose labels are model landmarks where mapped."""
+    markers, gaps = filter_markers(recording.markers, cfg)
+    long_gaps = [g for g in gaps if not g.filled]
+    if long_gaps:
+        listing = ", ".join(f"{markers.labels[g.marker_index]} frames {g.first_frame + markers.first_frame}–"
+                            f"{g.last_frame + markers.first_frame}" for g in long_gaps[:6])
+        more = f" and {len(long_gaps) - 6} more" if len(long_gaps) > 6 else ""
+        warnings.warn(f"{len(long_gaps)} marker gap(s) longer than {cfg.max_gap_frames} frames left unfilled "
+                      f"(pose fitting ignores those markers there): {listing}{more}", GaitWarning, stacklevel=2)
+
+    rate = markers.rate_hz
+    n = markers.n_frames
+    plates_analog = [plate_load(p, cutoff_hz=cfg.force_cutoff_hz, threshold_N=cfg.force_threshold_N)
+                     for p in recording.plates]
+    plates = [_frames(plate_load(p, cutoff_hz=cfg.force_cutoff_hz, threshold_N=cfg.force_threshold_N, rate_hz=rate),
+                      n) for p in recording.plates]
+
+    feet = {}
+    for side in ("r", "l"):
+        heel = _first_present(markers, HEEL[side])
+        toe = _first_present(markers, TOE[side])
+        if heel is not None and toe is not None:
+            feet[side] = (heel, toe)
+    if len(feet) < 2:
+        warnings.warn("no heel (CAr/CAl) and toe (FMr/FMl or VMr/VMl) landmarks for both feet: events come from "
+                      "plate loading only and plate contacts are not assigned to feet (add a marker_map)",
+                      GaitWarning, stacklevel=2)
+    detection = detect_events(plates, feet, pelvis_centre(markers), rate_hz=rate, threshold_N=cfg.force_threshold_N,
+                              refine=True)
+    for c in detection.contacts:
+        if c.flag:
+            warnings.warn(f"{c.plate_name}: contact at {c.on_time_s:.2f}–{c.off_time_s:.2f} s not assigned to a foot "
+                          f"({c.flag.replace('_', ' ')}); its load is left out of the per-foot ground reactions",
+                          GaitWarning, stacklevel=2)
+    foot_loads = combine_loads(plates, detection.owner) if plates else {}
+    force_design = design_frequency_hz(cfg.force_cutoff_hz, recording.plates[0].rate_hz, order=cfg.order) \
+        if recording.plates else None
+    return FilterResult(raw_markers=recording.markers, markers=markers, gaps=gaps, plates=plates,
+                        plates_analog=plates_analog, feet=foot_loads, plate_owner=detection.owner,
+                        contacts=detection.contacts, events=detection.events, design_cutoff_hz=design_frequency_hz(cfg.cutoff_hz, rate, order=cfg.order),
+                        force_design_cutoff_hz=force_design, config=cfg)

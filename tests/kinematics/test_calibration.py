@@ -1,0 +1,153 @@
+"""Static calibration: body parameters, clusters, locking, missing markers, disturbances."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitcli.errors import GaitWarning, InputError
+from gaitcli.kinematics.calibration import calibrate, static_landmarks
+from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
+from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS
+from gaitcli.kinematics.rotations import cardan_xyz_to_matrix
+from gaitcli.recording import Markers
+
+SUBJECT = dict(mass_kg=73.0, stature_m=1.792)
+
+
+def _static(**changes):
+    t = standing_template(1.792)
+    for name, value in changes.items():
+        if value is None:
+            t.pop(name)
+        else:
+            t[name] = value
+    return landmarks_to_markers(t)
+
+
+@pytest.fixture(scope="module")
+def cal():
+    return calibrate(_static(), **SUBJECT)
+
+
+def test_body_parameters_are_complete_and_consistent(cal):
+    body = cal.body
+    assert body.mass_kg.shape == (8,) and body.inertia_kgm2.shape == (8, 3, 3)
+    assert body.joint_in_parent_m.shape == (7, 3) and body.joint_in_child_m.shape == (7, 3)
+    assert body.total_mass_kg == pytest.approx(73.0, abs=1e-12)
+    np.testing.assert_allclose(body.inertia_kgm2, np.swapaxes(body.inertia_kgm2, 1, 2))
+    assert np.all(np.linalg.eigvalsh(body.inertia_kgm2) > 0)
+    # the static posture is the zero of the reference-frame coordinates: every joint centre is
+    # placed at the same point by parent and child with identity rotations
+    for j, name in enumerate(JOINTS):
+        by_parent = cal.com_m[JOINT_PARENT[j]] + body.joint_in_parent_m[j]
+        by_child = cal.com_m[JOINT_CHILD[j]] + body.joint_in_child_m[j]
+        np.testing.assert_allclose(by_parent, by_child, atol=1e-15, err_msg=name)
+    centres = cal.joint_centres_m
+    np.testing.assert_allclose(cal.com_m[0] + body.joint_in_parent_m[1], centres["HJCr"], atol=1e-15)
+    # Table A.4 pelvis geometry: c1 = 0.092 m (CoM to lumbar joint), d2 = 0.058 m (CoM above the hips)
+    assert body.joint_in_parent_m[0] == pytest.approx([0, 0, 0.092], abs=0.0005)
+    assert -body.joint_in_parent_m[1, 2] == pytest.approx(0.058, abs=0.0005)
+    assert body.joint_in_child_m[0] == pytest.approx([0, 0, -0.269], abs=0.0005)  # c2
+
+
+def test_coms_lie_on_joint_centre_lines_at_de_leva_fractions(cal):
+    c = cal.joint_centres_m
+    for s in "rl":
+        thigh = cal.com_m[BODIES.index(f"thigh_{s}")]
+        np.testing.assert_allclose(thigh, c[f"HJC{s}"] + 0.4095 * (c[f"KJC{s}"] - c[f"HJC{s}"]), atol=1e-15)
+        shank = cal.com_m[BODIES.index(f"shank_{s}")]
+        np.testing.assert_allclose(shank, c[f"KJC{s}"] + 0.4395 * (c[f"AJC{s}"] - c[f"KJC{s}"]), atol=1e-15)
+        assert cal.body.segment_length_m[f"thigh_{s}"] == pytest.approx(np.linalg.norm(c[f"HJC{s}"] - c[f"KJC{s}"]))
+        foot = cal.com_m[BODIES.index(f"foot_{s}")]
+        heel = cal.static_landmarks_m[f"CA{s}"]
+        assert np.linalg.norm(foot - heel) == pytest.approx(0.4415 * 258.1e-3 * 1.792 / 1.741)
+
+
+def test_clusters_reproduce_the_static_markers(cal):
+    for b in BODIES:
+        i = BODIES.index(b)
+        assert len(cal.tracking_landmarks[b]) >= 3
+        for name in cal.tracking_landmarks[b]:
+            np.testing.assert_allclose(cal.com_m[i] + cal.landmarks_in_body_m[b][name], cal.static_landmarks_m[name],
+                                       atol=1e-15)
+    assert cal.locked == ()
+    assert all(cal.anatomical_from_landmarks)
+    arrays, labels = cal.markers_in_body()
+    np.testing.assert_array_equal(arrays[2][labels[2].index("GTr")], cal.landmarks_in_body_m["thigh_r"]["GTr"])
+    C = cal.reference_to_anatomical
+    np.testing.assert_allclose(C @ np.swapaxes(C, 1, 2), np.broadcast_to(np.eye(3), C.shape), atol=1e-14)
+
+
+def test_inertia_is_rotated_into_body_axes():
+    t = standing_template(1.792)
+    # swing the right leg forward 20 degrees about the hip in the static posture
+    R = cardan_xyz_to_matrix(np.array([0.0, -0.35, 0.0]))
+    cal0 = calibrate(landmarks_to_markers(t), **SUBJECT)
+    hjc = cal0.joint_centres_m["HJCr"]
+    for name in ("GTr", "MRFr", "LEFr", "MEFr", "TTr", "LMr", "MMr", "CAr", "VMr", "FMr"):
+        t[name] = hjc + R @ (t[name] - hjc)
+    cal1 = calibrate(landmarks_to_markers(t), **SUBJECT)
+    i = BODIES.index("thigh_r")
+    np.testing.assert_allclose(cal1.body.inertia_kgm2[i], R @ cal0.body.inertia_kgm2[i] @ R.T, atol=1e-12)
+    assert cal1.body.mass_kg[i] == cal0.body.mass_kg[i]
+
+
+def test_missing_required_marker_names_it():
+    with pytest.raises(InputError) as err:
+        calibrate(_static(LEFr=None), **SUBJECT, source="static.c3d")
+    assert "LEFr" in str(err.value) and "static.c3d" in str(err.value) and "knee" in str(err.value)
+    with pytest.raises(InputError, match="PSISl"):
+        calibrate(_static(PSISl=None), **SUBJECT)
+
+
+def test_lower_limb_marker_set_locks_the_hat():
+    static = _static(C7=None, ST=None, ACr=None)
+    with pytest.warns(GaitWarning, match="hat.*locked to pelvis"):
+        cal = calibrate(static, **SUBJECT)
+    assert cal.locked == ("hat",)
+    assert cal.tracking_landmarks["hat"] == ()
+    assert not cal.anatomical_from_landmarks[BODIES.index("hat")]
+    assert any("locked" in n for n in cal.body.notes)
+
+
+def test_virtual_joint_centres_are_used():
+    t = standing_template(1.792, with_virtual_joint_centres=True)
+    t["HJCr"] = t["HJCr"] + [0.01, 0.0, 0.0]
+    t.pop("LEFl")  # not needed with KJCl
+    cal = calibrate(landmarks_to_markers(t), **SUBJECT)
+    np.testing.assert_array_equal(cal.joint_centres_m["HJCr"], t["HJCr"])
+    assert "KJCl" in cal.tracking_landmarks["thigh_l"] and "KJCl" in cal.tracking_landmarks["shank_l"]
+    assert not cal.anatomical_from_landmarks[BODIES.index("thigh_l")]
+
+
+def test_disturbance_preset_moves_mass_and_keeps_joints():
+    plain = calibrate(_static(), **SUBJECT)
+    heavy = calibrate(_static(), **SUBJECT, disturbances=["ankle_weight"])
+    i = BODIES.index("shank_r")
+    assert heavy.body.mass_kg[i] - plain.body.mass_kg[i] == pytest.approx(1.719)
+    assert heavy.com_m[i, 2] < plain.com_m[i, 2]  # the band pulls the CoM towards the ankle
+    for j in range(7):  # joint centres stay where the static trial put them
+        np.testing.assert_allclose(heavy.com_m[JOINT_PARENT[j]] + heavy.body.joint_in_parent_m[j],
+                                   plain.com_m[JOINT_PARENT[j]] + plain.body.joint_in_parent_m[j], atol=1e-15)
+        np.testing.assert_allclose(heavy.com_m[JOINT_CHILD[j]] + heavy.body.joint_in_child_m[j],
+                                   plain.com_m[JOINT_CHILD[j]] + plain.body.joint_in_child_m[j], atol=1e-15)
+    assert any("weight_band" in n for n in heavy.body.notes)
+
+
+def test_static_landmarks_average_named_frames_ignoring_nan():
+    rng = np.random.default_rng(5)
+    pos = rng.normal(size=(10, 2, 3))
+    pos[3, 0] = np.nan
+    pos[:, 1] = np.nan
+    m = Markers(("A", "B"), pos, 100.0)
+    out = static_landmarks(m, frames=[1, 2, 3, 4])
+    np.testing.assert_allclose(out["A"], pos[[1, 2, 4], 0].mean(0))
+    assert "B" not in out
+
+
+def test_subject_facing_backwards_warns():
+    t = standing_template(1.792)
+    flip = np.diag([-1.0, -1.0, 1.0])
+    with pytest.warns(GaitWarning, match="faces"):
+        calibrate(landmarks_to_markers({k: flip @ v for k, v in t.items()}), **SUBJECT)

@@ -1,0 +1,105 @@
+"""Joint centres (Bell, epicondyles, malleoli) and anatomical frames on synthetic geometry."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitcli.errors import InputError
+from gaitcli.kinematics import joint_centres as jcm
+from gaitcli.kinematics.markerset import standing_template
+from gaitcli.kinematics.rotations import cardan_xyz_to_matrix
+
+RNG = np.random.default_rng(11)
+PW = 0.24
+
+
+def _random_poses(n):
+    return cardan_xyz_to_matrix(RNG.uniform(-np.pi, np.pi, (n, 3))), RNG.normal(size=(n, 3))
+
+
+def _place(R, t, p):
+    return np.einsum("nij,j->ni", R, p) + t
+
+
+def test_bell_1990_on_a_rotated_pelvis_of_known_geometry():
+    # pelvis frame = identity: ASIS on the y axis, PSIS behind them in the same horizontal plane
+    asis_r, asis_l = np.array([0, -PW / 2, 0]), np.array([0, PW / 2, 0])
+    psis_r, psis_l = np.array([-0.16, -0.04, 0]), np.array([-0.16, 0.04, 0])
+    expected_r = PW * np.array([-0.19, -0.36, -0.30])
+    expected_l = PW * np.array([-0.19, 0.36, -0.30])
+    R, t = _random_poses(50)
+    hjc_r, hjc_l = jcm.hip_joint_centres(*(_place(R, t, p) for p in (asis_r, asis_l, psis_r, psis_l)))
+    np.testing.assert_allclose(hjc_r, _place(R, t, expected_r), atol=1e-14)
+    np.testing.assert_allclose(hjc_l, _place(R, t, expected_l), atol=1e-14)
+    # Bell 1989 (from each ASIS: 22 % posterior, 30 % distal, 14 % medial): same except 3 % PW further back
+    old_r, _ = jcm.hip_joint_centres(*(_place(R, t, p) for p in (asis_r, asis_l, psis_r, psis_l)), method="bell1989")
+    np.testing.assert_allclose(old_r, _place(R, t, expected_r + [-0.03 * PW, 0, 0]), atol=1e-14)
+
+
+def test_pelvis_frame_follows_the_asis_psis_plane():
+    depth, rise = 0.16, 0.05  # PSIS higher than ASIS: the frame tilts about y
+    asis_r, asis_l = np.array([0, -PW / 2, 0.0]), np.array([0, PW / 2, 0.0])
+    psis = [np.array([-depth, s * 0.04, rise]) for s in (-1, 1)]
+    origin, R = jcm.pelvis_frame(asis_r, asis_l, *psis)
+    norm = np.hypot(depth, rise)
+    np.testing.assert_allclose(R[:, 0], [depth / norm, 0, -rise / norm], atol=1e-15)
+    np.testing.assert_allclose(R[:, 2], [rise / norm, 0, depth / norm], atol=1e-15)
+    hjc_r, _ = jcm.hip_joint_centres(asis_r, asis_l, *psis)
+    np.testing.assert_allclose(hjc_r, origin + PW * (-0.19 * R[:, 0] - 0.36 * R[:, 1] - 0.30 * R[:, 2]))
+
+
+def test_knee_and_ankle_centres():
+    lef, mef = np.array([0.01, -0.15, 0.5]), np.array([0.0, -0.05, 0.5])
+    np.testing.assert_allclose(jcm.knee_joint_centre(lef, mef), [0.005, -0.1, 0.5])
+    kjc = np.array([0.0, -0.1, 0.5])
+    lm, mm = np.array([-0.01, -0.14, 0.07]), np.array([0.01, -0.06, 0.08])
+    mid = (lm + mm) / 2
+    np.testing.assert_allclose(jcm.ankle_joint_centre(lm, mm, method="midpoint"), mid)
+    ajc = jcm.ankle_joint_centre(lm, mm, kjc, sex="male")
+    # on the knee -> mid-malleoli line, longer by de Leva's 440.3/434.0
+    assert np.linalg.norm(ajc - kjc) == pytest.approx(np.linalg.norm(mid - kjc) * 440.3 / 434.0)
+    np.testing.assert_allclose(np.cross(ajc - kjc, mid - kjc), 0.0, atol=1e-15)
+
+
+def test_virtual_centres_replace_estimates_and_missing_markers_are_named():
+    t = standing_template(1.75)
+    virtual = t["HJCr"] = t["HJCl"] = np.array([0.01, 0.0, 0.9])
+    t["KJCl"] = np.array([0.0, 0.1, 0.5])
+    out = jcm.joint_centres(t)
+    np.testing.assert_array_equal(out["HJCr"], virtual)
+    np.testing.assert_array_equal(out["KJCl"], t["KJCl"])
+    np.testing.assert_allclose(out["KJCr"], (t["LEFr"] + t["MEFr"]) / 2)
+    del t["MMr"]
+    with pytest.raises(InputError, match="MMr.*ankle"):
+        jcm.joint_centres(t, source="static.c3d")
+
+
+def test_anatomical_frames_are_rotations_and_identity_in_the_template():
+    t = standing_template(1.8, with_virtual_joint_centres=True)
+    frames = {
+        "thigh_r": jcm.thigh_frame(t["HJCr"], t["KJCr"], t["LEFr"], t["MEFr"], side="r"),
+        "thigh_l": jcm.thigh_frame(t["HJCl"], t["KJCl"], t["LEFl"], t["MEFl"], side="l"),
+        "shank_l": jcm.shank_frame(t["KJCl"], t["AJCl"], t["LMl"], t["MMl"], side="l"),
+        "pelvis": jcm.pelvis_frame(t["ASISr"], t["ASISl"], t["PSISr"], t["PSISl"])[1],
+    }
+    for name, R in frames.items():
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-14, err_msg=name)
+        assert np.linalg.det(R) == pytest.approx(1.0)
+        if name != "shank_l":  # the template stands upright; its malleolar axis is externally rotated
+            np.testing.assert_allclose(R, np.eye(3), atol=1e-12, err_msg=name)
+    shank = frames["shank_l"]
+    np.testing.assert_allclose(shank[:, 2], [0.0, 0.0, 1.0], atol=0.011)  # long axis still nearly vertical
+    foot = jcm.foot_frame(t["CAr"], t["VMr"], t["FMr"], side="r")
+    assert foot[0, 0] > 0.99 and foot[2, 2] > 0.97  # x forward along the foot, z up
+    fallback = jcm.thigh_frame(t["HJCr"], t["KJCr"], side="r")
+    np.testing.assert_allclose(fallback, np.eye(3), atol=1e-12)
+
+
+@pytest.mark.parametrize("primary, secondary", [("x", "y"), ("y", "x"), ("z", "y"), ("x", "z"), ("z", "x"), ("y", "z")])
+def test_frame_from_axes_is_right_handed(primary, secondary):
+    a, b = RNG.normal(size=(20, 3)), RNG.normal(size=(20, 3))
+    R = jcm.frame_from_axes(a, b, primary_axis=primary, secondary_axis=secondary)
+    np.testing.assert_allclose(np.linalg.det(R), 1.0)
+    i = "xyz".index(primary)
+    np.testing.assert_allclose(R[..., i], a / np.linalg.norm(a, axis=-1, keepdims=True))
