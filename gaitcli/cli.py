@@ -90,6 +90,21 @@ def filter_command(console: Console, trial, out, pipeline, cutoff_hz):
     run.filter()
 
 
+@gait.command("idyn")
+@_trial_argument
+@_out_option
+@_pipeline_option
+@click.option("--frames", type=click.Choice(["reference", "anatomical"]), default=None,
+              help="Frames the joint moments are expressed in (default: reference).")
+@click.pass_obj
+def idyn_command(console: Console, trial, out, pipeline, frames):
+    """Segment poses, 27 coordinates, 21 joint moments and the pelvis residuals."""
+    from gaitcli import pipeline as pl
+
+    cfg = pl.configure(pipeline, idyn={"frames": frames})
+    pl.Run(trial, out, cfg, console).idyn()
+
+
 @gait.command("synth")
 @click.argument("out_dir", type=click.Path(path_type=Path))
 @click.option("--condition", type=click.Choice(["normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot"]),
@@ -98,16 +113,18 @@ def filter_command(console: Console, trial, out, pipeline, cutoff_hz):
 @click.option("--noise-mm", type=float, default=2.0, show_default=True, help="White marker noise (SD per axis), mm.")
 @click.option("--artefact-mm", type=float, default=10.0, show_default=True,
               help="Low-frequency skin-artefact amplitude, mm.")
+@click.option("--plate-noise-n", "plate_noise_N", type=float, default=1.0, show_default=True,
+              help="White noise on the force-plate channels, N (N·mm/20 on moments).")
 @click.option("--strides", type=int, default=3, show_default=True, help="Gait cycles in the trial.")
 @click.pass_obj
-def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, strides):
+def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides):
     """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/)."""
     from gaitcli.synth import write_trial
 
     if strides < 1:
         raise click.BadParameter("expected at least 1 stride", param_hint="--strides")
     trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
-                        strides=strides)
+                        plate_noise_N=plate_noise_N, strides=strides)
     console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames, "
                  f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates)")
 

@@ -23,7 +23,7 @@ STAGES = ("filter", "idyn", "muscles")
 class FilterConfig:
     """Parameters of ``gait filter`` (3.1.4)."""
 
-    cutoff_hz: float = 6.0  # net cut-off of the zero-lag cascade for markers
+    cutoff_hz: float = 6.0  # net cut-off of the zero-lag cascade for markers (0: no filtering)
     force_cutoff_hz: float = 6.0  # the same for force-plate signals, before COP is formed
     order: int = 2  # Butterworth order of one pass
     max_gap_frames: int = 10  # longer marker gaps stay NaN
@@ -65,7 +65,8 @@ CHOICES = {
     ("muscles", "side"): ("r", "l"),
     ("muscles", "objective"): ("metabolic", "crowninshield_brand"),
 }
-POSITIVE = {("filter", "cutoff_hz"), ("filter", "force_cutoff_hz"), ("filter", "order"),
+NON_NEGATIVE = {("filter", "cutoff_hz"), ("filter", "force_cutoff_hz")}  # 0 turns the filter off
+POSITIVE = {("filter", "order"),
             ("filter", "force_threshold_N"), ("idyn", "gravity_m_s2"), ("muscles", "nodes")}
 
 
@@ -96,6 +97,8 @@ def _coerce(path, section: str, name: str, default: Any, value: Any) -> Any:
             raise InputError(path, where, f"got {value!r} (expected one of {', '.join(choices)})")
     if (section, name) in POSITIVE and value <= 0:
         raise InputError(path, where, f"got {value!r} (expected a value > 0)")
+    if (section, name) in NON_NEGATIVE and value < 0:
+        raise InputError(path, where, f"got {value!r} (expected a cut-off ≥ 0 Hz; 0 turns the filter off)")
     if name == "max_gap_frames" and value < 0:
         raise InputError(path, where, f"got {value!r} (expected an integer ≥ 0)")
     return value

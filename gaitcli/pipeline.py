@@ -14,7 +14,6 @@ from pathlib import Path
 
 import h5py
 import numpy as np
-import yaml
 
 from gaitcli.config import PipelineConfig, load_pipeline, to_yaml, with_overrides
 from gaitcli.errors import InputError
@@ -100,6 +99,68 @@ class Run:
             summary = write_filter_outputs(tmp, result, recording, self.attrs("filter"),
                                            elapsed_s=time.perf_counter() - started)
         self.console.summary("filter", summary, target)
+        return result
+
+    def filtered(self):
+        """The filter stage's result: read from a fresh ``filter.h5``, else by running the filter stage."""
+        from gaitcli.report.filter_outputs import filtered_trial, read_filtered_trial
+
+        path = self.fresh("filter", "filter.h5")
+        if path is not None:
+            return read_filtered_trial(path)
+        return filtered_trial(self.filter())
+
+    def calibration(self, filtered, mass_kg: float):
+        """Static calibration from static.c3d (in the dynamic trial's axes) or named frames of the trial."""
+        from gaitcli.io.axes import apply_rotation
+        from gaitcli.io.c3d import read_c3d
+        from gaitcli.kinematics.calibration import calibrate
+        from gaitcli.kinematics.markerset import apply_marker_map
+
+        subject = self.trial.subject
+        common = dict(mass_kg=mass_kg, stature_m=subject.stature_m, sex=subject.sex,
+                      thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
+                      disturbances=subject.disturbances)
+        if self.trial.static_path is not None:
+            dynamic = load_recording(self.trial)
+            static = apply_rotation(read_c3d(self.trial.static_path, to_model_axes=False), dynamic.lab_to_model)
+            markers = static.markers
+            if subject.marker_map:
+                markers = apply_marker_map(markers, subject.marker_map, source=self.trial.subject_path)
+            return calibrate(markers, source=self.trial.static_path, **common)
+        if subject.static_frames is None:
+            raise InputError(self.trial.subject_path, "static_frames",
+                             "no static.c3d in the trial folder: name the standing frames of the trial as "
+                             "[first, last] (file frame numbers)")
+        first, last = subject.static_frames
+        m = filtered.markers
+        frames = np.arange(first, last + 1) - m.first_frame
+        if frames[0] < 0 or frames[-1] >= m.n_frames:
+            raise InputError(self.trial.subject_path, "static_frames",
+                             f"got [{first}, {last}] (expected frames within {m.first_frame}–"
+                             f"{m.first_frame + m.n_frames - 1})")
+        return calibrate(m, frames=frames, source=self.trial.trial_path, **common)
+
+    def idyn(self):
+        """Run the idyn stage (and the filter stage first when its output is missing or stale)."""
+        from gaitcli.dynamics.stage import check_mass, estimate_mass_kg, inverse_dynamics_stage
+        from gaitcli.report.idyn_outputs import write_idyn_outputs
+
+        started = time.perf_counter()
+        filtered = self.filtered()
+        subject = self.trial.subject
+        if subject.mass_kg is not None:
+            mass, source = subject.mass_kg, "subject.yaml"
+        else:
+            mass = check_mass(estimate_mass_kg(filtered, gravity_m_s2=self.cfg.idyn.gravity_m_s2),
+                              self.trial.subject_path)
+            source = "estimated from the force plates (2·∫Fz dt / (g·stride period) per recorded stance)"
+        calibration = self.calibration(filtered, mass)
+        result = inverse_dynamics_stage(filtered, calibration, self.cfg.idyn, mass_kg=mass, mass_source=source)
+        target = self.out_root / "idyn"
+        with stage_folder(target) as tmp:
+            summary = write_idyn_outputs(tmp, result, self.attrs("idyn"), elapsed_s=time.perf_counter() - started)
+        self.console.summary("idyn", summary, target)
         return result
 
     def all(self):

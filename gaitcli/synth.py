@@ -16,7 +16,6 @@ and one left stance. ``truth/`` holds the exact kinematics, moments, GRF and eve
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,12 +25,9 @@ from scipy.interpolate import CubicSpline
 
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS
-from gaitcli.kinematics.rotations import (joint_angles_to_matrix, matrix_to_cardan_xyz, matrix_to_joint_angles,
-                                          rot_y, rot_z)
 from gaitcli.recording import ForcePlate, Markers
 
 G = 9.81
-CORRECT = 0.0
 ANALOG_RATE_HZ = 1000.0
 MARKER_RATE_HZ = 100.0
 
@@ -163,13 +159,13 @@ HIP_ADDUCTION = ((0, 3), (15, 7), (40, 3), (60, -3), (75, -6), (90, -1), (100, 3
 HIP_ROTATION = ((0, 2), (20, 5), (50, 0), (70, -5), (100, 2))
 STANCE_END = 0.62  # toe off of the same foot, fraction of the cycle
 DOUBLE_SUPPORT = 0.12
-PELVIS_HARMONICS = (4, 3, 6)  # x, y, z
+PELVIS_HARMONICS = (4, 3, 4)  # x, y, z
 ROLL_RADIUS_M = 0.30
 WARP_KEEP = 0.3
-WARP_HARMONICS = 8
+WARP_HARMONICS = 4
 
 
-def periodic_curve(points, phase, *, harmonics=8):
+def periodic_curve(points, phase, *, harmonics=5):
     """Smooth periodic curve through (percent, value) via points, evaluated at ``phase`` (0..1).
 
     A periodic cubic spline through the points, low-passed to ``harmonics`` Fourier
@@ -634,8 +630,8 @@ def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, statu
 
 
 def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0,
-                artefact_mm: float = 10.0, strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78,
-                sex: str = "male") -> SyntheticTrial:
+                artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
+                stature_m: float = 1.78, sex: str = "male") -> SyntheticTrial:
     """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/."""
     from gaitcli.io.atomic import atomic_path
     from gaitcli.io.c3d_write import write_c3d
@@ -643,7 +639,8 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
     from gaitcli.kinematics.conventions import coordinates_to_clinical, moments_to_clinical
 
     trial = simulate_trial(condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
-                           strides=strides, mass_kg=mass_kg, stature_m=stature_m, sex=sex)
+                           plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
+                           sex=sex)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_c3d(out / "trial.c3d", trial.markers, trial.plates)

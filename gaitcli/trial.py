@@ -13,29 +13,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import yaml
 
 from gaitcli.errors import InputError
+from gaitcli.kinematics.anthropometry import Disturbance
 
 SEXES = ("male", "female")
 SIDES = ("r", "l")
 SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")
-
-
-@dataclass(frozen=True)
-class Disturbance:
-    """A mass added to a segment (orthosis, ankle weight, boot; Tables A.2–A.3).
-
-    ``inertia_kgm2`` are the principal moments about the added mass's own centre
-    (x, y, z of the segment frame); ``com_offset_m`` its centre relative to the
-    segment's centre of mass, in the segment frame.
-    """
-
-    segment: str
-    mass_kg: float
-    inertia_kgm2: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    com_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    name: str = ""
 
 
 @dataclass(frozen=True)
@@ -52,7 +38,7 @@ class Subject:
     static_frames: tuple[int, int] | None = None
     marker_map: dict[str, str] = field(default_factory=dict)
     disturbed_side: str | None = None
-    disturbances: tuple[Disturbance, ...] = ()
+    disturbances: tuple[Disturbance, ...] = ()  # added masses (Tables A.2–A.3), in segment axes
     condition: str = "normal"
 
 
@@ -144,8 +130,9 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
             segment=segment,
             mass_kg=_number(path, f"{where}.mass_kg", item.get("mass_kg"), low=0, high=50,
                             expected="an added mass in kg, > 0 and ≤ 50"),
-            inertia_kgm2=_vector3(path, f"{where}.inertia_kgm2", item.get("inertia_kgm2", [0, 0, 0])),
-            com_offset_m=_vector3(path, f"{where}.com_offset_m", item.get("com_offset_m", [0, 0, 0])),
+            # principal moments about the added mass's own centre, segment axes (Table A.2)
+            inertia_kgm2=np.diag(_vector3(path, f"{where}.inertia_kgm2", item.get("inertia_kgm2", [0, 0, 0]))),
+            com_offset_m=np.array(_vector3(path, f"{where}.com_offset_m", item.get("com_offset_m", [0, 0, 0]))),
             name=str(item.get("name", "")),
         ))
     condition = data.get("condition", "normal")

@@ -102,7 +102,7 @@ def write_h5(path: str | Path, datasets: dict[str, Dataset], root_attrs: dict) -
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as h5:
             for key, value in root_attrs.items():
-                h5.attrs[key] = value
+                h5.attrs[key] = "none" if value is None else value
             for name, ds in datasets.items():
                 values = np.asarray(ds.values)
                 if values.dtype.kind in "UO":
@@ -110,5 +110,5 @@ def write_h5(path: str | Path, datasets: dict[str, Dataset], root_attrs: dict) -
                 d = h5.create_dataset(name, data=values)
                 d.attrs["units"] = ds.units
                 for key, value in ds.attrs.items():
-                    d.attrs[key] = value
+                    d.attrs[key] = "none" if value is None else value
     return Path(path)

@@ -86,7 +86,8 @@ def write_filter_outputs(folder: Path, result: FilterResult, recording: Recordin
         "markers/time": Dataset(m.time_s, "s"),
         "markers/raw": Dataset(result.raw_markers.positions_m, "m", {"axes": "frames, markers, xyz (model axes)"}),
         "markers/filtered": Dataset(m.positions_m, "m", {"cutoff_hz": result.config.cutoff_hz,
-                                                         "design_cutoff_hz": result.design_cutoff_hz}),
+                                                         "design_cutoff_hz": result.design_cutoff_hz,
+                                                         "rate_hz": m.rate_hz, "first_frame": m.first_frame}),
         "markers/gaps": Dataset(np.array([[g.marker_index, g.first_frame, g.last_frame, g.filled]
                                           for g in result.gaps], dtype=int).reshape(-1, 4), "frame",
                                 {"columns": "marker_index, first_frame, last_frame, filled (0-based frames)"}),
@@ -117,3 +118,34 @@ def write_filter_outputs(folder: Path, result: FilterResult, recording: Recordin
     info = summary(result, recording, elapsed_s)
     write_json(folder / "summary.json", info)
     return info
+
+
+def filtered_trial(result: FilterResult):
+    """The part of a filter result the idyn stage uses."""
+    from gaitcli.dynamics.stage import FilteredTrial
+
+    feet = {side: {"force_N": load.force_N, "cop_m": load.cop_m, "free_moment_Nm": load.free_moment_Nm}
+            for side, load in result.feet.items()}
+    return FilteredTrial(markers=result.markers, feet=feet, events=result.events)
+
+
+def read_filtered_trial(path: Path):
+    """Read ``filter.h5`` back into the :class:`~gaitcli.dynamics.stage.FilteredTrial` the idyn stage uses."""
+    import h5py
+
+    from gaitcli.dynamics.stage import FilteredTrial
+    from gaitcli.signal.events import Events
+
+    with h5py.File(path, "r") as h5:
+        ds = h5["markers/filtered"]
+        labels = tuple(x.decode() if isinstance(x, bytes) else str(x) for x in h5["markers/labels"][()])
+        markers = Markers(labels, ds[()], float(ds.attrs["rate_hz"]), int(ds.attrs["first_frame"]))
+        feet = {}
+        for side in ("r", "l"):
+            if f"feet/{side}/force" in h5:
+                feet[side] = {"force_N": h5[f"feet/{side}/force"][()], "cop_m": h5[f"feet/{side}/cop"][()],
+                              "free_moment_Nm": h5[f"feet/{side}/free_moment"][()]}
+        text = (lambda key: np.array([x.decode() if isinstance(x, bytes) else str(x) for x in h5[key][()]]))
+        events = Events(frame=h5["events/frame"][()].astype(int), time_s=h5["events/time"][()],
+                        side=text("events/side"), kind=text("events/kind"), source=text("events/source"))
+    return FilteredTrial(markers=markers, feet=feet, events=events)

@@ -82,3 +82,59 @@ def filter_figures(folder: Path, result, *, title: str = "") -> list[Path]:
         fig.suptitle(f"Ground reactions per foot {title}", fontsize=10)
         written.append(save(fig, folder / "grf.png"))
     return written
+
+
+def idyn_figures(folder: Path, result, *, title: str = "") -> list[Path]:
+    """``cycle.png``: sagittal hip/knee/ankle angles and moments over the gait cycle (mean ± SD per side);
+    ``residuals.png``: the pelvis residual force and moment over time."""
+    from gaitcli.kinematics.conventions import coordinates_to_clinical, moments_to_clinical
+    from gaitcli.kinematics.model import COORDINATES, MOMENTS
+    from gaitcli.signal.cycles import normalise
+
+    folder = Path(folder)
+    written = []
+    kin = coordinates_to_clinical(result.q)
+    mom = moments_to_clinical(result.joint_moments_Nm) / result.mass_kg
+    joints = (("hip", "hip flexion"), ("knee", "knee flexion"), ("ankle", "ankle dorsiflexion"))
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
+    pct = np.arange(101)
+    for col, (joint, label) in enumerate(joints):
+        for side in ("r", "l"):
+            ks = [s for s in result.strides if s.side == side]
+            if not ks:
+                continue
+            a = np.array([normalise(kin[:, COORDINATES.index(f"{joint}_{side}_flexion")], result.time_s, s)
+                          for s in ks])
+            m = np.array([normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], result.time_s, s)
+                          for s in ks])
+            for row, values in ((0, a), (1, m)):
+                mean, sd = np.nanmean(values, axis=0), np.nanstd(values, axis=0)
+                ax = axes[row, col]
+                ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAME[side]} (n={len(ks)})")
+                ax.fill_between(pct, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
+        axes[0, col].set_ylabel(f"{label} (deg)")
+        axes[1, col].set_ylabel(f"{label} moment (N·m/kg)")
+        axes[1, col].set_xlabel("gait cycle (%)")
+        for row in (0, 1):
+            axes[row, col].axhline(0, color="0.8", lw=0.6)
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(f"Sagittal kinematics and moments over the gait cycle (mean ± SD; moments valid only where "
+                 f"the stance foot was on a plate) {title}", fontsize=9)
+    written.append(save(fig, folder / "cycle.png"))
+
+    fig, axes = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
+    for k, axis in enumerate("xyz"):
+        axes[0].plot(result.time_s, result.residual_force_N[:, k], label=axis)
+        axes[1].plot(result.time_s, result.residual_moment_Nm[:, k], label=axis)
+    for ax in axes:
+        ax.fill_between(result.time_s, 0, 1, where=~result.measured, transform=ax.get_xaxis_transform(),
+                        color="0.9", lw=0, label="a foot on the ground off the plates")
+        mark_events(ax, result.events)
+    axes[0].set_ylabel("pelvis residual force (N)")
+    axes[1].set_ylabel("pelvis residual moment (N·m)")
+    axes[1].set_xlabel("time (s)")
+    axes[0].legend(fontsize=8, ncol=4)
+    fig.suptitle(f"Pelvis residuals (3.22): what the model and the measured ground reactions leave unexplained "
+                 f"{title}", fontsize=9)
+    written.append(save(fig, folder / "residuals.png"))
+    return written

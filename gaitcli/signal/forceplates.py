@@ -126,7 +126,7 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
                rate_hz: float | None = None) -> PlateLoad:
     """Filter a plate's wrench at the analog rate, then form COP and free moment where loaded (3.1.4).
 
-    ``cutoff_hz`` is the net cut-off of the zero-lag Butterworth filter; ``threshold_N``
+    ``cutoff_hz`` is the net cut-off of the zero-lag Butterworth filter (0: no filtering); ``threshold_N``
     the vertical force above which the plate counts as loaded; ``rate_hz`` the marker
     rate to resample to (None keeps the plate's own rate).
     """
@@ -140,10 +140,12 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
     out_rate = plate.rate_hz if rate_hz is None else float(rate_hz)
     if not (np.isfinite(out_rate) and out_rate > 0):
         raise InputError(None, "rate_hz", f"got {rate_hz!r} (expected a marker rate > 0 Hz)")
-    if not cutoff_hz < out_rate / 2:
+    if cutoff_hz and not cutoff_hz < out_rate / 2:
         raise InputError(None, "cutoff_hz",
                          f"got {cutoff_hz!r} Hz (expected below the output Nyquist frequency {out_rate / 2:g} Hz)")
-    wrench = lowpass(np.concatenate([force, moment], axis=1), rate_hz=plate.rate_hz, cutoff_hz=cutoff_hz)
+    wrench = np.concatenate([force, moment], axis=1)
+    if cutoff_hz:  # 0 or None: unfiltered (exact synthetic data)
+        wrench = lowpass(wrench, rate_hz=plate.rate_hz, cutoff_hz=cutoff_hz)
     wrench = resample_to_frames(wrench, source_rate_hz=plate.rate_hz, rate_hz=out_rate)
     force_f, moment_f = wrench[:, :3], wrench[:, 3:]
     loaded = np.nan_to_num(force_f[:, 2], nan=-np.inf) > threshold_N

@@ -75,7 +75,8 @@ def _frames(load: PlateLoad, n: int) -> PlateLoad:
 def filter_markers(markers: Markers, cfg: FilterConfig) -> tuple[Markers, list[Gap]]:
     """Fill gaps up to ``cfg.max_gap_frames`` by cubic interpolation, then filter (3.1.4)."""
     filled, gaps = fill_gaps(markers.positions_m, max_gap_frames=cfg.max_gap_frames)
-    smooth = lowpass(filled, rate_hz=markers.rate_hz, cutoff_hz=cfg.cutoff_hz, order=cfg.order, axis=0)
+    smooth = lowpass(filled, rate_hz=markers.rate_hz, cutoff_hz=cfg.cutoff_hz, order=cfg.order, axis=0) \
+        if cfg.cutoff_hz else filled  # 0 turns the filter off (exact synthetic data)
     return Markers(markers.labels, smooth, markers.rate_hz, markers.first_frame), gaps
 
 
@@ -116,8 +117,10 @@ def filter_trial(recording: Recording, cfg: FilterConfig) -> FilterResult:
                           GaitWarning, stacklevel=2)
     foot_loads = combine_loads(plates, detection.owner) if plates else {}
     force_design = design_frequency_hz(cfg.force_cutoff_hz, recording.plates[0].rate_hz, order=cfg.order) \
-        if recording.plates else None
+        if recording.plates and cfg.force_cutoff_hz else None
     return FilterResult(raw_markers=recording.markers, markers=markers, gaps=gaps, plates=plates,
                         plates_analog=plates_analog, feet=foot_loads, plate_owner=detection.owner,
-                        contacts=detection.contacts, events=detection.events, design_cutoff_hz=design_frequency_hz(cfg.cutoff_hz, rate, order=cfg.order),
+                        contacts=detection.contacts, events=detection.events, 
+                        design_cutoff_hz=design_frequency_hz(cfg.cutoff_hz, rate, order=cfg.order)
+                        if cfg.cutoff_hz else None,
                         force_design_cutoff_hz=force_design, config=cfg)

@@ -1,0 +1,134 @@
+"""Writes the idyn stage's files: kinematics.csv, joint_moments.csv, residuals.csv, sagittal.csv,
+gait_cycle.csv, idyn.h5, summary.json and plots/."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from gaitcli.dynamics.stage import IdynResult
+from gaitcli.io.outputs import Dataset, write_h5, write_json, write_table
+from gaitcli.kinematics.conventions import CONVENTION, coordinates_to_clinical, moments_to_clinical
+from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS
+from gaitcli.report import plots
+from gaitcli.signal.cycles import CYCLE_POINTS, normalise
+
+
+def kinematics_columns(result: IdynResult) -> dict:
+    table = coordinates_to_clinical(result.q)
+    return {"time_s": result.time_s, **{name: table[:, k] for k, name in enumerate(COORDINATES)}}
+
+
+def moment_columns(result: IdynResult) -> dict:
+    """21 moments in N·m (``<name>_moment``) then in N·m/kg (``<name>_moment_per_kg``)."""
+    table = moments_to_clinical(result.joint_moments_Nm)
+    columns = {"time_s": result.time_s}
+    columns.update({name: table[:, k] for k, name in enumerate(MOMENTS)})
+    columns.update({f"{name}_per_kg": table[:, k] / result.mass_kg for k, name in enumerate(MOMENTS)})
+    columns["right_foot_load_known"] = result.foot_measured["r"].astype(int)
+    columns["left_foot_load_known"] = result.foot_measured["l"].astype(int)
+    return columns
+
+
+def residual_columns(result: IdynResult) -> dict:
+    values = np.column_stack([result.residual_force_N, result.residual_moment_Nm])
+    units = ["N"] * 3 + ["Nm"] * 3
+    columns = {"time_s": result.time_s}
+    columns.update({f"{name}_{u}": values[:, k] for k, (name, u) in enumerate(zip(RESIDUALS, units))})
+    columns["all_contacts_measured"] = result.measured.astype(int)
+    return columns
+
+
+def cycle_columns(result: IdynResult) -> dict:
+    """Every complete stride of each side normalised to 0–100 % (long format: one block per stride)."""
+    kin = coordinates_to_clinical(result.q)
+    mom = moments_to_clinical(result.joint_moments_Nm) / result.mass_kg
+    values = np.column_stack([kin, mom])
+    names = list(COORDINATES) + [f"{m}_per_kg" for m in MOMENTS]
+    blocks = {"cycle_pct": [], "side": [], "stride": [], "start_s": []}
+    rows = []
+    for k, stride in enumerate(result.strides):
+        rows.append(normalise(values, result.time_s, stride))
+        blocks["cycle_pct"].append(np.arange(CYCLE_POINTS, dtype=float))
+        blocks["side"].append(np.full(CYCLE_POINTS, stride.side))
+        blocks["stride"].append(np.full(CYCLE_POINTS, k + 1))
+        blocks["start_s"].append(np.full(CYCLE_POINTS, stride.start_s))
+    columns = {key: (np.concatenate(v) if v else np.zeros(0)) for key, v in blocks.items()}
+    table = np.concatenate(rows) if rows else np.zeros((0, len(names)))
+    columns.update({name: table[:, k] for k, name in enumerate(names)})
+    return columns
+
+
+def rms(values: np.ndarray) -> float:
+    """Root mean square of the vector magnitudes over the finite rows (NaN when none)."""
+    finite = np.all(np.isfinite(values), axis=1)
+    return float(np.sqrt(np.mean(np.sum(values[finite] ** 2, axis=1)))) if finite.any() else float("nan")
+
+
+def summary(result: IdynResult, elapsed_s: float) -> dict:
+    """DESIGN.md's idyn keys (Table 3.1 features, residuals) plus fit quality and provenance notes."""
+    m = result.measured
+    info = {
+        "frames": int(result.q.shape[0]),
+        "dof": int(result.q.shape[1]),
+        "rms_residual_force_N": rms(result.residual_force_N[m]),
+        "rms_residual_moment_Nm": rms(result.residual_moment_Nm[m]),
+        "residual_frames": int(np.sum(m & np.all(np.isfinite(result.residual_force_N), axis=1))),
+        "rms_residual_force_all_frames_N": rms(result.residual_force_N),
+        **{k: v for k, v in result.features.as_dict().items()},
+        "mass_kg": result.mass_kg,
+        "mass_source": result.mass_source,
+        "moment_frames": result.frames,
+        "segment_rms_marker_error_mm": {b: float(np.nanmean(result.segment_rms_m[:, i]) * 1000)
+                                        if np.isfinite(result.segment_rms_m[:, i]).any() else None
+                                        for i, b in enumerate(BODIES)},
+        "locked_segments": list(result.calibration.locked),
+        "notes": result.notes,
+        "elapsed_s": round(elapsed_s, 3),
+    }
+    return info
+
+
+def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict, *, elapsed_s: float) -> dict:
+    """Write every file of the idyn stage into ``folder``; return the summary."""
+    folder = Path(folder)
+    write_table(folder / "kinematics.csv", kinematics_columns(result))
+    write_table(folder / "joint_moments.csv", moment_columns(result))
+    write_table(folder / "residuals.csv", residual_columns(result))
+    write_table(folder / "sagittal.csv", result.sagittal)
+    write_table(folder / "gait_cycle.csv", cycle_columns(result))
+    p = result.parameters
+    data = {
+        "time": Dataset(result.time_s, "s"),
+        "coordinates": Dataset(result.q, "m, rad", {"columns": ",".join(COORDINATES),
+                                                     "convention": "model (3.1): Cardan x-y-z pelvis, y-x-z joints"}),
+        "coordinates_clinical": Dataset(coordinates_to_clinical(result.q), "m, deg",
+                                        {"columns": ",".join(COORDINATES), "convention": CONVENTION}),
+        "velocities": Dataset(result.qd, "m/s, rad/s"),
+        "accelerations": Dataset(result.qdd, "m/s^2, rad/s^2"),
+        "joint_moments": Dataset(result.joint_moments_Nm, "N*m", {
+            "axes": "frames, joints (" + ",".join(JOINTS) + "), xyz", "frames": result.frames,
+            "convention": "model: moment of the proximal on the distal segment, components in the distal "
+                          f"segment's {result.frames} frame"}),
+        "joint_moments_clinical": Dataset(moments_to_clinical(result.joint_moments_Nm), "N*m",
+                                          {"columns": ",".join(MOMENTS), "convention": CONVENTION}),
+        "joint_moments_global": Dataset(result.joint_moments_global_Nm, "N*m", {"frames": "global (model axes)"}),
+        "residuals/force": Dataset(result.residual_force_N, "N", {"frames": "global"}),
+        "residuals/moment": Dataset(result.residual_moment_Nm, "N*m", {"frames": "global, about the pelvis CoM"}),
+        "residuals/all_contacts_measured": Dataset(result.measured.astype(np.int8), "1"),
+        "segments/names": Dataset(np.array(BODIES), "1"),
+        "segments/mass": Dataset(p.mass_kg, "kg", {"total_kg": p.total_mass_kg}),
+        "segments/inertia": Dataset(p.inertia_kgm2, "kg*m^2", {"about": "segment CoM, segment axes"}),
+        "segments/joint_in_parent": Dataset(p.joint_in_parent_m, "m"),
+        "segments/joint_in_child": Dataset(p.joint_in_child_m, "m"),
+        "segments/rms_marker_error": Dataset(result.segment_rms_m, "m"),
+        "segments/reference_to_anatomical": Dataset(result.calibration.reference_to_anatomical, "1"),
+        "segments/disturbances": Dataset(np.array([str(n) for n in p.notes] or [""]), "1"),
+        "joint_centres": Dataset(result.joint_centres_m, "m", {"joints": ",".join(JOINTS)}),
+    }
+    write_h5(folder / "idyn.h5", data, attrs)
+    plots.idyn_figures(folder / "plots", result, title=attrs.get("trial", ""))
+    info = summary(result, elapsed_s)
+    write_json(folder / "summary.json", info)
+    return info

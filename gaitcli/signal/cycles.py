@@ -1,0 +1,113 @@
+"""Gait cycles from events: strides, time normalisation to 0–100 %, and the features of Table 3.1."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitcli.signal.events import Events
+
+CYCLE_POINTS = 101  # 0, 1, …, 100 % of the cycle
+
+
+@dataclass(frozen=True)
+class Stride:
+    """One gait cycle of one side: heel strike to the next heel strike of the same foot (times in s)."""
+
+    side: str
+    start_s: float
+    end_s: float
+    toe_off_s: float  # this foot's toe off inside the stride (NaN if not seen)
+
+    @property
+    def period_s(self) -> float:
+        return self.end_s - self.start_s
+
+
+def strides(events: Events) -> list[Stride]:
+    """Every complete stride of both sides, in time order."""
+    out = []
+    for side in ("r", "l"):
+        strikes = np.sort(events.time_s[(events.side == side) & (events.kind == "heel_strike")])
+        offs = np.sort(events.time_s[(events.side == side) & (events.kind == "toe_off")])
+        for a, b in zip(strikes[:-1], strikes[1:]):
+            inside = offs[(offs > a) & (offs < b)]
+            out.append(Stride(side, float(a), float(b), float(inside[0]) if inside.size else np.nan))
+    return sorted(out, key=lambda s: s.start_s)
+
+
+def normalise(values: np.ndarray, time_s: np.ndarray, stride: Stride) -> np.ndarray:
+    """Resample ``values`` (frames, ...) over one stride to 101 points, 0–100 % (linear interpolation)."""
+    grid = np.linspace(stride.start_s, stride.end_s, CYCLE_POINTS)
+    flat = values.reshape(values.shape[0], -1)
+    out = np.column_stack([np.interp(grid, time_s, flat[:, k], left=np.nan, right=np.nan)
+                           for k in range(flat.shape[1])])
+    return out.reshape((CYCLE_POINTS,) + values.shape[1:])
+
+
+def _stance_intervals(events: Events, side: str) -> list[tuple[float, float]]:
+    strikes = np.sort(events.time_s[(events.side == side) & (events.kind == "heel_strike")])
+    offs = np.sort(events.time_s[(events.side == side) & (events.kind == "toe_off")])
+    out = []
+    for a in strikes:
+        later = offs[offs > a]
+        if later.size:
+            out.append((float(a), float(later[0])))
+    return out
+
+
+@dataclass(frozen=True)
+class GaitFeatures:
+    """Table 3.1: stride length (m), period (s), speed (m/s), stance % per side, double stance %.
+
+    Means over the complete strides of both sides; NaN where the events do not allow it.
+    """
+
+    stride_length_m: float
+    period_s: float
+    speed_m_s: float
+    stance_right_pct: float
+    stance_left_pct: float
+    double_stance_pct: float
+    strides: int
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.ndarray) -> GaitFeatures:
+    """Table 3.1 from events and each heel's forward position (m) over time.
+
+    Stride length is the heel's forward displacement between two strikes of the
+    same foot; stance % the stance time over the stride period; double stance % the
+    time both feet are on the ground within a stride over its period.
+    """
+    all_strides = strides(events)
+    lengths, periods, stance = [], [], {"r": [], "l": []}
+    double = []
+    intervals = {s: _stance_intervals(events, s) for s in ("r", "l")}
+    for st in all_strides:
+        x = heel_x_m.get(st.side)
+        if x is not None:
+            a, b = np.interp([st.start_s, st.end_s], time_s, x)
+            lengths.append(abs(b - a))
+        periods.append(st.period_s)
+        if np.isfinite(st.toe_off_s):
+            stance[st.side].append((st.toe_off_s - st.start_s) / st.period_s * 100)
+        other = "l" if st.side == "r" else "r"
+        if not np.isfinite(st.toe_off_s):
+            continue
+        # both double supports must be seen: the other foot on the ground at this strike, and its next strike
+        starts = any(a <= st.start_s < b for a, b in intervals[other])
+        ends = any(st.start_s < a < st.toe_off_s for a, _ in intervals[other])
+        if starts and ends:
+            both = sum(max(0.0, min(b, st.toe_off_s) - max(a, st.start_s)) for a, b in intervals[other])
+            double.append(both / st.period_s * 100)
+    mean = (lambda v: float(np.mean(v)) if len(v) else float("nan"))
+    period = mean(periods)
+    length = mean(lengths)
+    return GaitFeatures(stride_length_m=length, period_s=period,
+                        speed_m_s=length / period if np.isfinite(length) and period > 0 else float("nan"),
+                        stance_right_pct=mean(stance["r"]), stance_left_pct=mean(stance["l"]),
+                        double_stance_pct=mean(double), strides=len(all_strides))
