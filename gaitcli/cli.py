@@ -105,6 +105,28 @@ def idyn_command(console: Console, trial, out, pipeline, frames):
     pl.Run(trial, out, cfg, console).idyn()
 
 
+@gait.command("muscles")
+@_trial_argument
+@_out_option
+@_pipeline_option
+@click.option("--method", type=click.Choice(["so", "mso", "eid"]), default=None,
+              help="Static optimization, modified SO or extended inverse dynamics (default: eid).")
+@click.option("--side", type=click.Choice(["r", "l"]), default=None, help="Which leg (default: r).")
+@click.option("--nodes", type=int, default=None, help="EID nodes over the interval (default 50).")
+@click.option("--phase", type=click.Choice(["cycle", "swing"]), default=None,
+              help="A stride recorded on the plates (periodic) or a swing phase (default: cycle).")
+@click.option("--validate", is_flag=True, default=None,
+              help="Integrate the forward model with the EID excitations and compare (4.5.4).")
+@click.pass_obj
+def muscles_command(console: Console, trial, out, pipeline, method, side, nodes, phase, validate):
+    """Muscle forces, activations, excitations and metabolic cost of 8 leg muscles (SO | MSO | EID)."""
+    from gaitcli import pipeline as pl
+
+    cfg = pl.configure(pipeline, muscles={"method": method, "side": side, "nodes": nodes, "phase": phase,
+                                          "validate": validate})
+    pl.Run(trial, out, cfg, console).muscles()
+
+
 @gait.command("synth")
 @click.argument("out_dir", type=click.Path(path_type=Path))
 @click.option("--condition", type=click.Choice(["normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot"]),

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -47,6 +48,7 @@ class MusclesConfig:
     nodes: int = 50
     validate: bool = False
     objective: str = "metabolic"  # EID objective: metabolic | crowninshield_brand
+    phase: str = "cycle"  # cycle: a full stride recorded on the plates (periodic); swing: one swing phase
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,7 @@ CHOICES = {
     ("muscles", "method"): ("so", "mso", "eid"),
     ("muscles", "side"): ("r", "l"),
     ("muscles", "objective"): ("metabolic", "crowninshield_brand"),
+    ("muscles", "phase"): ("cycle", "swing"),
 }
 NON_NEGATIVE = {("filter", "cutoff_hz"), ("filter", "force_cutoff_hz")}  # 0 turns the filter off
 POSITIVE = {("filter", "order"),
@@ -86,8 +89,8 @@ def _coerce(path, section: str, name: str, default: Any, value: Any) -> Any:
         if isinstance(value, bool) or not isinstance(value, int):
             raise InputError(path, where, f"got {value!r} (expected an integer)")
     elif isinstance(default, float):
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise InputError(path, where, f"got {value!r} (expected a number)")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise InputError(path, where, f"got {value!r} (expected a finite number)")
         value = float(value)
     elif isinstance(default, str):
         if not isinstance(value, str):
@@ -144,7 +147,9 @@ def load_pipeline(path: str | Path | None = None) -> PipelineConfig:
     if not path.is_file():
         raise InputError(path, None, "pipeline file not found")
     try:
-        data = yaml.safe_load(path.read_text())
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(path, None, "not a text file (expected UTF-8 YAML)") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark else None

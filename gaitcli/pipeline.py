@@ -10,17 +10,22 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
+import warnings
 from pathlib import Path
 
 import h5py
 import numpy as np
 
 from gaitcli.config import PipelineConfig, load_pipeline, to_yaml, with_overrides
-from gaitcli.errors import InputError
+from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.outputs import provenance, stage_folder
 from gaitcli.recording import Recording
 from gaitcli.resources import sample_trial
 from gaitcli.trial import TrialFolder, open_trial, sha256
+
+
+#: bump when a stage's output files change, so that older outputs count as stale
+OUTPUT_FORMAT = 1
 
 
 def configure(pipeline: Path | None, **sections) -> PipelineConfig:
@@ -65,7 +70,7 @@ class Run:
         """What a stage's output depends on: input hashes and the configuration of it and earlier stages."""
         sections = {"filter": ["filter"], "idyn": ["filter", "idyn"], "muscles": ["filter", "idyn", "muscles"]}
         cfg = {s: dataclasses.asdict(getattr(self.cfg, s)) for s in sections[stage]}
-        return json.dumps({"inputs": self.inputs, "config": cfg}, sort_keys=True)
+        return json.dumps({"inputs": self.inputs, "config": cfg, "format": OUTPUT_FORMAT}, sort_keys=True)
 
     def attrs(self, stage: str) -> dict:
         attrs = provenance(to_yaml(self.cfg), self.inputs)
@@ -107,7 +112,10 @@ class Run:
 
         path = self.fresh("filter", "filter.h5")
         if path is not None:
-            return read_filtered_trial(path)
+            try:
+                return read_filtered_trial(path)
+            except (KeyError, OSError, ValueError):  # an older or damaged output: make it anew
+                pass
         return filtered_trial(self.filter())
 
     def calibration(self, filtered, mass_kg: float):
@@ -123,7 +131,10 @@ class Run:
                       disturbances=subject.disturbances)
         if self.trial.static_path is not None:
             dynamic = load_recording(self.trial)
-            static = apply_rotation(read_c3d(self.trial.static_path, to_model_axes=False), dynamic.lab_to_model)
+            with warnings.catch_warnings():  # a standing trial has no plates to speak of
+                warnings.filterwarnings("ignore", message=".*force plate", category=GaitWarning)
+                static = read_c3d(self.trial.static_path, to_model_axes=False)
+            static = apply_rotation(static, dynamic.lab_to_model)
             markers = static.markers
             if subject.marker_map:
                 markers = apply_marker_map(markers, subject.marker_map, source=self.trial.subject_path)
@@ -161,6 +172,59 @@ class Run:
         with stage_folder(target) as tmp:
             summary = write_idyn_outputs(tmp, result, self.attrs("idyn"), elapsed_s=time.perf_counter() - started)
         self.console.summary("idyn", summary, target)
+        return result
+
+    def idyn_outputs(self):
+        """What the muscle stage needs: from a fresh ``idyn.h5``, else by running the idyn stage."""
+        from gaitcli.report.idyn_outputs import muscle_inputs, read_muscle_inputs
+
+        path = self.fresh("idyn", "idyn.h5")
+        if path is not None:
+            try:
+                return read_muscle_inputs(path)
+            except (KeyError, OSError, ValueError):  # an older or damaged output: make it anew
+                pass
+        return muscle_inputs(self.idyn())
+
+    def muscles(self):
+        """Run SO, MSO or EID on one leg; unconverged solutions are written, then reported (exit 3)."""
+        from gaitcli.errors import NotConvergedError
+        from gaitcli.muscles.interval import analysis_interval
+        from gaitcli.muscles.limb import LimbParameters, SagittalMotion
+        from gaitcli.muscles.stage import MuscleOptions, run_muscles
+        from gaitcli.report.muscles_outputs import write_muscle_outputs
+
+        started = time.perf_counter()
+        cfg = self.cfg.muscles
+        inputs = self.idyn_outputs()
+        subject = self.trial.subject
+        side = cfg.side
+        time_s = np.asarray(inputs.sagittal["time_s"])
+        source = self.out_root / "idyn" / "sagittal.csv"
+        start, end, periodic = analysis_interval(inputs.events, time_s, inputs.foot_load_known[side], side,
+                                                 cfg.phase, source=source)
+        ev = inputs.events
+        motion = SagittalMotion.from_table(
+            inputs.sagittal, side, path=source,
+            heel_strike_s=ev.time_s[(ev.side == side) & (ev.kind == "heel_strike")],
+            toe_off_s=ev.time_s[(ev.side == side) & (ev.kind == "toe_off")])
+        limb = LimbParameters.from_body(inputs.parameters, side, body_mass_kg=inputs.mass_kg,
+                                        stature_m=subject.stature_m, sex=subject.sex)
+        options = MuscleOptions(objective="cb" if cfg.objective == "crowninshield_brand" else "metabolic")
+        with self.console.progress(f"muscles ({cfg.method.upper()})") as bar:
+            result = run_muscles(motion, limb, method=cfg.method, nodes=cfg.nodes if cfg.method == "eid" else None,
+                                 interval=(start, end), periodic=periodic, options=options,
+                                 validate=cfg.validate)
+            bar.update(completed=1, total=1)
+        target = self.out_root / "muscles" / cfg.method
+        with stage_folder(target) as tmp:
+            summary = write_muscle_outputs(tmp, result, self.attrs("muscles"), phase=cfg.phase,
+                                           interval=(start, end), events=inputs.events,
+                                           elapsed_s=time.perf_counter() - started)
+        self.console.summary("muscles", summary, target)
+        if not result.converged:
+            raise NotConvergedError(f"{cfg.method.upper()} did not converge ({result.status}); results written to "
+                                    f"{target} with converged: false")
         return result
 
     def all(self):

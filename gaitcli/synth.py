@@ -54,7 +54,7 @@ class Condition:
 
 # Speeds and periods follow Table 3.1's trends (slower with kinematic constraints).
 CONDITIONS = {
-    "normal": Condition("normal", 1.25, 1.08),
+    "normal": Condition("normal", 1.25, 1.20),
     "ankle_weight": Condition("ankle_weight", 1.30, 1.12, (("shank_r", "weight_band", "ankle"),)),
     "knee_orthosis": Condition("knee_orthosis", 1.20, 1.16, (("shank_r", "knee_orthosis", "knee"),),
                                locked_knee_r=True),
@@ -161,6 +161,9 @@ STANCE_END = 0.62  # toe off of the same foot, fraction of the cycle
 DOUBLE_SUPPORT = 0.12
 PELVIS_HARMONICS = (4, 3, 4)  # x, y, z
 ROLL_RADIUS_M = 0.30
+FORE_AFT_MODE = "pendulum"
+BRAKING_BW = 0.18
+HEEL_COP_M = -0.04  # where the COP starts at heel strike, forward of the ankle centre
 WARP_KEEP = 0.3
 WARP_HARMONICS = 4
 
@@ -228,9 +231,9 @@ def design_gait(geometry: Geometry, condition: Condition, params, *, samples: in
     w = 2 * np.pi / T
     q = np.zeros((t.size, 27))
     q[:, 3:6] = np.column_stack([-np.radians(3.0) * np.sin(w * t),  # obliquity: swing side drops
-                                 np.radians(3.0) + np.radians(1.0) * np.cos(2 * w * t),  # anterior tilt
+                                 np.radians(3.0) + np.radians(0.3) * np.cos(2 * w * t),  # anterior tilt
                                  np.radians(4.0) * np.cos(w * t)])  # right side forward at right strike
-    q[:, 6:9] = np.column_stack([np.radians(2.0) + np.radians(1.5) * np.cos(2 * w * t),
+    q[:, 6:9] = np.column_stack([np.radians(2.0) + np.radians(0.3) * np.cos(2 * w * t),
                                  np.radians(2.0) * np.sin(w * t), -np.radians(5.0) * np.cos(w * t)])
     offsets = {"r": 0.0, "l": 0.5}
     for side, j0 in (("r", 9), ("l", 18)):
@@ -314,7 +317,23 @@ def design_gait(geometry: Geometry, condition: Condition, params, *, samples: in
     detrended_plan = cop_plan if cop_offset_m is None else cop_plan + cop_offset_m
     omega2 = G / float(np.mean(com[middle, 2]))
     k = np.fft.rfftfreq(n, d=T / n) * 2 * np.pi
-    target = np.fft.irfft(np.fft.rfft(detrended_plan) * omega2 / (omega2 + k ** 2), n=n) + stride * tau
+    if FORE_AFT_MODE == "force":
+        # the CoM follows a prescribed fore-aft ground reaction: each foot brakes in the first half of its
+        # stance and propels in the second (half-sines of BRAKING_BW body weights), ẍ = ΣFx / m
+        fx = np.zeros(n)
+        for side, off in offsets.items():
+            own = np.mod(tau - off, 1.0)
+            half = STANCE_END / 2
+            fx -= np.where(own < half, np.sin(np.pi * own / half), 0.0)
+            fx += np.where((own >= half) & (own < STANCE_END), np.sin(np.pi * (own - half) / half), 0.0)
+        accel = BRAKING_BW * G * fx
+        spectrum = np.fft.rfft(accel)
+        spectrum[0] = 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            spectrum = np.where(k > 0, -spectrum / (k ** 2), 0.0)
+        target = np.fft.irfft(spectrum, n=n) + float(np.mean(com[middle, 0] - shift - stride * tau)) + stride * tau
+    else:
+        target = np.fft.irfft(np.fft.rfft(detrended_plan) * omega2 / (omega2 + k ** 2), n=n) + stride * tau
     # invert com_x(φ) (monotonic) at the targets, over three cycles to handle the wrap
     com_x = com[:, 0] - shift
     phases = np.arange(3 * n) / n - 1.0
@@ -370,7 +389,7 @@ def balanced_gait(geometry: Geometry, condition: Condition, params, *, iteration
     """
     design = design_gait(geometry, condition, params)
     offset = np.zeros(design.q.shape[0])
-    for _ in range(iterations):
+    for _ in range(iterations if FORE_AFT_MODE != "force" else 0):
         _, _, _, _, cop, plan = ground_reactions(design, params, with_plan=True)
         offset -= cop[:, 0] - plan
         design = design_gait(geometry, condition, params, cop_offset_m=offset)
@@ -389,7 +408,7 @@ def whole_body_cop(force, moment):
     return cop, free
 
 
-def split_between_feet(design: GaitDesign, force, cop, free):
+def split_between_feet(design: GaitDesign, force, cop, free, hips=None, ankles=None):
     """Per-foot force (N), COP (m) and free moment (N·m) summing exactly to the whole-body wrench.
 
     ``cop`` is the whole-body COP with the forward trend ``v t`` removed (periodic).
@@ -400,6 +419,12 @@ def split_between_feet(design: GaitDesign, force, cop, free):
     line moves both feet's COPs, so ``Σ λ_i c_i = c`` and each load starts and
     ends at zero. Returns ``(per_foot, clip)``; ``clip`` (how far λ had to be
     clipped into [0, 1]) is 0 when the split is exact.
+
+    With ``hips`` (side -> (n, 3) hip centres, trend removed), the feet also push
+    against each other as legs do in double support — the leading foot braking, the
+    trailing one propelling: an internal force pair along the line joining their
+    COPs (which adds no moment) turns each foot's force towards its hip, with the
+    mismatch to the total fore-aft force shared by ``λ``.
     """
     n = force.shape[0]
     out = {s: {"force_N": np.zeros((n, 3)), "cop_m": np.full((n, 3), np.nan), "free_moment_Nm": np.zeros(n)}
@@ -417,10 +442,15 @@ def split_between_feet(design: GaitDesign, force, cop, free):
         idx = (first + np.arange(length)) % n
         lead = "r" if not design.stance["r"][(first - 1) % n] else "l"  # the foot that just landed
         trail = "l" if lead == "r" else "r"
-        c_trail = cop[(idx[0] - 1) % n]
-        c_lead = cop[(idx[-1] + 1) % n]
+        c_trail = np.broadcast_to(cop[(idx[0] - 1) % n], (idx.size, 3))
+        c_lead = np.broadcast_to(cop[(idx[-1] + 1) % n], (idx.size, 3))
+        if ankles is not None:  # the leading foot's COP rolls in from under its heel
+            u = ((np.arange(idx.size) + 1) / (idx.size + 1))[:, None]
+            heel = ankles[lead][idx[0]] + np.array([HEEL_COP_M, 0.0, 0.0])
+            heel[2] = 0.0
+            c_lead = heel + u * (c_lead - heel)
         line = c_lead - c_trail
-        lam = np.sum((cop[idx] - c_trail) * line, axis=1) / np.sum(line * line)
+        lam = np.sum((cop[idx] - c_trail) * line, axis=1) / np.sum(line * line, axis=1)
         clip = max(clip, float(np.max(np.abs(lam - np.clip(lam, 0, 1)))))
         lam = np.clip(lam, 0.0, 1.0)
         offset = cop[idx] - (c_trail + lam[:, None] * line)
@@ -430,6 +460,17 @@ def split_between_feet(design: GaitDesign, force, cop, free):
         out[trail]["free_moment_Nm"][idx] = (1 - lam) * free[idx]
         out[lead]["cop_m"][idx] = c_lead + offset
         out[trail]["cop_m"][idx] = c_trail + offset
+        if hips is not None:
+            along = {}
+            for side in (lead, trail):
+                lever = hips[side][idx] - out[side]["cop_m"][idx]
+                along[side] = out[side]["force_N"][idx, 2] * lever[:, 0] / lever[:, 2]  # fore-aft along the leg
+            mismatch = force[idx, 0] - along[lead] - along[trail]
+            push_x = along[lead] + lam * mismatch - lam * force[idx, 0]  # internal part on the leading foot
+            line_xy = out[lead]["cop_m"][idx, :2] - out[trail]["cop_m"][idx, :2]
+            push = np.column_stack([push_x, push_x * line_xy[:, 1] / line_xy[:, 0], np.zeros(idx.size)])
+            out[lead]["force_N"][idx] += push
+            out[trail]["force_N"][idx] -= push
     return out, clip
 
 
@@ -440,6 +481,7 @@ def ground_reactions(design: GaitDesign, params, *, gravity_m_s2: float = G, wit
     ``cop_m`` (trend removed, NaN in swing) and ``free_moment_Nm`` over the cycle.
     """
     from gaitcli.dynamics.inverse import required_external_wrench
+    from gaitcli.kinematics.forward import forward_kinematics
 
     trend = design.speed_m_s * design.time_s
     periodic = design.q.copy()
@@ -449,7 +491,10 @@ def ground_reactions(design: GaitDesign, params, *, gravity_m_s2: float = G, wit
     force, moment = required_external_wrench(design.q, qd, qdd, params, gravity_m_s2=gravity_m_s2)
     cop, free = whole_body_cop(force, moment)
     cop[:, 0] -= trend
-    feet, clip = split_between_feet(design, force, cop, free)
+    joints = forward_kinematics(design.q, params).joint_centre_m
+    hips = {s: joints[:, JOINTS.index(f"hip_{s}")] - np.outer(trend, [1.0, 0.0, 0.0]) for s in "rl"}
+    ankles = {s: joints[:, JOINTS.index(f"ankle_{s}")] - np.outer(trend, [1.0, 0.0, 0.0]) for s in "rl"}
+    feet, clip = split_between_feet(design, force, cop, free, hips, ankles)
     if with_plan:
         return qd, qdd, feet, clip, cop, design.cop_plan_m
     return qd, qdd, feet, clip

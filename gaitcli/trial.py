@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import hashlib
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -57,7 +58,7 @@ def _number(path, where, value, *, low=None, high=None, expected="a number") -> 
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputError(path, where, f"got {value!r} (expected {expected})")
     value = float(value)
-    if (low is not None and value <= low) or (high is not None and value > high):
+    if not math.isfinite(value) or (low is not None and value <= low) or (high is not None and value > high):
         raise InputError(path, where, f"got {value:g} (expected {expected})")
     return value
 
@@ -84,7 +85,7 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     else:
         mass = _number(path, "mass_kg", mass, low=0, high=500, expected="a body mass in kg, > 0 and ≤ 500, or 'auto'")
     stature = data["stature_m"]
-    if isinstance(stature, (int, float)) and not isinstance(stature, bool) and 3 < stature <= 300:
+    if isinstance(stature, (int, float)) and not isinstance(stature, bool) and 40 <= stature <= 260:
         raise InputError(path, "stature_m", f"got {stature:g} (expected metres, e.g. {stature / 100:.2f}; "
                                             "this looks like centimetres)")
     stature = _number(path, "stature_m", stature, low=0.4, high=2.6, expected="a stature in metres between 0.4 and 2.6")
@@ -123,6 +124,8 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
         for key in item:
             if key not in DISTURBANCE_KEYS:
                 raise _unknown_key(path, f"{where}.", key, list(DISTURBANCE_KEYS))
+        if not isinstance(item.get("name", ""), str):
+            raise InputError(path, f"{where}.name", f"got {item['name']!r} (expected text)")
         segment = item.get("segment")
         if segment not in SEGMENTS:
             raise InputError(path, f"{where}.segment", f"got {segment!r} (expected one of {', '.join(SEGMENTS)})")
@@ -149,7 +152,9 @@ def load_subject(path: str | Path) -> Subject:
     if not path.is_file():
         raise InputError(path, None, "file not found (every trial folder needs a subject.yaml)")
     try:
-        data = yaml.safe_load(path.read_text())
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(path, None, "not a text file (expected UTF-8 YAML)") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         raise InputError(path, f"line {mark.line + 1}" if mark else None, "not valid YAML") from None

@@ -101,25 +101,31 @@ def idyn_figures(folder: Path, result, *, title: str = "") -> list[Path]:
     for col, (joint, label) in enumerate(joints):
         for side in ("r", "l"):
             ks = [s for s in result.strides if s.side == side]
-            if not ks:
-                continue
-            a = np.array([normalise(kin[:, COORDINATES.index(f"{joint}_{side}_flexion")], result.time_s, s)
-                          for s in ks])
-            m = np.array([normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], result.time_s, s)
-                          for s in ks])
-            for row, values in ((0, a), (1, m)):
+            known = result.foot_measured[side]
+            # moments only from strides whose stance was measured throughout (on a plate, or in swing)
+            kk = [s for s in ks if known[(result.time_s >= s.start_s) & (result.time_s <= s.end_s)].all()]
+            a = [normalise(kin[:, COORDINATES.index(f"{joint}_{side}_flexion")], result.time_s, s) for s in ks]
+            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], result.time_s, s) for s in kk]
+            for row, values, count in ((0, a, len(ks)), (1, m, len(kk))):
+                if not values:
+                    continue
+                values = np.array(values)
                 mean, sd = np.nanmean(values, axis=0), np.nanstd(values, axis=0)
                 ax = axes[row, col]
-                ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAME[side]} (n={len(ks)})")
+                ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAME[side]} (n={count})")
                 ax.fill_between(pct, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
-        axes[0, col].set_ylabel(f"{label} (deg)")
-        axes[1, col].set_ylabel(f"{label} moment (N·m/kg)")
+        axes[0, col].set_title(label, fontsize=10)
+        axes[0, col].set_ylabel("angle (deg)")
+        axes[1, col].set_ylabel("moment (N·m/kg)")
         axes[1, col].set_xlabel("gait cycle (%)")
         for row in (0, 1):
             axes[row, col].axhline(0, color="0.8", lw=0.6)
-    axes[0, 0].legend(fontsize=8)
-    fig.suptitle(f"Sagittal kinematics and moments over the gait cycle (mean ± SD; moments valid only where "
-                 f"the stance foot was on a plate) {title}", fontsize=9)
+    for row in (0, 1):
+        for ax in axes[row]:
+            ax.legend(fontsize=7, loc="best")
+    fig.suptitle(f"Sagittal angles and moments over the gait cycle, mean ± SD (moments: strides with the stance "
+                 f"on a plate; + = flexion / dorsiflexion) {title}", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
     written.append(save(fig, folder / "cycle.png"))
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
@@ -137,4 +143,51 @@ def idyn_figures(folder: Path, result, *, title: str = "") -> list[Path]:
     fig.suptitle(f"Pelvis residuals (3.22): what the model and the measured ground reactions leave unexplained "
                  f"{title}", fontsize=9)
     written.append(save(fig, folder / "residuals.png"))
+    return written
+
+
+def muscle_figures(folder: Path, result, events, *, title: str = "") -> list[Path]:
+    """Figs. 4.7–4.9: force, activation and excitation of each muscle over the interval (heel strikes and toe
+    offs of the analysed side marked), and ``metabolic_cost.png``: the metabolic energy of each muscle."""
+    folder = Path(folder)
+    written = []
+    names = result.muscle_names
+    t = result.time_s
+    side_events = type(events)(frame=events.frame[events.side == result.side],
+                               time_s=events.time_s[events.side == result.side],
+                               side=events.side[events.side == result.side],
+                               kind=events.kind[events.side == result.side],
+                               source=events.source[events.side == result.side])
+    for name, values, label, limits in (
+            ("forces.png", result.forces_N, "force (N)", None),
+            ("activations.png", result.activations, "activation", (-0.05, 1.05)),
+            ("excitations.png", result.excitations, "excitation", None)):
+        fig, axes = plt.subplots(2, 4, figsize=(13, 5.5), sharex=True)
+        for k, ax in enumerate(axes.ravel()[: len(names)]):
+            ax.plot(t, values[:, k], color=SIDE_COLOUR.get(result.side, "k"))
+            if label != "force (N)":
+                ax.axhspan(0, 1, color="0.93", zorder=0)
+            mark_events(ax, side_events, sides=(result.side,))
+            ax.set_xlim(t[0], t[-1])
+            if limits is not None and np.all(np.isfinite(values)) and values.min() >= -0.05 and values.max() <= 1.05:
+                ax.set_ylim(*limits)
+            ax.set_title(names[k], fontsize=10)
+        for ax in axes[:, 0]:
+            ax.set_ylabel(label)
+        for ax in axes[-1]:
+            ax.set_xlabel("time (s)")
+        fig.suptitle(f"{result.method.upper()}: muscle {label.split(' ')[0]}s, {SIDE_NAME.get(result.side, '')} leg "
+                     f"(solid: heel strike, dashed: toe off; grey band: the physiological range [0, 1]) {title}",
+                     fontsize=9)
+        fig.tight_layout(rect=(0, 0, 1, 0.94))
+        written.append(save(fig, folder / name))
+    energy = np.trapezoid(result.metabolic_rate_W, t, axis=0)
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    ax.bar(names, energy, color=SIDE_COLOUR.get(result.side, "k"))
+    ax.set_ylabel("metabolic energy (J)")
+    total = "n/a (excitations outside [0, 1])" if not np.isfinite(result.metabolic_cost_J) \
+        else f"{result.metabolic_cost_J:.1f} J"
+    ax.set_title(f"{result.method.upper()}: metabolic energy per muscle over the interval; one leg total {total}",
+                 fontsize=9)
+    written.append(save(fig, folder / "metabolic_cost.png"))
     return written

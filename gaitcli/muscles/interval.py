@@ -1,0 +1,35 @@
+"""Which part of a trial the muscle stage analyses: a whole stride measured on the plates, or a swing phase."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gaitcli.errors import InputError
+from gaitcli.signal.cycles import strides
+from gaitcli.signal.events import Events
+
+
+def analysis_interval(events: Events, time_s: np.ndarray, load_known: np.ndarray, side: str, phase: str,
+                      *, source=None) -> tuple[float, float, bool]:
+    """``(start_s, end_s, periodic)`` for ``side``.
+
+    ``cycle``: the first stride (heel strike to heel strike) throughout which the
+    foot's load is known — its stance on a plate — analysed as periodic (4.3.5).
+    ``swing``: the first swing phase (toe off to heel strike), where the foot carries
+    no load, analysed with extra nodes before and after (4.3.6).
+    """
+    if phase == "cycle":
+        for st in strides(events):
+            inside = (time_s >= st.start_s) & (time_s <= st.end_s)
+            if st.side == side and load_known[inside].all():
+                return st.start_s, st.end_s, True
+        raise InputError(source, f"{side} side", "no stride whose stance was recorded on a force plate "
+                                                 "(expected one heel strike to heel strike on the plates; "
+                                                 "use --phase swing to analyse a swing phase)")
+    offs = np.sort(events.time_s[(events.side == side) & (events.kind == "toe_off")])
+    strikes = np.sort(events.time_s[(events.side == side) & (events.kind == "heel_strike")])
+    for off in offs:
+        later = strikes[strikes > off]
+        if later.size:
+            return float(off), float(later[0]), False
+    raise InputError(source, f"{side} side", "no swing phase (toe off followed by heel strike) in the events")

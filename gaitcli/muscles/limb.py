@@ -1,0 +1,358 @@
+"""2-D thigh–shank–foot model with prescribed hip motion (Diss. 4.5.1), and its input.
+
+Geometry (model axes x forward, z up, motion in the x–z plane). Generalized
+coordinates ``q = (θ, β, δ)``: θ thigh angle from the downward vertical,
+positive when the knee is in front of the hip (hip flexion with the trunk
+upright), β knee flexion, δ ankle dorsiflexion (0 with the foot ⟂ shank). The
+hip centre (x_hip(t), z_hip(t)) is prescribed (two rheonomic constraints).
+Absolute segment angles, counter-clockwise seen with x to the right and z up
+(= rotation about −y, i.e. flexion-positive): thigh θ, shank θ − β, foot
+θ − β + δ. The generalized forces conjugate to q are the hip flexion, knee
+flexion and ankle dorsiflexion moments, the signs of the output tables.
+
+Segment inertia from de Leva (1996) (MODEL_CONSTANTS A), written here with the
+few numbers needed. The ground reaction acts on the foot at (cop_x, 0): the
+floor is the plane z = 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from gaitcli.errors import InputError
+
+from .evaluation import evaluate
+
+GRAVITY_M_S2 = 9.81
+
+#: de Leva (1996) Table 4 (MODEL_CONSTANTS A), lengths in mm of the reference
+#: subjects (male 1741 mm, female 1735 mm); mass, CoM and radius of gyration in %.
+#: thigh HJC→KJC, shank KJC→AJC, foot HEEL→TTIP; r_trans for the sagittal plane
+#: except the foot, where the dissertation (Table A.5, I_Y = 0.0047 kg m²) uses r_sag.
+_DE_LEVA = {
+    "male": {"stature_mm": 1741.0,
+             "thigh": (422.2, 14.16, 40.95, 32.9), "shank": (440.3, 4.33, 43.95, 24.6),
+             "foot": (258.1, 1.37, 44.15, 25.7)},
+    "female": {"stature_mm": 1735.0,
+               "thigh": (368.5, 14.78, 36.12, 36.4), "shank": (438.6, 4.81, 43.52, 26.3),
+               "foot": (228.3, 1.29, 40.14, 29.9)},
+}
+#: heel-to-ankle distance along the foot / stature (gait2dc: 0.06 m at 1.8 m; MODEL_CONSTANTS H)
+_HEEL_TO_ANKLE_PER_STATURE = 0.060 / 1.8
+#: foot CoM below the ankle / stature (Diss. Table A.5, subject 1: 0.043 m at 1.792 m)
+_FOOT_COM_BELOW_ANKLE_PER_STATURE = 0.043 / 1.792
+
+SAGITTAL_COLUMNS = ("hip_x_{s}_m", "hip_z_{s}_m", "thigh_angle_{s}_deg", "knee_flexion_{s}_deg",
+                    "ankle_dorsiflexion_{s}_deg", "grf_x_{s}_N", "grf_z_{s}_N", "cop_x_{s}_m")
+
+
+@dataclass(frozen=True)
+class SagittalMotion:
+    """Sagittal kinematics and ground reaction of one leg (the idyn stage's ``sagittal.csv``).
+
+    Arrays over frames (SI, radians): hip centre ``hip_x_m``, ``hip_z_m``;
+    ``thigh_angle_rad``, ``knee_flexion_rad``, ``ankle_dorsiflexion_rad``;
+    ground reaction on the foot ``grf_x_N``, ``grf_z_N`` and centre of pressure
+    ``cop_x_m`` (NaN in swing). Events in s: ``heel_strike_s``, ``toe_off_s``.
+    """
+
+    time_s: np.ndarray
+    hip_x_m: np.ndarray
+    hip_z_m: np.ndarray
+    thigh_angle_rad: np.ndarray
+    knee_flexion_rad: np.ndarray
+    ankle_dorsiflexion_rad: np.ndarray
+    grf_x_N: np.ndarray
+    grf_z_N: np.ndarray
+    cop_x_m: np.ndarray
+    side: str = "r"
+    heel_strike_s: tuple = ()
+    toe_off_s: tuple = ()
+    source: str | None = None
+
+    @classmethod
+    def from_table(cls, table, side: str, *, path: str | Path | None = None,
+                   heel_strike_s=(), toe_off_s=()) -> "SagittalMotion":
+        """Read one side (``"r"`` or ``"l"``) from a DataFrame or dict of columns.
+
+        Columns: ``time_s`` and ``hip_x_{s}_m, hip_z_{s}_m, thigh_angle_{s}_deg,
+        knee_flexion_{s}_deg, ankle_dorsiflexion_{s}_deg, grf_x_{s}_N, grf_z_{s}_N,
+        cop_x_{s}_m``. NaN is checked later, in the analysed interval only
+        (:meth:`check_finite`).
+        """
+        if side not in ("r", "l"):
+            raise InputError(path, "side", f"got {side!r} (expected 'r' or 'l')")
+        names = ["time_s"] + [c.format(s=side) for c in SAGITTAL_COLUMNS]
+        cols = {}
+        for name in names:
+            if name not in table:
+                raise InputError(path, name, "missing column (the sagittal table needs "
+                                 + ", ".join(names) + ")")
+            try:
+                cols[name] = np.asarray(table[name], dtype=float).reshape(-1)
+            except (TypeError, ValueError):
+                raise InputError(path, name, "expected numbers") from None
+        t = cols["time_s"]
+        if t.size < 4:
+            raise InputError(path, "time_s", f"got {t.size} frames (expected at least 4)")
+        if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise InputError(path, "time_s", "expected finite, strictly increasing times")
+        deg = np.pi / 180.0
+        return cls(time_s=t,
+                   hip_x_m=cols[names[1]], hip_z_m=cols[names[2]],
+                   thigh_angle_rad=cols[names[3]] * deg, knee_flexion_rad=cols[names[4]] * deg,
+                   ankle_dorsiflexion_rad=cols[names[5]] * deg,
+                   grf_x_N=cols[names[6]], grf_z_N=cols[names[7]], cop_x_m=cols[names[8]],
+                   side=side, heel_strike_s=tuple(float(x) for x in heel_strike_s),
+                   toe_off_s=tuple(float(x) for x in toe_off_s),
+                   source=None if path is None else str(path))
+
+    @property
+    def angles_rad(self) -> np.ndarray:
+        """(frames, 3): thigh angle, knee flexion, ankle dorsiflexion."""
+        return np.column_stack([self.thigh_angle_rad, self.knee_flexion_rad, self.ankle_dorsiflexion_rad])
+
+    def column_name(self, key: str) -> str:
+        """Table column of a field, e.g. ``"knee_flexion"`` → ``knee_flexion_r_deg``."""
+        for c in SAGITTAL_COLUMNS:
+            if c.startswith(key):
+                return c.format(s=self.side)
+        return key
+
+    def check_finite(self, first: int, last: int) -> None:
+        """Raise InputError for NaN in frames ``first..last`` (inclusive).
+
+        NaN centre of pressure is allowed where the vertical force is zero (swing).
+        """
+        sl = slice(first, last + 1)
+        fields = {"hip_x": self.hip_x_m, "hip_z": self.hip_z_m, "thigh_angle": self.thigh_angle_rad,
+                  "knee_flexion": self.knee_flexion_rad, "ankle_dorsiflexion": self.ankle_dorsiflexion_rad,
+                  "grf_x": self.grf_x_N, "grf_z": self.grf_z_N}
+        bad_cols, bad = [], np.zeros(last - first + 1, bool)
+        for key, arr in fields.items():
+            nan = ~np.isfinite(arr[sl])
+            if nan.any():
+                bad_cols.append(self.column_name(key))
+                bad |= nan
+        loaded = (np.abs(self.grf_x_N[sl]) + np.abs(self.grf_z_N[sl])) > 0  # False where NaN
+        nan_cop = ~np.isfinite(self.cop_x_m[sl]) & loaded
+        if nan_cop.any():
+            bad_cols.append(self.column_name("cop_x"))
+            bad |= nan_cop
+        if bad_cols:
+            idx = np.flatnonzero(bad) + first
+            t = self.time_s
+            raise InputError(self.source, ", ".join(bad_cols),
+                             f"NaN in frames {idx[0]}–{idx[-1]} (t = {t[idx[0]]:.3f}–{t[idx[-1]]:.3f} s) "
+                             f"of the analysed interval {t[first]:.3f}–{t[last]:.3f} s "
+                             "(expected finite values; the centre of pressure may be NaN only without load)")
+
+
+@dataclass(frozen=True)
+class LimbParameters:
+    """Mass, geometry and inertia of thigh, shank and foot (SI units).
+
+    ``thigh_com_m`` from the hip along the thigh, ``shank_com_m`` from the knee
+    along the shank; the foot CoM lies ``foot_com_forward_m`` ahead of the ankle
+    along the foot and ``foot_com_down_m`` below it (foot frame, foot ⟂ shank at
+    neutral). Inertias are sagittal, about the segment CoM.
+    """
+
+    body_mass_kg: float
+    stature_m: float
+    thigh_length_m: float
+    shank_length_m: float
+    foot_length_m: float
+    thigh_mass_kg: float
+    shank_mass_kg: float
+    foot_mass_kg: float
+    thigh_com_m: float
+    shank_com_m: float
+    foot_com_forward_m: float
+    foot_com_down_m: float
+    thigh_inertia_kgm2: float
+    shank_inertia_kgm2: float
+    foot_inertia_kgm2: float
+    sex: str = "male"
+    gravity_m_s2: float = GRAVITY_M_S2
+    notes: tuple = field(default=())
+
+    @classmethod
+    def from_body(cls, body, side: str, *, body_mass_kg: float, stature_m: float, sex: str) -> "LimbParameters":
+        """The sagittal limb of one side from the 3-D model's segment parameters (idyn), added masses included.
+
+        Lengths are the hip–knee and knee–ankle joint-centre distances, CoM distances
+        their projections on the segment axis, inertias the segments' I_yy about their
+        CoM; the foot CoM relative to the ankle in the foot's reference frame.
+        """
+        from gaitcli.kinematics.model import BODIES, JOINTS
+
+        j = {name: JOINTS.index(f"{name}_{side}") for name in ("hip", "knee", "ankle")}
+        b = {name: BODIES.index(f"{name}_{side}") for name in ("thigh", "shank", "foot")}
+        top = {"thigh": body.joint_in_child_m[j["hip"]], "shank": body.joint_in_child_m[j["knee"]]}
+        bottom = {"thigh": body.joint_in_parent_m[j["knee"]], "shank": body.joint_in_parent_m[j["ankle"]]}
+        length = {k: float(np.linalg.norm(bottom[k] - top[k])) for k in top}
+        com = {k: float(np.dot(-top[k], (bottom[k] - top[k]) / length[k])) for k in top}
+        ankle_in_foot = body.joint_in_child_m[j["ankle"]]
+        return cls(
+            body_mass_kg=float(body_mass_kg), stature_m=float(stature_m),
+            thigh_length_m=length["thigh"], shank_length_m=length["shank"],
+            foot_length_m=0.152 * float(stature_m),  # Winter: heel–toe 0.152·H (MODEL_CONSTANTS H)
+            thigh_mass_kg=float(body.mass_kg[b["thigh"]]), shank_mass_kg=float(body.mass_kg[b["shank"]]),
+            foot_mass_kg=float(body.mass_kg[b["foot"]]),
+            thigh_com_m=com["thigh"], shank_com_m=com["shank"],
+            foot_com_forward_m=float(-ankle_in_foot[0]), foot_com_down_m=float(ankle_in_foot[2]),
+            thigh_inertia_kgm2=float(body.inertia_kgm2[b["thigh"]][1, 1]),
+            shank_inertia_kgm2=float(body.inertia_kgm2[b["shank"]][1, 1]),
+            foot_inertia_kgm2=float(body.inertia_kgm2[b["foot"]][1, 1]), sex=sex,
+            notes=("segment parameters of the idyn stage's 3-D model (de Leva with measured lengths and any "
+                   "added masses), sagittal inertia I_yy",))
+
+    @classmethod
+    def from_anthropometry(cls, mass_kg: float, stature_m: float, sex: str, *,
+                           thigh_length_m: float | None = None,
+                           shank_length_m: float | None = None) -> "LimbParameters":
+        """de Leva (1996) parameters; lengths scaled by stature unless measured."""
+        if sex not in _DE_LEVA:
+            raise InputError(None, "sex", f"got {sex!r} (expected 'male' or 'female')")
+        if not (mass_kg > 0 and stature_m > 0):
+            raise InputError(None, "mass_kg/stature_m", f"got {mass_kg}, {stature_m} (expected numbers > 0)")
+        table = _DE_LEVA[sex]
+        scale = stature_m * 1000.0 / table["stature_mm"]
+        segs = {}
+        for name, measured in (("thigh", thigh_length_m), ("shank", shank_length_m), ("foot", None)):
+            length_mm, mass_pct, com_pct, gyr_pct = table[name]
+            length = measured if measured is not None else length_mm * scale / 1000.0
+            mass = mass_pct / 100.0 * mass_kg
+            segs[name] = (length, mass, com_pct / 100.0 * length, mass * (gyr_pct / 100.0 * length) ** 2)
+        foot_len = segs["foot"][0]
+        return cls(
+            body_mass_kg=float(mass_kg), stature_m=float(stature_m),
+            thigh_length_m=segs["thigh"][0], shank_length_m=segs["shank"][0], foot_length_m=foot_len,
+            thigh_mass_kg=segs["thigh"][1], shank_mass_kg=segs["shank"][1], foot_mass_kg=segs["foot"][1],
+            thigh_com_m=segs["thigh"][2], shank_com_m=segs["shank"][2],
+            foot_com_forward_m=segs["foot"][2] - _HEEL_TO_ANKLE_PER_STATURE * stature_m,
+            foot_com_down_m=_FOOT_COM_BELOW_ANKLE_PER_STATURE * stature_m,
+            thigh_inertia_kgm2=segs["thigh"][3], shank_inertia_kgm2=segs["shank"][3],
+            foot_inertia_kgm2=segs["foot"][3], sex=sex,
+            notes=("de Leva (1996) via MODEL_CONSTANTS A; foot CoM offsets: heel–ankle 0.033·H "
+                   "(gait2dc), CoM 0.024·H below the ankle (Diss. Table A.5, subject 1)",))
+
+
+def _unit(phi):
+    """Unit vector of a segment at absolute angle φ from the downward vertical, (x, z)."""
+    return ca.vertcat(ca.sin(phi), -ca.cos(phi))
+
+
+class LimbModel:
+    """The limb's equations of motion, written once in CasADi (2.13, 2.29, 4.5.1).
+
+    Functions:
+    - ``points(q, hip) → (knee, ankle)`` joint centres (x, z) in m
+    - ``inverse_dynamics(q, qd, qdd, hip, hip_acc, grf, cop_x) → τ`` (3): the hip
+      flexion, knee flexion and ankle dorsiflexion moments that reproduce the
+      motion, τ = M(q)q̈ + k(q, q̇, ḧ) − q_g(q) − q_gr(q, f_gr) (4.2, 4.21)
+    - ``forward_dynamics(q, qd, tau, hip, hip_acc, grf, cop_x) → q̈`` (2.29)
+    - ``mass_matrix(q) → M`` (3 × 3)
+    """
+
+    def __init__(self, params: LimbParameters):
+        self.params = p = params
+        sym = ca.SX.sym
+        q, qd, qdd, tau = sym("q", 3), sym("qd", 3), sym("qdd", 3), sym("tau", 3)
+        hip, hip_acc, grf, cop = sym("hip", 2), sym("hip_acc", 2), sym("grf", 2), sym("cop_x")
+        th, sh, ft = q[0], q[0] - q[1], q[0] - q[1] + q[2]
+        knee = hip + p.thigh_length_m * _unit(th)
+        ankle = knee + p.shank_length_m * _unit(sh)
+        foot_fwd = ca.vertcat(ca.cos(ft), ca.sin(ft))
+        foot_up = ca.vertcat(-ca.sin(ft), ca.cos(ft))
+        coms = [hip + p.thigh_com_m * _unit(th), knee + p.shank_com_m * _unit(sh),
+                ankle + p.foot_com_forward_m * foot_fwd - p.foot_com_down_m * foot_up]
+        masses = [p.thigh_mass_kg, p.shank_mass_kg, p.foot_mass_kg]
+        inertias = [p.thigh_inertia_kgm2, p.shank_inertia_kgm2, p.foot_inertia_kgm2]
+        rates = [ca.DM([[1, 0, 0]]), ca.DM([[1, -1, 0]]), ca.DM([[1, -1, 1]])]  # ω_b = c_b·q̇
+        gravity = ca.vertcat(0, p.gravity_m_s2)
+        mass_matrix = ca.SX.zeros(3, 3)
+        tau_id = ca.SX.zeros(3)
+        for com, mass, inertia, c in zip(coms, masses, inertias, rates):
+            jac = ca.jacobian(com, q)
+            acc = jac @ qdd + ca.jacobian(jac @ qd, q) @ qd + hip_acc  # CoM acceleration
+            mass_matrix += mass * jac.T @ jac + inertia * c.T @ c
+            tau_id += jac.T @ (mass * (acc + gravity)) + c.T * (inertia * (c @ qdd))
+        # ground reaction at (cop_x, 0) on the foot: force at the ankle plus its moment
+        r = ca.vertcat(cop, 0) - ankle
+        q_gr = ca.jacobian(ankle, q).T @ grf + rates[2].T * (r[0] * grf[1] - r[1] * grf[0])
+        tau_id -= q_gr
+        bias = ca.substitute(tau_id, qdd, ca.SX.zeros(3))
+        self.points = ca.Function("points", [q, hip], [knee, ankle], ["q", "hip"], ["knee", "ankle"])
+        self.mass_matrix = ca.Function("mass_matrix", [q], [mass_matrix], ["q"], ["M"])
+        self.inverse_dynamics = ca.Function(
+            "inverse_dynamics", [q, qd, qdd, hip, hip_acc, grf, cop], [tau_id],
+            ["q", "qd", "qdd", "hip", "hip_acc", "grf", "cop_x"], ["tau"])
+        self.forward_dynamics = ca.Function(
+            "forward_dynamics", [q, qd, tau, hip, hip_acc, grf, cop], [ca.solve(mass_matrix, tau - bias)],
+            ["q", "qd", "tau", "hip", "hip_acc", "grf", "cop_x"], ["qdd"])
+
+    def evaluate(self, name: str, *args):
+        """Evaluate Function ``name`` on arrays shaped (n, k) (see ``evaluation.evaluate``)."""
+        return evaluate(getattr(self, name), *args)
+
+
+@dataclass(frozen=True)
+class MotionSamples:
+    """The motion at analysis times: coordinates and derivatives, hip, ground reaction.
+
+    Shapes: ``time_s`` (n,), ``q``/``qd``/``qdd`` (n, 3), ``hip_m``/``hip_vel``/``hip_acc``
+    (n, 2), ``grf_N`` (n, 2), ``cop_x_m`` (n,).
+    """
+
+    time_s: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    hip_m: np.ndarray
+    hip_vel: np.ndarray
+    hip_acc: np.ndarray
+    grf_N: np.ndarray
+    cop_x_m: np.ndarray
+
+
+class MotionInterpolant:
+    """Continuous-time motion: cubic splines of coordinates and hip, linear ground reaction.
+
+    Built on the frames covering ``[t_start, t_end]`` (plus two frames either
+    side where available); raises InputError if any of them holds NaN.
+    """
+
+    def __init__(self, motion: SagittalMotion, t_start: float, t_end: float):
+        t = motion.time_s
+        first = max(int(np.searchsorted(t, t_start, side="right")) - 3, 0)
+        last = min(int(np.searchsorted(t, t_end, side="left")) + 2, t.size - 1)
+        if t_start < t[0] - 1e-9 or t_end > t[-1] + 1e-9:
+            raise InputError(motion.source, "time_s",
+                             f"the analysed interval {t_start:.3f}–{t_end:.3f} s is outside the table "
+                             f"({t[0]:.3f}–{t[-1]:.3f} s)")
+        motion.check_finite(first, last)
+        sl = slice(first, last + 1)
+        ts = t[sl]
+        self.t_range = (ts[0], ts[-1])
+        self._q = CubicSpline(ts, motion.angles_rad[sl], axis=0)
+        self._hip = CubicSpline(ts, np.column_stack([motion.hip_x_m[sl], motion.hip_z_m[sl]]), axis=0)
+        self._ts = ts
+        self._grf = np.column_stack([motion.grf_x_N[sl], motion.grf_z_N[sl]])
+        cop = motion.cop_x_m[sl]
+        ok = np.isfinite(cop)
+        # where the foot is unloaded the COP is irrelevant; hold the nearest measured value
+        self._cop = np.interp(ts, ts[ok], cop[ok]) if ok.any() else np.zeros_like(ts)
+
+    def __call__(self, times) -> MotionSamples:
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        grf = np.column_stack([np.interp(times, self._ts, self._grf[:, k]) for k in range(2)])
+        return MotionSamples(time_s=times, q=self._q(times), qd=self._q(times, 1), qdd=self._q(times, 2),
+                             hip_m=self._hip(times), hip_vel=self._hip(times, 1), hip_acc=self._hip(times, 2),
+                             grf_N=grf, cop_x_m=np.interp(times, self._ts, self._cop))
