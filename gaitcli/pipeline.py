@@ -52,6 +52,17 @@ def load_recording(trial: TrialFolder) -> Recording:
     return recording
 
 
+def check_cutoffs(cfg, recording: Recording, path: Path) -> None:
+    """Cut-offs must lie below the Nyquist frequency of the signals they filter."""
+    rate = recording.markers.rate_hz
+    if cfg.cutoff_hz >= rate / 2:
+        raise InputError(path, "filter.cutoff_hz", f"got {cfg.cutoff_hz:g} Hz (expected below the Nyquist frequency "
+                                                   f"{rate / 2:g} Hz of its {rate:g} Hz markers)")
+    if recording.plates and cfg.force_cutoff_hz >= rate / 2:  # plate signals end up at the marker frames
+        raise InputError(path, "filter.force_cutoff_hz", f"got {cfg.force_cutoff_hz:g} Hz (expected below the "
+                                                         f"Nyquist frequency {rate / 2:g} Hz of the marker frames)")
+
+
 class Run:
     """One invocation on one trial: where inputs and outputs are, and the resolved configuration."""
 
@@ -98,6 +109,7 @@ class Run:
 
         started = time.perf_counter()
         recording = load_recording(self.trial)
+        check_cutoffs(self.cfg.filter, recording, self.trial.trial_path)
         result = filter_trial(recording, self.cfg.filter)
         target = self.out_root / "filter"
         with stage_folder(target) as tmp:

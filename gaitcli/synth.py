@@ -31,36 +31,28 @@ G = 9.81
 ANALOG_RATE_HZ = 1000.0
 MARKER_RATE_HZ = 100.0
 
-#: Table A.2–A.3 disturbances: mass (kg), principal inertias about their own centre (kg m²)
-DISTURBANCE_TABLE = {
-    "weight_band": (1.719, (0.0043, 0.0043, 0.0041)),
-    "knee_orthosis": (0.924, (0.026, 0.021, 0.0061)),
-    "vario_shoe_right": (0.999, (0.014, 0.015, 0.0055)),
-    "ski_boot": (2.431, (0.020, 0.033, 0.012)),
-}
-
-
 @dataclass(frozen=True)
 class Condition:
-    """One of the dissertation's experiments (3.1.1): speed, added masses and locked joints."""
+    """One of the dissertation's experiments (3.1.1): gait period and locked joints.
+
+    The added masses of each condition are the presets of
+    :func:`gaitcli.kinematics.anthropometry.preset_disturbances` (Tables A.2–A.3);
+    the speed follows from the stride the joint angles make over the period.
+    """
 
     name: str
-    speed_m_s: float
     period_s: float
-    disturbances: tuple = ()  # (segment, table key, com offset in the segment frame from its CoM, m)
     locked_knee_r: bool = False
     locked_ankle_r: bool = False
 
 
-# Speeds and periods follow Table 3.1's trends (slower with kinematic constraints).
+# Periods grow with the kinematic constraints, as the speeds of Table 3.1 fall.
 CONDITIONS = {
-    "normal": Condition("normal", 1.25, 1.20),
-    "ankle_weight": Condition("ankle_weight", 1.30, 1.12, (("shank_r", "weight_band", "ankle"),)),
-    "knee_orthosis": Condition("knee_orthosis", 1.20, 1.16, (("shank_r", "knee_orthosis", "knee"),),
-                               locked_knee_r=True),
-    "ankle_fixed": Condition("ankle_fixed", 1.25, 1.14, (("foot_r", "vario_shoe_right", "com"),),
-                             locked_ankle_r=True),
-    "ski_boot": Condition("ski_boot", 1.20, 1.16, (("foot_r", "ski_boot", "ankle"),), locked_ankle_r=True),
+    "normal": Condition("normal", 1.20),
+    "ankle_weight": Condition("ankle_weight", 1.24),
+    "knee_orthosis": Condition("knee_orthosis", 1.30, locked_knee_r=True),
+    "ankle_fixed": Condition("ankle_fixed", 1.26, locked_ankle_r=True),
+    "ski_boot": Condition("ski_boot", 1.30, locked_ankle_r=True),
 }
 
 #: the marker set of Table A.6 and the body each marker rides on

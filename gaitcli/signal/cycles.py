@@ -76,38 +76,48 @@ class GaitFeatures:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
+def _plate_contacts(events: Events, side: str) -> list[tuple[float, float]]:
+    """Stance intervals of ``side`` whose heel strike and toe off both come from a force plate."""
+    mine = (events.side == side) & (events.source == "plate")
+    strikes = np.sort(events.time_s[mine & (events.kind == "heel_strike")])
+    offs = np.sort(events.time_s[mine & (events.kind == "toe_off")])
+    out = []
+    for a in strikes:
+        later = offs[offs > a]
+        if later.size:
+            out.append((float(a), float(later[0])))
+    return out
+
+
 def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.ndarray) -> GaitFeatures:
     """Table 3.1 from events and each heel's forward position (m) over time.
 
     Stride length is the heel's forward displacement between two strikes of the
-    same foot; stance % the stance time over the stride period; double stance % the
-    time both feet are on the ground within a stride over its period.
+    same foot (mean over strides), the period the time between them. Stance % is
+    the stance time over the mean period, and double stance % the time both feet
+    are on the ground, stance_r + stance_l − 100 (walking has no flight phase).
+    Stances timed by a force plate at both ends are used where there are any,
+    being exact; kinematic events (Zeni) time heel strike a few frames early and
+    are the fallback.
     """
     all_strides = strides(events)
-    lengths, periods, stance = [], [], {"r": [], "l": []}
-    double = []
-    intervals = {s: _stance_intervals(events, s) for s in ("r", "l")}
+    lengths, periods = [], []
     for st in all_strides:
         x = heel_x_m.get(st.side)
         if x is not None:
             a, b = np.interp([st.start_s, st.end_s], time_s, x)
             lengths.append(abs(b - a))
         periods.append(st.period_s)
-        if np.isfinite(st.toe_off_s):
-            stance[st.side].append((st.toe_off_s - st.start_s) / st.period_s * 100)
-        other = "l" if st.side == "r" else "r"
-        if not np.isfinite(st.toe_off_s):
-            continue
-        # both double supports must be seen: the other foot on the ground at this strike, and its next strike
-        starts = any(a <= st.start_s < b for a, b in intervals[other])
-        ends = any(st.start_s < a < st.toe_off_s for a, _ in intervals[other])
-        if starts and ends:
-            both = sum(max(0.0, min(b, st.toe_off_s) - max(a, st.start_s)) for a, b in intervals[other])
-            double.append(both / st.period_s * 100)
     mean = (lambda v: float(np.mean(v)) if len(v) else float("nan"))
     period = mean(periods)
+    stance = {}
+    for side in ("r", "l"):
+        contacts = _plate_contacts(events, side) or _stance_intervals(events, side)
+        stance[side] = mean([(b - a) / period * 100 for a, b in contacts])
+    # walking has no flight phase: each foot's stance overlaps the other's twice per stride
+    double = stance["r"] + stance["l"] - 100.0
     length = mean(lengths)
     return GaitFeatures(stride_length_m=length, period_s=period,
                         speed_m_s=length / period if np.isfinite(length) and period > 0 else float("nan"),
-                        stance_right_pct=mean(stance["r"]), stance_left_pct=mean(stance["l"]),
-                        double_stance_pct=mean(double), strides=len(all_strides))
+                        stance_right_pct=stance["r"], stance_left_pct=stance["l"],
+                        double_stance_pct=double, strides=len(all_strides))

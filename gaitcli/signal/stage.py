@@ -16,7 +16,7 @@ from gaitcli.config import FilterConfig
 from gaitcli.errors import GaitWarning
 from gaitcli.recording import Markers, Recording
 from gaitcli.signal.butterworth import design_frequency_hz, lowpass
-from gaitcli.signal.events import Contact, Events, detect_events
+from gaitcli.signal.events import Contact, EventDetection, Events, detect_events
 from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
 from gaitcli.signal.gaps import Gap, fill_gaps
 
@@ -105,11 +105,13 @@ def filter_trial(recording: Recording, cfg: FilterConfig) -> FilterResult:
         if heel is not None and toe is not None:
             feet[side] = (heel, toe)
     if len(feet) < 2:
-        warnings.warn("no heel (CAr/CAl) and toe (FMr/FMl or VMr/VMl) landmarks for both feet: events come from "
-                      "plate loading only and plate contacts are not assigned to feet (add a marker_map)",
-                      GaitWarning, stacklevel=2)
-    detection = detect_events(plates, feet, pelvis_centre(markers), rate_hz=rate, threshold_N=cfg.force_threshold_N,
-                              refine=True)
+        warnings.warn("no heel (CAr/CAl) and toe (FMr/FMl or VMr/VMl) landmarks for both feet: no gait events and "
+                      "no plate-to-foot assignment (add a marker_map naming them)", GaitWarning, stacklevel=2)
+        detection = EventDetection(Events(), [], np.full((len(plates), n), "", dtype="<U1"))
+    else:
+        detection = detect_events(plates, feet, pelvis_centre(markers), rate_hz=rate,
+                                  threshold_N=cfg.force_threshold_N, refine=True,
+                                  duplicate_s=0.35)  # one foot cannot strike twice within 0.35 s
     for c in detection.contacts:
         if c.flag:
             warnings.warn(f"{c.plate_name}: contact at {c.on_time_s:.2f}–{c.off_time_s:.2f} s not assigned to a foot "

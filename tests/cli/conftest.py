@@ -1,0 +1,129 @@
+"""Helpers for the CLI tests: run the real ``gait`` command in a subprocess on copies of trials.
+
+Every CLI test works on a copy of a bundled sample trial (or of a shared C3D file)
+under pytest's tmp_path; nothing is ever written into ``sample_trials/``. The
+expensive runs (a full ``gait filter`` takes a few seconds: imports, the stage and
+the plots) are made once per session and several at a time, since each one is a
+separate process; under pytest-xdist the first worker to need them makes them and the
+others read what it recorded (:func:`build_once`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+
+from gaitcli.resources import sample_trial
+
+ENV = {**os.environ, "MPLBACKEND": "Agg", "PYTHONWARNINGS": "ignore::DeprecationWarning",
+       "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+WORKERS = max(2, min(4, os.cpu_count() or 2))
+FILTER_FILES = ("markers_filtered.csv", "grf.csv", "events.csv", "filter.h5", "summary.json")
+MINIMAL_SUBJECT = "mass_kg: 70.0\nstature_m: 1.70\nsex: male\n"
+
+
+@dataclass
+class Result:
+    """One finished ``gait`` invocation."""
+
+    args: tuple[str, ...]
+    returncode: int
+    stdout: str
+    stderr: str
+    cwd: Path
+
+    @property
+    def stderr_lines(self) -> list[str]:
+        return [line for line in self.stderr.splitlines() if line.strip()]
+
+    def to_json(self) -> dict:
+        return {**dataclasses.asdict(self), "args": list(self.args), "cwd": str(self.cwd)}
+
+    @classmethod
+    def from_json(cls, data: dict) -> Result:
+        return cls(tuple(data["args"]), data["returncode"], data["stdout"], data["stderr"], Path(data["cwd"]))
+
+    def describe(self) -> str:
+        return (f"gait {' '.join(self.args)} (in {self.cwd}) -> {self.returncode}\n"
+                f"stdout:\n{self.stdout}\nstderr:\n{self.stderr}")
+
+
+def gait(*args, cwd: Path, timeout_s: float = 180.0) -> Result:
+    """Run ``python -m gaitcli.cli ARGS`` (the installed ``gait`` command's code) in ``cwd``."""
+    args = tuple(str(a) for a in args)
+    done = subprocess.run([sys.executable, "-m", "gaitcli.cli", *args], cwd=cwd, env=ENV, capture_output=True,
+                          text=True, timeout=timeout_s)
+    return Result(args, done.returncode, done.stdout, done.stderr, Path(cwd))
+
+
+def gait_many(jobs: dict) -> dict:
+    """Run several ``gait`` invocations at once: ``{key: (args, cwd)}`` → ``{key: Result}``."""
+    with ThreadPoolExecutor(max_workers=WORKERS) as pool:
+        futures = {key: pool.submit(gait, *args, cwd=cwd) for key, (args, cwd) in jobs.items()}
+        return {key: f.result() for key, f in futures.items()}
+
+
+def copy_sample(name: str, dest: Path) -> Path:
+    """A copy of the bundled sample trial ``name`` (trial.c3d, static.c3d, subject.yaml, truth/) at ``dest``."""
+    shutil.copytree(sample_trial(name), dest, ignore=shutil.ignore_patterns("gait_out", "__pycache__"))
+    return dest
+
+
+def snapshot(folder: Path) -> dict[str, str]:
+    """Relative path → SHA-256 of every file below ``folder`` (and '<dir>' for every folder)."""
+    out = {}
+    for path in sorted(Path(folder).rglob("*")):
+        if "__pycache__" in path.parts:
+            continue
+        rel = path.relative_to(folder).as_posix()
+        out[rel] = "<dir>" if path.is_dir() else hashlib.sha256(path.read_bytes()).hexdigest()
+    return out
+
+
+@contextmanager
+def _exclusive(lock: Path, timeout_s: float = 900.0):
+    """Hold ``lock`` (a file created exclusively) for the duration; wait for another holder to finish."""
+    start = time.monotonic()
+    while True:
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            break
+        except FileExistsError:
+            if time.monotonic() - start > timeout_s:
+                raise TimeoutError(f"{lock} held for more than {timeout_s:g} s") from None
+            time.sleep(0.05)
+    try:
+        yield
+    finally:
+        os.close(fd)
+        lock.unlink()
+
+
+def build_once(tmp_path_factory, name: str, build) -> tuple[Path, dict]:
+    """Run ``build(root) -> JSON-able dict`` once per test session, shared by all xdist workers.
+
+    Returns ``root`` (the folder ``build`` filled) and what ``build`` returned.
+    """
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # shared by the workers of one session
+    root = base / name
+    record = base / f"{name}.json"
+    with _exclusive(base / f"{name}.lock"):
+        if not record.is_file():
+            if root.exists():
+                shutil.rmtree(root)
+            root.mkdir()
+            record.write_text(json.dumps(build(root)))
+    return root, json.loads(record.read_text())

@@ -1,0 +1,183 @@
+"""Output writers: the stage folder swap, HDF5 units and provenance, CSV tables, summary.json."""
+
+from __future__ import annotations
+
+import json
+import math
+from datetime import datetime, timezone
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from gaitcli import __version__
+from gaitcli.io.outputs import Dataset, provenance, stage_folder, write_h5, write_json, write_table
+
+
+def _tree(folder: Path) -> dict[str, bytes]:
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _old_outputs(target: Path) -> dict[str, bytes]:
+    (target / "plots").mkdir(parents=True)
+    (target / "summary.json").write_text('{"frames": 10}\n')
+    (target / "only_in_old.csv").write_text("time_s\n0\n")
+    (target / "plots" / "grf.png").write_bytes(b"old png")
+    return _tree(target)
+
+
+# ------------------------------------------------------------------------------- stage_folder
+
+
+def test_stage_folder_replaces_previous_outputs_whole(tmp_path):
+    target = tmp_path / "out" / "filter"
+    _old_outputs(target)
+    with stage_folder(target) as tmp:
+        assert tmp.parent == target.parent and tmp != target
+        assert (target / "only_in_old.csv").is_file()  # the old outputs stay until the new ones are complete
+        write_json(tmp / "summary.json", {"frames": 20})
+        (tmp / "plots").mkdir()
+    assert json.loads((target / "summary.json").read_text()) == {"frames": 20}
+    assert not (target / "only_in_old.csv").exists()  # nothing of the previous run survives
+    assert sorted(p.name for p in target.parent.iterdir()) == ["filter"]  # no temp or old folders left
+
+
+def test_stage_folder_creates_missing_parents(tmp_path):
+    target = tmp_path / "a" / "b" / "filter"
+    with stage_folder(target) as tmp:
+        (tmp / "x.csv").write_text("time_s\n")
+    assert (target / "x.csv").is_file()
+    assert sorted(p.name for p in target.parent.iterdir()) == ["filter"]
+
+
+class Boom(RuntimeError):
+    pass
+
+
+def test_stage_folder_failure_keeps_old_outputs(tmp_path):
+    target = tmp_path / "out" / "filter"
+    old = _old_outputs(target)
+    with pytest.raises(Boom):
+        with stage_folder(target) as tmp:
+            write_json(tmp / "summary.json", {"frames": 20})
+            write_table(tmp / "grf.csv", {"time_s": np.arange(3) / 100})
+            raise Boom("the plots failed")
+    assert _tree(target) == old
+    assert sorted(p.name for p in target.parent.iterdir()) == ["filter"]
+
+
+def test_stage_folder_failure_without_previous_outputs_leaves_nothing(tmp_path):
+    target = tmp_path / "out" / "filter"
+    with pytest.raises(Boom):
+        with stage_folder(target) as tmp:
+            (tmp / "half.csv").write_text("time_s\n0.0")
+            raise Boom()
+    assert not target.exists()
+    assert list(target.parent.iterdir()) == []
+
+
+def test_stage_folder_keyboard_interrupt_also_cleans_up(tmp_path):
+    target = tmp_path / "filter"
+    old = _old_outputs(target)
+    with pytest.raises(KeyboardInterrupt):
+        with stage_folder(target) as tmp:
+            (tmp / "summary.json").write_text("{}")
+            raise KeyboardInterrupt
+    assert _tree(target) == old
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["filter"]
+
+
+# ------------------------------------------------------------------------------------ HDF5
+
+
+def _datasets():
+    rng = np.random.default_rng(3)
+    return {
+        "markers/time": Dataset(np.arange(5) / 100.0, "s"),
+        "markers/filtered": Dataset(rng.normal(size=(5, 2, 3)), "m", {"cutoff_hz": 6.0}),
+        "markers/labels": Dataset(np.array(["CAr", "FMr"]), "1"),
+        "plates/plate1/force": Dataset(rng.normal(size=(5, 3)), "N", {"rate_hz": 100.0}),
+        "plates/plate1/foot": Dataset(np.array(["", "r", "r", "r", ""]), "1"),
+        "lab_to_model": Dataset(np.eye(3), "1", {"meaning": "v_model = R @ v_lab"}),
+    }
+
+
+def test_write_h5_units_attrs_and_values(tmp_path):
+    data = _datasets()
+    attrs = provenance("filter:\n  cutoff_hz: 6.0\n", {"trial.c3d": "ab" * 32})
+    path = write_h5(tmp_path / "stage.h5", data, attrs)
+    with h5py.File(path, "r") as h5:
+        found = []
+        h5.visititems(lambda name, obj: found.append(name) if isinstance(obj, h5py.Dataset) else None)
+        assert sorted(found) == sorted(data)
+        for name, ds in data.items():
+            assert h5[name].attrs["units"] == ds.units, name
+            for key, value in ds.attrs.items():
+                assert h5[name].attrs[key] == value
+            stored = h5[name].asstr()[()] if ds.values.dtype.kind == "U" else h5[name][()]
+            np.testing.assert_array_equal(stored, ds.values, err_msg=name)
+        for key, value in attrs.items():
+            assert h5.attrs[key] == value
+
+
+def test_provenance_attributes():
+    config = "stages: [filter]\nfilter:\n  cutoff_hz: 6.0\n"
+    inputs = {"trial.c3d": "0" * 64, "subject.yaml": "f" * 64}
+    attrs = provenance(config, inputs)
+    assert set(attrs) >= {"gaitcli_version", "config_yaml", "input_sha256", "created_utc"}
+    assert attrs["gaitcli_version"] == __version__
+    assert yaml.safe_load(attrs["config_yaml"]) == yaml.safe_load(config)
+    assert json.loads(attrs["input_sha256"]) == inputs
+    created = datetime.fromisoformat(attrs["created_utc"])
+    assert created.utcoffset().total_seconds() == 0
+    assert abs((datetime.now(timezone.utc) - created).total_seconds()) < 60
+
+
+def test_write_h5_failure_leaves_previous_file(tmp_path):
+    path = tmp_path / "stage.h5"
+    write_h5(path, _datasets(), {"gaitcli_version": "old"})
+    before = path.read_bytes()
+    bad = {**_datasets(), "broken": Dataset(np.array([{"a": 1}], dtype=object), "1")}
+    with pytest.raises(TypeError):  # h5py cannot store a dict
+        write_h5(path, bad, {"gaitcli_version": "new"})
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["stage.h5"]
+
+
+# ------------------------------------------------------------------------------ CSV and JSON
+
+
+def test_write_table_order_nan_and_precision(tmp_path):
+    t = np.arange(4) / 100.0
+    x = np.array([0.123456789, np.nan, -1.5e-7, 12345.678])
+    path = write_table(tmp_path / "t.csv", {"time_s": t, "pelvis_x_m": x, "side": np.array(["r", "", "l", "r"])})
+    lines = path.read_text().splitlines()
+    assert lines[0] == "time_s,pelvis_x_m,side"
+    assert lines[1] == "0,0.123457,r"
+    assert lines[2].split(",")[1] == "NaN"
+    back = pd.read_csv(path, keep_default_na=False, na_values=["NaN"])
+    np.testing.assert_allclose(back["pelvis_x_m"], x, rtol=5e-6)
+    assert back["side"].tolist() == ["r", "", "l", "r"]
+
+
+def test_write_table_failure_leaves_previous_file(tmp_path):
+    path = write_table(tmp_path / "t.csv", {"time_s": np.arange(3.0)})
+    before = path.read_bytes()
+    with pytest.raises(ValueError):
+        write_table(path, {"time_s": np.arange(3.0), "x_m": np.arange(4.0)})  # unequal lengths
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.csv"]
+
+
+def test_write_json_converts_numpy_and_non_finite(tmp_path):
+    data = {"frames": np.int64(432), "rate_hz": np.float64(100.0), "cutoff_hz": 6.0, "bad": math.nan,
+            "inf": np.inf, "events": [{"frame": np.int32(3), "ok": np.bool_(True)}], "path": tmp_path,
+            "array": np.array([1.5, np.nan])}
+    path = write_json(tmp_path / "summary.json", data)
+    back = json.loads(path.read_text())  # strict JSON: no NaN tokens
+    assert back == {"frames": 432, "rate_hz": 100.0, "cutoff_hz": 6.0, "bad": None, "inf": None,
+                    "events": [{"frame": 3, "ok": True}], "path": str(tmp_path), "array": [1.5, None]}
+    assert "NaN" not in path.read_text()

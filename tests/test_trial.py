@@ -1,0 +1,300 @@
+"""subject.yaml validation and trial-folder discovery (gaitcli/trial.py)."""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+
+import numpy as np
+import pytest
+import yaml
+
+from gaitcli.errors import InputError
+from gaitcli.resources import sample_trial
+from gaitcli.trial import KEYS, load_subject, open_trial, sha256, subject_from_dict
+
+BASE = {"mass_kg": 75.0, "stature_m": 1.78, "sex": "male"}
+
+
+def _with(**changes):
+    data = dict(BASE)
+    for key, value in changes.items():
+        if value is ...:
+            data.pop(key)
+        else:
+            data[key] = value
+    return data
+
+
+def _error(data, path="trial/subject.yaml") -> InputError:
+    with pytest.raises(InputError) as info:
+        subject_from_dict(data, path)
+    err = info.value
+    message = str(err)
+    assert "\n" not in message
+    assert message.startswith(str(path)), message  # the message names the file first
+    assert err.exit_code == 2
+    return err
+
+
+# ------------------------------------------------------------------------------- valid files
+
+
+def test_minimal_subject_and_defaults():
+    s = subject_from_dict(BASE)
+    assert (s.mass_kg, s.stature_m, s.sex) == (75.0, 1.78, "male")
+    assert s.thigh_length_m is None and s.shank_length_m is None
+    assert s.marker_map == {} and s.disturbances == () and s.disturbed_side is None
+    assert s.trial is None and s.static is None and s.static_frames is None and s.condition == "normal"
+    assert isinstance(s.mass_kg, float)
+
+
+def test_integers_are_accepted_as_numbers():
+    s = subject_from_dict(_with(mass_kg=80, stature_m=2))
+    assert s.mass_kg == 80.0 and isinstance(s.mass_kg, float) and s.stature_m == 2.0
+
+
+@pytest.mark.parametrize("mass", ["auto", ...])
+def test_mass_auto_or_missing_means_estimated(mass):
+    assert subject_from_dict(_with(mass_kg=mass)).mass_kg is None
+
+
+def test_every_optional_field():
+    data = _with(thigh_length_m=0.45, shank_length_m=0.42, trial="walk03.c3d", static="stand.c3d",
+                 static_frames=[1, 100], marker_map={"RHEE": "CAr", "LHEE": "CAl"}, disturbed_side="r",
+                 condition="ski_boot",
+                 disturbances=[{"segment": "foot_r", "name": "ski_boot", "mass_kg": 2.431,
+                                "inertia_kgm2": [0.02, 0.033, 0.012], "com_offset_m": [0.01, 0.0, -0.02]}])
+    s = subject_from_dict(data)
+    assert (s.thigh_length_m, s.shank_length_m) == (0.45, 0.42)
+    assert (s.trial, s.static, s.static_frames) == ("walk03.c3d", "stand.c3d", (1, 100))
+    assert s.marker_map == {"RHEE": "CAr", "LHEE": "CAl"}
+    assert s.disturbed_side == "r" and s.condition == "ski_boot"
+    (d,) = s.disturbances
+    assert (d.segment, d.name, d.mass_kg) == ("foot_r", "ski_boot", 2.431)
+    # principal moments about the added mass's own centre become a diagonal inertia tensor
+    np.testing.assert_array_equal(np.asarray(d.inertia_kgm2), np.diag([0.02, 0.033, 0.012]))
+    np.testing.assert_array_equal(np.asarray(d.com_offset_m), [0.01, 0.0, -0.02])
+
+
+def test_disturbance_defaults():
+    (d,) = subject_from_dict(_with(disturbances=[{"segment": "shank_l", "mass_kg": 1.0}])).disturbances
+    np.testing.assert_array_equal(np.asarray(d.inertia_kgm2), np.zeros((3, 3)))
+    np.testing.assert_array_equal(np.asarray(d.com_offset_m), np.zeros(3))
+
+
+@pytest.mark.parametrize("name", ["normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot"])
+def test_sample_subjects_load(name):
+    path = sample_trial(name) / "subject.yaml"
+    raw = yaml.safe_load(path.read_text())
+    s = load_subject(path)
+    assert (s.mass_kg, s.stature_m, s.sex, s.condition) == (75.0, 1.78, "male", name)
+    assert len(s.disturbances) == len(raw.get("disturbances", []))
+    for d, r in zip(s.disturbances, raw.get("disturbances", [])):
+        assert d.segment == r["segment"] and d.mass_kg == r["mass_kg"] and d.name == r["name"]
+        np.testing.assert_allclose(np.diag(np.asarray(d.inertia_kgm2)), r["inertia_kgm2"])
+
+
+# ---------------------------------------------------------------------------------- bad files
+
+
+@pytest.mark.parametrize("mass", ["heavy", True, [75], {"kg": 75}, None, "75"])
+def test_mass_wrong_type(mass):
+    err = _error(_with(mass_kg=mass))
+    assert err.field == "mass_kg" and "kg" in err.problem
+
+
+@pytest.mark.parametrize("mass", [0, 0.0, -3, -0.1, 501, float("nan"), float("inf")])
+def test_mass_out_of_range(mass):
+    assert _error(_with(mass_kg=mass)).field == "mass_kg"
+
+
+@pytest.mark.parametrize("stature", [175, 178.0, 40, 260])
+def test_stature_in_centimetres_says_so(stature):
+    err = _error(_with(stature_m=stature))
+    assert err.field == "stature_m" and "centimetres" in err.problem and f"{stature / 100:.2f}" in err.problem
+
+
+@pytest.mark.parametrize("stature", [0, 0.3, 2.7, 3.5, 1000, -1.7, float("nan"), "tall", True])
+def test_stature_out_of_range(stature):
+    err = _error(_with(stature_m=stature))
+    assert err.field == "stature_m" and "centimetres" not in err.problem
+
+
+@pytest.mark.parametrize("key", ["stature_m", "sex"])
+def test_required_keys(key):
+    err = _error(_with(**{key: ...}))
+    assert err.field == key and "missing" in err.problem
+
+
+@pytest.mark.parametrize("sex", ["Male", "m", "x", 1, ["male"]])
+def test_sex(sex):
+    assert _error(_with(sex=sex)).field == "sex"
+
+
+@pytest.mark.parametrize("key,hint", [("mass", "mass_kg"), ("stature", "stature_m"), ("marker_mapping", "marker_map"),
+                                      ("disturbance", "disturbances")])
+def test_unknown_key_did_you_mean(key, hint):
+    data = _with(**{key: 1})
+    err = _error(data)
+    assert err.field == key and "unknown key" in err.problem and f"did you mean '{hint}'" in err.problem
+
+
+def test_unknown_key_without_a_close_match_lists_the_allowed_keys():
+    err = _error(_with(shoe_size=42))
+    assert err.field == "shoe_size" and "did you mean" not in err.problem
+    for key in KEYS:
+        assert key in err.problem
+
+
+@pytest.mark.parametrize("key,value", [("thigh_length_m", 45), ("thigh_length_m", 0.05), ("shank_length_m", "long"),
+                                       ("shank_length_m", float("nan"))])
+def test_segment_lengths(key, value):
+    assert _error(_with(**{key: value})).field == key
+
+
+@pytest.mark.parametrize("frames", [[10, 5], [0, 5], [1], [1, 5.5], "1-10", [True, 5]])
+def test_static_frames(frames):
+    assert _error(_with(static_frames=frames)).field == "static_frames"
+
+
+@pytest.mark.parametrize("mapping", [["RHEE", "CAr"], {"RHEE": 3}, {1: "CAr"}, "RHEE: CAr"])
+def test_marker_map_shape(mapping):
+    assert _error(_with(marker_map=mapping)).field == "marker_map"
+
+
+@pytest.mark.parametrize("key,value", [("trial", 3), ("static", ["a.c3d"]), ("condition", 7),
+                                       ("disturbed_side", "right"), ("disturbed_side", ["r"])])
+def test_other_fields(key, value):
+    assert _error(_with(**{key: value})).field == key
+
+
+@pytest.mark.parametrize("item,field", [
+    ("foot_r", "disturbances[0]"),
+    ({"segment": "toe_r", "mass_kg": 1.0}, "disturbances[0].segment"),
+    ({"segment": "foot_r"}, "disturbances[0].mass_kg"),
+    ({"segment": "foot_r", "mass_kg": 0}, "disturbances[0].mass_kg"),
+    ({"segment": "foot_r", "mass_kg": 60}, "disturbances[0].mass_kg"),
+    ({"segment": "foot_r", "mass_kg": 1.0, "inertia_kgm2": [0.1, 0.2]}, "disturbances[0].inertia_kgm2"),
+    ({"segment": "foot_r", "mass_kg": 1.0, "com_offset_m": [0, "x", 0]}, "disturbances[0].com_offset_m"),
+    ({"segment": "foot_r", "mass_kg": 1.0, "com_offset_m": [0, float("nan"), 0]}, "disturbances[0].com_offset_m"),
+    ({"segment": "foot_r", "mass_kg": 1.0, "name": ["boot"]}, "disturbances[0].name"),
+    ({"segment": "foot_r", "mas_kg": 1.0}, "disturbances[0].mas_kg"),
+])
+def test_disturbances(item, field):
+    err = _error(_with(disturbances=[item]))
+    assert err.field == field
+    if field.endswith("mas_kg"):
+        assert "did you mean 'mass_kg'" in err.problem
+
+
+def test_disturbances_must_be_a_list():
+    assert _error(_with(disturbances={"segment": "foot_r", "mass_kg": 1})).field == "disturbances"
+
+
+@pytest.mark.parametrize("data", [None, [], ["mass_kg", 75], "mass_kg: 75", 75])
+def test_not_a_mapping(data):
+    assert _error(data).field is None
+
+
+# ----------------------------------------------------------------------------- load_subject
+
+
+def test_load_subject_file_errors(tmp_path):
+    with pytest.raises(InputError, match="subject.yaml: file not found"):
+        load_subject(tmp_path / "subject.yaml")
+    bad = tmp_path / "subject.yaml"
+    bad.write_text("mass_kg: 75\nsex: [male\n")
+    with pytest.raises(InputError, match=r"subject.yaml: line \d+: not valid YAML"):
+        load_subject(bad)
+    bad.write_bytes(b"\xff\xfe\x00\x80 binary")
+    with pytest.raises(InputError, match="subject.yaml: not a text file"):
+        load_subject(bad)
+    bad.write_text("")
+    with pytest.raises(InputError, match="subject.yaml: expected a YAML mapping"):
+        load_subject(bad)
+
+
+def test_load_subject_round_trip(tmp_path):
+    path = tmp_path / "subject.yaml"
+    path.write_text(yaml.safe_dump(_with(marker_map={"RHEE": "CAr"}, disturbed_side="l")))
+    s = load_subject(path)
+    assert s.marker_map == {"RHEE": "CAr"} and s.disturbed_side == "l" and s.mass_kg == 75.0
+
+
+# ------------------------------------------------------------------------------ open_trial
+
+
+def _folder(tmp_path, *files, subject=BASE):
+    folder = tmp_path / "trial"
+    folder.mkdir()
+    (folder / "subject.yaml").write_text(yaml.safe_dump(subject))
+    for name in files:
+        (folder / name).write_bytes(b"x")
+    return folder
+
+
+def test_open_trial_finds_trial_and_static(tmp_path):
+    folder = _folder(tmp_path, "trial.c3d", "static.c3d", "notes.txt")
+    t = open_trial(folder)
+    assert t.trial_path == folder / "trial.c3d" and t.static_path == folder / "static.c3d"
+    assert t.forces_path is None and t.subject_path == folder / "subject.yaml" and t.name == "trial"
+    assert t.input_files() == [folder / "subject.yaml", folder / "trial.c3d", folder / "static.c3d"]
+
+
+def test_open_trial_csv(tmp_path):
+    folder = _folder(tmp_path, "markers.csv", "forces.csv")
+    t = open_trial(folder)
+    assert (t.trial_path, t.forces_path, t.static_path) == (folder / "markers.csv", folder / "forces.csv", None)
+    (folder / "forces.csv").unlink()
+    assert open_trial(folder).forces_path is None  # markers only
+
+
+def test_open_trial_prefers_c3d_over_csv(tmp_path):
+    folder = _folder(tmp_path, "trial.c3d", "markers.csv", "forces.csv")
+    assert open_trial(folder).trial_path == folder / "trial.c3d"
+
+
+def test_open_trial_named_files(tmp_path):
+    folder = _folder(tmp_path, "walk03.c3d", "trial.c3d", "stand.c3d", "static.c3d",
+                     subject=_with(trial="walk03.c3d", static="stand.c3d"))
+    t = open_trial(folder)
+    assert t.trial_path == folder / "walk03.c3d" and t.static_path == folder / "stand.c3d"
+
+
+@pytest.mark.parametrize("key", ["trial", "static"])
+def test_open_trial_named_file_missing(tmp_path, key):
+    folder = _folder(tmp_path, "trial.c3d", subject=_with(**{key: "gone.c3d"}))
+    with pytest.raises(InputError) as info:
+        open_trial(folder)
+    assert info.value.path == folder / "subject.yaml" and info.value.field == key and "gone.c3d" in str(info.value)
+
+
+def test_open_trial_missing_files(tmp_path):
+    with pytest.raises(InputError, match="trial folder not found"):
+        open_trial(tmp_path / "nowhere")
+    folder = _folder(tmp_path)
+    with pytest.raises(InputError) as info:
+        open_trial(folder)
+    assert info.value.path == folder / "trial.c3d" and "not found" in str(info.value)
+    (folder / "subject.yaml").unlink()
+    (folder / "trial.c3d").write_bytes(b"x")
+    with pytest.raises(InputError) as info:
+        open_trial(folder)
+    assert info.value.path == folder / "subject.yaml"
+
+
+def test_open_trial_modifies_nothing(tmp_path):
+    folder = tmp_path / "normal"
+    shutil.copytree(sample_trial("normal"), folder, ignore=shutil.ignore_patterns("gait_out", "truth"))
+    before = {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+    t = open_trial(folder)
+    assert t.subject.condition == "normal"
+    assert {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()} == before
+
+
+def test_sha256(tmp_path):
+    path = tmp_path / "f.bin"
+    data = np.random.default_rng(0).bytes(3 << 20)  # more than one 1 MiB block
+    path.write_bytes(data)
+    assert sha256(path) == hashlib.sha256(data).hexdigest()
