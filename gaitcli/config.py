@@ -139,6 +139,17 @@ def pipeline_from_dict(data: dict | None, path: str | Path | None = None) -> Pip
                           **{name: _section(path, name, cls, data.get(name)) for name, cls in sections.items()})
 
 
+def read_yaml(path: Path):
+    """Parse a YAML file; a file that is not UTF-8 text or not YAML is an :class:`InputError`."""
+    try:
+        return yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(path, None, "not a text file (expected UTF-8 YAML)") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise InputError(path, f"line {mark.line + 1}" if mark else None, "not valid YAML") from None
+
+
 def load_pipeline(path: str | Path | None = None) -> PipelineConfig:
     """Read a pipeline YAML file; ``None`` gives the built-in defaults (``pipelines/standard.yaml``)."""
     if path is None:
@@ -146,14 +157,7 @@ def load_pipeline(path: str | Path | None = None) -> PipelineConfig:
     path = Path(path)
     if not path.is_file():
         raise InputError(path, None, "pipeline file not found")
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, None, "not a text file (expected UTF-8 YAML)") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else None
-        raise InputError(path, where, "not valid YAML") from None
+    data = read_yaml(path)
     return pipeline_from_dict(data, path)
 
 

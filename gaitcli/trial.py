@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
+from gaitcli.config import read_yaml
 from gaitcli.errors import InputError
 from gaitcli.kinematics.anthropometry import Disturbance
 
@@ -151,13 +151,7 @@ def load_subject(path: str | Path) -> Subject:
     path = Path(path)
     if not path.is_file():
         raise InputError(path, None, "file not found (every trial folder needs a subject.yaml)")
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, None, "not a text file (expected UTF-8 YAML)") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise InputError(path, f"line {mark.line + 1}" if mark else None, "not valid YAML") from None
+    data = read_yaml(path)
     return subject_from_dict(data, path)
 
 

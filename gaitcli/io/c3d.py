@@ -312,7 +312,7 @@ def _markers(path: Path, c, length_m: float, notes: list[str]) -> Markers:
 # ---------------------------------------------------------------------- plates
 
 
-def _plate_axes(corners: np.ndarray) -> np.ndarray:
+def plate_axes(corners: np.ndarray) -> np.ndarray:
     """Plate axes (3, 3), columns x, y, z in lab coordinates, from corners (4, 3) as ezc3d builds them."""
     x = corners[0] - corners[1]
     y = corners[0] - corners[3]
@@ -386,7 +386,7 @@ def _plates(path: Path, c, length_m: float, markers: Markers, notes: list[str]) 
         moment = np.asarray(pf["moment"], dtype=float).T
         corners = np.asarray(pf["corners"], dtype=float).T
         centre = corners.mean(axis=0)
-        axes = _plate_axes(corners)
+        axes = plate_axes(corners)
         normal = axes[:, 2]
 
         if plate_type == 1:

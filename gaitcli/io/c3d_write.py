@@ -33,20 +33,13 @@ import numpy as np
 
 from gaitcli.errors import InputError
 from gaitcli.io.atomic import atomic_path
+from gaitcli.io.c3d import plate_axes
 from gaitcli.recording import ForcePlate, Markers
 
 __all__ = ["write_c3d", "DEFAULT_ORIGIN_MM"]
 
 DEFAULT_ORIGIN_MM = (2.0, -1.5, 40.0)
 """Surface centre → transducer origin (mm, plate axes, z into the floor), AMTI-like."""
-
-
-def _plate_axes(corners: np.ndarray) -> np.ndarray:
-    x = corners[0] - corners[1]
-    y = corners[0] - corners[3]
-    z = np.cross(x, y)
-    y = np.cross(z, x)
-    return np.stack([v / np.linalg.norm(v) for v in (x, y, z)], axis=1)
 
 
 def _check_rotation(path: Path, R) -> np.ndarray:
@@ -141,10 +134,10 @@ def _plate_channels(path, plates, R, up_lab, n_frames, point_rate, origin_mm):
         if plate.n_samples != n_samples:
             raise InputError(path, plate.name, f"{plate.n_samples} samples (expected {n_samples} = frames x {ratio:g})")
         c_lab = np.asarray(plate.corners_m, dtype=float) @ R.T * 1000.0
-        axes = _plate_axes(c_lab)
+        axes = plate_axes(c_lab)
         if np.dot(axes[:, 2], up_lab) > 0:  # plate z must point into the floor
             c_lab = c_lab[[0, 3, 2, 1]]
-            axes = _plate_axes(c_lab)
+            axes = plate_axes(c_lab)
         centre_lab = R @ np.asarray(plate.centre_m, dtype=float) * 1000.0
         if not np.allclose(centre_lab, c_lab.mean(axis=0), atol=1e-3):
             raise InputError(path, plate.name, "centre_m is not the mean of corners_m")

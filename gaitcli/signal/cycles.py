@@ -46,9 +46,13 @@ def normalise(values: np.ndarray, time_s: np.ndarray, stride: Stride) -> np.ndar
     return out.reshape((CYCLE_POINTS,) + values.shape[1:])
 
 
-def _stance_intervals(events: Events, side: str) -> list[tuple[float, float]]:
-    strikes = np.sort(events.time_s[(events.side == side) & (events.kind == "heel_strike")])
-    offs = np.sort(events.time_s[(events.side == side) & (events.kind == "toe_off")])
+def _stance_intervals(events: Events, side: str, *, plate_only: bool = False) -> list[tuple[float, float]]:
+    """Stance intervals (heel strike → next toe off) of ``side``; with ``plate_only`` both timed by a plate."""
+    mine = events.side == side
+    if plate_only:
+        mine &= events.source == "plate"
+    strikes = np.sort(events.time_s[mine & (events.kind == "heel_strike")])
+    offs = np.sort(events.time_s[mine & (events.kind == "toe_off")])
     out = []
     for a in strikes:
         later = offs[offs > a]
@@ -76,19 +80,6 @@ class GaitFeatures:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
-def _plate_contacts(events: Events, side: str) -> list[tuple[float, float]]:
-    """Stance intervals of ``side`` whose heel strike and toe off both come from a force plate."""
-    mine = (events.side == side) & (events.source == "plate")
-    strikes = np.sort(events.time_s[mine & (events.kind == "heel_strike")])
-    offs = np.sort(events.time_s[mine & (events.kind == "toe_off")])
-    out = []
-    for a in strikes:
-        later = offs[offs > a]
-        if later.size:
-            out.append((float(a), float(later[0])))
-    return out
-
-
 def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.ndarray) -> GaitFeatures:
     """Table 3.1 from events and each heel's forward position (m) over time.
 
@@ -112,7 +103,7 @@ def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.nd
     period = mean(periods)
     stance = {}
     for side in ("r", "l"):
-        contacts = _plate_contacts(events, side) or _stance_intervals(events, side)
+        contacts = _stance_intervals(events, side, plate_only=True) or _stance_intervals(events, side)
         stance[side] = mean([(b - a) / period * 100 for a, b in contacts])
     # walking has no flight phase: each foot's stance overlaps the other's twice per stride
     double = stance["r"] + stance["l"] - 100.0
