@@ -130,27 +130,38 @@ class Run:
                 pass
         return filtered_trial(self.filter())
 
-    def calibration(self, filtered, mass_kg: float):
-        """Static calibration from static.c3d (in the dynamic trial's axes) or named frames of the trial."""
+    def static_markers(self):
+        """The standing trial's markers in the dynamic trial's axes, mapped; None when there is no static.c3d."""
         from gaitcli.io.axes import apply_rotation
         from gaitcli.io.c3d import read_c3d
-        from gaitcli.kinematics.calibration import calibrate
         from gaitcli.kinematics.markerset import apply_marker_map
+
+        subject = self.trial.subject
+        if self.trial.static_path is None:
+            if subject.static_frames is None:
+                raise InputError(self.trial.subject_path, "static_frames",
+                                 "no static.c3d in the trial folder: name the standing frames of the trial as "
+                                 "[first, last] (file frame numbers)")
+            return None
+        dynamic = load_recording(self.trial)
+        with warnings.catch_warnings():  # a standing trial has no plates to speak of
+            warnings.filterwarnings("ignore", message=".*force plate", category=GaitWarning)
+            static = read_c3d(self.trial.static_path, to_model_axes=False)
+        markers = apply_rotation(static, dynamic.lab_to_model).markers
+        if subject.marker_map:
+            markers = apply_marker_map(markers, subject.marker_map, source=self.trial.subject_path)
+        return markers
+
+    def calibration(self, filtered, mass_kg: float, static=None):
+        """Static calibration from static.c3d's markers or from named frames of the filtered trial."""
+        from gaitcli.kinematics.calibration import calibrate
 
         subject = self.trial.subject
         common = dict(mass_kg=mass_kg, stature_m=subject.stature_m, sex=subject.sex,
                       thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
                       disturbances=subject.disturbances)
-        if self.trial.static_path is not None:
-            dynamic = load_recording(self.trial)
-            with warnings.catch_warnings():  # a standing trial has no plates to speak of
-                warnings.filterwarnings("ignore", message=".*force plate", category=GaitWarning)
-                static = read_c3d(self.trial.static_path, to_model_axes=False)
-            static = apply_rotation(static, dynamic.lab_to_model)
-            markers = static.markers
-            if subject.marker_map:
-                markers = apply_marker_map(markers, subject.marker_map, source=self.trial.subject_path)
-            return calibrate(markers, source=self.trial.static_path, **common)
+        if static is not None:
+            return calibrate(static, source=self.trial.static_path, **common)
         if subject.static_frames is None:
             raise InputError(self.trial.subject_path, "static_frames",
                              "no static.c3d in the trial folder: name the standing frames of the trial as "
@@ -170,15 +181,18 @@ class Run:
         from gaitcli.report.idyn_outputs import write_idyn_outputs
 
         started = time.perf_counter()
-        filtered = self.filtered()
         subject = self.trial.subject
+        static = self.static_markers()
+        if static is not None:  # a static trial the model cannot use fails before anything is written
+            self.calibration(None, subject.mass_kg or 70.0, static)
+        filtered = self.filtered()
         if subject.mass_kg is not None:
             mass, source = subject.mass_kg, "subject.yaml"
         else:
             mass = check_mass(estimate_mass_kg(filtered, gravity_m_s2=self.cfg.idyn.gravity_m_s2),
                               self.trial.subject_path)
             source = "estimated from the force plates (2·∫Fz dt / (g·stride period) per recorded stance)"
-        calibration = self.calibration(filtered, mass)
+        calibration = self.calibration(filtered, mass, static)
         result = inverse_dynamics_stage(filtered, calibration, self.cfg.idyn, mass_kg=mass, mass_source=source)
         target = self.out_root / "idyn"
         with stage_folder(target) as tmp:

@@ -1,18 +1,20 @@
 """Sagittal export for the muscle stage (4.5.1): per side thigh, knee and ankle angles, hip path, GRF.
 
-Angles are planar, in the model's x–z plane (x forward along the walk): the thigh
-angle is the hip→knee line's angle from the downward vertical, positive when the
-knee is in front of the hip; knee flexion is the thigh angle minus the shank
-angle (knee→ankle line, positive when the ankle is in front of the knee); ankle
-dorsiflexion is the foot's toe-up pitch minus the shank angle, zero in the
-standing reference posture.
+The thigh and shank angles are planar, in the model's x–z plane (x forward along
+the walk), from the joint centres: the thigh angle is the hip→knee line's angle
+from the downward vertical, positive when the knee is in front of the hip; knee
+flexion is the thigh angle minus the shank angle (knee→ankle line, positive when
+the ankle is in front of the knee). The foot has no such line through joint
+centres, so ankle dorsiflexion is the 3-D model's ankle flexion coordinate
+(clinical sign): zero in the calibration posture, which for a standing static
+trial is the foot flat and ⟂ the shank, the muscle model's neutral (A.9).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gaitcli.kinematics.model import BODIES, JOINTS
+from gaitcli.kinematics.model import COORDINATES, JOINTS
 
 
 def _from_vertical(upper, lower):
@@ -21,11 +23,11 @@ def _from_vertical(upper, lower):
     return np.arctan2(d[:, 0], -d[:, 2])
 
 
-def sagittal_columns(time_s, joint_centres_m, rotations, feet: dict) -> dict[str, np.ndarray]:
+def sagittal_columns(time_s, joint_centres_m, q, feet: dict) -> dict[str, np.ndarray]:
     """The columns of ``sagittal.csv`` (4.5.1).
 
-    ``joint_centres_m`` (n, 7, 3) and body ``rotations`` (n, 8, 3, 3) from the
-    model's forward kinematics; ``feet[side]`` with ``force_N`` (n, 3) and ``cop_m``
+    ``joint_centres_m`` (n, 7, 3) from the model's forward kinematics of the
+    coordinates ``q`` (n, 27); ``feet[side]`` with ``force_N`` (n, 3) and ``cop_m``
     (n, 3) of that foot (zero force and NaN COP in swing).
     """
     columns = {"time_s": np.asarray(time_s)}
@@ -35,13 +37,13 @@ def sagittal_columns(time_s, joint_centres_m, rotations, feet: dict) -> dict[str
         ankle = joint_centres_m[:, JOINTS.index(f"ankle_{s}")]
         thigh = _from_vertical(hip, knee)
         shank = _from_vertical(knee, ankle)
-        foot_x = rotations[:, BODIES.index(f"foot_{s}"), :, 0]
-        toe_up = np.arctan2(foot_x[:, 2], foot_x[:, 0])
+        # Cardan y of the ankle is plantarflexion in the model's signs (3.1)
+        dorsiflexion = -np.asarray(q)[:, COORDINATES.index(f"ankle_{s}_flexion")]
         columns[f"hip_x_{s}_m"] = hip[:, 0]
         columns[f"hip_z_{s}_m"] = hip[:, 2]
         columns[f"thigh_angle_{s}_deg"] = np.degrees(thigh)
         columns[f"knee_flexion_{s}_deg"] = np.degrees(thigh - shank)
-        columns[f"ankle_dorsiflexion_{s}_deg"] = np.degrees(toe_up - shank)
+        columns[f"ankle_dorsiflexion_{s}_deg"] = np.degrees(dorsiflexion)
         load = feet.get(s)
         n = hip.shape[0]
         force = np.zeros((n, 3)) if load is None else np.nan_to_num(np.asarray(load["force_N"]))

@@ -158,7 +158,7 @@ def inverse_dynamics_stage(trial: FilteredTrial, calibration: StaticCalibration,
     states = forward_kinematics(q, params)
     heel_x = {s: markers.get(HEEL[s])[:, 0] for s in ("r", "l") if HEEL[s] in markers}
     features = gait_features(trial.events, heel_x, markers.time_s)
-    sagittal = sagittal_columns(markers.time_s, states.joint_centre_m, states.rotation, trial.feet)
+    sagittal = sagittal_columns(markers.time_s, states.joint_centre_m, q, trial.feet)
     return IdynResult(time_s=markers.time_s, q=q, qd=qd, qdd=qdd, joint_moments_Nm=moments,
                       joint_moments_global_Nm=result.joint_moments_global_Nm,
                       residual_force_N=result.residual_force_N, residual_moment_Nm=result.residual_moment_Nm,

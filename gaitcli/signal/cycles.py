@@ -80,11 +80,24 @@ class GaitFeatures:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
+def _footprint(heel_x: np.ndarray, time_s: np.ndarray, strike_s: float, period_s: float) -> float:
+    """Forward position of a planted heel: where it moves least in the first 35 % of the cycle after a strike.
+
+    Robust to heel strikes timed a few frames early or late (kinematic events),
+    unlike the heel position at the strike itself, when the heel still moves.
+    """
+    window = (time_s >= strike_s) & (time_s <= strike_s + 0.35 * period_s) & np.isfinite(heel_x)
+    if window.sum() < 3:
+        return float(np.interp(strike_s, time_s, heel_x))
+    speed = np.abs(np.gradient(heel_x[window], time_s[window]))
+    return float(heel_x[window][np.argmin(speed)])
+
+
 def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.ndarray) -> GaitFeatures:
     """Table 3.1 from events and each heel's forward position (m) over time.
 
-    Stride length is the heel's forward displacement between two strikes of the
-    same foot (mean over strides), the period the time between them. Stance % is
+    Stride length is the forward distance between two successive footprints of
+    the same heel (mean over strides), the period the time between the strikes. Stance % is
     the stance time over the mean period, and double stance % the time both feet
     are on the ground, stance_r + stance_l − 100 (walking has no flight phase).
     Stances timed by a force plate at both ends are used where there are any,
@@ -92,15 +105,13 @@ def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.nd
     are the fallback.
     """
     all_strides = strides(events)
-    lengths, periods = [], []
+    mean = (lambda v: float(np.mean(v)) if len(v) else float("nan"))
+    period = mean([st.period_s for st in all_strides])
+    lengths = []
     for st in all_strides:
         x = heel_x_m.get(st.side)
         if x is not None:
-            a, b = np.interp([st.start_s, st.end_s], time_s, x)
-            lengths.append(abs(b - a))
-        periods.append(st.period_s)
-    mean = (lambda v: float(np.mean(v)) if len(v) else float("nan"))
-    period = mean(periods)
+            lengths.append(abs(_footprint(x, time_s, st.end_s, period) - _footprint(x, time_s, st.start_s, period)))
     stance = {}
     for side in ("r", "l"):
         contacts = _stance_intervals(events, side, plate_only=True) or _stance_intervals(events, side)

@@ -16,7 +16,7 @@ from gaitcli.config import FilterConfig
 from gaitcli.errors import GaitWarning
 from gaitcli.recording import Markers, Recording
 from gaitcli.signal.butterworth import design_frequency_hz, lowpass
-from gaitcli.signal.events import Contact, EventDetection, Events, detect_events
+from gaitcli.signal.events import Contact, EventDetection, Events, detect_events, kinematic_events
 from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
 from gaitcli.signal.gaps import Gap, fill_gaps
 
@@ -72,6 +72,38 @@ def _frames(load: PlateLoad, n: int) -> PlateLoad:
                                free_moment_Nm=fit(load.free_moment_Nm, np.nan), loaded=fit(load.loaded, False))
 
 
+def calibrate_kinematic_events(events: Events, feet: dict, pelvis: np.ndarray, rate_hz: float) -> Events:
+    """Shift the kinematic (Zeni) events by their bias against the plate events of the same trial.
+
+    Zeni's heel strike comes before the true one and its toe off after (the foot is
+    still moving relative to the pelvis). Where a plate timed a heel strike or toe
+    off, the Zeni event of the same contact (within ±0.2 s) gives the bias; the
+    median bias per foot and kind (both feet's where a foot was never on a plate)
+    is removed from that foot's kinematic events of the kind.
+    Trials without plate events are left as they are.
+    """
+    if not feet or not len(events.of(source="plate")):
+        return events
+    zeni = Events.concatenate(kinematic_events(heel, toe, pelvis, rate_hz, side) for side, (heel, toe) in feet.items())
+    shifted = events.time_s.copy()
+    for kind in ("heel_strike", "toe_off"):
+        bias = {}
+        for side in feet:
+            bias[side] = []
+            for t in events.of(side=side, kind=kind, source="plate").time_s:
+                candidates = zeni.of(side=side, kind=kind).time_s
+                near = candidates[np.abs(candidates - t) <= 0.2]
+                if near.size:
+                    bias[side].append(t - near[np.argmin(np.abs(near - t))])
+        pooled = [b for values in bias.values() for b in values]
+        for side in feet:
+            own = bias[side] or pooled  # a foot's own bias where a plate saw it, else both feet's
+            if own:
+                mine = (events.side == side) & (events.kind == kind) & (events.source == "kinematics")
+                shifted[mine] += float(np.median(own))
+    return Events(np.rint(shifted * rate_hz).astype(int), shifted, events.side, events.kind, events.source)
+
+
 def filter_markers(markers: Markers, cfg: FilterConfig) -> tuple[Markers, list[Gap]]:
     """Fill gaps up to ``cfg.max_gap_frames`` by cubic interpolation, then filter (3.1.4)."""
     filled, gaps = fill_gaps(markers.positions_m, max_gap_frames=cfg.max_gap_frames)
@@ -110,8 +142,10 @@ def filter_trial(recording: Recording, cfg: FilterConfig) -> FilterResult:
         detection = EventDetection(Events(), [], np.full((len(plates), n), "", dtype="<U1"))
     else:
         detection = detect_events(plates, feet, pelvis_centre(markers), rate_hz=rate,
-                                  threshold_N=cfg.force_threshold_N, refine=True,
+                                  threshold_N=cfg.force_threshold_N, refine=False,
                                   duplicate_s=0.35)  # one foot cannot strike twice within 0.35 s
+    detection = dataclasses.replace(detection, events=calibrate_kinematic_events(
+        detection.events, feet, pelvis_centre(markers), rate))
     for c in detection.contacts:
         if c.flag:
             warnings.warn(f"{c.plate_name}: contact at {c.on_time_s:.2f}–{c.off_time_s:.2f} s not assigned to a foot "
