@@ -153,8 +153,6 @@ STANCE_END = 0.62  # toe off of the same foot, fraction of the cycle
 DOUBLE_SUPPORT = 0.12
 PELVIS_HARMONICS = (4, 3, 4)  # x, y, z
 ROLL_RADIUS_M = 0.30
-FORE_AFT_MODE = "pendulum"
-BRAKING_BW = 0.18
 HEEL_COP_M = -0.04  # where the COP starts at heel strike, forward of the ankle centre
 WARP_KEEP = 0.3
 WARP_HARMONICS = 4
@@ -309,23 +307,7 @@ def design_gait(geometry: Geometry, condition: Condition, params, *, samples: in
     detrended_plan = cop_plan if cop_offset_m is None else cop_plan + cop_offset_m
     omega2 = G / float(np.mean(com[middle, 2]))
     k = np.fft.rfftfreq(n, d=T / n) * 2 * np.pi
-    if FORE_AFT_MODE == "force":
-        # the CoM follows a prescribed fore-aft ground reaction: each foot brakes in the first half of its
-        # stance and propels in the second (half-sines of BRAKING_BW body weights), ẍ = ΣFx / m
-        fx = np.zeros(n)
-        for side, off in offsets.items():
-            own = np.mod(tau - off, 1.0)
-            half = STANCE_END / 2
-            fx -= np.where(own < half, np.sin(np.pi * own / half), 0.0)
-            fx += np.where((own >= half) & (own < STANCE_END), np.sin(np.pi * (own - half) / half), 0.0)
-        accel = BRAKING_BW * G * fx
-        spectrum = np.fft.rfft(accel)
-        spectrum[0] = 0.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            spectrum = np.where(k > 0, -spectrum / (k ** 2), 0.0)
-        target = np.fft.irfft(spectrum, n=n) + float(np.mean(com[middle, 0] - shift - stride * tau)) + stride * tau
-    else:
-        target = np.fft.irfft(np.fft.rfft(detrended_plan) * omega2 / (omega2 + k ** 2), n=n) + stride * tau
+    target = np.fft.irfft(np.fft.rfft(detrended_plan) * omega2 / (omega2 + k ** 2), n=n) + stride * tau
     # invert com_x(φ) (monotonic) at the targets, over three cycles to handle the wrap
     com_x = com[:, 0] - shift
     phases = np.arange(3 * n) / n - 1.0
@@ -381,7 +363,7 @@ def balanced_gait(geometry: Geometry, condition: Condition, params, *, iteration
     """
     design = design_gait(geometry, condition, params)
     offset = np.zeros(design.q.shape[0])
-    for _ in range(iterations if FORE_AFT_MODE != "force" else 0):
+    for _ in range(iterations):
         _, _, _, _, cop, plan = ground_reactions(design, params, with_plan=True)
         offset -= cop[:, 0] - plan
         design = design_gait(geometry, condition, params, cop_offset_m=offset)
