@@ -226,7 +226,7 @@ class Run:
         subject = self.trial.subject
         side = cfg.side
         time_s = np.asarray(inputs.sagittal["time_s"])
-        source = self.out_root / "idyn" / "sagittal.csv"
+        source = inputs.source or self.out_root / "idyn" / "sagittal.csv"  # idyn.h5 when read back from it
         start, end, periodic = analysis_interval(inputs.events, time_s, inputs.foot_load_known[side], side,
                                                  cfg.phase, source=source)
         ev = inputs.events

@@ -1,0 +1,316 @@
+"""``gait muscles`` as a command on copies of the bundled normal sample trial.
+
+All invocations run once per session (:func:`build_once`), several processes at a time:
+
+* ``gait muscles normal --method so`` (runs filter and idyn first) and, alongside it, ``gait idyn``
+  on a second copy whose ``idyn.h5`` then gets NaN knee angles inside the analysed stride;
+* then, at once, on copies of the first trial folder (filter and idyn outputs included): a second
+  ``--method so`` run on the same folder (must reuse filter and idyn), ``--method eid`` (ends
+  infeasible on the synthetic gait: exit 3, outputs written with ``converged: false``),
+  ``--phase swing``, ``--side l``, and the muscles run on the corrupted copy (exit 2, nothing written).
+
+The synthetic gait's moments change faster than the Table A.1 muscles' activation dynamics follow,
+so EID over a whole cycle is infeasible (a documented limitation) and SO's excitations, derived
+from its forces, leave [0, 1]; both are what these tests expect.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pandas as pd
+import pytest
+
+from .conftest import (
+    WORKERS,
+    Result,
+    build_once,
+    copy_sample,
+    gait,
+    gait_many,
+    snapshot,
+)
+
+#: the eight muscles of Table A.1 (Diss. appendix A.1), in the model's order
+MUSCLES = ("iliopsoas", "rectus_femoris", "glutei", "hamstrings", "vasti", "gastrocnemius", "tibialis_anterior",
+           "soleus")
+TABLES = {"forces.csv": "force_N", "activations.csv": "activation", "excitations.csv": "excitation",
+          "metabolics.csv": "metabolic_rate_W"}
+MUSCLE_FILES = (*TABLES, "muscles.h5", "summary.json")
+PLOTS = ("forces.png", "activations.png", "excitations.png", "metabolic_cost.png")
+SUMMARY_KEYS = ("method", "nodes", "solve_time_s", "converged", "metabolic_cost_J", "cost_of_transport_J_per_m",
+                "min_excitation", "max_excitation", "max_moment_error_Nm")
+PROVENANCE = ("gaitcli_version", "config_yaml", "input_sha256", "created_utc")
+#: IPOPT's return statuses of a failed solve (ApplicationReturnStatus)
+IPOPT_FAILURES = ("Infeasible_Problem_Detected", "Search_Direction_Becomes_Too_Small", "Diverging_Iterates",
+                  "User_Requested_Stop", "Feasible_Point_Found", "Maximum_Iterations_Exceeded", "Restoration_Failed",
+                  "Error_In_Step_Computation", "Maximum_CpuTime_Exceeded", "Maximum_WallTime_Exceeded",
+                  "Not_Enough_Degrees_Of_Freedom", "Invalid_Problem_Definition", "Invalid_Option",
+                  "Invalid_Number_Detected", "Unrecoverable_Exception", "NonIpopt_Exception_Thrown",
+                  "Insufficient_Memory", "Internal_Error")
+NAN_COLUMN = "knee_flexion_r_deg"
+NAN_OFFSET_S = (0.40, 0.50)  # where the knee angle becomes NaN, after the start of the analysed stride
+CSV_RTOL = 1e-5  # the tables' 6 significant digits
+
+
+def _mtimes(folder: Path) -> dict[str, int]:
+    return {p.relative_to(folder).as_posix(): p.stat().st_mtime_ns for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _copy_with_outputs(source: Path, dest: Path) -> Path:
+    """A copy of a trial folder with its filter and idyn outputs (up to date there too) but no muscle outputs."""
+    shutil.copytree(source, dest)
+    shutil.rmtree(dest / "gait_out" / "muscles")
+    return dest
+
+
+def _corrupt_knee(h5_path: Path, start_s: float) -> dict:
+    """NaN in ``sagittal/knee_flexion_r_deg`` of idyn.h5 over NAN_OFFSET_S after ``start_s``; the rows and times."""
+    with h5py.File(h5_path, "r+") as h5:
+        t = h5["sagittal/time_s"][()]
+        rows = np.flatnonzero((t >= start_s + NAN_OFFSET_S[0]) & (t <= start_s + NAN_OFFSET_S[1]))
+        data = h5[f"sagittal/{NAN_COLUMN}"]
+        values = data[()]
+        values[rows] = np.nan
+        data[...] = values
+    return {"rows": [int(rows[0]), int(rows[-1])], "times_s": [float(t[rows[0]]), float(t[rows[-1]])]}
+
+
+def _build(root: Path) -> dict:
+    normal = copy_sample("normal", root / "normal")
+    nan = copy_sample("normal", root / "nan")
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        first = pool.submit(gait, "muscles", normal, "--method", "so", cwd=root)
+        idyn = pool.submit(gait, "idyn", nan, cwd=root)
+        first, idyn = first.result(), idyn.result()
+    if first.returncode != 0 or idyn.returncode != 0:
+        return {"failed": [first.to_json(), idyn.to_json()]}
+    out = normal / "gait_out"
+    shutil.copytree(out / "muscles" / "so", root / "so_first")  # the first run's outputs, before the second run
+    upstream = {stage: _mtimes(out / stage) for stage in ("filter", "idyn")}
+    upstream_sha = {stage: snapshot(out / stage) for stage in ("filter", "idyn")}
+    for name in ("eid", "swing", "left"):
+        _copy_with_outputs(normal, root / name)
+    start_s = json.loads((out / "muscles" / "so" / "summary.json").read_text())["interval_s"][0]
+    corrupted = _corrupt_knee(nan / "gait_out" / "idyn" / "idyn.h5", start_s)
+    nan_idyn = snapshot(nan / "gait_out")
+    results = gait_many({  # the longest first
+        "eid": (("muscles", root / "eid", "--method", "eid"), root),
+        "second": (("muscles", normal, "--method", "so"), root),
+        "swing": (("muscles", root / "swing", "--method", "so", "--phase", "swing"), root),
+        "left": (("muscles", root / "left", "--method", "so", "--side", "l"), root),
+        "nan": (("muscles", nan, "--method", "so"), root),
+    })
+    return {"first": first.to_json(), "idyn": idyn.to_json(),
+            **{key: r.to_json() for key, r in results.items()},
+            "upstream_mtimes": upstream, "upstream_mtimes_after": {s: _mtimes(out / s) for s in upstream},
+            "upstream_sha": upstream_sha, "upstream_sha_after": {s: snapshot(out / s) for s in upstream},
+            "corrupted": corrupted, "nan_gait_out": nan_idyn, "workers": WORKERS}
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """(record of every invocation, root folder), built once per session."""
+    root, record = build_once(tmp_path_factory, "cli_muscles", _build)
+    if "failed" in record:
+        pytest.fail("\n".join(Result.from_json(r).describe() for r in record["failed"]))
+    return record, root
+
+
+def result(runs, key: str) -> Result:
+    return Result.from_json(runs[0][key])
+
+
+def summary_of(folder: Path) -> dict:
+    return json.loads((folder / "summary.json").read_text())
+
+
+def events_of(trial: Path) -> pd.DataFrame:
+    return pd.read_csv(trial / "gait_out" / "filter" / "events.csv")
+
+
+def assert_all_files(folder: Path) -> None:
+    for name in MUSCLE_FILES:
+        assert (folder / name).is_file() and (folder / name).stat().st_size > 0, f"{folder / name} missing"
+    for name in PLOTS:
+        assert (folder / "plots" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", f"{folder / 'plots' / name}"
+
+
+# -- 1. SO on the normal sample trial --------------------------------------------------------------------------
+
+def test_so_exits_0_and_writes_every_file(runs):
+    first = result(runs, "first")
+    assert first.returncode == 0, first.describe()
+    folder = runs[1] / "so_first"
+    assert_all_files(folder)
+    info = summary_of(folder)
+    assert set(SUMMARY_KEYS) <= set(info)
+    assert info["method"] == "so" and info["converged"] is True and info["side"] == "r"
+    assert info["phase"] == "cycle" and info["periodic"] is True
+    assert info["solve_time_s"] > 0
+
+
+def test_so_tables_have_one_column_per_muscle(runs):
+    folder = runs[1] / "so_first"
+    info = summary_of(folder)
+    start, end = info["interval_s"]
+    for name, suffix in TABLES.items():
+        table = pd.read_csv(folder / name)
+        expected = ["time_s"] + [f"{m}_{suffix}" for m in MUSCLES]
+        if name == "metabolics.csv":
+            expected.append("total_metabolic_rate_W")
+        assert list(table.columns) == expected, name
+        assert len(table) == info["nodes"], name
+        assert np.all(np.diff(table.time_s) > 0)
+        assert start - 0.011 <= table.time_s.iloc[0] and table.time_s.iloc[-1] <= end + 0.011
+        assert np.isfinite(table.drop(columns="time_s").to_numpy()).all(), name
+    metabolics = pd.read_csv(folder / "metabolics.csv")
+    per_muscle = metabolics[[f"{m}_metabolic_rate_W" for m in MUSCLES]].sum(axis=1)
+    np.testing.assert_allclose(metabolics.total_metabolic_rate_W, per_muscle, rtol=CSV_RTOL, atol=1e-3)
+
+
+def test_so_h5_units_and_provenance(runs):
+    folder = runs[1] / "so_first"
+    forces = pd.read_csv(folder / "forces.csv")
+    with h5py.File(folder / "muscles.h5", "r") as h5:
+        datasets = []
+        h5.visititems(lambda name, obj: datasets.append(obj) if isinstance(obj, h5py.Dataset) else None)
+        assert len(datasets) >= 13
+        for ds in datasets:
+            assert "units" in ds.attrs, ds.name
+        for key in PROVENANCE:
+            assert key in h5.attrs and str(h5.attrs[key]), key
+        assert json.loads(h5.attrs["input_sha256"]).keys() >= {"trial.c3d", "subject.yaml"}
+        assert h5.attrs["method"] == "so" and bool(h5.attrs["converged"]) is True
+        names = [x.decode() if isinstance(x, bytes) else str(x) for x in h5["muscles"][()]]
+        assert tuple(names) == MUSCLES
+        assert h5["forces"].attrs["units"] == "N" and h5["time"].attrs["units"] == "s"
+        np.testing.assert_allclose(forces[[f"{m}_force_N" for m in MUSCLES]], h5["forces"][()], rtol=CSV_RTOL,
+                                   atol=1e-6)
+
+
+def test_so_moment_equations_hold(runs):
+    """Muscle + passive + damping moments reproduce the inverse-dynamics moments (4.20)."""
+    folder = runs[1] / "so_first"
+    with h5py.File(folder / "muscles.h5", "r") as h5:
+        error = (h5["muscle_moments"][()] + h5["passive_moments"][()] + h5["damping_moments"][()]
+                 - h5["joint_moments"][()])
+        np.testing.assert_allclose(h5["moment_error"][()], error, atol=1e-9)
+        peak = np.abs(h5["joint_moments"][()]).max()
+    assert peak > 20.0  # a walking stride's hip/knee/ankle moments, not an empty problem
+    info = summary_of(folder)
+    assert np.abs(error).max() < 0.5
+    assert info["max_moment_error_Nm"] == pytest.approx(np.abs(error).max(), rel=1e-6, abs=1e-9)
+
+
+def test_so_excitation_range_reported_as_computed(runs):
+    """SO's excitations (from its forces by (4.10–4.19)) leave [0, 1] here; the summary gives them unclipped."""
+    folder = runs[1] / "so_first"
+    info = summary_of(folder)
+    u = pd.read_csv(folder / "excitations.csv")[[f"{m}_excitation" for m in MUSCLES]].to_numpy()
+    assert info["min_excitation"] == pytest.approx(u.min(), rel=CSV_RTOL, abs=1e-9)
+    assert info["max_excitation"] == pytest.approx(u.max(), rel=CSV_RTOL, abs=1e-9)
+    assert info["min_excitation"] < 0.0 or info["max_excitation"] > 1.0
+    # outside [0, 1] the energetics model does not apply: no cost is given (Table 4.2)
+    assert info["metabolic_cost_J"] is None and info["cost_of_transport_J_per_m"] is None
+
+
+# -- 2. filter and idyn first, reused by the next run ----------------------------------------------------------
+
+def test_filter_and_idyn_run_first_then_reused(runs):
+    record, root = runs
+    out = root / "normal" / "gait_out"
+    assert (out / "filter" / "filter.h5").is_file() and (out / "idyn" / "idyn.h5").is_file()
+    first, second = result(runs, "first"), result(runs, "second")
+    assert any(line.startswith("filter: wrote") for line in first.stderr_lines), first.describe()
+    assert any(line.startswith("idyn: wrote") for line in first.stderr_lines), first.describe()
+    assert second.returncode == 0, second.describe()
+    assert not any(line.startswith(("filter:", "idyn:")) for line in second.stderr_lines), second.describe()
+    assert record["upstream_mtimes"]["filter"] and record["upstream_mtimes"]["idyn"]
+    assert record["upstream_mtimes_after"] == record["upstream_mtimes"]
+    assert record["upstream_sha_after"] == record["upstream_sha"]
+    assert summary_of(out / "muscles" / "so")["converged"] is True
+
+
+# -- 3. EID: infeasible on the synthetic gait, exit 3 ----------------------------------------------------------
+
+def test_eid_not_converged_exit_3(runs):
+    run = result(runs, "eid")
+    assert run.returncode == 3, run.describe()
+    errors = [line for line in run.stderr_lines if "did not converge" in line]
+    assert len(errors) == 1 and errors[0].startswith("gait: error: EID did not converge"), run.describe()
+    assert "Traceback" not in run.stderr
+    folder = runs[1] / "eid" / "gait_out" / "muscles" / "eid"
+    assert_all_files(folder)
+    info = summary_of(folder)
+    assert set(SUMMARY_KEYS) <= set(info)
+    assert info["method"] == "eid" and info["converged"] is False and info["nodes"] == 50
+    assert info["status"] in IPOPT_FAILURES
+    assert info["status"] in errors[0]
+    with h5py.File(folder / "muscles.h5", "r") as h5:
+        assert isinstance(h5.attrs["converged"], (bool, np.bool_)) and not h5.attrs["converged"]
+        assert h5.attrs["solver_status"] == info["status"]
+    assert len(pd.read_csv(folder / "forces.csv")) == 50
+
+
+# -- 4. NaN in the analysed stride ------------------------------------------------------------------------------
+
+def test_nan_in_sagittal_input_exit_2_nothing_written(runs):
+    record, root = runs
+    assert result(runs, "idyn").returncode == 0
+    run = result(runs, "nan")
+    assert run.returncode == 2, run.describe()
+    assert len(run.stderr_lines) == 1 and "Traceback" not in run.stderr, run.describe()
+    message = run.stderr_lines[0]
+    (r0, r1), (t0, t1) = record["corrupted"]["rows"], record["corrupted"]["times_s"]
+    assert message.startswith("gait: error:") and NAN_COLUMN in message and "idyn.h5" in message, message
+    assert f"NaN in frames {r0}–{r1} (t = {t0:.3f}–{t1:.3f} s)" in message, message
+    out = root / "nan" / "gait_out"
+    assert not (out / "muscles").exists()
+    assert snapshot(out) == record["nan_gait_out"]  # idyn was not run again; nothing else written
+
+
+# -- 5. a swing phase --------------------------------------------------------------------------------------------
+
+def test_swing_phase_interval(runs):
+    run = result(runs, "swing")
+    assert run.returncode == 0, run.describe()
+    trial = runs[1] / "swing"
+    folder = trial / "gait_out" / "muscles" / "so"
+    assert_all_files(folder)
+    info = summary_of(folder)
+    start, end = info["interval_s"]
+    events = events_of(trial)
+    right = events[events.side == "r"]
+    offs = right.time_s[right.event == "toe_off"].to_numpy()
+    strikes = np.sort(right.time_s[right.event == "heel_strike"].to_numpy())
+    assert np.min(np.abs(offs - start)) < 1e-5, (start, offs)
+    assert end == pytest.approx(strikes[strikes > start + 1e-5][0], abs=1e-5)
+    assert info["phase"] == "swing" and info["periodic"] is False and info["side"] == "r"
+    times = pd.read_csv(folder / "forces.csv").time_s
+    assert times.iloc[0] == pytest.approx(start, abs=1e-5) and times.iloc[-1] == pytest.approx(end, abs=1e-5)
+
+
+# -- 6. the left leg ----------------------------------------------------------------------------------------------
+
+def test_left_side(runs):
+    run = result(runs, "left")
+    assert run.returncode == 0, run.describe()
+    trial = runs[1] / "left"
+    folder = trial / "gait_out" / "muscles" / "so"
+    assert_all_files(folder)
+    info = summary_of(folder)
+    assert info["side"] == "l" and info["converged"] is True and info["periodic"] is True
+    events = events_of(trial)
+    strikes = np.sort(events.time_s[(events.side == "l") & (events.event == "heel_strike")].to_numpy())
+    start, end = info["interval_s"]
+    k = int(np.argmin(np.abs(strikes - start)))
+    assert strikes[k] == pytest.approx(start, abs=1e-5) and strikes[k + 1] == pytest.approx(end, abs=1e-5)
+    right = summary_of(runs[1] / "so_first")
+    assert info["interval_s"] != right["interval_s"]
+    assert info["max_moment_error_Nm"] < 0.5
