@@ -132,9 +132,10 @@ def muscles_command(console: Console, trial, out, pipeline, method, side, nodes,
 @click.option("--condition", type=click.Choice(["normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot"]),
               default="normal", show_default=True, help="Experiment of 3.1.1 (added masses, locked joints).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the marker noise and artefact.")
-@click.option("--noise-mm", type=float, default=2.0, show_default=True, help="White marker noise (SD per axis), mm.")
+@click.option("--noise-mm", type=float, default=2.0, show_default=True,
+              help="White marker noise: RMS of the 3-D position error, mm (each axis gets noise/√3).")
 @click.option("--artefact-mm", type=float, default=10.0, show_default=True,
-              help="Low-frequency skin-artefact amplitude, mm.")
+              help="Low-frequency skin artefact: peak 3-D displacement of a marker, mm.")
 @click.option("--plate-noise-n", "plate_noise_N", type=float, default=1.0, show_default=True,
               help="White noise on the force-plate channels, N (N·mm/20 on moments).")
 @click.option("--strides", type=int, default=3, show_default=True, help="Gait cycles in the trial.")

@@ -9,8 +9,8 @@ with it: the whole-body wrench ``Σ m (a + g)``, ``Σ dL/dt`` (what the ground m
 supply for zero pelvis residual) goes to the stance foot in single support and
 is shared between the feet in double support along the line joining their
 centres of pressure, so both feet's loads start and end at zero continuously.
-Markers (Table A.6) ride rigidly on the bodies, plus white noise and a
-low-frequency skin artefact. Two TYPE-2 plates in millimetres measure one right
+Markers (Table A.6) ride rigidly on the bodies, plus white noise (RMS 3-D error
+``noise_mm``) and a low-frequency skin artefact (peak 3-D displacement ``artefact_mm``). Two TYPE-2 plates in millimetres measure one right
 and one left stance. ``truth/`` holds the exact kinematics, moments, GRF and events.
 """
 
@@ -497,25 +497,31 @@ class SyntheticTrial:
 
 
 def _skin_artefact(rng, n_markers, time_s, period_s, amplitude_m, bodies):
-    """Low-frequency artefact: per segment a common part (70 %) plus a per-marker part (30 %)."""
+    """Low-frequency skin artefact of peak 3-D displacement ``amplitude_m``, at the gait frequency and its
+    first harmonic: per segment a common part (70 %) plus a per-marker part (30 %)."""
     w = 2 * np.pi / period_s
     out = np.zeros((time_s.size, n_markers, 3))
     common = {}
-    for body in set(bodies):
+    for body in sorted(set(bodies)):  # a fixed order: the same seed gives the same trial
         phases = rng.uniform(0, 2 * np.pi, (2, 3))
         common[body] = 0.6 * np.sin(w * time_s[:, None] + phases[0]) + 0.4 * np.sin(2 * w * time_s[:, None]
                                                                                   + phases[1])
     for i, body in enumerate(bodies):
         phases = rng.uniform(0, 2 * np.pi, (2, 3))
         own = 0.6 * np.sin(w * time_s[:, None] + phases[0]) + 0.4 * np.sin(2 * w * time_s[:, None] + phases[1])
-        out[:, i] = amplitude_m * (0.7 * common[body] + 0.3 * own)
+        out[:, i] = amplitude_m / np.sqrt(3.0) * (0.7 * common[body] + 0.3 * own)  # ≤ amplitude in 3-D
     return out
 
 
 def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0, artefact_mm: float = 10.0,
                    strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78, sex: str = "male",
                    plate_noise_N: float = 1.0) -> SyntheticTrial:
-    """Make a synthetic walking trial with known truth (nothing written)."""
+    """Make a synthetic walking trial with known truth (nothing written).
+
+    ``noise_mm`` is the RMS of each marker's 3-D position error (white, σ = noise/√3
+    per axis), as optical systems quote their accuracy; ``artefact_mm`` the peak
+    3-D displacement of the low-frequency skin artefact.
+    """
     from gaitcli.dynamics.equations import ExternalWrench
     from gaitcli.dynamics.inverse import inverse_dynamics
     from gaitcli.kinematics.calibration import calibrate
@@ -605,11 +611,11 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
             bodies.append(BODIES[bi])
     exact = np.stack(columns, axis=1)
     tm = t[frames]
-    noisy = exact + rng.normal(0.0, noise_mm / 1000.0, exact.shape) \
+    noisy = exact + rng.normal(0.0, noise_mm / 1000.0 / np.sqrt(3.0), exact.shape) \
         + _skin_artefact(rng, len(names), tm, T, artefact_mm / 1000.0, bodies)
     markers = Markers(tuple(names), noisy, MARKER_RATE_HZ)
     static_positions = np.stack([template[nm] for nm in names])[None] \
-        + rng.normal(0.0, noise_mm / 1000.0, (int(MARKER_RATE_HZ), len(names), 3))
+        + rng.normal(0.0, noise_mm / 1000.0 / np.sqrt(3.0), (int(MARKER_RATE_HZ), len(names), 3))
     static = Markers(tuple(names), static_positions, MARKER_RATE_HZ)
 
     # truth: moments with every ground contact (not only the plates), at the marker rate
