@@ -17,11 +17,9 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
 import warnings
 from pathlib import Path
 
@@ -41,6 +39,7 @@ from gaitcli.report.filter_outputs import write_filter_outputs  # noqa: E402
 from gaitcli.resources import sample_trial  # noqa: E402
 from gaitcli.signal.stage import filter_trial  # noqa: E402
 from gaitcli.trial import open_trial  # noqa: E402
+from timing import median_s  # benchmarks/timing.py
 
 SAMPLES = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")
 SHARED_C3D = REPO.parent / "shared" / "data" / "c3d"
@@ -51,16 +50,6 @@ marker_map: {RCAL: CAr, RMT1: FMr, LCAL: CAl, LMT1: FMl, RASI: ASISr, LASI: ASIS
 """
 
 
-def _median_s(func, repeat: int):
-    """Median wall time (s) of ``repeat`` calls of ``func`` and the last call's return value."""
-    times, value = [], None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        value = func()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), value
-
-
 def time_trial(folder: Path, out: Path, repeat: int) -> dict:
     """Read, stage and write timings (s, medians) of the filter stage on one trial folder."""
     trial = open_trial(folder)
@@ -68,15 +57,15 @@ def time_trial(folder: Path, out: Path, repeat: int) -> dict:
     attrs = provenance(to_yaml(PipelineConfig()), {})
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", GaitWarning)
-        read_s, recording = _median_s(lambda: load_recording(trial), repeat)
-        stage_s, result = _median_s(lambda: filter_trial(recording, cfg), repeat)
+        read_s, recording = median_s(lambda: load_recording(trial), repeat)
+        stage_s, result = median_s(lambda: filter_trial(recording, cfg), repeat)
 
         def write():
             with stage_folder(out) as tmp:
                 write_filter_outputs(tmp, result, recording, attrs, elapsed_s=0.0)
 
-        write_s, _ = _median_s(write, repeat)
-        plots_s, _ = _median_s(lambda: plots.filter_figures(out.parent / "plots_only", result), repeat)
+        write_s, _ = median_s(write, repeat)
+        plots_s, _ = median_s(lambda: plots.filter_figures(out.parent / "plots_only", result), repeat)
     m = result.markers
     plates = recording.plates
     return {"frames": m.n_frames, "rate_hz": m.rate_hz, "plates": len(plates),
@@ -90,7 +79,7 @@ def time_cli(folder: Path, repeat: int) -> float:
     def run():
         subprocess.run([sys.executable, "-m", "gaitcli.cli", "-q", "filter", str(folder)], check=True,
                        capture_output=True)
-    return _median_s(run, repeat)[0]
+    return median_s(run, repeat)[0]
 
 
 def main(argv=None) -> int:

@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -54,6 +53,7 @@ from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments 
 from gaitcli.recording import Markers  # noqa: E402
 from gaitcli.resources import sample_trial  # noqa: E402
 from gaitcli.synth import MARKER_RATE_HZ, simulate_trial  # noqa: E402
+from timing import median_s  # benchmarks/timing.py
 
 MASS_KG, STATURE_M = 75.0, 1.78
 
@@ -73,16 +73,6 @@ class _Quiet:
         from gaitcli.report.progress import progress_bar
 
         return progress_bar(description, total=total, enabled=False)
-
-
-def _median_s(func, repeat: int):
-    """Median wall time (s) of ``repeat`` calls of ``func`` and the last call's return value."""
-    times, value = [], None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        value = func()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), value
 
 
 def _peak_mb(func) -> float:
@@ -111,11 +101,11 @@ def kernels(markers, feet, calibration, repeat: int) -> None:
     n = markers.n_frames
     wrenches = external_wrenches(feet, n)
     parts = {}
-    parts["track_segments"], poses = _median_s(lambda: track_segments(markers, calibration), repeat)
-    parts["poses_to_coordinates"], q = _median_s(lambda: poses_to_coordinates(poses), repeat)
-    parts["coordinate_derivatives"], (qd, qdd) = _median_s(lambda: coordinate_derivatives(q, markers.rate_hz),
+    parts["track_segments"], poses = median_s(lambda: track_segments(markers, calibration), repeat)
+    parts["poses_to_coordinates"], q = median_s(lambda: poses_to_coordinates(poses), repeat)
+    parts["coordinate_derivatives"], (qd, qdd) = median_s(lambda: coordinate_derivatives(q, markers.rate_hz),
                                                            repeat)
-    parts["inverse_dynamics"], _ = _median_s(lambda: inverse_dynamics(q, qd, qdd, calibration.body, wrenches),
+    parts["inverse_dynamics"], _ = median_s(lambda: inverse_dynamics(q, qd, qdd, calibration.body, wrenches),
                                              repeat)
 
     def once():
@@ -145,15 +135,15 @@ def whole_stage(tmp: Path, repeat: int, cli: bool) -> None:
     run = pl.Run(folder, tmp / "out", cfg, _Quiet())
     run.filter()  # written once: Run.idyn then reads the fresh filter.h5
     filtered = run.filtered()
-    calibration = run.calibration(filtered, MASS_KG)
+    calibration = run.calibration(filtered, MASS_KG, run.static_markers())
     frames = filtered.markers.n_frames
 
     def stage():
         return inverse_dynamics_stage(filtered, calibration, IdynConfig(), mass_kg=MASS_KG, mass_source="bench")
 
-    stage_s, _ = _median_s(stage, repeat)
+    stage_s, _ = median_s(stage, repeat)
     stage_mb = _peak_mb(stage)
-    run_s, _ = _median_s(run.idyn, repeat)
+    run_s, _ = median_s(run.idyn, repeat)
     run_mb = _peak_mb(run.idyn)
     print(f"\nthe idyn stage on the normal sample trial ({frames} frames), median of {repeat} runs, one core")
     print(f"{'':40} {'ms':>9} {'frames/s':>10} {'peak MB':>8}")
@@ -171,7 +161,7 @@ def whole_stage(tmp: Path, repeat: int, cli: bool) -> None:
 
         runs = max(1, min(repeat, 3))
         print(f"`gait -q idyn` in a new process, filter stage included (median of {runs}): "
-              f"{_median_s(command, runs)[0]:.2f} s")
+              f"{median_s(command, runs)[0]:.2f} s")
 
 
 def main(argv=None) -> int:

@@ -174,6 +174,16 @@ class TrialFolder:
         return [p for p in (self.subject_path, self.trial_path, self.forces_path, self.static_path) if p]
 
 
+def _named_file(folder: Path, name: str | None, key: str) -> Path | None:
+    """The file ``subject.yaml`` names under ``key`` (None when it names none); it must exist."""
+    if not name:
+        return None
+    path = folder / name
+    if not path.is_file():
+        raise InputError(folder / "subject.yaml", key, f"names {name}, which is not in {folder}")
+    return path
+
+
 def open_trial(folder: str | Path) -> TrialFolder:
     """Find and validate a trial folder's files; raise :class:`InputError` naming what is missing."""
     folder = Path(folder)
@@ -181,24 +191,17 @@ def open_trial(folder: str | Path) -> TrialFolder:
         raise InputError(folder, None, "trial folder not found")
     subject = load_subject(folder / "subject.yaml")
     forces = None
-    if subject.trial:
-        trial = folder / subject.trial
-        if not trial.is_file():
-            raise InputError(folder / "subject.yaml", "trial", f"names {subject.trial}, which is not in {folder}")
-    elif (folder / "trial.c3d").is_file():
+    trial = _named_file(folder, subject.trial, "trial")
+    if trial is None and (folder / "trial.c3d").is_file():
         trial = folder / "trial.c3d"
-    elif (folder / "markers.csv").is_file():
+    elif trial is None and (folder / "markers.csv").is_file():
         trial = folder / "markers.csv"
         forces = folder / "forces.csv" if (folder / "forces.csv").is_file() else None
-    else:
+    elif trial is None:
         raise InputError(folder / "trial.c3d", None, "file not found (expected trial.c3d, markers.csv, "
                                                      "or `trial:` in subject.yaml)")
-    static = None
-    if subject.static:
-        static = folder / subject.static
-        if not static.is_file():
-            raise InputError(folder / "subject.yaml", "static", f"names {subject.static}, which is not in {folder}")
-    elif (folder / "static.c3d").is_file():
+    static = _named_file(folder, subject.static, "static")
+    if static is None and (folder / "static.c3d").is_file():
         static = folder / "static.c3d"
     return TrialFolder(folder=folder, subject_path=folder / "subject.yaml", subject=subject,
                        trial_path=trial, forces_path=forces, static_path=static)
