@@ -25,16 +25,22 @@ class Console:
     def __init__(self, quiet: bool = False, as_json: bool = False):
         self.quiet = quiet
         self.as_json = as_json
+        self.summaries: dict[str, dict] = {}
 
     def info(self, message: str) -> None:
         if not self.quiet:
             click.echo(message, err=True)
 
     def summary(self, stage: str, summary: dict, out_dir: Path) -> None:
-        if self.as_json:
-            click.echo(json.dumps(summary, indent=2, default=str))
-        elif not self.quiet:
+        self.summaries[stage] = summary
+        if not self.quiet and not self.as_json:
             click.echo(f"{stage}: wrote {out_dir}", err=True)
+
+    def print_json(self, stage: str | None = None) -> None:
+        """With ``--json``: one JSON document on stdout — the stage's summary, or all of them for ``run``."""
+        data = self.summaries if stage is None else self.summaries.get(stage)
+        if self.as_json and data:  # nothing when the stage failed before writing
+            click.echo(json.dumps(data, indent=2, default=str))
 
     def progress(self, description: str, total: int | None = None):
         """A rich progress bar on stderr (a no-op bar when quiet)."""
@@ -87,7 +93,10 @@ def filter_command(console: Console, trial, out, pipeline, cutoff_hz):
 
     cfg = pl.configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz})
     run = pl.Run(trial, out, cfg, console)
-    run.filter()
+    try:
+        run.filter()
+    finally:
+        console.print_json("filter")
 
 
 @gait.command("idyn")
@@ -102,7 +111,10 @@ def idyn_command(console: Console, trial, out, pipeline, frames):
     from gaitcli import pipeline as pl
 
     cfg = pl.configure(pipeline, idyn={"frames": frames})
-    pl.Run(trial, out, cfg, console).idyn()
+    try:
+        pl.Run(trial, out, cfg, console).idyn()
+    finally:
+        console.print_json("idyn")
 
 
 @gait.command("muscles")
@@ -124,7 +136,10 @@ def muscles_command(console: Console, trial, out, pipeline, method, side, nodes,
 
     cfg = pl.configure(pipeline, muscles={"method": method, "side": side, "nodes": nodes, "phase": phase,
                                           "validate": validate})
-    pl.Run(trial, out, cfg, console).muscles()
+    try:
+        pl.Run(trial, out, cfg, console).muscles()
+    finally:
+        console.print_json("muscles")
 
 
 @gait.command("synth")
@@ -163,7 +178,10 @@ def run_command(console: Console, trial, out, pipeline):
 
     cfg = pl.configure(pipeline)
     run = pl.Run(trial, out, cfg, console)
-    run.all()
+    try:
+        run.all()
+    finally:
+        console.print_json()
 
 
 def main(argv: list[str] | None = None) -> int:

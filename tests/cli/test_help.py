@@ -26,3 +26,13 @@ def test_help_prints_usage(command, capsys):
 def test_unknown_option_is_exit_2(capsys):
     assert main(["filter", "--no-such-option"]) == 2
     assert "No such option" in capsys.readouterr().err
+
+
+def test_json_prints_one_document_even_when_earlier_stages_run(tmp_path, monkeypatch, capsys):
+    import json
+
+    monkeypatch.chdir(tmp_path)  # the bundled sample trial writes ./gait_out
+    assert main(["--json", "--quiet", "idyn"]) == 0  # runs filter first: only idyn's summary is printed
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["dof"] == 27 and "rms_residual_force_N" in summary
+    assert (tmp_path / "gait_out" / "filter" / "summary.json").is_file()
