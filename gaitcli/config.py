@@ -132,8 +132,8 @@ def pipeline_from_dict(data: dict | None, path: str | Path | None = None) -> Pip
         if key not in ("stages", *sections):
             raise _unknown(path, "", str(key), ["stages", *sections])
     stages = data.get("stages", PipelineConfig.stages)
-    if not isinstance(stages, (list, tuple)) or not all(s in STAGES for s in stages):
-        raise InputError(path, "stages", f"got {stages!r} (expected a list drawn from {', '.join(STAGES)})")
+    if not isinstance(stages, (list, tuple)) or not stages or not all(s in STAGES for s in stages):
+        raise InputError(path, "stages", f"got {stages!r} (expected a non-empty list drawn from {', '.join(STAGES)})")
     order = [s for s in STAGES if s in stages]
     return PipelineConfig(stages=tuple(order),
                           **{name: _section(path, name, cls, data.get(name)) for name, cls in sections.items()})

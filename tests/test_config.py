@@ -181,3 +181,11 @@ def test_configs_are_frozen():
     cfg = PipelineConfig()
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.filter.cutoff_hz = 8.0
+
+
+def test_an_empty_stage_list_is_an_error():
+    from gaitcli.config import pipeline_from_dict
+    from gaitcli.errors import InputError
+
+    with pytest.raises(InputError, match="non-empty list"):
+        pipeline_from_dict({"stages": []}, "p.yaml")
