@@ -101,6 +101,16 @@ class Run:
             return None
         return path if key == self.stage_key(stage) else None
 
+    def reuse(self, stage: str, h5_name: str, read, run):
+        """``read(h5)`` of a fresh earlier output, else ``run()`` (the stage again, which writes it anew)."""
+        path = self.fresh(stage, h5_name)
+        if path is not None:
+            try:
+                return read(path)
+            except (KeyError, OSError, ValueError):  # an older or damaged output: make it anew
+                pass
+        return run()
+
     # -- stages -----------------------------------------------------------------------------
     def filter(self):
         """Run the filter stage and write its outputs; returns the in-memory result."""
@@ -122,13 +132,7 @@ class Run:
         """The filter stage's result: read from a fresh ``filter.h5``, else by running the filter stage."""
         from gaitcli.report.filter_outputs import filtered_trial, read_filtered_trial
 
-        path = self.fresh("filter", "filter.h5")
-        if path is not None:
-            try:
-                return read_filtered_trial(path)
-            except (KeyError, OSError, ValueError):  # an older or damaged output: make it anew
-                pass
-        return filtered_trial(self.filter())
+        return self.reuse("filter", "filter.h5", read_filtered_trial, lambda: filtered_trial(self.filter()))
 
     def static_markers(self):
         """The standing trial's markers in the dynamic trial's axes, mapped; None when there is no static.c3d."""
@@ -204,13 +208,7 @@ class Run:
         """What the muscle stage needs: from a fresh ``idyn.h5``, else by running the idyn stage."""
         from gaitcli.report.idyn_outputs import muscle_inputs, read_muscle_inputs
 
-        path = self.fresh("idyn", "idyn.h5")
-        if path is not None:
-            try:
-                return read_muscle_inputs(path)
-            except (KeyError, OSError, ValueError):  # an older or damaged output: make it anew
-                pass
-        return muscle_inputs(self.idyn())
+        return self.reuse("idyn", "idyn.h5", read_muscle_inputs, lambda: muscle_inputs(self.idyn()))
 
     def muscles(self):
         """Run SO, MSO or EID on one leg; unconverged solutions are written, then reported (exit 3)."""
