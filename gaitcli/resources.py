@@ -11,9 +11,19 @@ from importlib.resources import files
 from pathlib import Path
 
 
+def _shipped_folder(package: str, folder: str) -> Path:
+    try:
+        return Path(str(files(package)))
+    except ModuleNotFoundError:
+        # gaitcli imported from a source checkout rather than the installed copy (e.g.
+        # `python -m pytest` at the repository root puts ./gaitcli first on sys.path):
+        # the folder sits beside the package directory.
+        return Path(__file__).resolve().parent.parent / folder
+
+
 def sample_trials_dir() -> Path:
     """Folder holding the bundled synthetic trials (``normal``, one per disturbance)."""
-    return Path(str(files("gaitcli.sample_trials")))
+    return _shipped_folder("gaitcli.sample_trials", "sample_trials")
 
 
 def sample_trial(name: str = "normal") -> Path:
@@ -23,4 +33,4 @@ def sample_trial(name: str = "normal") -> Path:
 
 def pipeline_file(name: str) -> Path:
     """A bundled pipeline YAML by name (``standard``, ``muscles_eid``, ...)."""
-    return Path(str(files("gaitcli.pipelines"))) / f"{name}.yaml"
+    return _shipped_folder("gaitcli.pipelines", "pipelines") / f"{name}.yaml"
