@@ -154,15 +154,25 @@ def muscles_command(console: Console, trial, out, pipeline, method, side, nodes,
 @click.option("--plate-noise-n", "plate_noise_N", type=float, default=1.0, show_default=True,
               help="White noise on the force-plate channels, N (N·mm/20 on moments).")
 @click.option("--strides", type=int, default=3, show_default=True, help="Gait cycles in the trial.")
+@click.option("--mass-kg", type=float, default=75.0, show_default=True, help="Body mass of the subject, kg.")
+@click.option("--stature-m", type=float, default=1.78, show_default=True, help="Stature of the subject, m.")
+@click.option("--sex", type=click.Choice(["male", "female"]), default="male", show_default=True,
+              help="Selects de Leva's segment tables.")
+@click.option("--period-s", type=float, default=None,
+              help="Gait cycle, s (default: the condition's, 1.20 s for normal walking).")
 @click.pass_obj
-def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides):
+def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides,
+                  mass_kg, stature_m, sex, period_s):
     """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/)."""
     from gaitcli.synth import write_trial
 
     if strides < 1:
         raise click.BadParameter("expected at least 1 stride", param_hint="--strides")
+    if not (mass_kg > 0 and 0.5 < stature_m < 2.5):
+        raise click.BadParameter("expected mass > 0 kg and stature in metres (0.5–2.5)", param_hint="--mass-kg/--stature-m")
     trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
-                        plate_noise_N=plate_noise_N, strides=strides)
+                        plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
+                        sex=sex, period_s=period_s)
     console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames, "
                  f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates)")
 

@@ -16,7 +16,7 @@ and one left stance. ``truth/`` holds the exact kinematics, moments, GRF and eve
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -416,13 +416,18 @@ def split_between_feet(design: GaitDesign, force, cop, free, hips=None, ankles=N
         idx = (first + np.arange(length)) % n
         lead = "r" if not design.stance["r"][(first - 1) % n] else "l"  # the foot that just landed
         trail = "l" if lead == "r" else "r"
-        c_trail = np.broadcast_to(cop[(idx[0] - 1) % n], (idx.size, 3))
-        c_lead = np.broadcast_to(cop[(idx[-1] + 1) % n], (idx.size, 3))
+        # a point fixed on the floor moves backwards at the walking speed in these detrended
+        # coordinates: the trailing foot's COP stays where single support left it, the leading
+        # foot's where single support will take it over
+        steps = np.arange(idx.size)[:, None]
+        backwards = np.array([design.speed_m_s * design.period_s / n, 0.0, 0.0])
+        c_trail = cop[(idx[0] - 1) % n] - (steps + 1) * backwards
+        c_lead = cop[(idx[-1] + 1) % n] + (idx.size - steps) * backwards
         if ankles is not None:  # the leading foot's COP rolls in from under its heel
-            u = ((np.arange(idx.size) + 1) / (idx.size + 1))[:, None]
+            u = (steps + 1) / (idx.size + 1)
             heel = ankles[lead][idx[0]] + np.array([HEEL_COP_M, 0.0, 0.0])
             heel[2] = 0.0
-            c_lead = heel + u * (c_lead - heel)
+            c_lead = heel - steps * backwards + u * (c_lead - heel + steps * backwards)
         line = c_lead - c_trail
         lam = np.sum((cop[idx] - c_trail) * line, axis=1) / np.sum(line * line, axis=1)
         clip = max(clip, float(np.max(np.abs(lam - np.clip(lam, 0, 1)))))
@@ -515,12 +520,13 @@ def _skin_artefact(rng, n_markers, time_s, period_s, amplitude_m, bodies):
 
 def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0, artefact_mm: float = 10.0,
                    strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78, sex: str = "male",
-                   plate_noise_N: float = 1.0) -> SyntheticTrial:
+                   plate_noise_N: float = 1.0, period_s: float | None = None) -> SyntheticTrial:
     """Make a synthetic walking trial with known truth (nothing written).
 
     ``noise_mm`` is the RMS of each marker's 3-D position error (white, σ = noise/√3
     per axis), as optical systems quote their accuracy; ``artefact_mm`` the peak
-    3-D displacement of the low-frequency skin artefact.
+    3-D displacement of the low-frequency skin artefact. ``period_s`` (gait cycle, s)
+    defaults to the condition's; the stride length follows from stature and angles.
     """
     from gaitcli.dynamics.equations import ExternalWrench
     from gaitcli.dynamics.inverse import inverse_dynamics
@@ -533,6 +539,10 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     if noise_mm < 0 or artefact_mm < 0:
         raise InputError(None, "--noise-mm", "expected noise and artefact amplitudes ≥ 0 mm")
     cond = CONDITIONS[condition]
+    if period_s is not None:
+        if not 0.6 <= period_s <= 3.0:
+            raise InputError(None, "--period-s", f"got {period_s} s (expected a gait cycle of 0.6–3.0 s)")
+        cond = replace(cond, period_s=float(period_s))
     rng = np.random.default_rng(seed)
     template = {k: v for k, v in standing_template(stature_m).items() if k in MARKER_BODY}
     exact_static = landmarks_to_markers(template, rate_hz=MARKER_RATE_HZ)
@@ -656,7 +666,7 @@ def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, statu
 
 def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0,
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
-                stature_m: float = 1.78, sex: str = "male") -> SyntheticTrial:
+                stature_m: float = 1.78, sex: str = "male", period_s: float | None = None) -> SyntheticTrial:
     """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/."""
     from gaitcli.io.atomic import atomic_path
     from gaitcli.io.c3d_write import write_c3d
@@ -665,7 +675,7 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
 
     trial = simulate_trial(condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                            plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
-                           sex=sex)
+                           sex=sex, period_s=period_s)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_c3d(out / "trial.c3d", trial.markers, trial.plates)

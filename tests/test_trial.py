@@ -88,7 +88,8 @@ def test_sample_subjects_load(name):
     path = sample_trial(name) / "subject.yaml"
     raw = yaml.safe_load(path.read_text())
     s = load_subject(path)
-    assert (s.mass_kg, s.stature_m, s.sex, s.condition) == (75.0, 1.78, "male", name)
+    # the sample subject of sample_trials/README.md
+    assert (s.mass_kg, s.stature_m, s.sex, s.condition) == (55.0, 1.65, "male", name)
     assert len(s.disturbances) == len(raw.get("disturbances", []))
     for d, r in zip(s.disturbances, raw.get("disturbances", [])):
         assert d.segment == r["segment"] and d.mass_kg == r["mass_kg"] and d.name == r["name"]

@@ -51,6 +51,7 @@ IDYN_FILES = ("kinematics.csv", "joint_moments.csv", "residuals.csv", "sagittal.
 TABLE_3_1 = ("stride_length_m", "period_s", "speed_m_s", "stance_right_pct", "stance_left_pct", "double_stance_pct")
 EXACT_PIPELINE = "filter: {cutoff_hz: 0, force_cutoff_hz: 0, force_threshold_N: 1.0}\n"
 SKI_BOOT_KG = 2.431  # Table A.3
+SAMPLE_MASS_KG = 55.0  # the sample subject (sample_trials/README.md)
 GAP = (50, 69)  # file frames (first frame 1) where GTr and MRFr are missing: longer than the 10 filled
 EDGE = 2
 
@@ -191,7 +192,7 @@ def test_noisy_sample_trial_moments_within_tolerance(runs):
         known = moments[column].to_numpy() == 1
         for joint in ("hip", "knee", "ankle"):
             name = f"{joint}_{side}_flexion_moment"
-            error = (moments[name] - truth[name]).to_numpy()[known] / 75.0
+            error = (moments[name] - truth[name]).to_numpy()[known] / SAMPLE_MASS_KG
             assert np.sqrt(np.mean(error ** 2)) < bound[joint], name
 
 
@@ -205,10 +206,10 @@ def test_disturbance_mass_is_in_the_segment_parameters(runs):
             assert names == list(BODIES)
             masses[name] = dict(zip(names, h5["segments/mass"][()]))
             assert h5["segments/mass"].attrs["units"] == "kg"
-            assert h5["segments/mass"].attrs["body_mass_kg"] == pytest.approx(75.0)
+            assert h5["segments/mass"].attrs["body_mass_kg"] == pytest.approx(SAMPLE_MASS_KG)
     boot = masses["ski_boot"]
     assert boot["foot_r"] - boot["foot_l"] == pytest.approx(SKI_BOOT_KG, abs=1e-9)
-    assert sum(boot.values()) == pytest.approx(75.0 + SKI_BOOT_KG, abs=1e-9)
+    assert sum(boot.values()) == pytest.approx(SAMPLE_MASS_KG + SKI_BOOT_KG, abs=1e-9)
     assert masses["normal"]["foot_r"] == pytest.approx(masses["normal"]["foot_l"], abs=1e-12)
     assert masses["normal"]["foot_l"] == pytest.approx(boot["foot_l"], abs=1e-12)
 
