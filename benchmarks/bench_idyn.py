@@ -11,7 +11,7 @@ equations of motion with both feet's ground reactions). Frames per second per pa
 peak traced memory (``tracemalloc``, numpy's buffers included) of one pass through all four,
 measured in a separate run because tracing slows allocation.
 
-Part 2 — the whole ``gait idyn`` stage on the bundled normal sample trial (480 frames): the stage
+Part 2 — the whole ``gait idyn`` stage on the bundled normal sample trial (560 frames): the stage
 function alone (``inverse_dynamics_stage`` on the filtered trial: the four kernels plus forward
 kinematics, events, gait features and the sagittal export), and the pipeline's ``Run.idyn`` in
 this process (static calibration, the stage, CSV/HDF5/JSON writers and plots; the filter stage's
@@ -53,26 +53,9 @@ from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments 
 from gaitcli.recording import Markers  # noqa: E402
 from gaitcli.resources import sample_trial  # noqa: E402
 from gaitcli.synth import MARKER_RATE_HZ, simulate_trial  # noqa: E402
-from timing import median_s  # benchmarks/timing.py
+from timing import QuietConsole, median_s  # benchmarks/timing.py
 
 MASS_KG, STATURE_M = 75.0, 1.78
-
-
-class _Quiet:
-    """Stand-in for the CLI console: no messages, no progress bars."""
-
-    quiet, as_json = True, False
-
-    def info(self, message):
-        pass
-
-    def summary(self, stage, summary, out_dir):
-        pass
-
-    def progress(self, description, total=None):
-        from gaitcli.report.progress import progress_bar
-
-        return progress_bar(description, total=total, enabled=False)
 
 
 def _peak_mb(func) -> float:
@@ -132,14 +115,15 @@ def whole_stage(tmp: Path, repeat: int, cli: bool) -> None:
     folder = tmp / "normal"
     shutil.copytree(sample_trial("normal"), folder, ignore=shutil.ignore_patterns("gait_out", "truth"))
     cfg = pl.configure(None)
-    run = pl.Run(folder, tmp / "out", cfg, _Quiet())
+    run = pl.Run(folder, tmp / "out", cfg, QuietConsole())
     run.filter()  # written once: Run.idyn then reads the fresh filter.h5
     filtered = run.filtered()
-    calibration = run.calibration(filtered, MASS_KG, run.static_markers())
+    mass_kg = run.trial.subject.mass_kg
+    calibration = run.calibration(filtered, mass_kg, run.static_markers())
     frames = filtered.markers.n_frames
 
     def stage():
-        return inverse_dynamics_stage(filtered, calibration, IdynConfig(), mass_kg=MASS_KG, mass_source="bench")
+        return inverse_dynamics_stage(filtered, calibration, IdynConfig(), mass_kg=mass_kg, mass_source="bench")
 
     stage_s, _ = median_s(stage, repeat)
     stage_mb = _peak_mb(stage)

@@ -14,3 +14,20 @@ def median_s(func, repeat: int):
         value = func()
         times.append(time.perf_counter() - start)
     return statistics.median(times), value
+
+
+class QuietConsole:
+    """Stand-in for the CLI console when a benchmark drives ``gaitcli.pipeline.Run``: no messages, no bars."""
+
+    quiet, as_json = True, False
+
+    def info(self, message):
+        pass
+
+    def summary(self, stage, summary, out_dir):
+        pass
+
+    def progress(self, description, total=None):
+        from gaitcli.report.progress import progress_bar
+
+        return progress_bar(description, total=total, enabled=False)

@@ -78,7 +78,8 @@ def _out_option(func):
 
 def _pipeline_option(func):
     return click.option("--pipeline", "pipeline", type=click.Path(path_type=Path),
-                        help="Pipeline YAML (default: the built-in standard pipeline).")(func)
+                        help="Pipeline YAML file, or a bundled pipeline by name (standard, muscles_eid); "
+                             "default: standard.")(func)
 
 
 @gait.command("filter")

@@ -155,6 +155,14 @@ def load_pipeline(path: str | Path | None = None) -> PipelineConfig:
     if path is None:
         return PipelineConfig()
     path = Path(path)
+    if not path.is_file() and path.suffix == "" and len(path.parts) == 1:  # a bundled pipeline by name
+        from gaitcli.resources import bundled_pipelines, pipeline_file
+
+        if str(path) in bundled_pipelines():
+            path = pipeline_file(str(path))
+        else:
+            raise InputError(path, None, f"pipeline file not found (bundled pipelines: "
+                                         f"{', '.join(bundled_pipelines())})")
     if not path.is_file():
         raise InputError(path, None, "pipeline file not found")
     data = read_yaml(path)

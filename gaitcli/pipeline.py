@@ -213,37 +213,27 @@ class Run:
     def muscles(self):
         """Run SO, MSO or EID on one leg; unconverged solutions are written, then reported (exit 3)."""
         from gaitcli.errors import NotConvergedError
-        from gaitcli.muscles.interval import analysis_interval
-        from gaitcli.muscles.limb import LimbParameters, SagittalMotion
+        from gaitcli.muscles.interval import prepare_leg
         from gaitcli.muscles.stage import MuscleOptions, run_muscles
         from gaitcli.report.muscles_outputs import write_muscle_outputs
 
         started = time.perf_counter()
         cfg = self.cfg.muscles
         inputs = self.idyn_outputs()
-        subject = self.trial.subject
-        side = cfg.side
-        time_s = np.asarray(inputs.sagittal["time_s"])
-        source = inputs.source or self.out_root / "idyn" / "sagittal.csv"  # idyn.h5 when read back from it
-        start, end, periodic = analysis_interval(inputs.events, time_s, inputs.foot_load_known[side], side,
-                                                 cfg.phase, source=source)
-        ev = inputs.events
-        motion = SagittalMotion.from_table(
-            inputs.sagittal, side, path=source,
-            heel_strike_s=ev.time_s[(ev.side == side) & (ev.kind == "heel_strike")],
-            toe_off_s=ev.time_s[(ev.side == side) & (ev.kind == "toe_off")])
-        limb = LimbParameters.from_body(inputs.parameters, side, body_mass_kg=inputs.mass_kg,
-                                        stature_m=subject.stature_m, sex=subject.sex)
+        if inputs.source is None:  # computed in this run rather than read back from idyn.h5
+            inputs = dataclasses.replace(inputs, source=self.out_root / "idyn" / "sagittal.csv")
+        leg = prepare_leg(inputs, cfg.side, cfg.phase, stature_m=self.trial.subject.stature_m,
+                          sex=self.trial.subject.sex)
         options = MuscleOptions(objective="cb" if cfg.objective == "crowninshield_brand" else "metabolic")
         with self.console.progress(f"muscles ({cfg.method.upper()})") as bar:
-            result = run_muscles(motion, limb, method=cfg.method, nodes=cfg.nodes if cfg.method == "eid" else None,
-                                 interval=(start, end), periodic=periodic, options=options,
-                                 validate=cfg.validate)
+            result = run_muscles(leg.motion, leg.limb, method=cfg.method,
+                                 nodes=cfg.nodes if cfg.method == "eid" else None, interval=leg.interval_s,
+                                 periodic=leg.periodic, options=options, validate=cfg.validate)
             bar.update(completed=1, total=1)
         target = self.out_root / "muscles" / cfg.method
         with stage_folder(target) as tmp:
             summary = write_muscle_outputs(tmp, result, self.attrs("muscles"), phase=cfg.phase,
-                                           interval=(start, end), events=inputs.events,
+                                           interval=leg.interval_s, events=inputs.events,
                                            elapsed_s=time.perf_counter() - started)
         self.console.summary("muscles", summary, target)
         if not result.converged:

@@ -34,3 +34,8 @@ def sample_trial(name: str = "normal") -> Path:
 def pipeline_file(name: str) -> Path:
     """A bundled pipeline YAML by name (``standard``, ``muscles_eid``, ...)."""
     return _shipped_folder("gaitcli.pipelines", "pipelines") / f"{name}.yaml"
+
+
+def bundled_pipelines() -> tuple[str, ...]:
+    """Names of the bundled pipelines (``--pipeline NAME``)."""
+    return tuple(sorted(p.stem for p in _shipped_folder("gaitcli.pipelines", "pipelines").glob("*.yaml")))

@@ -51,6 +51,17 @@ def test_standard_pipeline_file_lists_every_parameter():
             assert value == getattr(cls(), key), f"{name}.{key}"
 
 
+def test_bundled_pipelines_by_name(monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)  # a name, not a file in the working folder
+    assert load_pipeline("standard") == PipelineConfig()
+    eid = load_pipeline("muscles_eid")
+    assert eid.stages == ("filter", "idyn", "muscles")
+    assert eid.muscles.method == "eid" and eid.muscles.nodes == 50 and eid.muscles.objective == "metabolic"
+    assert eid.filter == PipelineConfig().filter and eid.idyn == PipelineConfig().idyn
+    with pytest.raises(InputError, match="bundled pipelines: muscles_eid, standard"):
+        load_pipeline("muscle_eid")
+
+
 def test_empty_file_and_empty_sections_give_defaults(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("# nothing\n")

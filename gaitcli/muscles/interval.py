@@ -1,12 +1,17 @@
-"""Which part of a trial the muscle stage analyses: a whole stride measured on the plates, or a swing phase."""
+"""Which leg and which part of a trial the muscle stage analyses: a whole stride measured on the plates,
+or a swing phase."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from gaitcli.errors import InputError
 from gaitcli.signal.cycles import strides
 from gaitcli.signal.events import Events
+
+from .limb import LimbParameters, SagittalMotion
 
 
 def analysis_interval(events: Events, time_s: np.ndarray, load_known: np.ndarray, side: str, phase: str,
@@ -33,3 +38,30 @@ def analysis_interval(events: Events, time_s: np.ndarray, load_known: np.ndarray
         if later.size:
             return float(off), float(later[0]), False
     raise InputError(source, f"{side} side", "no swing phase (toe off followed by heel strike) in the events")
+
+
+@dataclass(frozen=True)
+class LegAnalysis:
+    """One leg's sagittal motion and limb parameters, and the interval (s) to analyse."""
+
+    motion: SagittalMotion
+    limb: LimbParameters
+    interval_s: tuple[float, float]
+    periodic: bool
+
+
+def prepare_leg(inputs, side: str, phase: str, *, stature_m: float, sex: str) -> LegAnalysis:
+    """The muscle stage's inputs for ``side`` from the idyn stage's export (``report.idyn_outputs.MuscleInputs``:
+    sagittal table, events, per-foot load flags, segment parameters and body mass)."""
+    time_s = np.asarray(inputs.sagittal["time_s"])
+    source = inputs.source
+    start, end, periodic = analysis_interval(inputs.events, time_s, inputs.foot_load_known[side], side, phase,
+                                             source=source)
+    ev = inputs.events
+    motion = SagittalMotion.from_table(
+        inputs.sagittal, side, path=source,
+        heel_strike_s=ev.time_s[(ev.side == side) & (ev.kind == "heel_strike")],
+        toe_off_s=ev.time_s[(ev.side == side) & (ev.kind == "toe_off")])
+    limb = LimbParameters.from_body(inputs.parameters, side, body_mass_kg=inputs.mass_kg, stature_m=stature_m,
+                                    sex=sex)
+    return LegAnalysis(motion=motion, limb=limb, interval_s=(start, end), periodic=periodic)
