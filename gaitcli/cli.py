@@ -130,13 +130,16 @@ def idyn_command(console: Console, trial, out, pipeline, frames):
               help="A stride recorded on the plates (periodic) or a swing phase (default: cycle).")
 @click.option("--validate", is_flag=True, default=None,
               help="Integrate the forward model with the EID excitations and compare (4.5.4).")
+@click.option("--objective", type=click.Choice(["metabolic", "crowninshield_brand"]), default=None,
+              help="EID cost: total metabolic energy (4.29) or Crowninshield–Brand Σ(F/Fmax)³ (4.3) "
+                   "(default: metabolic).")
 @click.pass_obj
-def muscles_command(console: Console, trial, out, pipeline, method, side, nodes, phase, validate):
+def muscles_command(console: Console, trial, out, pipeline, method, side, nodes, phase, validate, objective):
     """Muscle forces, activations, excitations and metabolic cost of 8 leg muscles (SO | MSO | EID)."""
     from gaitcli import pipeline as pl
 
     cfg = pl.configure(pipeline, muscles={"method": method, "side": side, "nodes": nodes, "phase": phase,
-                                          "validate": validate})
+                                          "validate": validate, "objective": objective})
     try:
         pl.Run(trial, out, cfg, console).muscles()
     finally:

@@ -224,7 +224,7 @@ class Run:
             inputs = dataclasses.replace(inputs, source=self.out_root / "idyn" / "sagittal.csv")
         leg = prepare_leg(inputs, cfg.side, cfg.phase, stature_m=self.trial.subject.stature_m,
                           sex=self.trial.subject.sex)
-        options = MuscleOptions(objective="cb" if cfg.objective == "crowninshield_brand" else "metabolic")
+        options = MuscleOptions(objective=cfg.objective)
         with self.console.progress(f"muscles ({cfg.method.upper()})") as bar:
             result = run_muscles(leg.motion, leg.limb, method=cfg.method,
                                  nodes=cfg.nodes if cfg.method == "eid" else None, interval=leg.interval_s,

@@ -33,7 +33,7 @@ from .problem import Problem
 from .so import moment_constraints, solve_so
 from .solver import Outcome, SolverSettings, build_solver, solve
 
-OBJECTIVES = ("metabolic", "cb")
+OBJECTIVES = ("metabolic", "crowninshield_brand")
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ class MuscleOptions:
 
     ``muscles``/``joints``: model parameters (Table A.1; passive moments and
     damping). ``solver``: IPOPT settings. ``objective``: EID cost, "metabolic"
-    (4.29) or "cb" (Crowninshield–Brand (4.3) integrated over time).
+    (4.29) or "crowninshield_brand" ((4.3) integrated over time).
     ``smoothing``: width of the smoothed kinks of the heat rate the EID
     optimiser sees (0 = exact; reported costs always use the exact model).
     ``eid_nodes``: default number of EID nodes (4.5.2: 50). ``extra_nodes``:
@@ -169,10 +169,10 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
     if method == "so":
         force, out = solve_so(problem, opts.solver)
         converged, status, iterations = out.success, out.status, out.iterations
-        objective = "cb"
+        objective = "crowninshield_brand"
     elif method == "mso":
         sol = solve_mso(problem, opts.solver, penalty=opts.mso_penalty)
-        force, scheme, objective = sol.force_N, "backward", "cb"
+        force, scheme, objective = sol.force_N, "backward", "crowninshield_brand"
         activation, excitation = sol.activation, sol.excitation
         iterations = sol.so_outcome.iterations + sum(o.iterations for o in sol.outcomes)
         failed = [j + 1 for j, o in enumerate(sol.outcomes) if not o.success]

@@ -5,14 +5,15 @@ All invocations run once per session (:func:`build_once`), several processes at 
 * ``gait muscles normal --method so`` (runs filter and idyn first) and, alongside it, ``gait idyn``
   on a second copy whose ``idyn.h5`` then gets NaN knee angles inside the analysed stride;
 * then, at once, on copies of the first trial folder (filter and idyn outputs included): a second
-  ``--method so`` run on the same folder (must reuse filter and idyn), ``--method eid``,
-  ``--method mso``, ``--method eid --phase swing --validate``, ``--phase swing``, ``--side l``, and
+  ``--method so`` run on the same folder (must reuse filter and idyn), ``--method eid`` with each
+  objective, ``--method mso``, ``--method eid --phase swing --validate``, ``--phase swing``, ``--side l``, and
   the muscles run on the corrupted copy (exit 2, nothing written);
 * ``gait muscles --method eid`` on a ``gait synth`` trial of a 75 kg, 1.78 m subject walking a
   1.20 s cycle, whose moments the Table A.1 muscles cannot follow: exit 3, outputs written with
   ``converged: false``.
 
-Measured on the normal sample trial (right leg, full cycle, 50 EID nodes): EID 223 J, MSO 299 J
+Measured on the normal sample trial (right leg, full cycle, 50 EID nodes): EID 223 J (with the
+Crowninshield–Brand objective 279 J), MSO 299 J
 (one leg, J); swing phase EID 42.0 J (the dissertation's subject 1: 46.1 J, 4.5.4), forward
 validation 0.10° RMS and 42.1 J.
 """
@@ -97,7 +98,7 @@ def _build(root: Path) -> dict:
     shutil.copytree(out / "muscles" / "so", root / "so_first")  # the first run's outputs, before the second run
     upstream = {stage: _mtimes(out / stage) for stage in ("filter", "idyn")}
     upstream_sha = {stage: snapshot(out / stage) for stage in ("filter", "idyn")}
-    for name in ("eid", "mso", "validate", "swing", "left"):
+    for name in ("eid", "cb", "mso", "validate", "swing", "left"):
         _copy_with_outputs(normal, root / name)
     heavy = gait("synth", root / "heavy", "--seed", "1", cwd=root)
     if heavy.returncode != 0:
@@ -110,6 +111,7 @@ def _build(root: Path) -> dict:
         "eid": (("muscles", root / "eid", "--method", "eid"), root),
         "validate": (("muscles", root / "validate", "--method", "eid", "--phase", "swing", "--validate"), root),
         "mso": (("muscles", root / "mso", "--method", "mso"), root),
+        "cb": (("muscles", root / "cb", "--method", "eid", "--objective", "crowninshield_brand"), root),
         "second": (("muscles", normal, "--method", "so"), root),
         "swing": (("muscles", root / "swing", "--method", "so", "--phase", "swing"), root),
         "left": (("muscles", root / "left", "--method", "so", "--side", "l"), root),
@@ -280,6 +282,18 @@ def test_eid_costs_less_than_mso_on_the_same_stride(runs):
     # both legs over the distance walked (4.5.2)
     distance = eid["speed_m_s"] * (eid["interval_s"][1] - eid["interval_s"][0])
     assert eid["cost_of_transport_J_per_m"] == pytest.approx(2 * eid["metabolic_cost_J"] / distance, rel=1e-3)
+
+
+def test_eid_objectives(runs):
+    """The metabolic objective's optimum costs no more energy than the Crowninshield–Brand optimum, which
+    satisfies the same constraints (4.26–4.28); both are reported under their own objective."""
+    run = result(runs, "cb")
+    assert run.returncode == 0, run.describe()
+    cb = summary_of(runs[1] / "cb" / "gait_out" / "muscles" / "eid")
+    metabolic = summary_of(runs[1] / "eid" / "gait_out" / "muscles" / "eid")
+    assert cb["objective"] == "crowninshield_brand" and metabolic["objective"] == "metabolic"
+    assert cb["converged"] is True and cb["interval_s"] == pytest.approx(metabolic["interval_s"], abs=1e-9)
+    assert metabolic["metabolic_cost_J"] < cb["metabolic_cost_J"]
 
 
 def test_validate_reproduces_swing_angles_and_cost(runs):

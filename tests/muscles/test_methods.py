@@ -95,7 +95,7 @@ def test_eid_lifted_variables_match_inversion(gait):
     motion, limb = gait
     models = Models.build(limb)
     problem = build_problem(motion, models, nodes=30)
-    sol = solve_eid(problem, objective="cb")
+    sol = solve_eid(problem, objective="crowninshield_brand")
     assert sol.outcome.success
     inv = models.muscle.invert_forces(sol.force_N, problem.l_m, problem.v_m, problem.dt_s, "periodic")
     np.testing.assert_allclose(inv["a"], sol.activation, atol=1e-6)
