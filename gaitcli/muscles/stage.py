@@ -73,7 +73,7 @@ class MuscleResult:
     inverse dynamics (4.20). ``metabolic_cost_J`` is one leg over the interval
     (NaN when the excitations or activations leave [0, 1], where the energetics
     model does not apply — SO in Table 4.2); ``cost_of_transport_J_per_m`` =
-    2 × one leg / distance (4.5.2); ``ralston_J_per_m`` the empirical (4.5) at the
+    2 × one leg / distance (4.5.2); ``metabolic_energy_J`` (m,) its share per muscle; ``ralston_J_per_m`` the empirical (4.5) at the
     same speed. ``infeasible_frames`` (indices into ``time_s``) and
     ``infeasibility`` (how far u left [0, 1] there) — MSO only.
     """
@@ -90,6 +90,7 @@ class MuscleResult:
     fibre_velocity_m_s: np.ndarray
     metabolic_rate_W: np.ndarray
     metabolic_cost_J: float
+    metabolic_energy_J: np.ndarray
     cost_of_transport_J_per_m: float
     ralston_J_per_m: float
     distance_m: float
@@ -227,11 +228,13 @@ def _result(method, objective, problem: Problem, motion, force, inv, converged, 
     out_of_bounds = (not np.all(np.isfinite(uc)) or not np.all(np.isfinite(ac)) or np.min(uc) < -tol
                      or np.max(uc) > 1 + tol or np.min(ac) < -tol or np.max(ac) > 1 + tol)
     weights = quadrature_weights(sl.stop - sl.start, problem.periodic)
-    cost = float(problem.dt_s * weights @ rate[sl].sum(axis=1))
+    energy = problem.dt_s * weights @ rate[sl]  # per muscle, the same quadrature as (4.29)
+    cost = float(energy.sum())
     if out_of_bounds:
         notes = list(notes) + ["metabolic cost not given: excitations or activations outside [0, 1], where "
                                "the energetics model does not apply (Table 4.2)"]
         cost = float("nan")
+        energy = np.full_like(energy, np.nan)
     duration = problem.dt_s * (sl.stop - sl.start) if problem.periodic else problem.t_end_s - problem.t_start_s
     distance = problem.distance_m
     speed = distance / duration if duration > 0 else float("nan")
@@ -251,7 +254,7 @@ def _result(method, objective, problem: Problem, motion, force, inv, converged, 
         method=method, objective=objective, side=motion.side, time_s=problem.time_s[sl],
         muscle_names=muscle.names, forces_N=force[sl], activations=a, excitations=u,
         fibre_length_m=inv["l_ce"][sl], fibre_velocity_m_s=inv["v_ce"][sl], metabolic_rate_W=rate[sl],
-        metabolic_cost_J=cost, cost_of_transport_J_per_m=cot, ralston_J_per_m=ralston, distance_m=distance,
+        metabolic_cost_J=cost, metabolic_energy_J=energy, cost_of_transport_J_per_m=cot, ralston_J_per_m=ralston, distance_m=distance,
         speed_m_s=speed, duration_s=duration, joint_moments_Nm=problem.tau_id[sl],
         passive_moments_Nm=problem.tau_passive[sl], damping_moments_Nm=problem.tau_damping[sl],
         muscle_moments_Nm=problem.muscle_moments(force)[sl], moment_error_Nm=problem.moment_error(force)[sl],

@@ -26,8 +26,8 @@ def summary(result: MuscleResult, *, phase: str, interval: tuple, elapsed_s: flo
         "periodic": bool(result.periodic), "objective": result.objective, "status": result.status,
         "iterations": int(result.iterations), "speed_m_s": float(result.speed_m_s),
         "ralston_J_per_m": float(result.ralston_J_per_m),
-        "metabolic_cost_per_muscle_J": {name: float(v) for name, v in zip(
-            result.muscle_names, np.trapezoid(result.metabolic_rate_W, result.time_s, axis=0))},
+        "metabolic_cost_per_muscle_J": {name: float(v) if np.isfinite(v) else None
+                                        for name, v in zip(result.muscle_names, result.metabolic_energy_J)},
         "infeasible_frames": [int(i) for i in result.infeasible_frames],
         "max_infeasibility": float(max(result.infeasibility)) if result.infeasibility else 0.0,
         "notes": list(result.notes), "elapsed_s": round(elapsed_s, 3),
@@ -71,6 +71,7 @@ def write_muscle_outputs(folder: Path, result: MuscleResult, attrs: dict, *, pha
                  "solver_status": result.status})
     write_h5(folder / "muscles.h5", data, root)
     info = summary(result, phase=phase, interval=interval, elapsed_s=elapsed_s)
-    plots.muscle_figures(folder / "plots", result, events, title=attrs.get("trial", ""))
+    trial = attrs.get("trial")
+    plots.muscle_figures(folder / "plots", result, events, title=f"— {Path(trial).resolve().name}" if trial else "")
     write_json(folder / "summary.json", info)
     return info

@@ -181,13 +181,19 @@ def muscle_figures(folder: Path, result, events, *, title: str = "") -> list[Pat
                      fontsize=9)
         fig.tight_layout(rect=(0, 0, 1, 0.94))
         written.append(save(fig, folder / name))
-    energy = np.trapezoid(result.metabolic_rate_W, t, axis=0)
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.bar(names, energy, color=SIDE_COLOUR.get(result.side, "k"))
-    ax.set_ylabel("metabolic energy (J)")
-    total = "n/a (excitations outside [0, 1])" if not np.isfinite(result.metabolic_cost_J) \
-        else f"{result.metabolic_cost_J:.1f} J"
-    ax.set_title(f"{result.method.upper()}: metabolic energy per muscle over the interval; one leg total {total}",
+    fig, ax = plt.subplots(figsize=(7, 3.8))
+    rows = np.arange(len(names))[::-1]  # Table A.1 order from the top
+    if np.isfinite(result.metabolic_cost_J):
+        ax.barh(rows, result.metabolic_energy_J, color=SIDE_COLOUR.get(result.side, "k"))
+        total = f"one leg total {result.metabolic_cost_J:.1f} J"
+    else:
+        ax.text(0.5, 0.5, "not given: excitations or activations outside [0, 1],\nwhere the energetics model "
+                "does not apply", transform=ax.transAxes, ha="center", va="center", fontsize=9)
+        total = "not given"
+    ax.set_yticks(rows, [n.replace("_", " ") for n in names])
+    ax.set_xlabel("metabolic energy (J)")
+    ax.set_title(f"{result.method.upper()}: metabolic energy per muscle over the interval; {total} {title}",
                  fontsize=9)
+    fig.tight_layout()
     written.append(save(fig, folder / "metabolic_cost.png"))
     return written

@@ -229,6 +229,7 @@ def test_so_excitation_range_reported_as_computed(runs):
     assert info["min_excitation"] < 0.0 or info["max_excitation"] > 1.0
     # outside [0, 1] the energetics model does not apply: no cost is given (Table 4.2)
     assert info["metabolic_cost_J"] is None and info["cost_of_transport_J_per_m"] is None
+    assert set(info["metabolic_cost_per_muscle_J"].values()) == {None}
 
 
 # -- 2. filter and idyn first, reused by the next run ----------------------------------------------------------
@@ -272,6 +273,14 @@ def test_eid_and_mso_converge_with_bounded_excitations(runs, method):
         assert np.abs(h5["moment_error"][()]).max() < 0.5
         assert _bounded(h5["excitations"][()]) and _bounded(h5["activations"][()])
     assert info["metabolic_cost_J"] > 0 and info["cost_of_transport_J_per_m"] > 0
+    per_muscle = info["metabolic_cost_per_muscle_J"]
+    assert list(per_muscle) == list(MUSCLES)
+    assert sum(per_muscle.values()) == pytest.approx(info["metabolic_cost_J"], rel=1e-9)
+    # the total is the rate integrated over the interval: rectangle rule on the periodic grid (4.29)
+    rates = pd.read_csv(folder / "metabolics.csv")
+    start, end = info["interval_s"]
+    dt = (end - start) / len(rates)
+    assert info["metabolic_cost_J"] == pytest.approx(dt * rates.total_metabolic_rate_W.sum(), rel=1e-4)
 
 
 def test_eid_costs_less_than_mso_on_the_same_stride(runs):
