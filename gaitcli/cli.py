@@ -173,7 +173,8 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
     if strides < 1:
         raise click.BadParameter("expected at least 1 stride", param_hint="--strides")
     if not (mass_kg > 0 and 0.5 < stature_m < 2.5):
-        raise click.BadParameter("expected mass > 0 kg and stature in metres (0.5–2.5)", param_hint="--mass-kg/--stature-m")
+        raise click.BadParameter("expected mass > 0 kg and stature in metres (0.5–2.5)",
+                                 param_hint="--mass-kg/--stature-m")
     trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                         plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
                         sex=sex, period_s=period_s)

@@ -1,17 +1,19 @@
 """Synthetic trial folders with known truth (``gait synth``).
 
-A periodic walking motion of the 27-DoF model is designed in Cartesian terms —
-feet placed on the floor and rolling heel → flat → toe, a pelvis whose centre of
-mass follows the linear inverted pendulum over a centre-of-pressure path under
-the stance foot, legs reaching their ankles by two-link inverse kinematics — and
-turned into coordinates ``q(t)``. Ground reactions are then exactly consistent
-with it: the whole-body wrench ``Σ m (a + g)``, ``Σ dL/dt`` (what the ground must
-supply for zero pelvis residual) goes to the stance foot in single support and
-is shared between the feet in double support along the line joining their
-centres of pressure, so both feet's loads start and end at zero continuously.
+A periodic walking motion of the 27-DoF model: normative sagittal joint-angle
+curves (Winter) with small frontal and transverse motion; the pelvis placed so
+that the stance foot rolls on the floor without slipping (heel → flat → toe);
+the cycle re-timed so that the body's centre of mass follows the linear inverted
+pendulum over a centre-of-pressure path under the stance foot. Ground reactions
+are then exactly consistent with it: the whole-body wrench ``Σ m (a + g)``,
+``Σ dL/dt`` (what the ground must supply for zero pelvis residual) goes to the
+stance foot in single support and is shared between the feet in double support
+along the line joining their centres of pressure, each of which stays where it
+is on the floor, so both feet's loads start and end at zero continuously.
 Markers (Table A.6) ride rigidly on the bodies, plus white noise (RMS 3-D error
-``noise_mm``) and a low-frequency skin artefact (peak 3-D displacement ``artefact_mm``). Two TYPE-2 plates in millimetres measure one right
-and one left stance. ``truth/`` holds the exact kinematics, moments, GRF and events.
+``noise_mm``) and a low-frequency skin artefact (peak 3-D displacement
+``artefact_mm``). Two TYPE-2 plates in millimetres measure one right and one
+left stance. ``truth/`` holds the exact kinematics, moments, GRF and events.
 """
 
 from __future__ import annotations

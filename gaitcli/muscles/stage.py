@@ -73,9 +73,10 @@ class MuscleResult:
     inverse dynamics (4.20). ``metabolic_cost_J`` is one leg over the interval
     (NaN when the excitations or activations leave [0, 1], where the energetics
     model does not apply — SO in Table 4.2); ``cost_of_transport_J_per_m`` =
-    2 × one leg / distance (4.5.2); ``metabolic_energy_J`` (m,) its share per muscle; ``ralston_J_per_m`` the empirical (4.5) at the
-    same speed. ``infeasible_frames`` (indices into ``time_s``) and
-    ``infeasibility`` (how far u left [0, 1] there) — MSO only.
+    2 × one leg / distance (4.5.2); ``metabolic_energy_J`` (m,) its share per
+    muscle; ``ralston_J_per_m`` the empirical (4.5) at the same speed.
+    ``infeasible_frames`` (indices into ``time_s``) and ``infeasibility`` (how
+    far u left [0, 1] there) — MSO only.
     """
 
     method: str
@@ -254,7 +255,8 @@ def _result(method, objective, problem: Problem, motion, force, inv, converged, 
         method=method, objective=objective, side=motion.side, time_s=problem.time_s[sl],
         muscle_names=muscle.names, forces_N=force[sl], activations=a, excitations=u,
         fibre_length_m=inv["l_ce"][sl], fibre_velocity_m_s=inv["v_ce"][sl], metabolic_rate_W=rate[sl],
-        metabolic_cost_J=cost, metabolic_energy_J=energy, cost_of_transport_J_per_m=cot, ralston_J_per_m=ralston, distance_m=distance,
+        metabolic_cost_J=cost, metabolic_energy_J=energy, cost_of_transport_J_per_m=cot, ralston_J_per_m=ralston,
+        distance_m=distance,
         speed_m_s=speed, duration_s=duration, joint_moments_Nm=problem.tau_id[sl],
         passive_moments_Nm=problem.tau_passive[sl], damping_moments_Nm=problem.tau_damping[sl],
         muscle_moments_Nm=problem.muscle_moments(force)[sl], moment_error_Nm=problem.moment_error(force)[sl],

@@ -100,10 +100,9 @@ def synthetic_gait_table(side: str = "r", margin_s: float = 0.3):
     t = np.round(np.arange(-margin_s, PERIOD_S + margin_s + 1e-9, 1.0 / RATE_HZ), 10)
     phase = t / PERIOD_S
     hip_deg, knee_deg, ankle_deg = (_fourier(_fourier_fit(p), phase) for p in (_HIP, _KNEE, _ANKLE))
-    th, kn, an = np.deg2rad(hip_deg), np.deg2rad(knee_deg), np.deg2rad(ankle_deg)
-    # leg geometry relative to the hip (x forward, z up)
+    th, kn = np.deg2rad(hip_deg), np.deg2rad(knee_deg)
+    # the ankle relative to the hip (x forward)
     ankle_dx = limb.thigh_length_m * np.sin(th) + limb.shank_length_m * np.sin(th - kn)
-    ankle_dz = -limb.thigh_length_m * np.cos(th) - limb.shank_length_m * np.cos(th - kn)
     mid = 0.30
     th30, kn30 = (np.deg2rad(_fourier(_fourier_fit(p), np.array([mid])))[0] for p in (_HIP, _KNEE))
     dz30 = -limb.thigh_length_m * np.cos(th30) - limb.shank_length_m * np.cos(th30 - kn30)
