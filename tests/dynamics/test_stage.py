@@ -15,10 +15,11 @@ plate), seeds 0–9 (measured through the CLI):
 
 | joint | right | left |
 | --- | --- | --- |
-| hip | 0.061–0.079 | 0.077–0.094 |
-| knee | 0.029–0.036 | 0.071–0.075 |
-| ankle | 0.029–0.035 | 0.030–0.038 |
+| hip | 0.061–0.079 | 0.076–0.094 |
+| knee | 0.028–0.037 | 0.071–0.076 |
+| ankle | 0.030–0.036 | 0.031–0.040 |
 
+(re-measured 2026-12-01 after the double-support COP fix of the generator.)
 With the noise read as 2 mm per axis (3.5 mm RMS in 3-D) the hip measured 0.084–0.128. The left
 leg's swing includes the first and last frames of the trial, where the 6 Hz filter and the spline
 ends are least accurate. Pelvis residuals in the frames where every contact is measured: RMS
