@@ -30,7 +30,9 @@ class ValidationResult:
     ``angles_rad``/``reference_rad`` (n, 3) at ``time_s``; ``rms_deg`` (3,) per
     coordinate (thigh, knee, ankle) and ``rms_total_deg`` over all three;
     ``metabolic_cost_forward_J`` of the simulation and ``metabolic_cost_eid_J`` of the
-    EID over the same interval; ``success``/``message`` from the integrator.
+    EID over the same interval; ``success``/``message`` from the integrator;
+    ``restarted_at_nodes``: each inter-node interval integrated from the EID state
+    at its first node rather than one integration from the first node.
     """
 
     time_s: np.ndarray
@@ -44,6 +46,7 @@ class ValidationResult:
     metabolic_cost_eid_J: float
     success: bool
     message: str
+    restarted_at_nodes: bool = False
 
 
 def state_equations(problem: Problem) -> tuple[ca.Function, ca.Function]:
@@ -139,7 +142,7 @@ def validate_forward(problem: Problem, motion_interp: MotionInterpolant, force_N
                             rms_total_deg=float(np.sqrt(np.mean(err_deg ** 2))),
                             metabolic_cost_forward_J=float(np.sum(costs)),
                             metabolic_cost_eid_J=float(metabolic_cost_eid_J), success=ok,
-                            message="; ".join(sorted(messages)))
+                            message="; ".join(sorted(messages)), restarted_at_nodes=restart_at_nodes)
 
 
 def _metabolic_rate(muscle, t, xs, t_nodes, u_nodes) -> np.ndarray:

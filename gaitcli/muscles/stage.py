@@ -44,8 +44,10 @@ class MuscleOptions:
     ``bound_tolerance``: how far u or a may leave [0, 1] before a frame counts
     as infeasible (and before SO's metabolic cost is declared invalid).
     ``validation_restart_at_nodes``: the forward validation restarts every
-    inter-node interval from the EID state (instead of one integration from
-    the first node, 4.5.4).
+    inter-node interval from the EID state instead of one integration from
+    the first node (4.5.4); ``None`` restarts on a periodic cycle, whose stance
+    an open-loop integration with prescribed ground reactions cannot follow,
+    and integrates once over a swing phase, as the dissertation does.
     """
 
     muscles: MuscleParameters = field(default_factory=table_a1)
@@ -57,7 +59,7 @@ class MuscleOptions:
     extra_nodes: int = 2
     mso_penalty: float = 1e4
     bound_tolerance: float = 1e-6
-    validation_restart_at_nodes: bool = False
+    validation_restart_at_nodes: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -131,6 +133,7 @@ class MuscleResult:
         if self.validation is not None:
             out["validation_rms_deg"] = num(self.validation.rms_total_deg)
             out["validation_metabolic_cost_J"] = num(self.validation.metabolic_cost_forward_J)
+            out["validation_restarted_at_nodes"] = bool(self.validation.restarted_at_nodes)
         return out
 
 
@@ -244,12 +247,16 @@ def _result(method, objective, problem: Problem, motion, force, inv, converged, 
     validation = None
     if validate:
         interp = MotionInterpolant(motion, problem.time_s[0], problem.time_s[-1])
+        restart = problem.periodic if opts.validation_restart_at_nodes is None else opts.validation_restart_at_nodes
         validation = validate_forward(problem, interp, force, eid_solution.activation, eid_solution.excitation,
-                                      cost, restart_at_nodes=opts.validation_restart_at_nodes)
-        if problem.periodic and not opts.validation_restart_at_nodes:
-            notes = list(notes) + ["forward validation over a whole cycle: open-loop integration with "
-                                   "prescribed ground reactions drifts in stance (the dissertation validates "
-                                   "a swing phase); validation_restart_at_nodes checks the discretisation"]
+                                      cost, restart_at_nodes=restart)
+        if restart:
+            notes = list(notes) + ["forward validation restarted from the EID state at every node (4.5.4's "
+                                   "variant): an open-loop integration with prescribed ground reactions cannot "
+                                   "follow a stance phase; --phase swing integrates once, as the dissertation"]
+        elif problem.periodic:
+            notes = list(notes) + ["forward validation over a whole cycle in one integration: open-loop with "
+                                   "prescribed ground reactions, it drifts in stance"]
     finite_u = u[np.isfinite(u)]
     return MuscleResult(
         method=method, objective=objective, side=motion.side, time_s=problem.time_s[sl],

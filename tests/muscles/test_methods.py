@@ -145,6 +145,7 @@ def test_swing_phase_forward_validation(gait):
     assert v.rms_total_deg < 3.0
     assert abs(v.metabolic_cost_forward_J - v.metabolic_cost_eid_J) < 0.1 * v.metabolic_cost_eid_J
     assert r.summary()["validation_rms_deg"] == pytest.approx(v.rms_total_deg)
+    assert not v.restarted_at_nodes and r.summary()["validation_restarted_at_nodes"] is False  # one integration
 
 
 def test_summary_keys(results):
