@@ -237,8 +237,9 @@ class Run:
                                            elapsed_s=time.perf_counter() - started)
         self.console.summary("muscles", summary, target)
         if not result.converged:
-            raise NotConvergedError(f"{cfg.method.upper()} did not converge ({result.status}); results written to "
-                                    f"{target} with converged: false")
+            why = f": {result.diagnosis}" if result.diagnosis else ""
+            raise NotConvergedError(f"{cfg.method.upper()} did not converge ({result.status}){why}; results written "
+                                    f"to {target} with converged: false")
         return result
 
     def all(self):

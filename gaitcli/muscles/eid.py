@@ -56,19 +56,17 @@ def quadrature_weights(n: int, periodic: bool) -> np.ndarray:
     return w
 
 
-def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objective: str = "metabolic",
-              warm_start: tuple[np.ndarray, Outcome] | None = None, smoothing: float = 1e-2) -> EidSolution:
-    """Solve the EID NLP on the nodes of ``problem``, warm-started from SO (Table 4.2).
+def _eid_nlp(problem: Problem, objective: str, smoothing: float, shortfall_penalty: float | None):
+    """Variables, cost and constraints of the EID NLP (see the module docstring).
 
-    ``warm_start`` = (SO forces (n, m), SO outcome) on the same nodes; computed when omitted.
+    With ``shortfall_penalty`` the moment equations get slack variables (per node and
+    coordinate, both signs, in units of MOMENT_SCALE_NM) added to the cost with that
+    weight: the problem is then always feasible and the slacks say where and by how much
+    the muscles cannot produce the required moments.
     """
-    if objective not in OBJECTIVES:
-        raise ValueError(f"objective {objective!r} not in {OBJECTIVES}")
     muscle = problem.models.muscle
     par = muscle.params
     m, n, dt = muscle.m, problem.n, problem.dt_s
-    so_force, so_out = warm_start if warm_start is not None else solve_so(problem, settings)
-
     sym = ca.SX.sym
     s, a, u = sym("s", m, n), sym("a", m, n), sym("u", m, n)
     d_t = ca.DM(finite_difference_matrix(n, dt, problem.scheme).T)  # x·Dᵀ differentiates each row
@@ -90,22 +88,91 @@ def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objec
     else:
         f_max = ca.repmat(ca.DM(par.max_isometric_force_N), 1, n)
         cost = dt * (ca.sum1((force / f_max) ** 3) @ weights)  # (4.3) integrated over time
-    x = ca.vertcat(ca.vec(s), ca.vec(a), ca.vec(u))
+    x = [ca.vec(s), ca.vec(a), ca.vec(u)]
+    if shortfall_penalty is not None:
+        over, under = sym("over", 3, n), sym("under", 3, n)
+        moments = moments - over + under
+        cost = cost + shortfall_penalty * (ca.sum1(ca.sum2(over)) + ca.sum1(ca.sum2(under)))
+        x += [ca.vec(over), ca.vec(under)]
     g = ca.vertcat(ca.vec(moments.T), ca.vec(contraction), ca.vec(activation))
-    solver = build_solver("eid", x, cost, g, settings=settings)
+    return ca.vertcat(*x), cost, g
 
+
+def _bounds_and_start(problem: Problem, so_force: np.ndarray, extra: int):
+    muscle = problem.models.muscle
+    par = muscle.params
+    m, n = muscle.m, problem.n
     s_max = np.sqrt(par.eccentric_asymptote)  # (4.28)
-    lbx = np.zeros(3 * m * n)
-    ubx = np.concatenate([np.full(m * n, s_max), np.ones(2 * m * n)])  # (4.26), (4.27)
+    lbx = np.zeros(3 * m * n + extra)
+    ubx = np.concatenate([np.full(m * n, s_max), np.ones(2 * m * n), np.full(extra, np.inf)])  # (4.26), (4.27)
     # warm start: SO forces and the activations/excitations they need, moved inside the bounds
-    inv = muscle.invert_forces(so_force, problem.l_m, problem.v_m, dt, problem.scheme)
+    inv = muscle.invert_forces(so_force, problem.l_m, problem.v_m, problem.dt_s, problem.scheme)
     s0 = np.clip(np.sqrt(so_force / par.max_isometric_force_N), 0, s_max)
     a0 = np.clip(np.nan_to_num(inv["a"], nan=0.0, posinf=1.0, neginf=0.0), 0, 1)
     u0 = np.clip(np.nan_to_num(inv["u"], nan=0.0, posinf=1.0, neginf=0.0), 0, 1)
-    x0 = np.concatenate([s0.ravel(), a0.ravel(), u0.ravel()])  # (n, m) row-major = vec of (m, n)
+    x0 = np.concatenate([s0.ravel(), a0.ravel(), u0.ravel(), np.zeros(extra)])  # (n, m) row-major = vec of (m, n)
+    return x0, lbx, ubx, s_max
+
+
+def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objective: str = "metabolic",
+              warm_start: tuple[np.ndarray, Outcome] | None = None, smoothing: float = 1e-2) -> EidSolution:
+    """Solve the EID NLP on the nodes of ``problem``, warm-started from SO (Table 4.2).
+
+    ``warm_start`` = (SO forces (n, m), SO outcome) on the same nodes; computed when omitted.
+    """
+    if objective not in OBJECTIVES:
+        raise ValueError(f"objective {objective!r} not in {OBJECTIVES}")
+    par = problem.models.muscle.params
+    m, n = problem.models.muscle.m, problem.n
+    so_force, so_out = warm_start if warm_start is not None else solve_so(problem, settings)
+    x, cost, g = _eid_nlp(problem, objective, smoothing, None)
+    solver = build_solver("eid", x, cost, g, settings=settings)
+    x0, lbx, ubx, s_max = _bounds_and_start(problem, so_force, 0)
     out = solve(solver, x0, lbx, ubx, 0.0, 0.0)
     blocks = out.x.reshape(3, n, m)
     s_opt = np.clip(blocks[0], 0.0, s_max)  # IPOPT's bound relaxation is 1e-8 of the bound
     return EidSolution(force_N=par.max_isometric_force_N * s_opt ** 2, activation=blocks[1],
                        excitation=blocks[2], outcome=out, warm_start_outcome=so_out,
                        node_weights=quadrature_weights(n, problem.periodic))
+
+
+@dataclass(frozen=True)
+class MomentShortfall:
+    """Where the muscles cannot produce the required moments within 0 ≤ u, a ≤ 1 (an infeasible EID).
+
+    ``shortfall_Nm`` (n, 3): required minus achievable moment (hip flexion, knee flexion,
+    ankle dorsiflexion) at each node of the problem; 0 where the muscles suffice.
+    """
+
+    shortfall_Nm: np.ndarray
+    outcome: Outcome
+
+    def describe(self, time_s: np.ndarray, threshold_Nm: float = 0.01) -> str:
+        """One line: each joint's largest shortfall and the time span where it exceeds ``threshold_Nm``."""
+        parts = []
+        for k, joint in enumerate(("hip", "knee", "ankle")):
+            short = np.abs(self.shortfall_Nm[:, k])
+            where = np.flatnonzero(short > threshold_Nm)
+            if where.size:
+                parts.append(f"the {joint} moment by up to {short.max():.2f} N·m at t = {time_s[where[0]]:.3f}–"
+                             f"{time_s[where[-1]]:.3f} s")
+        if not parts:
+            return (f"with the moment equations relaxed every one is met within {threshold_Nm} N·m: the failure is "
+                    f"numerical, not a lack of muscle strength")
+        return "the muscles fall short of " + "; ".join(parts)
+
+
+def moment_shortfall(problem: Problem, settings: SolverSettings | None = None, *,
+                     penalty: float = 1e3) -> MomentShortfall:
+    """Diagnose an infeasible EID: the same NLP with the moment equations relaxed by L1-penalised
+    slacks (Crowninshield–Brand cost), so that the slacks locate what the muscles cannot do."""
+    m, n = problem.models.muscle.m, problem.n
+    so_force, _ = solve_so(problem, settings)
+    x, cost, g = _eid_nlp(problem, "crowninshield_brand", 0.0, penalty)
+    solver = build_solver("eid_shortfall", x, cost, g, settings=settings)
+    x0, lbx, ubx, _ = _bounds_and_start(problem, so_force, 6 * n)
+    out = solve(solver, x0, lbx, ubx, 0.0, 0.0)
+    over, under = out.x[3 * m * n:3 * m * n + 3 * n], out.x[3 * m * n + 3 * n:]
+    # the slacks enter as moments − over + under = 0 with moments = (R·F − b)/scale: R·F − b = over − under
+    shortfall = (under - over).reshape(n, 3) * MOMENT_SCALE_NM
+    return MomentShortfall(shortfall_Nm=shortfall, outcome=out)

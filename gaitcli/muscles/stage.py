@@ -9,13 +9,13 @@ residuals and the solver's report; the CLI writes it and maps
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from gaitcli.errors import InputError
 
-from .eid import OBJECTIVES, quadrature_weights, solve_eid
+from .eid import OBJECTIVES, moment_shortfall, quadrature_weights, solve_eid
 from .forward import ValidationResult, validate_forward
 from .limb import LimbParameters, MotionInterpolant, SagittalMotion
 from .mso import solve_mso
@@ -78,7 +78,9 @@ class MuscleResult:
     2 × one leg / distance (4.5.2); ``metabolic_energy_J`` (m,) its share per
     muscle; ``ralston_J_per_m`` the empirical (4.5) at the same speed.
     ``infeasible_frames`` (indices into ``time_s``) and ``infeasibility`` (how
-    far u left [0, 1] there) — MSO only.
+    far u left [0, 1] there) — MSO only. ``moment_shortfall_Nm`` (n, 3) and
+    ``diagnosis`` — an unconverged EID only: required minus achievable moment
+    where the muscles cannot produce it (:func:`muscles.eid.moment_shortfall`).
     """
 
     method: str
@@ -116,6 +118,8 @@ class MuscleResult:
     nodes: int
     notes: tuple = ()
     validation: ValidationResult | None = None
+    moment_shortfall_Nm: np.ndarray | None = None
+    diagnosis: str = ""
 
     @property
     def max_moment_error_Nm(self) -> float:
@@ -134,6 +138,10 @@ class MuscleResult:
             out["validation_rms_deg"] = num(self.validation.rms_total_deg)
             out["validation_metabolic_cost_J"] = num(self.validation.metabolic_cost_forward_J)
             out["validation_restarted_at_nodes"] = bool(self.validation.restarted_at_nodes)
+        if self.moment_shortfall_Nm is not None:
+            out["max_moment_shortfall_Nm"] = dict(zip(("hip", "knee", "ankle"),
+                                                      np.abs(self.moment_shortfall_Nm).max(axis=0).tolist()))
+            out["diagnosis"] = self.diagnosis
         return out
 
 
@@ -171,6 +179,7 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
     infeasible, violation = (), ()
     scheme = problem.scheme
     activation = excitation = None
+    shortfall, diagnosis = None, ""
     if method == "so":
         force, out = solve_so(problem, opts.solver)
         converged, status, iterations = out.success, out.status, out.iterations
@@ -197,6 +206,14 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
         force, out, objective = sol.force_N, sol.outcome, opts.objective
         converged, status, iterations = out.success, out.status, out.iterations
         activation, excitation = sol.activation, sol.excitation
+        if not converged:  # where can the muscles not produce the moments? (one more, always feasible, NLP)
+            shortfall = moment_shortfall(problem, SolverSettings(print_level=opts.solver.print_level))
+            if shortfall.outcome.success:
+                diagnosis = shortfall.describe(problem.time_s)
+                notes.append(f"EID diagnosis (moment equations relaxed, L1 penalty): {diagnosis}")
+            else:
+                notes.append(f"EID diagnosis (moment equations relaxed) ended {shortfall.outcome.status}")
+                shortfall = None
         if opts.objective == "metabolic" and opts.smoothing > 0:
             notes.append(f"EID objective: heat rate with kinks smoothed over {opts.smoothing:g}; "
                          f"optimiser objective {out.objective:.2f} J, reported cost uses the exact model")
@@ -215,8 +232,11 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
         inv["a"], inv["u"] = activation, excitation
         inv["l_ce"][0], inv["v_ce"][0] = sol.first_frame["l_ce"], sol.first_frame["v_ce"]
     solve_time = time.perf_counter() - start
-    return _result(method, objective, problem, motion, force, inv, converged, status, iterations, solve_time,
-                   infeasible, violation, notes, opts, validate, sol if method == "eid" else None)
+    result = _result(method, objective, problem, motion, force, inv, converged, status, iterations, solve_time,
+                     infeasible, violation, notes, opts, validate, sol if method == "eid" else None)
+    if shortfall is not None:
+        result = replace(result, moment_shortfall_Nm=shortfall.shortfall_Nm[problem.interval], diagnosis=diagnosis)
+    return result
 
 
 def _result(method, objective, problem: Problem, motion, force, inv, converged, status, iterations, solve_time,

@@ -66,6 +66,9 @@ def write_muscle_outputs(folder: Path, result: MuscleResult, attrs: dict, *, pha
         data["validation/time"] = Dataset(v.time_s, "s")
         data["validation/angles"] = Dataset(v.angles_rad, "rad", {"columns": "thigh, knee flexion, ankle dorsiflexion"})
         data["validation/rms"] = Dataset(v.rms_deg, "deg")
+    if result.moment_shortfall_Nm is not None:
+        data["moment_shortfall"] = Dataset(result.moment_shortfall_Nm, "N*m", {
+            "columns": joints, "meaning": "required minus achievable moment (EID with relaxed moment equations)"})
     root = dict(attrs)
     root.update({"method": result.method, "objective": result.objective, "converged": bool(result.converged),
                  "solver_status": result.status})

@@ -344,7 +344,14 @@ def test_eid_not_converged_exit_3(runs):
     with h5py.File(folder / "muscles.h5", "r") as h5:
         assert isinstance(h5.attrs["converged"], (bool, np.bool_)) and not h5.attrs["converged"]
         assert h5.attrs["solver_status"] == info["status"]
+        shortfall = h5["moment_shortfall"][()]
+        assert shortfall.shape == (50, 3) and h5["moment_shortfall"].attrs["units"] == "N*m"
     assert len(pd.read_csv(folder / "forces.csv")) == 50
+    # the diagnosis: the hip flexors cannot follow this gait's early swing (sample_trials/README.md)
+    assert info["max_moment_shortfall_Nm"]["hip"] > 1.0
+    assert info["max_moment_shortfall_Nm"]["hip"] == pytest.approx(np.abs(shortfall[:, 0]).max(), rel=1e-9)
+    assert info["diagnosis"].startswith("the muscles fall short of the hip moment by up to")
+    assert info["diagnosis"] in errors[0]
 
 
 # -- 4. NaN in the analysed stride ------------------------------------------------------------------------------

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.optimize import minimize
@@ -10,7 +12,7 @@ from gaitcli.errors import InputError
 from gaitcli.muscles import (LimbParameters, Models, MotionInterpolant, MuscleOptions, SagittalMotion,
                              SolverSettings, build_problem, ralston_cost_of_transport, run_muscles,
                              validate_forward)
-from gaitcli.muscles.eid import solve_eid
+from gaitcli.muscles.eid import moment_shortfall, solve_eid
 from gaitcli.muscles.so import solve_so
 
 BOUND_TOL = 1e-6
@@ -113,6 +115,30 @@ def test_eid_unconverged_reports_status(gait):
     assert not r.converged
     assert r.status == "Maximum_Iterations_Exceeded"
     assert r.forces_N.shape == (20, 8) and r.iterations == 3
+    # the problem itself is feasible (test_moment_equations_hold): the diagnosis finds no shortfall
+    assert np.abs(r.moment_shortfall_Nm).max() < 0.01
+    assert "numerical, not a lack of muscle strength" in r.diagnosis
+    assert r.summary()["diagnosis"] == r.diagnosis
+
+
+def test_moment_shortfall_locates_an_impossible_moment(gait):
+    """A hip flexion moment beyond what all muscles can give even at f_asympt·F_max, at one node: the
+    relaxed EID puts the shortfall there, at least the excess over that capacity, and nowhere else."""
+    motion, limb = gait
+    models = Models.build(limb)
+    problem = build_problem(motion, models, nodes=30)
+    par = models.muscle.params
+    node, extra = 12, 400.0
+    capacity = float(np.sum(par.eccentric_asymptote * par.max_isometric_force_N * np.abs(problem.arms[node, 0])))
+    required = problem.required.copy()
+    required[node, 0] += capacity + extra
+    s = moment_shortfall(dataclasses.replace(problem, required=required))
+    assert s.outcome.success
+    assert s.shortfall_Nm[node, 0] >= extra
+    assert s.shortfall_Nm[node, 0] <= capacity + extra + abs(problem.required[node, 0])
+    others = np.delete(np.abs(s.shortfall_Nm[:, 0]), node)
+    assert others.max() < 0.01 and np.abs(s.shortfall_Nm[:, 1:]).max() < 0.01
+    assert s.describe(problem.time_s).startswith("the muscles fall short of the hip moment by up to")
 
 
 def test_mso_reports_infeasible_frames(gait_table):
