@@ -156,7 +156,6 @@ DOUBLE_SUPPORT = 0.12
 PELVIS_HARMONICS = (4, 3, 4)  # x, y, z
 ROLL_RADIUS_M = 0.30
 HEEL_COP_M = -0.04  # where the COP starts at heel strike, forward of the ankle centre
-WARP_KEEP = 0.3
 WARP_HARMONICS = 4
 
 
