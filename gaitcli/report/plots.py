@@ -168,6 +168,8 @@ def muscle_figures(folder: Path, result, events, *, title: str = "") -> list[Pat
             if label != "force (N)":
                 ax.axhspan(0, 1, color="0.93", zorder=0)
             mark_events(ax, side_events, sides=(result.side,))
+            for j in result.infeasible_frames:  # MSO frames whose excitations had to leave [0, 1]
+                ax.axvspan(t[max(j - 1, 0)], t[min(j + 1, t.size - 1)], color="tab:red", alpha=0.12, lw=0)
             ax.set_xlim(t[0], t[-1])
             if limits is not None and np.all(np.isfinite(values)) and values.min() >= -0.05 and values.max() <= 1.05:
                 ax.set_ylim(*limits)
@@ -176,9 +178,10 @@ def muscle_figures(folder: Path, result, events, *, title: str = "") -> list[Pat
             ax.set_ylabel(label)
         for ax in axes[-1]:
             ax.set_xlabel("time (s)")
+        infeasible = "; red: infeasible frames" if result.infeasible_frames else ""
         fig.suptitle(f"{result.method.upper()}: muscle {label.split(' ')[0]}s, {SIDE_NAME.get(result.side, '')} leg "
-                     f"(solid: heel strike, dashed: toe off; grey band: the physiological range [0, 1]) {title}",
-                     fontsize=9)
+                     f"(solid: heel strike, dashed: toe off; grey band: the physiological range [0, 1]{infeasible}) "
+                     f"{title}", fontsize=9)
         fig.tight_layout(rect=(0, 0, 1, 0.94))
         written.append(save(fig, folder / name))
     fig, ax = plt.subplots(figsize=(7, 3.8))
