@@ -50,7 +50,9 @@ def _build(shared_c3d_dir: Path, root: Path) -> dict:
     trial.mkdir()
     shutil.copy(shared_c3d_dir / "Qualisys.c3d", trial / "trial.c3d")
     shutil.copy(EXAMPLE / "subject.yaml", trial / "subject.yaml")
-    return {"results": [gait(command, trial, cwd=root).to_json() for command in ("filter", "idyn")]}
+    results = [gait(command, trial, cwd=root).to_json() for command in ("filter", "idyn")]
+    eid = gait("muscles", trial, "--method", "eid", "--side", "r", cwd=root)
+    return {"results": results, "eid": eid.to_json()}
 
 
 @pytest.fixture(scope="module")
@@ -65,6 +67,7 @@ def qualisys(shared_c3d_dir, tmp_path_factory):
         "summary": json.loads((out / "idyn" / "summary.json").read_text()),
         "events": pd.read_csv(out / "filter" / "events.csv"),
         "moments": pd.read_csv(out / "idyn" / "joint_moments.csv"),
+        "eid": Result.from_json(record["eid"]),
     }
 
 
@@ -196,3 +199,20 @@ def test_ankle_plantarflexion_moment_peaks_in_the_second_half_of_stance(qualisys
     assert -2.0 < ankle[peak] < -0.8  # measured −1.31 l, −1.06 r
     assert np.all(ankle[pct <= 15] > -0.5)  # little plantarflexion moment while the heel loads (−0.20, +0.02)
     assert abs(ankle[-1]) < 0.3  # unloaded at toe off (−0.05, −0.01)
+
+
+def test_eid_on_the_right_stride_of_real_data(qualisys):
+    """EID on measured data (the right stride whose stance is on plate 2): converges with 0 ≤ u, a ≤ 1.
+    Measured: 191 J for one leg's stride, cost of transport (both legs) 267 J/m beside Ralston's
+    218 J/m at the stride's 1.46 m/s (the dissertation's subject 1: 311 against 247 J/m)."""
+    run = qualisys["eid"]
+    assert run.returncode == 0, run.describe()
+    folder = qualisys["trial"] / "gait_out" / "muscles" / "eid"
+    info = json.loads((folder / "summary.json").read_text())
+    assert info["converged"] is True and info["side"] == "r" and info["periodic"] is True
+    assert -1e-6 <= info["min_excitation"] and info["max_excitation"] <= 1 + 1e-6
+    activations = pd.read_csv(folder / "activations.csv").drop(columns="time_s").to_numpy()
+    assert activations.min() >= -1e-6 and activations.max() <= 1 + 1e-6
+    assert info["max_moment_error_Nm"] < 0.5
+    assert 50 < info["metabolic_cost_J"] < 500
+    assert 0.5 < info["cost_of_transport_J_per_m"] / info["ralston_J_per_m"] < 2.0
