@@ -18,6 +18,10 @@ variables tied by the contraction equation (4.18) and the activation dynamics
 (2.17), whose unique root in [0, 1] is the root rule's choice (4.3.3). This
 lifting gives IPOPT exact, sparse first and second derivatives of a
 polynomial-like problem instead of nested square roots and divisions.
+
+When the NLP is infeasible, :func:`moment_shortfall` solves it once more with
+the moment equations relaxed by L1-penalised slacks; the slacks say which joint
+moment the muscles cannot produce, by how much and when.
 """
 
 from __future__ import annotations
