@@ -4,8 +4,8 @@ Run from the repository root: ``python benchmarks/bench_muscles.py [--repeat N] 
 The filter and idyn stages run once on a copy of ``sample_trials/normal`` (55 kg, 1.65 m,
 0.88 m/s); then, on the first stride whose stance is on a plate (periodic, 4.3.5), with the
 8 muscles of Table A.1: SO and MSO on every 100 Hz frame of the stride (as Table 4.2 solves
-one small problem per frame), EID on 50 nodes (400 force variables, as Table 4.2), and EID on
-the swing phase with the forward validation of 4.5.4. Threads are limited to one and the process
+one small problem per frame) and on the 50 EID nodes ("so 50", "mso 50"), EID on 50 nodes (400
+force variables, as Table 4.2), and EID on the swing phase with the forward validation of 4.5.4. Threads are limited to one and the process
 to one core. Prints median wall time of ``--repeat`` runs (the whole ``run_muscles`` call: model
 set-up, NLP construction, solve, inversions, energetics), IPOPT iterations, metabolic cost of one
 leg, cost of transport (both legs) beside Ralston's (4.5), the largest moment-equation error, and
@@ -70,8 +70,9 @@ def main(argv=None) -> int:
               f"{'E (J)':>8} {'Diss. E':>8} {'CoT (J/m)':>10} {'Ralston':>8} {'max |ΔM| (N·m)':>15}")
     print(header)
     print("-" * len(header))
-    rows = [("so", "cycle", None, False), ("mso", "cycle", None, False), ("eid", "cycle", args.nodes, False),
-            ("eid", "swing", args.nodes, True)]
+    rows = [("so", "cycle", None, False), ("mso", "cycle", None, False),
+            ("so", "cycle", args.nodes, False), ("mso", "cycle", args.nodes, False),
+            ("eid", "cycle", args.nodes, False), ("eid", "swing", args.nodes, True)]
     for method, phase, nodes, validate in rows:
         leg = legs[phase]
 
@@ -81,7 +82,8 @@ def main(argv=None) -> int:
 
         seconds, result = median_s(solve, args.repeat)
         diss_t, diss_vars, diss_e = DISSERTATION[method]
-        label = method if phase == "cycle" else f"{method} swing"
+        label = (method if nodes is None or method == "eid" else f"{method} {nodes}") + \
+            ("" if phase == "cycle" else " swing")
         vars_ = f"8 ({result.nodes}x)" if method != "eid" else f"{8 * result.nodes} (8x{result.nodes})"
         diss = f"{diss_t:10.3g} {diss_t / seconds:9.0f}" if phase == "cycle" else f"{'-':>10} {'-':>9}"
         print(f"{label:10} {seconds:9.2f} {diss} "
