@@ -38,17 +38,21 @@ from .so import moment_constraints, solve_so
 from .solver import Outcome, SolverSettings, build_solver, solve
 
 OBJECTIVES = ("metabolic", "crowninshield_brand")
+#: the limb's moment equations, in the order of the problem's coordinates (4.21)
+JOINT_NAMES = ("hip", "knee", "ankle")
 
 
 @dataclass(frozen=True)
 class EidSolution:
-    """Forces, activations and excitations (n, m) at all nodes (extra nodes included)."""
+    """Forces, activations and excitations (n, m) at all nodes (extra nodes included); the SO forces
+    the NLP was warm-started from."""
 
     force_N: np.ndarray
     activation: np.ndarray
     excitation: np.ndarray
     outcome: Outcome
     warm_start_outcome: Outcome
+    warm_start_force_N: np.ndarray
     node_weights: np.ndarray  # (n,) quadrature weights of the objective, in units of Δt
 
 
@@ -136,7 +140,7 @@ def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objec
     blocks = out.x.reshape(3, n, m)
     s_opt = np.clip(blocks[0], 0.0, s_max)  # IPOPT's bound relaxation is 1e-8 of the bound
     return EidSolution(force_N=par.max_isometric_force_N * s_opt ** 2, activation=blocks[1],
-                       excitation=blocks[2], outcome=out, warm_start_outcome=so_out,
+                       excitation=blocks[2], outcome=out, warm_start_outcome=so_out, warm_start_force_N=so_force,
                        node_weights=quadrature_weights(n, problem.periodic))
 
 
@@ -154,7 +158,7 @@ class MomentShortfall:
     def describe(self, time_s: np.ndarray, threshold_Nm: float = 0.01) -> str:
         """One line: each joint's largest shortfall and the time span where it exceeds ``threshold_Nm``."""
         parts = []
-        for k, joint in enumerate(("hip", "knee", "ankle")):
+        for k, joint in enumerate(JOINT_NAMES):
             short = np.abs(self.shortfall_Nm[:, k])
             where = np.flatnonzero(short > threshold_Nm)
             if where.size:
@@ -166,12 +170,15 @@ class MomentShortfall:
         return "the muscles fall short of " + "; ".join(parts)
 
 
-def moment_shortfall(problem: Problem, settings: SolverSettings | None = None, *,
-                     penalty: float = 1e3) -> MomentShortfall:
+def moment_shortfall(problem: Problem, settings: SolverSettings | None = None, *, penalty: float = 1e3,
+                     warm_start_force_N: np.ndarray | None = None) -> MomentShortfall:
     """Diagnose an infeasible EID: the same NLP with the moment equations relaxed by L1-penalised
-    slacks (Crowninshield–Brand cost), so that the slacks locate what the muscles cannot do."""
+    slacks (Crowninshield–Brand cost), so that the slacks locate what the muscles cannot do.
+
+    ``warm_start_force_N``: SO forces (n, m) on the same nodes (the failed EID's); solved when omitted.
+    """
     m, n = problem.models.muscle.m, problem.n
-    so_force, _ = solve_so(problem, settings)
+    so_force = warm_start_force_N if warm_start_force_N is not None else solve_so(problem, settings)[0]
     x, cost, g = _eid_nlp(problem, "crowninshield_brand", 0.0, penalty)
     solver = build_solver("eid_shortfall", x, cost, g, settings=settings)
     x0, lbx, ubx, _ = _bounds_and_start(problem, so_force, 6 * n)

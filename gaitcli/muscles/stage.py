@@ -15,7 +15,7 @@ import numpy as np
 
 from gaitcli.errors import InputError
 
-from .eid import OBJECTIVES, moment_shortfall, quadrature_weights, solve_eid
+from .eid import JOINT_NAMES, OBJECTIVES, moment_shortfall, quadrature_weights, solve_eid
 from .forward import ValidationResult, validate_forward
 from .limb import LimbParameters, MotionInterpolant, SagittalMotion
 from .mso import solve_mso
@@ -139,7 +139,7 @@ class MuscleResult:
             out["validation_metabolic_cost_J"] = num(self.validation.metabolic_cost_forward_J)
             out["validation_restarted_at_nodes"] = bool(self.validation.restarted_at_nodes)
         if self.moment_shortfall_Nm is not None:
-            out["max_moment_shortfall_Nm"] = dict(zip(("hip", "knee", "ankle"),
+            out["max_moment_shortfall_Nm"] = dict(zip(JOINT_NAMES,
                                                       np.abs(self.moment_shortfall_Nm).max(axis=0).tolist()))
             out["diagnosis"] = self.diagnosis
         return out
@@ -207,7 +207,8 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
         converged, status, iterations = out.success, out.status, out.iterations
         activation, excitation = sol.activation, sol.excitation
         if not converged:  # where can the muscles not produce the moments? (one more, always feasible, NLP)
-            shortfall = moment_shortfall(problem, SolverSettings(print_level=opts.solver.print_level))
+            shortfall = moment_shortfall(problem, SolverSettings(print_level=opts.solver.print_level),
+                                         warm_start_force_N=sol.warm_start_force_N)
             if shortfall.outcome.success:
                 diagnosis = shortfall.describe(problem.time_s)
                 notes.append(f"EID diagnosis (moment equations relaxed, L1 penalty): {diagnosis}")

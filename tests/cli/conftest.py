@@ -29,7 +29,16 @@ from gaitcli.resources import sample_trial
 ENV = {**os.environ, "MPLBACKEND": "Agg", "PYTHONWARNINGS": "ignore::DeprecationWarning",
        "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 WORKERS = max(2, min(4, os.cpu_count() or 2))
+#: the bundled sample trials (sample_trials/README.md)
+SAMPLES = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")
 FILTER_FILES = ("markers_filtered.csv", "grf.csv", "events.csv", "filter.h5", "summary.json")
+#: the eight muscles of Table A.1 (Diss. appendix A.1), in the model's order
+MUSCLES = ("iliopsoas", "rectus_femoris", "glutei", "hamstrings", "vasti", "gastrocnemius", "tibialis_anterior",
+           "soleus")
+MUSCLE_FILES = ("forces.csv", "activations.csv", "excitations.csv", "metabolics.csv", "muscles.h5", "summary.json")
+#: DESIGN.md's summary.json keys of the muscle stage
+MUSCLE_SUMMARY_KEYS = ("method", "nodes", "solve_time_s", "converged", "metabolic_cost_J",
+                       "cost_of_transport_J_per_m", "min_excitation", "max_excitation", "max_moment_error_Nm")
 MINIMAL_SUBJECT = "mass_kg: 70.0\nstature_m: 1.70\nsex: male\n"
 
 

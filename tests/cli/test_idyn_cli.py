@@ -43,9 +43,8 @@ from gaitcli.io.c3d_write import write_c3d
 from gaitcli.kinematics.model import BODIES, COORDINATES, MOMENTS, RESIDUALS
 from gaitcli.recording import Markers
 
-from .conftest import WORKERS, Result, build_once, copy_sample, gait
+from .conftest import SAMPLES, WORKERS, Result, build_once, copy_sample, gait
 
-SAMPLES = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")
 IDYN_FILES = ("kinematics.csv", "joint_moments.csv", "residuals.csv", "sagittal.csv", "gait_cycle.csv", "idyn.h5",
               "summary.json")
 TABLE_3_1 = ("stride_length_m", "period_s", "speed_m_s", "stance_right_pct", "stance_left_pct", "double_stance_pct")

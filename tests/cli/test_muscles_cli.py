@@ -31,6 +31,9 @@ import pandas as pd
 import pytest
 
 from .conftest import (
+    MUSCLE_FILES,
+    MUSCLE_SUMMARY_KEYS,
+    MUSCLES,
     WORKERS,
     Result,
     build_once,
@@ -40,15 +43,9 @@ from .conftest import (
     snapshot,
 )
 
-#: the eight muscles of Table A.1 (Diss. appendix A.1), in the model's order
-MUSCLES = ("iliopsoas", "rectus_femoris", "glutei", "hamstrings", "vasti", "gastrocnemius", "tibialis_anterior",
-           "soleus")
 TABLES = {"forces.csv": "force_N", "activations.csv": "activation", "excitations.csv": "excitation",
           "metabolics.csv": "metabolic_rate_W"}
-MUSCLE_FILES = (*TABLES, "muscles.h5", "summary.json")
 PLOTS = ("forces.png", "activations.png", "excitations.png", "metabolic_cost.png")
-SUMMARY_KEYS = ("method", "nodes", "solve_time_s", "converged", "metabolic_cost_J", "cost_of_transport_J_per_m",
-                "min_excitation", "max_excitation", "max_moment_error_Nm")
 PROVENANCE = ("gaitcli_version", "config_yaml", "input_sha256", "created_utc")
 #: IPOPT's return statuses of a failed solve (ApplicationReturnStatus)
 IPOPT_FAILURES = ("Infeasible_Problem_Detected", "Search_Direction_Becomes_Too_Small", "Diverging_Iterates",
@@ -161,7 +158,7 @@ def test_so_exits_0_and_writes_every_file(runs):
     folder = runs[1] / "so_first"
     assert_all_files(folder)
     info = summary_of(folder)
-    assert set(SUMMARY_KEYS) <= set(info)
+    assert set(MUSCLE_SUMMARY_KEYS) <= set(info)
     assert info["method"] == "so" and info["converged"] is True and info["side"] == "r"
     assert info["phase"] == "cycle" and info["periodic"] is True
     assert info["solve_time_s"] > 0
@@ -263,7 +260,7 @@ def test_eid_and_mso_converge_with_bounded_excitations(runs, method):
     folder = runs[1] / method / "gait_out" / "muscles" / method
     assert_all_files(folder)
     info = summary_of(folder)
-    assert set(SUMMARY_KEYS) <= set(info)
+    assert set(MUSCLE_SUMMARY_KEYS) <= set(info)
     assert info["method"] == method and info["converged"] is True and info["status"] == "Solve_Succeeded"
     if method == "eid":
         assert info["nodes"] == 50 and len(pd.read_csv(folder / "forces.csv")) == 50
@@ -337,7 +334,7 @@ def test_eid_not_converged_exit_3(runs):
     folder = runs[1] / "heavy" / "gait_out" / "muscles" / "eid"
     assert_all_files(folder)
     info = summary_of(folder)
-    assert set(SUMMARY_KEYS) <= set(info)
+    assert set(MUSCLE_SUMMARY_KEYS) <= set(info)
     assert info["method"] == "eid" and info["converged"] is False and info["nodes"] == 50
     assert info["status"] in IPOPT_FAILURES
     assert info["status"] in errors[0]

@@ -12,13 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import Result, build_once, copy_sample, gait_many
+from .conftest import MUSCLE_FILES, MUSCLE_SUMMARY_KEYS, SAMPLES, Result, build_once, copy_sample, gait_many
 
-SAMPLES = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")
 METHODS = ("so", "mso", "eid")
-FILES = ("forces.csv", "activations.csv", "excitations.csv", "metabolics.csv", "muscles.h5", "summary.json")
-SUMMARY_KEYS = ("method", "nodes", "solve_time_s", "converged", "metabolic_cost_J", "cost_of_transport_J_per_m",
-                "min_excitation", "max_excitation", "max_moment_error_Nm")
 
 
 def _build(root: Path) -> dict:
@@ -45,10 +41,10 @@ def test_every_method_runs_on_every_sample_trial(runs, name, method):
     folder = root / name / "gait_out" / "muscles" / method
     assert run.returncode in (0, 3), run.describe()
     assert "Traceback" not in run.stderr
-    for file in FILES:
+    for file in MUSCLE_FILES:
         assert (folder / file).is_file(), f"{folder / file} missing"
     info = json.loads((folder / "summary.json").read_text())
-    assert set(SUMMARY_KEYS) <= set(info) and info["method"] == method
+    assert set(MUSCLE_SUMMARY_KEYS) <= set(info) and info["method"] == method
     assert info["converged"] is (run.returncode == 0)
     if info["converged"]:
         assert info["max_moment_error_Nm"] < 0.5
