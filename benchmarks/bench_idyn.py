@@ -50,7 +50,7 @@ from gaitcli.dynamics.stage import external_wrenches, inverse_dynamics_stage  # 
 from gaitcli.errors import GaitWarning  # noqa: E402
 from gaitcli.kinematics.calibration import calibrate  # noqa: E402
 from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments  # noqa: E402
-from gaitcli.recording import Markers  # noqa: E402
+from gaitcli.core.recording import Markers  # noqa: E402
 from gaitcli.resources import sample_trial  # noqa: E402
 from gaitcli.synth import MARKER_RATE_HZ, simulate_trial  # noqa: E402
 from timing import QuietConsole, median_s  # benchmarks/timing.py

@@ -19,7 +19,7 @@ import numpy as np
 from gaitcli.config import PipelineConfig, load_pipeline, to_yaml, with_overrides
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.outputs import provenance, stage_folder
-from gaitcli.recording import Recording
+from gaitcli.core.recording import Recording
 from gaitcli.resources import sample_trial
 from gaitcli.trial import TrialFolder, open_trial, sha256
 

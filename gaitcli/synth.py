@@ -27,7 +27,7 @@ from scipy.interpolate import CubicSpline
 
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS
-from gaitcli.recording import ForcePlate, Markers
+from gaitcli.core.recording import ForcePlate, Markers
 
 G = 9.81
 ANALOG_RATE_HZ = 1000.0

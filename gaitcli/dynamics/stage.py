@@ -21,9 +21,9 @@ from gaitcli.kinematics.calibration import StaticCalibration
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, BodyParameters
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 from gaitcli.signal.cycles import GaitFeatures, Stride, gait_features, strides
-from gaitcli.signal.events import Events
+from gaitcli.core.events import Events
 
 FOOT_BODY = {"r": BODIES.index("foot_r"), "l": BODIES.index("foot_l")}
 HEEL = {"r": "CAr", "l": "CAl"}

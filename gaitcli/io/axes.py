@@ -32,7 +32,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from gaitcli.recording import ForcePlate, Markers, Recording
+from gaitcli.core.recording import ForcePlate, Markers, Recording
 
 __all__ = [
     "LOAD_THRESHOLD_N",

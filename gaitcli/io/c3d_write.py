@@ -34,7 +34,7 @@ import numpy as np
 from gaitcli.errors import InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.c3d import plate_axes
-from gaitcli.recording import ForcePlate, Markers
+from gaitcli.core.recording import ForcePlate, Markers
 
 __all__ = ["write_c3d", "DEFAULT_ORIGIN_MM"]
 

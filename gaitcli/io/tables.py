@@ -44,7 +44,7 @@ import numpy as np
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.axes import LOAD_THRESHOLD_N, apply_rotation, infer_lab_to_model
-from gaitcli.recording import ForcePlate, Markers, Recording
+from gaitcli.core.recording import ForcePlate, Markers, Recording
 
 __all__ = [
     "PLATE_SIZE_M",

@@ -43,7 +43,7 @@ from gaitcli.kinematics.markerset import (LANDMARKS, SEGMENT_MARKERS, VIRTUAL_JO
                                           tracking_landmarks)
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
 from gaitcli.kinematics.pose import MIN_MARKERS
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 _PURPOSE = {"ASIS": "the pelvis frame and hip joint centres", "PSIS": "the pelvis frame and hip joint centres",
             "LEF": "the knee joint centre", "MEF": "the knee joint centre", "LM": "the ankle joint centre",

@@ -20,7 +20,7 @@ from gaitcli.kinematics.calibration import StaticCalibration
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT
 from gaitcli.kinematics.pose import fit_rigid_pose
 from gaitcli.kinematics.rotations import matrix_to_cardan_xyz, matrix_to_joint_angles
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 
 @dataclass

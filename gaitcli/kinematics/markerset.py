@@ -22,7 +22,7 @@ import numpy as np
 
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 SIDES = ("r", "l")
 

@@ -9,9 +9,11 @@ import numpy as np
 
 from gaitcli.errors import InputError
 from gaitcli.signal.cycles import strides
-from gaitcli.signal.events import Events
+from gaitcli.core.events import Events
 
-from .limb import LimbParameters, SagittalMotion
+from gaitcli.dynamics.sagittal import SagittalMotion
+
+from .limb import LimbParameters
 
 
 def analysis_interval(events: Events, time_s: np.ndarray, load_known: np.ndarray, side: str, phase: str,

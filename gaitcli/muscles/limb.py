@@ -18,12 +18,12 @@ floor is the plane z = 0.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from gaitcli.dynamics.sagittal import SagittalMotion
 from gaitcli.errors import InputError
 
 from .evaluation import evaluate
@@ -46,112 +46,6 @@ _DE_LEVA = {
 _HEEL_TO_ANKLE_PER_STATURE = 0.060 / 1.8
 #: foot CoM below the ankle / stature (Diss. Table A.5, subject 1: 0.043 m at 1.792 m)
 _FOOT_COM_BELOW_ANKLE_PER_STATURE = 0.043 / 1.792
-
-SAGITTAL_COLUMNS = ("hip_x_{s}_m", "hip_z_{s}_m", "thigh_angle_{s}_deg", "knee_flexion_{s}_deg",
-                    "ankle_dorsiflexion_{s}_deg", "grf_x_{s}_N", "grf_z_{s}_N", "cop_x_{s}_m")
-
-
-@dataclass(frozen=True)
-class SagittalMotion:
-    """Sagittal kinematics and ground reaction of one leg (the idyn stage's ``sagittal.csv``).
-
-    Arrays over frames (SI, radians): hip centre ``hip_x_m``, ``hip_z_m``;
-    ``thigh_angle_rad``, ``knee_flexion_rad``, ``ankle_dorsiflexion_rad``;
-    ground reaction on the foot ``grf_x_N``, ``grf_z_N`` and centre of pressure
-    ``cop_x_m`` (NaN in swing). Events in s: ``heel_strike_s``, ``toe_off_s``.
-    """
-
-    time_s: np.ndarray
-    hip_x_m: np.ndarray
-    hip_z_m: np.ndarray
-    thigh_angle_rad: np.ndarray
-    knee_flexion_rad: np.ndarray
-    ankle_dorsiflexion_rad: np.ndarray
-    grf_x_N: np.ndarray
-    grf_z_N: np.ndarray
-    cop_x_m: np.ndarray
-    side: str = "r"
-    heel_strike_s: tuple = ()
-    toe_off_s: tuple = ()
-    source: str | None = None
-
-    @classmethod
-    def from_table(cls, table, side: str, *, path: str | Path | None = None,
-                   heel_strike_s=(), toe_off_s=()) -> "SagittalMotion":
-        """Read one side (``"r"`` or ``"l"``) from a DataFrame or dict of columns.
-
-        Columns: ``time_s`` and ``hip_x_{s}_m, hip_z_{s}_m, thigh_angle_{s}_deg,
-        knee_flexion_{s}_deg, ankle_dorsiflexion_{s}_deg, grf_x_{s}_N, grf_z_{s}_N,
-        cop_x_{s}_m``. NaN is checked later, in the analysed interval only
-        (:meth:`check_finite`).
-        """
-        if side not in ("r", "l"):
-            raise InputError(path, "side", f"got {side!r} (expected 'r' or 'l')")
-        names = ["time_s"] + [c.format(s=side) for c in SAGITTAL_COLUMNS]
-        cols = {}
-        for name in names:
-            if name not in table:
-                raise InputError(path, name, "missing column (the sagittal table needs "
-                                 + ", ".join(names) + ")")
-            try:
-                cols[name] = np.asarray(table[name], dtype=float).reshape(-1)
-            except (TypeError, ValueError):
-                raise InputError(path, name, "expected numbers") from None
-        t = cols["time_s"]
-        if t.size < 4:
-            raise InputError(path, "time_s", f"got {t.size} frames (expected at least 4)")
-        if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-            raise InputError(path, "time_s", "expected finite, strictly increasing times")
-        deg = np.pi / 180.0
-        return cls(time_s=t,
-                   hip_x_m=cols[names[1]], hip_z_m=cols[names[2]],
-                   thigh_angle_rad=cols[names[3]] * deg, knee_flexion_rad=cols[names[4]] * deg,
-                   ankle_dorsiflexion_rad=cols[names[5]] * deg,
-                   grf_x_N=cols[names[6]], grf_z_N=cols[names[7]], cop_x_m=cols[names[8]],
-                   side=side, heel_strike_s=tuple(float(x) for x in heel_strike_s),
-                   toe_off_s=tuple(float(x) for x in toe_off_s),
-                   source=None if path is None else str(path))
-
-    @property
-    def angles_rad(self) -> np.ndarray:
-        """(frames, 3): thigh angle, knee flexion, ankle dorsiflexion."""
-        return np.column_stack([self.thigh_angle_rad, self.knee_flexion_rad, self.ankle_dorsiflexion_rad])
-
-    def column_name(self, key: str) -> str:
-        """Table column of a field, e.g. ``"knee_flexion"`` → ``knee_flexion_r_deg``."""
-        for c in SAGITTAL_COLUMNS:
-            if c.startswith(key):
-                return c.format(s=self.side)
-        return key
-
-    def check_finite(self, first: int, last: int) -> None:
-        """Raise InputError for NaN in frames ``first..last`` (inclusive).
-
-        NaN centre of pressure is allowed where the vertical force is zero (swing).
-        """
-        sl = slice(first, last + 1)
-        fields = {"hip_x": self.hip_x_m, "hip_z": self.hip_z_m, "thigh_angle": self.thigh_angle_rad,
-                  "knee_flexion": self.knee_flexion_rad, "ankle_dorsiflexion": self.ankle_dorsiflexion_rad,
-                  "grf_x": self.grf_x_N, "grf_z": self.grf_z_N}
-        bad_cols, bad = [], np.zeros(last - first + 1, bool)
-        for key, arr in fields.items():
-            nan = ~np.isfinite(arr[sl])
-            if nan.any():
-                bad_cols.append(self.column_name(key))
-                bad |= nan
-        loaded = (np.abs(self.grf_x_N[sl]) + np.abs(self.grf_z_N[sl])) > 0  # False where NaN
-        nan_cop = ~np.isfinite(self.cop_x_m[sl]) & loaded
-        if nan_cop.any():
-            bad_cols.append(self.column_name("cop_x"))
-            bad |= nan_cop
-        if bad_cols:
-            idx = np.flatnonzero(bad) + first
-            t = self.time_s
-            raise InputError(self.source, ", ".join(bad_cols),
-                             f"NaN in frames {idx[0]}–{idx[-1]} (t = {t[idx[0]]:.3f}–{t[idx[-1]]:.3f} s) "
-                             f"of the analysed interval {t[first]:.3f}–{t[last]:.3f} s "
-                             "(expected finite values; the centre of pressure may be NaN only without load)")
-
 
 @dataclass(frozen=True)
 class LimbParameters:

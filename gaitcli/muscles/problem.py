@@ -15,7 +15,9 @@ import numpy as np
 from gaitcli.errors import InputError
 
 from .hill import MuscleModel
-from .limb import LimbModel, LimbParameters, MotionInterpolant, MotionSamples, SagittalMotion
+from gaitcli.dynamics.sagittal import SagittalMotion
+
+from .limb import LimbModel, LimbParameters, MotionInterpolant, MotionSamples
 from .parameters import JointParameters, MuscleParameters
 from .passive import JointModel
 

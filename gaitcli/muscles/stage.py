@@ -17,7 +17,9 @@ from gaitcli.errors import InputError
 
 from .eid import JOINT_NAMES, OBJECTIVES, moment_shortfall, quadrature_weights, solve_eid
 from .forward import ValidationResult, validate_forward
-from .limb import LimbParameters, MotionInterpolant, SagittalMotion
+from gaitcli.dynamics.sagittal import SagittalMotion
+
+from .limb import LimbParameters, MotionInterpolant
 from .mso import solve_mso
 from .parameters import JointParameters, MuscleParameters, table_a1
 from .problem import Models, Problem, build_problem

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.io.outputs import Dataset, write_h5, write_json, write_table
-from gaitcli.recording import Markers, Recording
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.report import plots
 from gaitcli.signal.forceplates import PlateLoad
 from gaitcli.signal.stage import FilterResult
@@ -134,7 +134,7 @@ def read_filtered_trial(path: Path):
     import h5py
 
     from gaitcli.dynamics.stage import FilteredTrial
-    from gaitcli.signal.events import Events
+    from gaitcli.core.events import Events
 
     with h5py.File(path, "r") as h5:
         ds = h5["markers/filtered"]

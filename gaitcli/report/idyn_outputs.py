@@ -14,7 +14,7 @@ from gaitcli.kinematics.conventions import CONVENTION, coordinates_to_clinical, 
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS, BodyParameters
 from gaitcli.report import plots
 from gaitcli.signal.cycles import CYCLE_POINTS, normalise
-from gaitcli.signal.events import Events
+from gaitcli.core.events import Events
 
 
 def kinematics_columns(result: IdynResult) -> dict:

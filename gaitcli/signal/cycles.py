@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitcli.signal.events import Events
+from gaitcli.core.events import Events
 
 CYCLE_POINTS = 101  # 0, 1, …, 100 % of the cycle
 

@@ -31,92 +31,18 @@ Plate contacts:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.signal import find_peaks
 
+from gaitcli.core.events import KINDS, SIDES, Events
 from gaitcli.errors import InputError
 from gaitcli.signal.butterworth import finite_runs
 from gaitcli.signal.forceplates import PlateLoad
 
-__all__ = ["Events", "Contact", "EventDetection", "plate_contacts", "assign_contacts", "plate_owner",
+__all__ = ["Contact", "EventDetection", "plate_contacts", "assign_contacts", "plate_owner",
            "kinematic_events", "detect_events"]
-
-SIDES = ("r", "l")
-KINDS = ("heel_strike", "toe_off")
-SOURCES = ("plate", "kinematics")
-
-
-@dataclass(frozen=True)
-class Events:
-    """Gait events as parallel arrays, sorted by time.
-
-    ``frame`` (int, 0-based marker frame nearest to the event), ``time_s``,
-    ``side`` (``'r'``/``'l'``), ``kind`` (``'heel_strike'``/``'toe_off'``) and
-    ``source`` (``'plate'``/``'kinematics'``).
-    """
-
-    frame: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    time_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    side: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U1"))
-    kind: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U11"))
-    source: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U10"))
-
-    def __post_init__(self):
-        frame = np.asarray(self.frame, dtype=int).ravel()
-        time_s = np.asarray(self.time_s, dtype=float).ravel()
-        side = np.asarray(self.side, dtype="<U1").ravel()
-        kind = np.asarray(self.kind, dtype="<U11").ravel()
-        source = np.asarray(self.source, dtype="<U10").ravel()
-        if not len(frame) == len(time_s) == len(side) == len(kind) == len(source):
-            raise InputError(None, "events", "got arrays of different lengths (expected parallel arrays)")
-        for name, values, allowed in (("side", side, SIDES), ("kind", kind, KINDS), ("source", source, SOURCES)):
-            bad = sorted(set(values.tolist()) - set(allowed))
-            if bad:
-                raise InputError(None, f"events.{name}", f"got {bad} (expected one of {list(allowed)})")
-        order = np.lexsort((kind, side, time_s))
-        for name, values in (("frame", frame), ("time_s", time_s), ("side", side), ("kind", kind),
-                             ("source", source)):
-            object.__setattr__(self, name, values[order])
-
-    @classmethod
-    def from_times(cls, time_s, *, rate_hz: float, side: str, kind: str, source: str) -> Events:
-        """Events of one side, kind and source at ``time_s``; ``frame = round(time_s * rate_hz)``."""
-        time_s = np.asarray(time_s, dtype=float).ravel()
-        n = len(time_s)
-        return cls(np.rint(time_s * rate_hz).astype(int), time_s, np.full(n, side), np.full(n, kind),
-                   np.full(n, source))
-
-    @classmethod
-    def concatenate(cls, parts) -> Events:
-        """All events of ``parts`` in one sorted :class:`Events`."""
-        parts = list(parts)
-        if not parts:
-            return cls()
-        return cls(*(np.concatenate([getattr(p, name) for p in parts])
-                     for name in ("frame", "time_s", "side", "kind", "source")))
-
-    def __len__(self) -> int:
-        return len(self.time_s)
-
-    def select(self, mask) -> Events:
-        """The events where the boolean ``mask`` is true."""
-        mask = np.asarray(mask, dtype=bool)
-        return Events(self.frame[mask], self.time_s[mask], self.side[mask], self.kind[mask], self.source[mask])
-
-    def of(self, side: str | None = None, kind: str | None = None, source: str | None = None) -> Events:
-        """The events of one side and/or kind and/or source (None: any)."""
-        mask = np.ones(len(self), dtype=bool)
-        for values, wanted in ((self.side, side), (self.kind, kind), (self.source, source)):
-            if wanted is not None:
-                mask &= values == wanted
-        return self.select(mask)
-
-    def rows(self) -> list[dict]:
-        """One dict per event with keys ``time_s, frame, side, kind, source`` (for ``events.csv``)."""
-        return [{"time_s": float(t), "frame": int(f), "side": str(s), "kind": str(k), "source": str(src)}
-                for t, f, s, k, src in zip(self.time_s, self.frame, self.side, self.kind, self.source)]
 
 
 @dataclass(frozen=True)

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitcli.errors import InputError
-from gaitcli.recording import ForcePlate
+from gaitcli.core.recording import ForcePlate
 from gaitcli.signal.butterworth import lowpass
 
 __all__ = ["PlateLoad", "centre_of_pressure", "plate_load", "combine_loads", "resample_to_frames"]

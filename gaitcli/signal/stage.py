@@ -1,6 +1,6 @@
 """The ``filter`` stage: gap filling, zero-lag filtering, plate loads, events (3.1.4).
 
-A pure function from a :class:`~gaitcli.recording.Recording` (markers and plates
+A pure function from a :class:`~gaitcli.core.recording.Recording` (markers and plates
 in model axes, landmark names already mapped) to a :class:`FilterResult`.
 """
 
@@ -14,9 +14,10 @@ import numpy as np
 
 from gaitcli.config import FilterConfig
 from gaitcli.errors import GaitWarning
-from gaitcli.recording import Markers, Recording
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.signal.butterworth import design_frequency_hz, lowpass
-from gaitcli.signal.events import Contact, EventDetection, Events, detect_events, kinematic_events
+from gaitcli.core.events import Events
+from gaitcli.signal.events import Contact, EventDetection, detect_events, kinematic_events
 from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
 from gaitcli.signal.gaps import Gap, fill_gaps
 

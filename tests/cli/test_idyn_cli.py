@@ -41,7 +41,7 @@ from gaitcli.errors import GaitWarning
 from gaitcli.io.c3d import read_c3d
 from gaitcli.io.c3d_write import write_c3d
 from gaitcli.kinematics.model import BODIES, COORDINATES, MOMENTS, RESIDUALS
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 from .conftest import SAMPLES, WORKERS, Result, build_once, copy_sample, gait
 

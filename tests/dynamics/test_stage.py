@@ -40,9 +40,9 @@ from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import COORDINATES, JOINT_CHILD, MOMENTS
-from gaitcli.recording import Markers, Recording
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.report.filter_outputs import filtered_trial
-from gaitcli.signal.events import Events
+from gaitcli.core.events import Events
 from gaitcli.signal.stage import filter_trial
 from gaitcli.synth import simulate_trial
 

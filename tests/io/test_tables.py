@@ -15,7 +15,7 @@ from gaitcli.io.tables import (
     write_mot,
     write_trc,
 )
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 RATE_HZ, FORCE_RATE_HZ, N = 100.0, 500.0, 80
 # the CSV lab: z up, the subject walks along lab -y, so model x = -lab y, model y = lab x

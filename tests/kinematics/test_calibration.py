@@ -10,7 +10,7 @@ from gaitcli.kinematics.calibration import calibrate, static_landmarks
 from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS
 from gaitcli.kinematics.rotations import cardan_xyz_to_matrix
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 SUBJECT = dict(mass_kg=73.0, stature_m=1.792)
 

@@ -12,7 +12,7 @@ from gaitcli.kinematics.coordinates import (convert_frames, frame_ranges, missin
 from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT
 from gaitcli.kinematics.rotations import cardan_xyz_to_matrix, joint_angles_to_matrix, matrix_to_joint_angles
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 RATE_HZ = 100.0
 

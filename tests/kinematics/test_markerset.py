@@ -10,7 +10,7 @@ from gaitcli.kinematics.markerset import (LANDMARKS, MARKERS, SEGMENT_MARKERS, a
                                           landmarks_to_markers, required_landmarks, standing_template,
                                           tracking_landmarks)
 from gaitcli.kinematics.model import BODIES
-from gaitcli.recording import Markers
+from gaitcli.core.recording import Markers
 
 
 def test_table_a6_has_28_markers_each_on_one_body():

@@ -45,7 +45,8 @@ import numpy as np
 import pytest
 from scipy.interpolate import CubicSpline
 
-from gaitcli.muscles.limb import LimbParameters, SagittalMotion
+from gaitcli.dynamics.sagittal import SagittalMotion
+from gaitcli.muscles.limb import LimbParameters
 
 MASS_KG, STATURE_M = 65.0, 1.70
 PERIOD_S, SPEED_M_S, RATE_HZ = 1.1, 1.25, 100.0

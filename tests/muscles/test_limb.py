@@ -7,7 +7,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from gaitcli.errors import InputError
-from gaitcli.muscles import LimbModel, LimbParameters, MotionInterpolant, SagittalMotion
+from gaitcli.dynamics.sagittal import SagittalMotion
+from gaitcli.muscles import LimbModel, LimbParameters, MotionInterpolant
 
 G = 9.81
 

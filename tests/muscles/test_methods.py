@@ -9,7 +9,8 @@ import pytest
 from scipy.optimize import minimize
 
 from gaitcli.errors import InputError
-from gaitcli.muscles import (LimbParameters, Models, MotionInterpolant, MuscleOptions, SagittalMotion,
+from gaitcli.dynamics.sagittal import SagittalMotion
+from gaitcli.muscles import (LimbParameters, Models, MotionInterpolant, MuscleOptions,
                              SolverSettings, build_problem, ralston_cost_of_transport, run_muscles,
                              validate_forward)
 from gaitcli.muscles.eid import moment_shortfall, solve_eid

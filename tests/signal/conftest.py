@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from gaitcli.recording import ForcePlate
+from gaitcli.core.recording import ForcePlate
 
 HEEL_TO_TOE_M = 0.18  # heel marker to toe marker
 HEEL_POINT_M = 0.02  # heel load point, ahead of the heel marker

@@ -22,7 +22,8 @@ import numpy as np
 import pytest
 
 from gaitcli.errors import InputError
-from gaitcli.signal.events import (Contact, Events, assign_contacts, detect_events, kinematic_events,
+from gaitcli.core.events import Events
+from gaitcli.signal.events import (Contact, assign_contacts, detect_events, kinematic_events,
                                    plate_contacts, plate_owner)
 from gaitcli.signal.forceplates import PlateLoad, plate_load
 

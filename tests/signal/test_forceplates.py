@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gaitcli.errors import InputError
-from gaitcli.recording import ForcePlate
+from gaitcli.core.recording import ForcePlate
 from gaitcli.signal.butterworth import lowpass
 from gaitcli.signal.events import detect_events
 from gaitcli.signal.forceplates import (PlateLoad, centre_of_pressure, combine_loads, plate_load,

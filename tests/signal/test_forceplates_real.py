@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcli.recording import ForcePlate
+from gaitcli.core.recording import ForcePlate
 from gaitcli.signal.forceplates import centre_of_pressure, plate_load
 
 pytestmark = pytest.mark.shared

@@ -29,7 +29,7 @@ import pytest
 from gaitcli.config import FilterConfig
 from gaitcli.errors import GaitWarning
 from gaitcli.pipeline import load_recording
-from gaitcli.recording import Markers, Recording
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.report.filter_outputs import event_columns, grf_columns
 from gaitcli.resources import sample_trial
 from gaitcli.signal.stage import filter_trial

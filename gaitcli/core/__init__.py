@@ -1,0 +1,1 @@
+"""The core below every stage: the trial container, events, validators, the stage registry."""
