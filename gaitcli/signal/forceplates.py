@@ -28,7 +28,7 @@ Decisions (documented here once):
 * The unfiltered vertical force is kept at the analog rate
   (``raw_vertical_force_N``) for timing foot contacts: a zero-lag filter spreads
   the steep loading edge symmetrically in time, which would move a threshold
-  crossing by 1-2 frames (:mod:`gaitcli.signal.events`).
+  crossing by 1-2 frames (:mod:`gaitcli.signal.contacts`).
 """
 
 from __future__ import annotations

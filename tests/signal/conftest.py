@@ -161,6 +161,32 @@ def make_walk(*, plates=(), duration_s=4.0, rate_hz=100.0, analog_rate_hz=1000.0
     return w
 
 
+# ------------------------------------------------- shared by the event tests
+
+EVENT_RATE_HZ = 100.0
+EVENT_THRESHOLD_N = 20.0
+CENTRED_PLATE = (0.0, 0.6, 0.4)  # dx, length, width: a plate centred under the foot
+
+
+def walk_loads(walk):
+    """The walk's plates filtered and resampled to the marker rate, as the event functions take them."""
+    from gaitcli.signal.forceplates import plate_load
+
+    return [plate_load(p, cutoff_hz=6.0, threshold_N=EVENT_THRESHOLD_N, rate_hz=EVENT_RATE_HZ) for p in walk.plates]
+
+
+def true_event_times(walk, side, kind):
+    """The walk's true heel strike or toe off times (s) of one side."""
+    return (walk.heel_strikes if kind == "heel_strike" else walk.toe_offs)[side]
+
+
+def event_errors_frames(events, walk, side, kind):
+    """Frames from each found event of ``side``/``kind`` to the nearest true one."""
+    truth = true_event_times(walk, side, kind)
+    found = events.of(side, kind).time_s
+    return np.array([(t - truth[np.argmin(np.abs(truth - t))]) * EVENT_RATE_HZ for t in found])
+
+
 @pytest.fixture
 def walk_factory():
     """The synthetic walk generator :func:`make_walk`."""

@@ -1,0 +1,205 @@
+"""Foot contacts on force plates: when each plate was loaded, and by which foot.
+
+Positions are in model axes (x forward, y left, z up), metres; times in seconds
+from the first marker frame; frames are 0-based indices into the marker arrays.
+
+1. :func:`plate_contacts` finds the runs of *unfiltered* vertical force above the
+   threshold at the analog rate (the zero-lag filter would spread the loading edge
+   and move the crossing earlier by 1-2 frames), bridges dips shorter than
+   ``min_gap_s``, drops runs shorter than ``min_contact_s``, and times each edge by
+   linear interpolation of F_z across the threshold.
+2. :func:`assign_contacts` gives each contact to the foot whose heel-toe segment is
+   closest (horizontally) to the contact's COP path, using the frames with at
+   least 10 % of the contact's peak vertical force. A contact is flagged instead of
+   assigned when the COP strays from the chosen foot (90th percentile of the
+   distance above ``max_distance_m``: two feet loaded the plate; ``'ambiguous'``
+   if the other foot was not seen) or when the two feet's mean distances differ by
+   less than ``min_margin_m`` (``'ambiguous'``). It also records
+   whether the heel marker was over the plate at the onset and the toe marker at the
+   offset, so that a foot landing half off a plate does not give a late heel strike.
+3. :func:`plate_owner` tells which foot loads each plate in each frame, for
+   :func:`~gaitcli.signal.forceplates.combine_loads`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from gaitcli.core.events import SIDES
+from gaitcli.errors import InputError
+from gaitcli.signal.butterworth import finite_runs
+from gaitcli.signal.forceplates import PlateLoad
+
+__all__ = ["Contact", "plate_contacts", "assign_contacts", "plate_owner"]
+
+
+@dataclass(frozen=True)
+class Contact:
+    """One loading of one plate: frames ``first_frame..last_frame`` (inclusive) at the marker rate.
+
+    ``on_time_s``/``off_time_s``: threshold crossings of the raw vertical force (NaN
+    where the plate was already loaded at the start or still loaded at the end).
+    Filled by :func:`assign_contacts`: ``side`` (``'r'``, ``'l'`` or ``''``), the mean
+    horizontal COP-to-foot distances, ``margin_m`` (their difference), ``flag``
+    (``''``, ``'both_feet'``, ``'ambiguous'``, ``'no_markers'`` or ``'no_cop'``: the
+    filtered load never passed the threshold), and whether the
+    heel marker was over the plate at the onset and the toe marker at the offset.
+    """
+
+    plate_index: int
+    plate_name: str
+    first_frame: int
+    last_frame: int
+    on_time_s: float
+    off_time_s: float
+    side: str = ""
+    distance_r_m: float = np.nan
+    distance_l_m: float = np.nan
+    margin_m: float = np.nan
+    flag: str = ""
+    heel_inside: bool = True
+    toe_inside: bool = True
+
+
+def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s: float = 0.1,
+                   min_gap_s: float = 0.05) -> list[Contact]:
+    """Contact intervals of every plate from its unfiltered vertical force (see module docstring).
+
+    Uses ``raw_vertical_force_N`` at ``raw_rate_hz`` where present, else the (masked,
+    filtered) ``force_N[:, 2]``. Runs above ``threshold_N`` separated by less than
+    ``min_gap_s`` are joined; runs shorter than ``min_contact_s`` are dropped. Ordered
+    by plate, then time.
+    """
+    if not (np.isfinite(threshold_N) and threshold_N >= 0):
+        raise InputError(None, "threshold_N", f"got {threshold_N!r} (expected a force >= 0 N)")
+    contacts = []
+    for p, load in enumerate(loads):
+        if load.raw_vertical_force_N is not None:
+            fz, rate = np.asarray(load.raw_vertical_force_N, dtype=float), float(load.raw_rate_hz)
+        else:
+            fz, rate = load.force_N[:, 2], load.rate_hz
+        fz = np.nan_to_num(fz, nan=0.0)
+        starts, stops = finite_runs(fz > threshold_N)
+        if len(starts) > 1:
+            keep = np.concatenate([[True], (starts[1:] - stops[:-1]) >= min_gap_s * rate])
+            starts, stops = starts[keep], stops[np.concatenate([keep[1:], [True]])]
+        long_enough = (stops - starts) >= min_contact_s * rate
+        last_t = (load.n_frames - 1) / load.rate_hz
+        for a, b in zip(starts[long_enough], stops[long_enough]):
+            on = np.nan if a == 0 else (a - 1 + (threshold_N - fz[a - 1]) / (fz[a] - fz[a - 1])) / rate
+            off = np.nan if b == len(fz) else (b - 1 + (fz[b - 1] - threshold_N) / (fz[b - 1] - fz[b])) / rate
+            on = np.nan if on > last_t else on
+            off = np.nan if off > last_t else off
+            first = 0 if np.isnan(on) else int(np.ceil(on * load.rate_hz - 1e-9))
+            last = load.n_frames - 1 if np.isnan(off) else int(np.floor(off * load.rate_hz + 1e-9))
+            if a / rate > last_t or last < first:
+                continue
+            contacts.append(Contact(p, load.name, first, min(last, load.n_frames - 1), float(on), float(off)))
+    return contacts
+
+
+def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe_r, heel_l, toe_l, *,
+                    max_distance_m: float = 0.1, min_margin_m: float = 0.05,
+                    edge_tolerance_m: float = 0.02) -> list[Contact]:
+    """Give each contact to the foot whose heel-toe segment is closest to its COP path (see module docstring).
+
+    Foot markers are (frames, 3) in model axes, NaN allowed. Returns new
+    :class:`Contact` objects with ``side``, distances, ``margin_m``, ``flag``,
+    ``heel_inside`` and ``toe_inside`` filled; a flagged contact has ``side = ''``.
+    ``edge_tolerance_m`` widens the plate outline for the heel/toe check (markers sit
+    a little behind the heel and above the toes); where the marker is not seen, or
+    the plate has no outline, the plate is trusted.
+    """
+    feet = {"r": (np.asarray(heel_r, float), np.asarray(toe_r, float)),
+            "l": (np.asarray(heel_l, float), np.asarray(toe_l, float))}
+    out = []
+    for c in contacts:
+        load = loads[c.plate_index]
+        frames = np.arange(c.first_frame, c.last_frame + 1)
+        fz = load.force_N[frames, 2]
+        use = load.loaded[frames] & (fz >= 0.1 * fz.max(initial=0.0))
+        cop = load.cop_m[frames[use], :2]
+        distances = {}
+        for side, (heel, toe) in feet.items():
+            d = _segment_distance(cop, heel[frames[use], :2], toe[frames[use], :2])
+            distances[side] = d[np.isfinite(d)]
+        mean = {s: float(d.mean()) if d.size else np.nan for s, d in distances.items()}
+        seen = [s for s in SIDES if np.isfinite(mean[s])]
+        side, flag, margin = "", "", np.nan
+        if not use.any():
+            flag = "no_cop"
+        elif not seen:
+            flag = "no_markers"
+        else:
+            best = min(seen, key=lambda s: mean[s])
+            if len(seen) == 2:
+                margin = abs(mean["r"] - mean["l"])
+            strays = np.median(distances[best]) > max_distance_m
+            other = [s for s in seen if s != best]
+            # a COP that strays from the best foot points at two feet only if the other foot comes near it too
+            other_near = bool(other) and np.percentile(distances[other[0]], 10) <= max_distance_m
+            if strays and other_near:
+                flag = "both_feet"
+            elif strays or (len(seen) == 2 and margin < min_margin_m):
+                flag = "ambiguous"
+            else:
+                side = best
+        heel_inside = toe_inside = True
+        if side and load.corners_m is not None:
+            heel, toe = feet[side]
+            heel_inside = _inside(heel[c.first_frame, :2], load.corners_m, edge_tolerance_m)
+            toe_inside = _inside(toe[c.last_frame, :2], load.corners_m, edge_tolerance_m)
+        out.append(replace(c, side=side, distance_r_m=mean["r"], distance_l_m=mean["l"], margin_m=margin,
+                           flag=flag, heel_inside=heel_inside, toe_inside=toe_inside))
+    return out
+
+
+def plate_owner(contacts: list[Contact], loads: list[PlateLoad]) -> np.ndarray:
+    """Which foot (``'r'``, ``'l'``, ``''``) loads each plate in each frame, shape (n_plates, n_frames).
+
+    Each assigned contact owns its frames, extended over the adjacent frames in which
+    the (filtered) plate is still loaded, up to the neighbouring contact.
+    """
+    n = loads[0].n_frames if loads else 0
+    owner = np.full((len(loads), n), "", dtype="<U1")
+    for p, load in enumerate(loads):
+        mine = sorted((c for c in contacts if c.plate_index == p), key=lambda c: c.first_frame)
+        starts, stops = finite_runs(load.loaded)
+        for i, c in enumerate(mine):
+            if not c.side:
+                continue
+            lo, hi = c.first_frame, c.last_frame + 1
+            run = np.flatnonzero((starts <= c.last_frame) & (stops > c.first_frame))
+            if run.size:
+                lo, hi = min(lo, starts[run[0]]), max(hi, stops[run[-1]])
+            if i > 0:
+                lo = max(lo, mine[i - 1].last_frame + 1)
+            if i + 1 < len(mine):
+                hi = min(hi, mine[i + 1].first_frame)
+            owner[p, lo:hi] = c.side
+    return owner
+
+
+def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance of each 2-D point to the segment from ``a`` to ``b`` (row by row)."""
+    ab = b - a
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = np.clip(np.einsum("ij,ij->i", points - a, ab) / np.einsum("ij,ij->i", ab, ab), 0.0, 1.0)
+    return np.linalg.norm(points - (a + u[:, None] * ab), axis=1)
+
+
+def _inside(point: np.ndarray, corners: np.ndarray, tolerance_m: float) -> bool:
+    """Whether a 2-D point lies inside the convex outline ``corners`` (4, 2+) widened by ``tolerance_m``.
+
+    A point with NaN coordinates counts as inside (the plate is trusted).
+    """
+    if not np.all(np.isfinite(point)):
+        return True
+    c = np.asarray(corners, dtype=float)[:, :2]
+    edges = np.roll(c, -1, axis=0) - c
+    area2 = np.sum(c[:, 0] * np.roll(c[:, 1], -1) - np.roll(c[:, 0], -1) * c[:, 1])
+    cross = edges[:, 0] * (point[1] - c[:, 1]) - edges[:, 1] * (point[0] - c[:, 0])
+    signed = np.sign(area2) * cross / np.linalg.norm(edges, axis=1)
+    return bool(np.all(signed >= -tolerance_m))

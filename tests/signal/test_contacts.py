@@ -1,0 +1,67 @@
+"""Plate contacts: timing of the raw vertical force's threshold crossings, and the foot that made each.
+
+Tolerances: crossings are interpolated linearly, so a linear ramp gives them exactly (1e-9 s).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitcli.signal.contacts import Contact, assign_contacts, plate_contacts, plate_owner
+from gaitcli.signal.forceplates import PlateLoad
+from tests.signal.conftest import CENTRED_PLATE, EVENT_THRESHOLD_N, walk_loads
+
+
+def _ramp_load(fz, rate_hz=1000.0, frames=None):
+    n = frames or len(fz) // 10
+    force = np.zeros((n, 3))
+    return PlateLoad("FP1", force, np.full((n, 3), np.nan), np.full(n, np.nan), np.zeros(n, bool), 100.0,
+                     threshold_N=EVENT_THRESHOLD_N, raw_vertical_force_N=fz, raw_rate_hz=rate_hz)
+
+
+def test_contact_timing_interpolated_and_short_runs_handled():
+    t = np.arange(3000) / 1000.0
+    fz = np.clip(1000.0 * (t - 0.5), 0, 400) * (t < 2.0)  # ramp 1000 N/s from 0.5 s, drop at 2 s
+    fz = fz.copy()
+    fz[1500:1510] = 0.0  # a 10 ms dip: bridged
+    fz[2500:2520] = 100.0  # a 20 ms spike: dropped
+    (contact,) = plate_contacts([_ramp_load(fz)], threshold_N=EVENT_THRESHOLD_N)
+    assert contact.on_time_s == pytest.approx(0.52, abs=1e-9)  # 0.5 s + 20 N / (1000 N/s)
+    assert contact.off_time_s == pytest.approx(1.999 + 380 / 400 * 0.001, abs=1e-9)
+    assert (contact.first_frame, contact.last_frame) == (52, 199)  # frames at or after the onset
+    # loaded from the start: no onset time
+    (edge,) = plate_contacts([_ramp_load(np.full(1000, 500.0))], threshold_N=EVENT_THRESHOLD_N)
+    assert np.isnan(edge.on_time_s) and np.isnan(edge.off_time_s)
+    assert (edge.first_frame, edge.last_frame) == (0, 99)
+    # a raw contact whose filtered load never passed the threshold has no COP to assign by
+    feet = np.zeros((300, 3))
+    (weak,) = assign_contacts([contact], [_ramp_load(fz)], feet, feet, feet, feet)
+    assert weak.flag == "no_cop" and weak.side == ""
+
+
+def test_assignment_ambiguous_and_missing_markers(walk_factory):
+    walk = walk_factory(plates=[("r", 1) + CENTRED_PLATE])
+    loads = walk_loads(walk)
+    contacts = plate_contacts(loads, threshold_N=EVENT_THRESHOLD_N)
+    heel_r, toe_r = walk.feet["r"]
+    nan = np.full_like(heel_r, np.nan)
+    (c,) = assign_contacts(contacts, loads, heel_r, toe_r, heel_r + [0, 0.02, 0], toe_r + [0, 0.02, 0])
+    assert c.flag == "ambiguous" and c.side == ""
+    (c,) = assign_contacts(contacts, loads, nan, nan, nan, nan)
+    assert c.flag == "no_markers" and c.side == ""
+    (c,) = assign_contacts(contacts, loads, heel_r, toe_r, nan, nan)  # left foot unseen: right foot fits
+    assert c.side == "r" and c.flag == "" and np.isnan(c.margin_m)
+
+
+def test_owner_covers_the_filtered_loaded_frames(walk_factory):
+    walk = walk_factory(plates=[("r", 1) + CENTRED_PLATE, ("l", 1) + CENTRED_PLATE])
+    loads = walk_loads(walk)
+    contacts = assign_contacts(plate_contacts(loads, threshold_N=EVENT_THRESHOLD_N), loads,
+                               *walk.feet["r"], *walk.feet["l"])
+    owner = plate_owner(contacts, loads)
+    for p, side in enumerate("rl"):
+        np.testing.assert_array_equal(owner[p] == side, loads[p].loaded)
+        assert np.all(owner[p][~loads[p].loaded] == "")
+    unassigned = [Contact(0, "FP1", 140, 206, 1.4, 2.06)]
+    assert np.all(plate_owner(unassigned, loads[:1]) == "")
