@@ -157,7 +157,6 @@ def _leftward(lateral, medial, side: str) -> np.ndarray:
 
 
 _GLOBAL_Y = np.array([0.0, 1.0, 0.0])
-_GLOBAL_Z = np.array([0.0, 0.0, 1.0])
 
 
 def thigh_frame(hjc, kjc, lef=None, mef=None, *, side: str) -> np.ndarray:

@@ -26,24 +26,6 @@ from gaitcli.core.recording import Markers
 
 SIDES = ("r", "l")
 
-#: Table A.6: designation (without side suffix) -> anatomical description
-MARKER_DESIGNATIONS = {
-    "VM": "metatarsal lateralis (5th metatarsal head)",
-    "FM": "metatarsal medialis (1st metatarsal head)",
-    "LM": "malleolus lateralis",
-    "MM": "malleolus medialis",
-    "CA": "calcaneus posterior",
-    "TT": "tuberositas tibiae",
-    "LEF": "epicondylus lateralis femoris",
-    "MEF": "epicondylus medialis femoris",
-    "MRF": "musculus rectus femoris",
-    "GT": "trochanter major",
-    "ASIS": "spina iliaca anterior superior",
-    "PSIS": "spina iliaca posterior superior",
-    "AC": "acromioclavicular joint",
-    "C7": "vertebra prominens (7th cervical)",
-    "ST": "manubrium sterni",
-}
 BILATERAL = ("VM", "FM", "LM", "MM", "CA", "TT", "LEF", "MEF", "MRF", "GT", "ASIS", "PSIS", "AC")
 MIDLINE = ("C7", "ST")
 
