@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.validate import one_of
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
 from gaitcli.kinematics.anthropometry import (Disturbance, SegmentInertia, apply_disturbances, normalise_sex,
@@ -204,9 +205,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
                           segment_length_m=lengths, notes=notes)
 
     extra = dict(extra_tracking_markers or {})
-    unknown = [b for b in extra if b not in BODIES]
-    if unknown:
-        raise InputError(source, "extra_tracking_markers", f"unknown bodies {unknown} (expected {', '.join(BODIES)})")
+    for b in extra:
+        one_of(b, BODIES, where="extra_tracking_markers", path=source)
     landmarks_in_body: dict[str, dict[str, np.ndarray]] = {}
     tracking: dict[str, tuple[str, ...]] = {}
     locked = []

@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from gaitcli.core.validate import one_of
 from gaitcli.kinematics.calibration import StaticCalibration
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT
 from gaitcli.kinematics.pose import fit_rigid_pose
@@ -91,8 +92,7 @@ def track_segments(markers: Markers, calibration: StaticCalibration) -> SegmentP
 
 def convert_frames(poses: SegmentPoses, calibration: StaticCalibration, frames: str) -> SegmentPoses:
     """Express ``poses`` in ``"reference"`` or ``"anatomical"`` frames (same origins; 3.3)."""
-    if frames not in ("reference", "anatomical"):
-        raise ValueError(f"frames must be 'reference' or 'anatomical', got {frames!r}")
+    one_of(frames, ("reference", "anatomical"), where="frames")
     if frames == poses.frames:
         return poses
     C = calibration.reference_to_anatomical  # R_anatomical = R_reference @ C

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.anthropometry import DE_LEVA, normalise_sex
 
@@ -70,6 +71,7 @@ def pelvis_frame(asis_r, asis_l, psis_r, psis_l) -> tuple[np.ndarray, np.ndarray
 
 def hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str = "bell1990") -> tuple[np.ndarray, np.ndarray]:
     """Right and left hip joint centres (m) by the Bell regression, ``method`` ``"bell1990"|"bell1989"``."""
+    one_of(method, ("bell1990", "bell1989"), where="hip_method")
     origin, R = pelvis_frame(asis_r, asis_l, psis_r, psis_l)
     pw = np.linalg.norm(np.asarray(asis_l, dtype=float) - np.asarray(asis_r, dtype=float), axis=-1)[..., None]
     x, y, z = R[..., 0], R[..., 1], R[..., 2]
@@ -77,12 +79,10 @@ def hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str = "bell1990
         c = BELL_1990
         base = origin - pw * (c["posterior"] * x + c["inferior"] * z)
         return base - pw * c["lateral"] * y, base + pw * c["lateral"] * y
-    if method == "bell1989":
-        c = BELL_1989
-        shift = -pw * (c["posterior"] * x + c["inferior"] * z)
-        return (np.asarray(asis_r, dtype=float) + shift + pw * c["medial"] * y,
-                np.asarray(asis_l, dtype=float) + shift - pw * c["medial"] * y)
-    raise InputError(None, "hip_method", f"got {method!r} (expected 'bell1990' or 'bell1989')")
+    c = BELL_1989
+    shift = -pw * (c["posterior"] * x + c["inferior"] * z)
+    return (np.asarray(asis_r, dtype=float) + shift + pw * c["medial"] * y,
+            np.asarray(asis_l, dtype=float) + shift - pw * c["medial"] * y)
 
 
 def knee_joint_centre(lef, mef) -> np.ndarray:
@@ -98,15 +98,14 @@ def ankle_distal_ratio(sex: str = "male") -> float:
 
 def ankle_joint_centre(lm, mm, kjc=None, *, method: str = "de_leva", sex: str = "male") -> np.ndarray:
     """Ankle joint centre from the malleoli; ``"de_leva"`` needs the knee centre ``kjc``."""
+    one_of(method, ("de_leva", "midpoint"), where="ankle_method")
     mid = (np.asarray(lm, dtype=float) + np.asarray(mm, dtype=float)) / 2
     if method == "midpoint":
         return mid
-    if method == "de_leva":
-        if kjc is None:
-            raise ValueError("the de Leva ankle centre needs the knee joint centre")
-        kjc = np.asarray(kjc, dtype=float)
-        return kjc + ankle_distal_ratio(sex) * (mid - kjc)
-    raise InputError(None, "ankle_method", f"got {method!r} (expected 'de_leva' or 'midpoint')")
+    if kjc is None:
+        raise ValueError("the de Leva ankle centre needs the knee joint centre")
+    kjc = np.asarray(kjc, dtype=float)
+    return kjc + ankle_distal_ratio(sex) * (mid - kjc)
 
 
 def present(landmarks: Mapping[str, np.ndarray], name: str) -> bool:

@@ -14,12 +14,12 @@ VM, FM; HAT C7, ST, ACr, ACl. 4 + 2×(4 + 3 + 3) + 4 = 28 markers.
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
 from gaitcli.core.recording import Markers
@@ -93,11 +93,6 @@ def required_landmarks(*, virtual_joint_centres: tuple[str, ...] | frozenset = (
     return tuple(needed)
 
 
-def _did_you_mean(name: str, choices) -> str:
-    close = difflib.get_close_matches(name, list(choices), n=1)
-    return f" Did you mean {close[0]!r}?" if close else ""
-
-
 def apply_marker_map(markers: Markers, marker_map: Mapping[str, str], *,
                      source: str | Path | None = None) -> Markers:
     """Rename lab marker labels to model landmark names.
@@ -114,10 +109,7 @@ def apply_marker_map(markers: Markers, marker_map: Mapping[str, str], *,
                          f"labels not in the marker file: {', '.join(missing)} "
                          f"(the file has: {', '.join(markers.labels)})")
     for lab, landmark in marker_map.items():
-        if landmark not in LANDMARKS:
-            raise InputError(source, f"marker_map.{lab}",
-                             f"unknown model landmark {landmark!r} (expected one of "
-                             f"{', '.join(LANDMARKS)}).{_did_you_mean(landmark, LANDMARKS)}")
+        one_of(landmark, LANDMARKS, where=f"marker_map.{lab}", path=source)
     new_labels = tuple(marker_map.get(lab, lab) for lab in markers.labels)
     duplicates = sorted({lab for lab in new_labels if new_labels.count(lab) > 1})
     if duplicates:

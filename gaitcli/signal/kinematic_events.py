@@ -11,6 +11,7 @@ import numpy as np
 from scipy.signal import find_peaks
 
 from gaitcli.core.events import SIDES, Events
+from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.signal.butterworth import finite_runs
 
@@ -40,8 +41,7 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
     well before the toes leave the ground (on walking2.c3d the same rule put toe off
     80 ms before the plate's, while the Zeni toe off was 15 ms after it).
     """
-    if side not in SIDES:
-        raise InputError(None, "side", f"got {side!r} (expected one of {list(SIDES)})")
+    one_of(side, SIDES, where="side")
     heel, toe, pelvis = (np.asarray(a, dtype=float) for a in (heel, toe, pelvis_centre))
     n = pelvis.shape[0]
     if heel.shape != (n, 3) or toe.shape != (n, 3) or pelvis.shape != (n, 3):

@@ -101,6 +101,11 @@ def test_missing_required_marker_names_it():
         calibrate(_static(PSISl=None), **SUBJECT)
 
 
+def test_extra_tracking_markers_of_an_unknown_body_are_named():
+    with pytest.raises(InputError, match=r"static\.c3d: extra_tracking_markers: got 'thigh' \(expected one of pelvis"):
+        calibrate(_static(), **SUBJECT, extra_tracking_markers={"thigh": ("GTr",)}, source="static.c3d")
+
+
 def test_lower_limb_marker_set_locks_the_hat():
     static = _static(C7=None, ST=None, ACr=None)
     with pytest.warns(GaitWarning, match="hat.*locked to pelvis"):

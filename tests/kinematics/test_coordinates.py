@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcli.errors import GaitWarning
+from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.coordinates import (convert_frames, frame_ranges, missing_frame_messages,
                                             poses_to_coordinates, track_segments, unwrap_angles)
@@ -140,6 +140,8 @@ def test_anatomical_frames_convert_both_ways(cal):
     np.testing.assert_allclose(anat.rotation, poses.rotation @ C, atol=1e-15)
     back = convert_frames(anat, cal, "reference")
     np.testing.assert_allclose(back.rotation, poses.rotation, atol=1e-14)
+    with pytest.raises(InputError, match=r"frames: got 'anatomic' .*did you mean 'anatomical'\?"):
+        convert_frames(poses, cal, "anatomic")
     # relative rotation in anatomical frames = C_p^T S_rel C_d (3.17 with both frames)
     qa = poses_to_coordinates(anat, unwrap=False)
     knee = C[2].T @ joint_angles_to_matrix(q[:, 12:15]) @ C[3]

@@ -75,6 +75,15 @@ def test_virtual_centres_replace_estimates_and_missing_markers_are_named():
         jcm.joint_centres(t, source="static.c3d")
 
 
+def test_unknown_methods_are_input_errors():
+    t = standing_template(1.75)
+    with pytest.raises(InputError, match=r"hip_method: got 'bell90' \(expected one of bell1990, bell1989; "
+                                         r"did you mean 'bell1990'\?\)"):
+        jcm.joint_centres(t, hip_method="bell90")
+    with pytest.raises(InputError, match=r"ankle_method: got 'midpt' .*did you mean 'midpoint'\?"):
+        jcm.joint_centres(t, ankle_method="midpt")
+
+
 def test_anatomical_frames_are_rotations_and_identity_in_the_template():
     t = standing_template(1.8, with_virtual_joint_centres=True)
     frames = {
