@@ -7,6 +7,7 @@ written, ``converged: false``); 1 an internal error. ``--debug`` shows traceback
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import traceback
@@ -16,7 +17,12 @@ from pathlib import Path
 import click
 
 from gaitcli import __version__
-from gaitcli.errors import GaitError, GaitWarning
+from gaitcli.config import configure
+from gaitcli.core.validate import parameter_spec
+from gaitcli.dynamics.stage import IdynConfig
+from gaitcli.errors import GaitError, GaitWarning, NotConvergedError
+from gaitcli.muscles.stage import MusclesConfig
+from gaitcli.signal.stage import FilterConfig
 
 
 class Console:
@@ -31,10 +37,14 @@ class Console:
         if not self.quiet:
             click.echo(message, err=True)
 
-    def summary(self, stage: str, summary: dict, out_dir: Path) -> None:
-        self.summaries[stage] = summary
-        if not self.quiet and not self.as_json:
-            click.echo(f"{stage}: wrote {out_dir}", err=True)
+    def outcomes(self, outcomes) -> None:
+        """Say what each stage wrote; keep the summaries for ``--json``."""
+        for outcome in outcomes:
+            if outcome.status == "reused":
+                continue
+            self.summaries[outcome.stage] = outcome.summary
+            if not self.quiet and not self.as_json:
+                click.echo(f"{outcome.stage}: wrote {outcome.folder}", err=True)
 
     def print_json(self, stage: str | None = None) -> None:
         """With ``--json``: one JSON document on stdout — the stage's summary, or all of them for ``run``."""
@@ -42,11 +52,19 @@ class Console:
         if self.as_json and data:  # nothing when the stage failed before writing
             click.echo(json.dumps(data, indent=2, default=str))
 
-    def progress(self, description: str, total: int | None = None):
-        """A rich progress bar on stderr (a no-op bar when quiet)."""
-        from gaitcli.report.progress import progress_bar
+    def run(self, trial, names, cfg, *, out, plots: bool, show: str | None = None) -> None:
+        """Run the stages through the pipeline with a progress display; unconverged → exit 3."""
+        from gaitcli.pipeline import run_stages
+        from gaitcli.report.progress import ProgressDisplay
 
-        return progress_bar(description, total=total, enabled=not self.quiet)
+        with ProgressDisplay(enabled=not self.quiet) as progress:
+            outcomes = run_stages(trial, names, cfg, out=out, progress=progress, plots=plots)
+        self.outcomes(outcomes)
+        self.print_json(show)
+        failed = [o for o in outcomes if not o.converged]
+        if failed:
+            o = failed[0]
+            raise NotConvergedError(f"{o.message}; results written to {o.folder} with converged: false")
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):
@@ -71,79 +89,67 @@ def _trial_argument(func):
     return click.argument("trial", required=False, type=click.Path(path_type=Path))(func)
 
 
-def _out_option(func):
-    return click.option("-o", "--out", "out", type=click.Path(path_type=Path),
-                        help="Output root (default TRIAL/gait_out; ./gait_out for the bundled sample).")(func)
-
-
-def _pipeline_option(func):
-    return click.option("--pipeline", "pipeline", type=click.Path(path_type=Path),
+def _trial_options(func):
+    """TRIAL, -o/--out, --pipeline and --no-plots: the options every trial command takes."""
+    func = click.option("--no-plots", "no_plots", is_flag=True, help="Skip the figures (plots/).")(func)
+    func = click.option("--pipeline", "pipeline", type=click.Path(path_type=Path),
                         help="Pipeline YAML file, or a bundled pipeline by name (standard, muscles_eid); "
                              "default: standard.")(func)
+    func = click.option("-o", "--out", "out", type=click.Path(path_type=Path),
+                        help="Output root (default TRIAL/gait_out; ./gait_out for the bundled sample).")(func)
+    return _trial_argument(func)
+
+
+def _config_option(config, name: str, *flags: str, flag: bool = False):
+    """A click option for the stage parameter ``config.name``: type, choices, range and help from its declaration."""
+    f = next(f for f in dataclasses.fields(config) if f.name == name)
+    spec = parameter_spec(f)
+    if flag:
+        return click.option(*flags, name, is_flag=True, default=None, help=spec["help"])
+    if spec["choices"] is not None:
+        kind = click.Choice(spec["choices"])
+    elif isinstance(f.default, int):
+        kind = click.IntRange(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
+    else:
+        kind = click.FloatRange(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
+    return click.option(*flags, name, type=kind, default=None, help=spec["help"])
 
 
 @gait.command("filter")
-@_trial_argument
-@_out_option
-@_pipeline_option
-@click.option("--cutoff", "cutoff_hz", type=float, help="Net cut-off of the zero-lag filter, Hz (default 6).")
+@_trial_options
+@_config_option(FilterConfig, "cutoff_hz", "--cutoff")
 @click.pass_obj
-def filter_command(console: Console, trial, out, pipeline, cutoff_hz):
+def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz):
     """Fill gaps, zero-lag filter markers and plates, find gait events."""
-    from gaitcli import pipeline as pl
-
-    cfg = pl.configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz})
-    run = pl.Run(trial, out, cfg, console)
-    try:
-        run.filter()
-    finally:
-        console.print_json("filter")
+    cfg = configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz})
+    console.run(trial, ["filter"], cfg, out=out, plots=not no_plots, show="filter")
 
 
 @gait.command("idyn")
-@_trial_argument
-@_out_option
-@_pipeline_option
-@click.option("--frames", type=click.Choice(["reference", "anatomical"]), default=None,
-              help="Frames the joint moments are expressed in (default: reference).")
+@_trial_options
+@_config_option(IdynConfig, "frames", "--frames")
 @click.pass_obj
-def idyn_command(console: Console, trial, out, pipeline, frames):
+def idyn_command(console: Console, trial, out, pipeline, no_plots, frames):
     """Segment poses, 27 coordinates, 21 joint moments and the pelvis residuals."""
-    from gaitcli import pipeline as pl
-
-    cfg = pl.configure(pipeline, idyn={"frames": frames})
-    try:
-        pl.Run(trial, out, cfg, console).idyn()
-    finally:
-        console.print_json("idyn")
+    cfg = configure(pipeline, idyn={"frames": frames})
+    console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
 
 
 @gait.command("muscles")
-@_trial_argument
-@_out_option
-@_pipeline_option
-@click.option("--method", type=click.Choice(["so", "mso", "eid"]), default=None,
-              help="Static optimization, modified SO or extended inverse dynamics (default: eid).")
-@click.option("--side", type=click.Choice(["r", "l"]), default=None, help="Which leg (default: r).")
-@click.option("--nodes", type=int, default=None, help="EID nodes over the interval (default 50).")
-@click.option("--phase", type=click.Choice(["cycle", "swing"]), default=None,
-              help="A stride recorded on the plates (periodic) or a swing phase (default: cycle).")
-@click.option("--validate", is_flag=True, default=None,
-              help="Integrate the forward model with the EID excitations and compare (4.5.4).")
-@click.option("--objective", type=click.Choice(["metabolic", "crowninshield_brand"]), default=None,
-              help="EID cost: total metabolic energy (4.29) or Crowninshield–Brand Σ(F/Fmax)³ (4.3) "
-                   "(default: metabolic).")
+@_trial_options
+@_config_option(MusclesConfig, "method", "--method")
+@_config_option(MusclesConfig, "side", "--side")
+@_config_option(MusclesConfig, "nodes", "--nodes")
+@_config_option(MusclesConfig, "phase", "--phase")
+@_config_option(MusclesConfig, "validate", "--validate", flag=True)
+@_config_option(MusclesConfig, "objective", "--objective")
 @click.pass_obj
-def muscles_command(console: Console, trial, out, pipeline, method, side, nodes, phase, validate, objective):
+def muscles_command(console: Console, trial, out, pipeline, no_plots, method, side, nodes, phase, validate,
+                    objective):
     """Muscle forces, activations, excitations and metabolic cost of 8 leg muscles (SO | MSO | EID)."""
-    from gaitcli import pipeline as pl
-
-    cfg = pl.configure(pipeline, muscles={"method": method, "side": side, "nodes": nodes, "phase": phase,
-                                          "validate": validate, "objective": objective})
-    try:
-        pl.Run(trial, out, cfg, console).muscles()
-    finally:
-        console.print_json("muscles")
+    cfg = configure(pipeline, muscles={"method": method, "side": side, "nodes": nodes, "phase": phase,
+                                       "validate": validate, "objective": objective})
+    console.run(trial, ["muscles"], cfg, out=out, plots=not no_plots, show="muscles")
 
 
 @gait.command("synth")
@@ -183,20 +189,12 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
 
 
 @gait.command("run")
-@_trial_argument
-@_out_option
-@_pipeline_option
+@_trial_options
 @click.pass_obj
-def run_command(console: Console, trial, out, pipeline):
+def run_command(console: Console, trial, out, pipeline, no_plots):
     """Run every stage of the pipeline on a trial, in order."""
-    from gaitcli import pipeline as pl
-
-    cfg = pl.configure(pipeline)
-    run = pl.Run(trial, out, cfg, console)
-    try:
-        run.all()
-    finally:
-        console.print_json()
+    cfg = configure(pipeline)
+    console.run(trial, cfg.stages, cfg, out=out, plots=not no_plots)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -212,6 +210,11 @@ def main(argv: list[str] | None = None) -> int:
             gait.main(args=argv, prog_name="gait", standalone_mode=False)
         return 0
     except click.exceptions.Exit as exc:
+        return exc.exit_code
+    except click.UsageError as exc:  # one line, as for bad input
+        command = f"gait {exc.ctx.command_path.split(' ', 1)[1]}" if exc.ctx and " " in exc.ctx.command_path \
+            else "gait"
+        click.echo(f"gait: error: {exc.format_message()} (see '{command} --help')", err=True)
         return exc.exit_code
     except click.ClickException as exc:
         exc.show()

@@ -1,125 +1,66 @@
-"""Pipeline YAML → validated, frozen dataclasses with defaults.
+"""Pipeline YAML → validated, frozen configuration assembled from the stage registry.
 
-Every stage parameter has a default; unknown keys are errors (with a "did you
-mean"); CLI options override the file via :func:`with_overrides`.
+A pipeline file has ``stages:`` (which stages ``gait run`` performs) and one
+section per registered stage with that stage's parameters (its config
+dataclass, defined beside the stage). Every parameter has a default; unknown
+keys are errors (with a "did you mean"); CLI options override the file via
+:func:`with_overrides`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import difflib
-import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from gaitcli import stages as _builtin_stages  # noqa: F401  (registers the built-in stages)
+from gaitcli.core.registry import stage, stage_names
+from gaitcli.core.validate import known_keys, replace_checked
 from gaitcli.errors import InputError
+from gaitcli.io.yamlfile import read_yaml
 
-STAGES = ("filter", "idyn", "muscles")
-
-
-@dataclass(frozen=True)
-class FilterConfig:
-    """Parameters of ``gait filter`` (3.1.4)."""
-
-    cutoff_hz: float = 6.0  # net cut-off of the zero-lag cascade for markers (0: no filtering)
-    force_cutoff_hz: float = 6.0  # the same for force-plate signals, before COP is formed
-    order: int = 2  # Butterworth order of one pass
-    max_gap_frames: int = 10  # longer marker gaps stay NaN
-    force_threshold_N: float = 20.0  # COP/free moment only above this vertical load
+#: what ``gait run`` does without a pipeline file (``pipelines/standard.yaml``)
+DEFAULT_STAGES = ("filter", "idyn")
 
 
-@dataclass(frozen=True)
-class IdynConfig:
-    """Parameters of ``gait idyn`` (3.2–3.4)."""
-
-    frames: str = "reference"  # 'reference' or 'anatomical': frames the joint moments are expressed in
-    gravity_m_s2: float = 9.81
-
-
-@dataclass(frozen=True)
-class MusclesConfig:
-    """Parameters of ``gait muscles`` (ch. 4)."""
-
-    method: str = "eid"  # so | mso | eid
-    side: str = "r"  # r | l
-    nodes: int = 50
-    validate: bool = False
-    objective: str = "metabolic"  # EID objective: metabolic | crowninshield_brand
-    phase: str = "cycle"  # cycle: a full stride recorded on the plates (periodic); swing: one swing phase
+def _default_sections() -> dict[str, Any]:
+    return {name: stage(name).config() for name in stage_names()}
 
 
 @dataclass(frozen=True)
 class PipelineConfig:
-    """A whole pipeline: which stages ``gait run`` performs and each stage's parameters."""
+    """A whole pipeline: which stages ``gait run`` performs and each registered stage's parameters.
 
-    stages: tuple[str, ...] = ("filter", "idyn")
-    filter: FilterConfig = field(default_factory=FilterConfig)
-    idyn: IdynConfig = field(default_factory=IdynConfig)
-    muscles: MusclesConfig = field(default_factory=MusclesConfig)
+    ``cfg.filter``, ``cfg.idyn``, … are the sections by stage name.
+    """
 
+    stages: tuple[str, ...] = DEFAULT_STAGES
+    sections: Mapping[str, Any] = field(default_factory=_default_sections)
 
-CHOICES = {
-    ("idyn", "frames"): ("reference", "anatomical"),
-    ("muscles", "method"): ("so", "mso", "eid"),
-    ("muscles", "side"): ("r", "l"),
-    ("muscles", "objective"): ("metabolic", "crowninshield_brand"),
-    ("muscles", "phase"): ("cycle", "swing"),
-}
-NON_NEGATIVE = {("filter", "cutoff_hz"), ("filter", "force_cutoff_hz")}  # 0 turns the filter off
-POSITIVE = {("filter", "order"),
-            ("filter", "force_threshold_N"), ("idyn", "gravity_m_s2"), ("muscles", "nodes")}
+    def __getattr__(self, name: str):
+        sections = self.__dict__.get("sections", {})
+        if name in sections:
+            return sections[name]
+        raise AttributeError(name)
 
+    def section(self, name: str):
+        return self.sections[name]
 
-def _unknown(path, where: str, key: str, allowed) -> InputError:
-    hint = difflib.get_close_matches(key, list(allowed), n=1)
-    more = f" (did you mean '{hint[0]}'?)" if hint else ""
-    return InputError(path, f"{where}{key}", f"unknown key{more}; allowed keys are {', '.join(allowed)}")
+    def replace_section(self, name: str, value) -> PipelineConfig:
+        return dataclasses.replace(self, sections={**self.sections, name: value})
 
 
-def _coerce(path, section: str, name: str, default: Any, value: Any) -> Any:
-    where = f"{section}.{name}"
-    if isinstance(default, bool):
-        if not isinstance(value, bool):
-            raise InputError(path, where, f"got {value!r} (expected true or false)")
-        return value
-    if isinstance(default, int):
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise InputError(path, where, f"got {value!r} (expected an integer)")
-    elif isinstance(default, float):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise InputError(path, where, f"got {value!r} (expected a finite number)")
-        value = float(value)
-    elif isinstance(default, str):
-        if not isinstance(value, str):
-            raise InputError(path, where, f"got {value!r} (expected text)")
-        choices = CHOICES.get((section, name))
-        if choices and value not in choices:
-            raise InputError(path, where, f"got {value!r} (expected one of {', '.join(choices)})")
-    if (section, name) in POSITIVE and value <= 0:
-        raise InputError(path, where, f"got {value!r} (expected a value > 0)")
-    if (section, name) in NON_NEGATIVE and value < 0:
-        raise InputError(path, where, f"got {value!r} (expected a cut-off ≥ 0 Hz; 0 turns the filter off)")
-    if name == "max_gap_frames" and value < 0:
-        raise InputError(path, where, f"got {value!r} (expected an integer ≥ 0)")
-    return value
-
-
-def _section(path, name: str, cls, data: Any):
+def _section(path, name: str, data: Any):
+    defaults = stage(name).config()
     if data is None:
-        return cls()
+        return defaults
     if not isinstance(data, dict):
         raise InputError(path, name, f"got {type(data).__name__} (expected a mapping of parameters)")
-    defaults = cls()
-    known = [f.name for f in dataclasses.fields(cls)]
-    values = {}
-    for key, value in data.items():
-        if key not in known:
-            raise _unknown(path, f"{name}.", str(key), known)
-        values[key] = _coerce(path, name, key, getattr(defaults, key), value)
-    return dataclasses.replace(defaults, **values)
+    return replace_checked(defaults, data, section=name, path=path)
 
 
 def pipeline_from_dict(data: dict | None, path: str | Path | None = None) -> PipelineConfig:
@@ -127,27 +68,13 @@ def pipeline_from_dict(data: dict | None, path: str | Path | None = None) -> Pip
     data = data or {}
     if not isinstance(data, dict):
         raise InputError(path, None, "expected a YAML mapping with stage sections")
-    sections = {"filter": FilterConfig, "idyn": IdynConfig, "muscles": MusclesConfig}
-    for key in data:
-        if key not in ("stages", *sections):
-            raise _unknown(path, "", str(key), ["stages", *sections])
-    stages = data.get("stages", PipelineConfig.stages)
-    if not isinstance(stages, (list, tuple)) or not stages or not all(s in STAGES for s in stages):
-        raise InputError(path, "stages", f"got {stages!r} (expected a non-empty list drawn from {', '.join(STAGES)})")
-    order = [s for s in STAGES if s in stages]
-    return PipelineConfig(stages=tuple(order),
-                          **{name: _section(path, name, cls, data.get(name)) for name, cls in sections.items()})
-
-
-def read_yaml(path: Path):
-    """Parse a YAML file; a file that is not UTF-8 text or not YAML is an :class:`InputError`."""
-    try:
-        return yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, None, "not a text file (expected UTF-8 YAML)") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise InputError(path, f"line {mark.line + 1}" if mark else None, "not valid YAML") from None
+    names = stage_names()
+    known_keys(data, ("stages", *names), path=path)
+    chosen = data.get("stages", DEFAULT_STAGES)
+    if not isinstance(chosen, (list, tuple)) or not chosen or not all(s in names for s in chosen):
+        raise InputError(path, "stages", f"got {chosen!r} (expected a non-empty list drawn from {', '.join(names)})")
+    return PipelineConfig(stages=tuple(s for s in names if s in chosen),
+                          sections={name: _section(path, name, data.get(name)) for name in names})
 
 
 def load_pipeline(path: str | Path | None = None) -> PipelineConfig:
@@ -165,8 +92,7 @@ def load_pipeline(path: str | Path | None = None) -> PipelineConfig:
                                          f"{', '.join(bundled_pipelines())})")
     if not path.is_file():
         raise InputError(path, None, "pipeline file not found")
-    data = read_yaml(path)
-    return pipeline_from_dict(data, path)
+    return pipeline_from_dict(read_yaml(path), path)
 
 
 def with_overrides(cfg: PipelineConfig, section: str, **options) -> PipelineConfig:
@@ -174,14 +100,23 @@ def with_overrides(cfg: PipelineConfig, section: str, **options) -> PipelineConf
     given = {k: v for k, v in options.items() if v is not None}
     if not given:
         return cfg
-    current = getattr(cfg, section)
-    merged = {**dataclasses.asdict(current), **given}
-    new = _section("command line", section, type(current), merged)
-    return dataclasses.replace(cfg, **{section: new})
+    return cfg.replace_section(section, replace_checked(cfg.section(section), given, section=section,
+                                                        path="command line"))
+
+
+def configure(pipeline: Path | None, **sections) -> PipelineConfig:
+    """Load the pipeline file (or defaults) and apply the CLI's overrides per section."""
+    cfg = load_pipeline(pipeline)
+    for section, options in sections.items():
+        cfg = with_overrides(cfg, section, **options)
+    return cfg
+
+
+def section_dict(cfg: PipelineConfig, name: str) -> dict:
+    return dataclasses.asdict(cfg.section(name))
 
 
 def to_yaml(cfg: PipelineConfig) -> str:
     """The resolved configuration as YAML (stored in every HDF5 file's attributes)."""
-    data = dataclasses.asdict(cfg)
-    data["stages"] = list(cfg.stages)
+    data = {"stages": list(cfg.stages), **{name: section_dict(cfg, name) for name in cfg.sections}}
     return yaml.safe_dump(data, sort_keys=False)

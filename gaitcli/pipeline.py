@@ -1,39 +1,53 @@
-"""Wiring between the CLI and the stages: inputs → stage functions → writers.
+"""Running registered stages on one trial: inputs → stage functions → writers, with reuse of fresh outputs.
 
-Every input is read and validated before anything is written. A later stage
-reads an earlier stage's HDF5 output when it is up to date (same input hashes
-and same stage configuration) and runs the earlier stage itself otherwise.
+:func:`run_stages` (and :func:`run_stage` for one) is what ``gait run``, every
+trial command and a batch runner call; it prints nothing and returns a
+:class:`StageOutcome` per stage. The trial is read once; every stage needed is
+computed before anything is written, so bad input found by a later stage
+leaves every output as it was. An earlier stage whose HDF5 output was made
+from the same inputs and configuration is read back instead of run again.
+Each stage's folder is written whole or not at all (``io.outputs.stage_folder``).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
-import numpy as np
 
-from gaitcli.config import PipelineConfig, load_pipeline, to_yaml, with_overrides
-from gaitcli.errors import GaitWarning, InputError
-from gaitcli.io.outputs import provenance, stage_folder
-from gaitcli.core.recording import Recording
+from gaitcli.config import PipelineConfig, section_dict, to_yaml
+from gaitcli.core.recording import Markers, Recording
+from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage
+from gaitcli.errors import GaitWarning
+from gaitcli.io.h5 import provenance
+from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
 from gaitcli.trial import TrialFolder, open_trial, sha256
 
-
 #: bump when a stage's output files change, so that older outputs count as stale
-OUTPUT_FORMAT = 1
+OUTPUT_FORMAT = 2
 
 
-def configure(pipeline: Path | None, **sections) -> PipelineConfig:
-    """Load the pipeline file (or defaults) and apply the CLI's overrides per section."""
-    cfg = load_pipeline(pipeline)
-    for section, options in sections.items():
-        cfg = with_overrides(cfg, section, **options)
-    return cfg
+@dataclass(frozen=True)
+class StageOutcome:
+    """What became of one stage: ``status`` is ``"written"``, ``"unconverged"`` (written, exit 3) or ``"reused"``
+    (a fresh earlier output read back); ``summary`` its ``summary.json``; ``folder`` where its files are."""
+
+    stage: str
+    status: str
+    folder: Path
+    summary: dict | None = None
+    converged: bool = True
+    message: str = ""
+    elapsed_s: float = 0.0
+
+    @property
+    def paths(self) -> tuple[Path, ...]:
+        return tuple(sorted(p for p in self.folder.rglob("*") if p.is_file())) if self.folder.is_dir() else ()
 
 
 def load_recording(trial: TrialFolder) -> Recording:
@@ -52,46 +66,58 @@ def load_recording(trial: TrialFolder) -> Recording:
     return recording
 
 
-def check_cutoffs(cfg, recording: Recording, path: Path) -> None:
-    """Cut-offs must lie below the Nyquist frequency of the signals they filter."""
-    rate = recording.markers.rate_hz
-    if cfg.cutoff_hz >= rate / 2:
-        raise InputError(path, "filter.cutoff_hz", f"got {cfg.cutoff_hz:g} Hz (expected below the Nyquist frequency "
-                                                   f"{rate / 2:g} Hz of its {rate:g} Hz markers)")
-    if recording.plates and cfg.force_cutoff_hz >= rate / 2:  # plate signals end up at the marker frames
-        raise InputError(path, "filter.force_cutoff_hz", f"got {cfg.force_cutoff_hz:g} Hz (expected below the "
-                                                         f"Nyquist frequency {rate / 2:g} Hz of the marker frames)")
+def load_static_markers(trial: TrialFolder, lab_to_model) -> Markers | None:
+    """The standing trial's markers in the dynamic trial's model axes, mapped; None without static.c3d."""
+    from gaitcli.io.axes import apply_rotation
+    from gaitcli.io.c3d import read_c3d
+    from gaitcli.kinematics.markerset import apply_marker_map
+
+    if trial.static_path is None:
+        return None
+    with warnings.catch_warnings():  # a standing trial has no plates to speak of
+        warnings.filterwarnings("ignore", message=".*force plate", category=GaitWarning)
+        static = read_c3d(trial.static_path, to_model_axes=False)
+    markers = apply_rotation(static, lab_to_model).markers
+    if trial.subject.marker_map:
+        markers = apply_marker_map(markers, trial.subject.marker_map, source=trial.subject_path)
+    return markers
 
 
-class Run:
-    """One invocation on one trial: where inputs and outputs are, and the resolved configuration."""
+class TrialRun:
+    """One trial, its output root and the resolved configuration: freshness, provenance, inputs read once."""
 
-    def __init__(self, trial: Path | None, out: Path | None, cfg: PipelineConfig, console):
+    def __init__(self, trial: Path | None, out: Path | None, cfg: PipelineConfig):
         bundled = trial is None
         self.trial = open_trial(sample_trial() if bundled else trial)
         if out is None:
             out = Path.cwd() / "gait_out" if bundled else self.trial.folder / "gait_out"
         self.out_root = Path(out)
         self.cfg = cfg
-        self.console = console
         self.inputs = {p.name: sha256(p) for p in self.trial.input_files()}
+        self._recording: Recording | None = None
 
-    # -- provenance and freshness -------------------------------------------------------------
-    def stage_key(self, stage: str) -> str:
+    def recording(self) -> Recording:
+        if self._recording is None:
+            self._recording = load_recording(self.trial)
+        return self._recording
+
+    def stage_key(self, name: str) -> str:
         """What a stage's output depends on: input hashes and the configuration of it and earlier stages."""
-        sections = {"filter": ["filter"], "idyn": ["filter", "idyn"], "muscles": ["filter", "idyn", "muscles"]}
-        cfg = {s: dataclasses.asdict(getattr(self.cfg, s)) for s in sections[stage]}
+        cfg = {s: section_dict(self.cfg, s) for s in requirements(name)}
         return json.dumps({"inputs": self.inputs, "config": cfg, "format": OUTPUT_FORMAT}, sort_keys=True)
 
-    def attrs(self, stage: str) -> dict:
-        attrs = provenance(to_yaml(self.cfg), self.inputs)
-        attrs["stage_key"] = self.stage_key(stage)
-        attrs["trial"] = str(self.trial.folder)
+    def attrs(self, name: str, history: tuple[str, ...] = ()) -> dict:
+        attrs = provenance(to_yaml(self.cfg), self.inputs, history)
+        attrs["stage_key"] = self.stage_key(name)
+        attrs["trial"] = self.trial.folder.resolve().name
         return attrs
 
-    def fresh(self, stage: str, h5_name: str) -> Path | None:
+    def output_folder(self, name: str) -> Path:
+        return self.out_root / stage(name).output_folder(self.cfg.section(name))
+
+    def fresh(self, name: str) -> Path | None:
         """The stage's HDF5 output if it exists and was made from the same inputs and configuration."""
-        path = self.out_root / stage / h5_name
+        path = self.output_folder(name) / stage(name).h5_name
         if not path.is_file():
             return None
         try:
@@ -99,149 +125,72 @@ class Run:
                 key = h5.attrs.get("stage_key")
         except OSError:
             return None
-        return path if key == self.stage_key(stage) else None
+        return path if key == self.stage_key(name) else None
 
-    def reuse(self, stage: str, h5_name: str, read, run):
-        """``read(h5)`` of a fresh earlier output, else ``run()`` (the stage again, which writes it anew)."""
-        path = self.fresh(stage, h5_name)
-        if path is not None:
-            try:
-                return read(path)
-            except (KeyError, OSError, ValueError):  # an older or damaged output: make it anew
-                pass
-        return run()
 
-    # -- stages -----------------------------------------------------------------------------
-    def filter(self):
-        """Run the filter stage and write its outputs; returns the in-memory result."""
-        from gaitcli.report.filter_outputs import write_filter_outputs
-        from gaitcli.signal.stage import filter_trial
+def _history(result) -> tuple[str, ...]:
+    trial = getattr(result, "trial", None)
+    return tuple(getattr(trial, "history", ()))
 
+
+def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | None = None,
+               progress: ProgressCallback = no_progress, plots: bool = True) -> list[StageOutcome]:
+    """Run the stages ``names`` (and whatever they need) on one trial; one outcome per stage touched.
+
+    The named stages always run; a stage they depend on is read back from its
+    output where that is fresh. Nothing is written until every stage has been
+    computed. Raises :class:`~gaitcli.errors.InputError` for bad input (nothing
+    written); an unconverged optimization is written and reported in its outcome.
+    """
+    run = TrialRun(trial, out, cfg)
+    names = tuple(names)
+    needed = [n for n in dict.fromkeys(n for name in names for n in requirements(name))]
+    handoffs, sources, outcomes, computed = {}, {}, [], []
+
+    def static_markers():
+        filtered = handoffs.get("filter")
+        lab_to_model = run.recording().lab_to_model if filtered is None or filtered.lab_to_model is None \
+            else filtered.lab_to_model
+        return load_static_markers(run.trial, lab_to_model)
+
+    for name in needed:
+        st = stage(name)
+        if name not in names:
+            path = run.fresh(name)
+            if path is not None:
+                try:
+                    handoffs[name], sources[name] = st.read(path), path
+                    outcomes.append(StageOutcome(name, "reused", path.parent))
+                    continue
+                except (KeyError, OSError, ValueError, TypeError):  # an older or damaged output: make it anew
+                    pass
         started = time.perf_counter()
-        recording = load_recording(self.trial)
-        check_cutoffs(self.cfg.filter, recording, self.trial.trial_path)
-        result = filter_trial(recording, self.cfg.filter)
-        target = self.out_root / "filter"
-        with stage_folder(target) as tmp:
-            summary = write_filter_outputs(tmp, result, recording, self.attrs("filter"),
-                                           elapsed_s=time.perf_counter() - started)
-        self.console.summary("filter", summary, target)
-        return result
+        ctx = StageContext(subject=run.trial.subject, folder=run.trial.folder, subject_path=run.trial.subject_path,
+                           trial_path=run.trial.trial_path, static_path=run.trial.static_path,
+                           inputs={d: handoffs[d] for d in st.depends}, input_paths={d: sources[d] for d in st.depends},
+                           recording=run.recording, static_markers=static_markers, progress=progress, stage=name)
+        result = st.run(ctx, cfg.section(name))
+        handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path
+        computed.append((name, result, time.perf_counter() - started))
 
-    def filtered(self):
-        """The filter stage's result: read from a fresh ``filter.h5``, else by running the filter stage."""
-        from gaitcli.report.filter_outputs import filtered_trial, read_filtered_trial
-
-        return self.reuse("filter", "filter.h5", read_filtered_trial, lambda: filtered_trial(self.filter()))
-
-    def static_markers(self):
-        """The standing trial's markers in the dynamic trial's axes, mapped; None when there is no static.c3d."""
-        from gaitcli.io.axes import apply_rotation
-        from gaitcli.io.c3d import read_c3d
-        from gaitcli.kinematics.markerset import apply_marker_map
-
-        subject = self.trial.subject
-        if self.trial.static_path is None:
-            if subject.static_frames is None:
-                raise InputError(self.trial.subject_path, "static_frames",
-                                 "no static.c3d in the trial folder: name the standing frames of the trial as "
-                                 "[first, last] (file frame numbers)")
-            return None
-        dynamic = load_recording(self.trial)
-        with warnings.catch_warnings():  # a standing trial has no plates to speak of
-            warnings.filterwarnings("ignore", message=".*force plate", category=GaitWarning)
-            static = read_c3d(self.trial.static_path, to_model_axes=False)
-        markers = apply_rotation(static, dynamic.lab_to_model).markers
-        if subject.marker_map:
-            markers = apply_marker_map(markers, subject.marker_map, source=self.trial.subject_path)
-        return markers
-
-    def calibration(self, filtered, mass_kg: float, static=None):
-        """Static calibration from static.c3d's markers or from named frames of the filtered trial."""
-        from gaitcli.kinematics.calibration import calibrate
-
-        subject = self.trial.subject
-        common = dict(mass_kg=mass_kg, stature_m=subject.stature_m, sex=subject.sex,
-                      thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
-                      disturbances=subject.disturbances)
-        if static is not None:
-            return calibrate(static, source=self.trial.static_path, **common)
-        if subject.static_frames is None:
-            raise InputError(self.trial.subject_path, "static_frames",
-                             "no static.c3d in the trial folder: name the standing frames of the trial as "
-                             "[first, last] (file frame numbers)")
-        first, last = subject.static_frames
-        m = filtered.markers
-        frames = np.arange(first, last + 1) - m.first_frame
-        if frames[0] < 0 or frames[-1] >= m.n_frames:
-            raise InputError(self.trial.subject_path, "static_frames",
-                             f"got [{first}, {last}] (expected frames within {m.first_frame}–"
-                             f"{m.first_frame + m.n_frames - 1})")
-        return calibrate(m, frames=frames, source=self.trial.trial_path, **common)
-
-    def idyn(self):
-        """Run the idyn stage (and the filter stage first when its output is missing or stale)."""
-        from gaitcli.dynamics.stage import check_mass, estimate_mass_kg, inverse_dynamics_stage
-        from gaitcli.report.idyn_outputs import write_idyn_outputs
-
+    for name, result, elapsed in computed:
+        st = stage(name)
+        target = run.output_folder(name)
         started = time.perf_counter()
-        subject = self.trial.subject
-        static = self.static_markers()
-        if static is not None:  # a static trial the model cannot use fails before anything is written
-            self.calibration(None, subject.mass_kg or 70.0, static)
-        filtered = self.filtered()
-        if subject.mass_kg is not None:
-            mass, source = subject.mass_kg, "subject.yaml"
-        else:
-            mass = check_mass(estimate_mass_kg(filtered, gravity_m_s2=self.cfg.idyn.gravity_m_s2),
-                              self.trial.subject_path)
-            source = "estimated from the force plates (2·∫Fz dt / (g·stride period) per recorded stance)"
-        calibration = self.calibration(filtered, mass, static)
-        result = inverse_dynamics_stage(filtered, calibration, self.cfg.idyn, mass_kg=mass, mass_source=source)
-        target = self.out_root / "idyn"
         with stage_folder(target) as tmp:
-            summary = write_idyn_outputs(tmp, result, self.attrs("idyn"), elapsed_s=time.perf_counter() - started)
-        self.console.summary("idyn", summary, target)
-        return result
+            summary = st.write(tmp, result, run.attrs(name, _history(result)))
+            if plots and st.plots is not None:
+                st.plots(tmp / st.h5_name, tmp / "plots", run.trial.folder.resolve().name)
+            summary["elapsed_s"] = round(elapsed + time.perf_counter() - started, 3)
+            write_json(tmp / "summary.json", summary)
+        converged = st.converged(result)
+        outcomes.append(StageOutcome(name, "written" if converged else "unconverged", target, summary, converged,
+                                     "" if converged else st.unconverged(result), summary["elapsed_s"]))
+    order = {n: i for i, n in enumerate(needed)}
+    return sorted(outcomes, key=lambda o: order[o.stage])
 
-    def idyn_outputs(self):
-        """What the muscle stage needs: from a fresh ``idyn.h5``, else by running the idyn stage."""
-        from gaitcli.report.idyn_outputs import muscle_inputs, read_muscle_inputs
 
-        return self.reuse("idyn", "idyn.h5", read_muscle_inputs, lambda: muscle_inputs(self.idyn()))
+def run_stage(trial: Path | None, name: str, cfg: PipelineConfig, **options) -> StageOutcome:
+    """Run one stage (and whatever it needs) on one trial; the outcome of ``name`` (see :func:`run_stages`)."""
+    return next(o for o in run_stages(trial, [name], cfg, **options) if o.stage == name)
 
-    def muscles(self):
-        """Run SO, MSO or EID on one leg; unconverged solutions are written, then reported (exit 3)."""
-        from gaitcli.errors import NotConvergedError
-        from gaitcli.muscles.interval import prepare_leg
-        from gaitcli.muscles.stage import MuscleOptions, run_muscles
-        from gaitcli.report.muscles_outputs import write_muscle_outputs
-
-        started = time.perf_counter()
-        cfg = self.cfg.muscles
-        inputs = self.idyn_outputs()
-        if inputs.source is None:  # computed in this run rather than read back from idyn.h5
-            inputs = dataclasses.replace(inputs, source=self.out_root / "idyn" / "sagittal.csv")
-        leg = prepare_leg(inputs, cfg.side, cfg.phase, stature_m=self.trial.subject.stature_m,
-                          sex=self.trial.subject.sex)
-        options = MuscleOptions(objective=cfg.objective)
-        with self.console.progress(f"muscles ({cfg.method.upper()})") as bar:
-            result = run_muscles(leg.motion, leg.limb, method=cfg.method,
-                                 nodes=cfg.nodes if cfg.method == "eid" else None, interval=leg.interval_s,
-                                 periodic=leg.periodic, options=options, validate=cfg.validate)
-            bar.update(completed=1, total=1)
-        target = self.out_root / "muscles" / cfg.method
-        with stage_folder(target) as tmp:
-            summary = write_muscle_outputs(tmp, result, self.attrs("muscles"), phase=cfg.phase,
-                                           interval=leg.interval_s, events=inputs.events,
-                                           elapsed_s=time.perf_counter() - started)
-        self.console.summary("muscles", summary, target)
-        if not result.converged:
-            why = f": {result.diagnosis}" if result.diagnosis else ""
-            raise NotConvergedError(f"{cfg.method.upper()} did not converge ({result.status}){why}; results written "
-                                    f"to {target} with converged: false")
-        return result
-
-    def all(self):
-        for stage in self.cfg.stages:
-            getattr(self, stage)()

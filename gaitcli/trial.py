@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from gaitcli.config import read_yaml
+from gaitcli.io.yamlfile import read_yaml
 from gaitcli.errors import InputError
 from gaitcli.kinematics.anthropometry import Disturbance
 

@@ -1,5 +1,9 @@
 """Sagittal export for the muscle stage (4.5.1): per side thigh, knee and ankle angles, hip path, GRF.
 
+The idyn stage hands the muscle stage a :class:`SagittalExport` (SI, radians);
+``sagittal.csv`` (degrees) is written from it for people and other tools, and
+:meth:`SagittalMotion.from_table` reads such a table back.
+
 The thigh and shank angles are planar, in the model's x–z plane (x forward along
 the walk), from the joint centres: the thigh angle is the hip→knee line's angle
 from the downward vertical, positive when the knee is in front of the hip; knee
@@ -17,8 +21,11 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.container import Trial
+from gaitcli.core.events import SIDES, Events
 from gaitcli.errors import InputError
-from gaitcli.kinematics.model import COORDINATES, JOINTS
+from gaitcli.kinematics.conventions import coordinates_to_clinical
+from gaitcli.kinematics.model import COORDINATES, JOINTS, BodyParameters
 
 SAGITTAL_COLUMNS = ("hip_x_{s}_m", "hip_z_{s}_m", "thigh_angle_{s}_deg", "knee_flexion_{s}_deg",
                     "ankle_dorsiflexion_{s}_deg", "grf_x_{s}_N", "grf_z_{s}_N", "cop_x_{s}_m")
@@ -44,8 +51,8 @@ class SagittalMotion:
     grf_z_N: np.ndarray
     cop_x_m: np.ndarray
     side: str = "r"
-    heel_strike_s: tuple = ()
-    toe_off_s: tuple = ()
+    heel_strike_s: tuple[float, ...] = ()
+    toe_off_s: tuple[float, ...] = ()
     source: str | None = None
 
     @classmethod
@@ -132,32 +139,62 @@ def _from_vertical(upper, lower):
     return np.arctan2(d[:, 0], -d[:, 2])
 
 
-def sagittal_columns(time_s, joint_centres_m, q, feet: dict) -> dict[str, np.ndarray]:
-    """The columns of ``sagittal.csv`` (4.5.1).
+@dataclass(frozen=True)
+class SagittalExport:
+    """What the muscle stage takes from the idyn stage (4.5.1).
+
+    ``legs[side]``: that leg's :class:`SagittalMotion` (SI, radians) with its
+    events; ``load_known[side]`` (n,) frames in which that foot's load is known;
+    ``parameters``: the 3-D model's segment parameters (de Leva with measured
+    lengths and added masses); ``body_mass_kg``; ``events`` of both feet.
+    """
+
+    legs: dict[str, SagittalMotion]
+    load_known: dict[str, np.ndarray]
+    events: Events
+    parameters: BodyParameters
+    body_mass_kg: float
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return self.legs["r"].time_s
+
+
+def sagittal_export(trial: Trial, joint_centres_m, q, parameters: BodyParameters, *,
+                    body_mass_kg: float) -> SagittalExport:
+    """Each leg's planar motion and ground reaction from the 3-D model (4.5.1).
 
     ``joint_centres_m`` (n, 7, 3) from the model's forward kinematics of the
-    coordinates ``q`` (n, 27); ``feet[side]`` with ``force_N`` (n, 3) and ``cop_m``
-    (n, 3) of that foot (zero force and NaN COP in swing).
+    coordinates ``q`` (n, 27); the ankle's dorsiflexion is the clinical sign of the
+    3-D ankle flexion coordinate (:mod:`gaitcli.kinematics.conventions`).
     """
-    columns = {"time_s": np.asarray(time_s)}
-    for s in ("r", "l"):
+    clinical = np.radians(coordinates_to_clinical(q))
+    legs = {}
+    for s in SIDES:
         hip = joint_centres_m[:, JOINTS.index(f"hip_{s}")]
         knee = joint_centres_m[:, JOINTS.index(f"knee_{s}")]
         ankle = joint_centres_m[:, JOINTS.index(f"ankle_{s}")]
         thigh = _from_vertical(hip, knee)
         shank = _from_vertical(knee, ankle)
-        # Cardan y of the ankle is plantarflexion in the model's signs (3.1)
-        dorsiflexion = -np.asarray(q)[:, COORDINATES.index(f"ankle_{s}_flexion")]
-        columns[f"hip_x_{s}_m"] = hip[:, 0]
-        columns[f"hip_z_{s}_m"] = hip[:, 2]
-        columns[f"thigh_angle_{s}_deg"] = np.degrees(thigh)
-        columns[f"knee_flexion_{s}_deg"] = np.degrees(thigh - shank)
-        columns[f"ankle_dorsiflexion_{s}_deg"] = np.degrees(dorsiflexion)
-        load = feet.get(s)
-        n = hip.shape[0]
-        force = np.zeros((n, 3)) if load is None else np.nan_to_num(np.asarray(load["force_N"]))
-        cop = np.full((n, 3), np.nan) if load is None else np.asarray(load["cop_m"])
-        columns[f"grf_x_{s}_N"] = force[:, 0]
-        columns[f"grf_z_{s}_N"] = force[:, 2]
-        columns[f"cop_x_{s}_m"] = cop[:, 0]
+        load = trial.feet[s]
+        force = np.nan_to_num(load.force_N)
+        legs[s] = SagittalMotion(
+            time_s=trial.time_s, hip_x_m=hip[:, 0], hip_z_m=hip[:, 2], thigh_angle_rad=thigh,
+            knee_flexion_rad=thigh - shank,
+            ankle_dorsiflexion_rad=clinical[:, COORDINATES.index(f"ankle_{s}_flexion")],
+            grf_x_N=force[:, 0], grf_z_N=force[:, 2], cop_x_m=np.asarray(load.cop_m)[:, 0], side=s,
+            heel_strike_s=tuple(trial.events.times(s, "heel_strike")),
+            toe_off_s=tuple(trial.events.times(s, "toe_off")))
+    return SagittalExport(legs=legs, load_known={s: trial.load_known(s) for s in SIDES}, events=trial.events,
+                          parameters=parameters, body_mass_kg=float(body_mass_kg))
+
+
+def sagittal_columns(export: SagittalExport) -> dict[str, np.ndarray]:
+    """The columns of ``sagittal.csv`` (angles in degrees): :data:`SAGITTAL_COLUMNS` per side."""
+    columns = {"time_s": export.time_s}
+    for s in SIDES:
+        leg = export.legs[s]
+        values = (leg.hip_x_m, leg.hip_z_m, np.degrees(leg.thigh_angle_rad), np.degrees(leg.knee_flexion_rad),
+                  np.degrees(leg.ankle_dorsiflexion_rad), leg.grf_x_N, leg.grf_z_N, leg.cop_x_m)
+        columns.update({name.format(s=s): v for name, v in zip(SAGITTAL_COLUMNS, values)})
     return columns

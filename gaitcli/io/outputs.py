@@ -1,4 +1,4 @@
-"""Writers for a stage's outputs: CSV tables, one HDF5 file, ``summary.json``.
+"""Writers for a stage's outputs: CSV tables and ``summary.json`` (HDF5: :mod:`gaitcli.io.h5`).
 
 A stage's whole output folder is staged in a temporary sibling folder and
 renamed into place only when every file has been written (:func:`stage_folder`),
@@ -12,15 +12,11 @@ import math
 import shutil
 import tempfile
 from contextlib import contextmanager
-from dataclasses import dataclass, field
-from datetime import datetime, timezone
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pandas as pd
 
-from gaitcli import __version__
 from gaitcli.io.atomic import atomic_path
 
 
@@ -75,40 +71,4 @@ def write_json(path: str | Path, data: dict) -> Path:
     """Write ``summary.json`` (NaN/inf become null so any JSON reader accepts it)."""
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(_jsonable(data), indent=2) + "\n")
-    return Path(path)
-
-
-@dataclass
-class Dataset:
-    """One HDF5 dataset: values, their units, and optional extra attributes (e.g. sign convention)."""
-
-    values: np.ndarray
-    units: str
-    attrs: dict = field(default_factory=dict)
-
-
-def provenance(config_yaml: str, inputs: dict[str, str]) -> dict:
-    """Root attributes every HDF5 file carries: version, resolved config, input SHA-256, creation time."""
-    return {
-        "gaitcli_version": __version__,
-        "config_yaml": config_yaml,
-        "input_sha256": json.dumps(inputs, indent=0),
-        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-    }
-
-
-def write_h5(path: str | Path, datasets: dict[str, Dataset], root_attrs: dict) -> Path:
-    """Write one HDF5 file; dataset names may contain '/' for groups; every dataset gets ``units``."""
-    with atomic_path(path) as tmp:
-        with h5py.File(tmp, "w") as h5:
-            for key, value in root_attrs.items():
-                h5.attrs[key] = "none" if value is None else value
-            for name, ds in datasets.items():
-                values = np.asarray(ds.values)
-                if values.dtype.kind in "UO":
-                    values = values.astype(h5py.string_dtype())
-                d = h5.create_dataset(name, data=values)
-                d.attrs["units"] = ds.units
-                for key, value in ds.attrs.items():
-                    d.attrs[key] = "none" if value is None else value
     return Path(path)

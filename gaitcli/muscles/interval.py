@@ -3,6 +3,7 @@ or a swing phase."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,7 +12,7 @@ from gaitcli.errors import InputError
 from gaitcli.signal.cycles import strides
 from gaitcli.core.events import Events
 
-from gaitcli.dynamics.sagittal import SagittalMotion
+from gaitcli.dynamics.sagittal import SagittalExport, SagittalMotion
 
 from .limb import LimbParameters
 
@@ -33,12 +34,9 @@ def analysis_interval(events: Events, time_s: np.ndarray, load_known: np.ndarray
         raise InputError(source, f"{side} side", "no stride whose stance was recorded on a force plate "
                                                  "(expected one heel strike to heel strike on the plates; "
                                                  "use --phase swing to analyse a swing phase)")
-    offs = np.sort(events.time_s[(events.side == side) & (events.kind == "toe_off")])
-    strikes = np.sort(events.time_s[(events.side == side) & (events.kind == "heel_strike")])
-    for off in offs:
-        later = strikes[strikes > off]
-        if later.size:
-            return float(off), float(later[0]), False
+    swings = events.swings(side)
+    if swings:
+        return swings[0][0], swings[0][1], False
     raise InputError(source, f"{side} side", "no swing phase (toe off followed by heel strike) in the events")
 
 
@@ -52,18 +50,15 @@ class LegAnalysis:
     periodic: bool
 
 
-def prepare_leg(inputs, side: str, phase: str, *, stature_m: float, sex: str) -> LegAnalysis:
-    """The muscle stage's inputs for ``side`` from the idyn stage's export (``report.idyn_outputs.MuscleInputs``:
-    sagittal table, events, per-foot load flags, segment parameters and body mass)."""
-    time_s = np.asarray(inputs.sagittal["time_s"])
-    source = inputs.source
-    start, end, periodic = analysis_interval(inputs.events, time_s, inputs.foot_load_known[side], side, phase,
+def prepare_leg(export: SagittalExport, side: str, phase: str, *, stature_m: float, sex: str,
+                source=None) -> LegAnalysis:
+    """The muscle stage's inputs for ``side`` from the idyn stage's :class:`SagittalExport`.
+
+    ``source`` names the idyn output in error messages.
+    """
+    start, end, periodic = analysis_interval(export.events, export.time_s, export.load_known[side], side, phase,
                                              source=source)
-    ev = inputs.events
-    motion = SagittalMotion.from_table(
-        inputs.sagittal, side, path=source,
-        heel_strike_s=ev.time_s[(ev.side == side) & (ev.kind == "heel_strike")],
-        toe_off_s=ev.time_s[(ev.side == side) & (ev.kind == "toe_off")])
-    limb = LimbParameters.from_body(inputs.parameters, side, body_mass_kg=inputs.mass_kg, stature_m=stature_m,
+    motion = dataclasses.replace(export.legs[side], source=None if source is None else str(source))
+    limb = LimbParameters.from_body(export.parameters, side, body_mass_kg=export.body_mass_kg, stature_m=stature_m,
                                     sex=sex)
     return LegAnalysis(motion=motion, limb=limb, interval_s=(start, end), periodic=periodic)

@@ -13,12 +13,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from gaitcli.core.events import SIDES, Events
+from gaitcli.core.validate import one_of, parameter
+from gaitcli.dynamics.sagittal import SagittalExport, SagittalMotion
 from gaitcli.errors import InputError
 
 from .eid import JOINT_NAMES, OBJECTIVES, moment_shortfall, quadrature_weights, solve_eid
 from .forward import ValidationResult, validate_forward
-from gaitcli.dynamics.sagittal import SagittalMotion
-
+from .interval import prepare_leg
 from .limb import LimbParameters, MotionInterpolant
 from .mso import solve_mso
 from .parameters import JointParameters, MuscleParameters, table_a1
@@ -27,8 +29,26 @@ from .so import solve_so
 from .solver import SolverSettings
 
 METHODS = ("so", "mso", "eid")
+PHASES = ("cycle", "swing")
 #: J per (thermochemical) calorie, for Ralston's (4.4)–(4.5)
 JOULE_PER_CAL = 4.184
+
+
+@dataclass(frozen=True)
+class MusclesConfig:
+    """Parameters of ``gait muscles`` (ch. 4)."""
+
+    method: str = parameter("eid", choices=METHODS, help="Static optimization, modified SO or extended inverse "
+                                                         "dynamics (default: eid).")
+    side: str = parameter("r", choices=SIDES, help="Which leg (default: r).")
+    nodes: int = parameter(50, low=4, high=2000, help="EID nodes over the interval (default 50).")
+    validate: bool = parameter(False, help="Integrate the forward model with the EID excitations and compare "
+                                           "(4.5.4).")
+    objective: str = parameter("metabolic", choices=OBJECTIVES,
+                               help="EID cost: total metabolic energy (4.29) or Crowninshield–Brand Σ(F/Fmax)³ "
+                                    "(4.3) (default: metabolic).")
+    phase: str = parameter("cycle", choices=PHASES, help="A stride recorded on the plates (periodic) or a swing "
+                                                         "phase (default: cycle).")
 
 
 @dataclass(frozen=True)
@@ -89,7 +109,7 @@ class MuscleResult:
     objective: str
     side: str
     time_s: np.ndarray
-    muscle_names: tuple
+    muscle_names: tuple[str, ...]
     forces_N: np.ndarray
     activations: np.ndarray
     excitations: np.ndarray
@@ -114,14 +134,17 @@ class MuscleResult:
     solve_time_s: float
     min_excitation: float
     max_excitation: float
-    infeasible_frames: tuple
-    infeasibility: tuple
+    infeasible_frames: tuple[int, ...]
+    infeasibility: tuple[float, ...]
     periodic: bool
     nodes: int
-    notes: tuple = ()
+    notes: tuple[str, ...] = ()
     validation: ValidationResult | None = None
     moment_shortfall_Nm: np.ndarray | None = None
     diagnosis: str = ""
+    phase: str = "cycle"
+    interval_s: tuple[float, ...] = ()
+    events: Events | None = None  # the analysed side's events
 
     @property
     def max_moment_error_Nm(self) -> float:
@@ -147,6 +170,17 @@ class MuscleResult:
         return out
 
 
+def run_muscles_stage(export: SagittalExport, cfg: MusclesConfig, *, stature_m: float, sex: str,
+                      source=None, options: MuscleOptions | None = None) -> MuscleResult:
+    """The muscle stage on one leg of the idyn stage's export: interval, limb, then :func:`run_muscles`."""
+    leg = prepare_leg(export, cfg.side, cfg.phase, stature_m=stature_m, sex=sex, source=source)
+    options = replace(options or MuscleOptions(), objective=cfg.objective)
+    result = run_muscles(leg.motion, leg.limb, method=cfg.method, nodes=cfg.nodes if cfg.method == "eid" else None,
+                         interval=leg.interval_s, periodic=leg.periodic, options=options, validate=cfg.validate)
+    return replace(result, phase=cfg.phase, interval_s=tuple(float(t) for t in leg.interval_s),
+                   events=export.events.of(side=cfg.side))
+
+
 def ralston_cost_of_transport(speed_m_s: float, body_mass_kg: float) -> float:
     """Ralston's E_w^t = 32/v + 0.0050·v cal/kg/m with v in m/min (4.5), in J/m for the whole body."""
     v = speed_m_s * 60.0
@@ -163,11 +197,9 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
     ``options.eid_nodes`` (EID). ``validate`` (EID only) integrates the forward
     model with the EID excitations (4.5.4).
     """
-    if method not in METHODS:
-        raise InputError(None, "method", f"got {method!r} (expected one of {', '.join(METHODS)})")
+    one_of(method, METHODS, where="method")
     opts = options or MuscleOptions()
-    if opts.objective not in OBJECTIVES:
-        raise InputError(None, "objective", f"got {opts.objective!r} (expected one of {', '.join(OBJECTIVES)})")
+    one_of(opts.objective, OBJECTIVES, where="objective")
     if validate and method != "eid":
         raise InputError(None, "validate", "forward validation needs the EID excitations (--method eid)")
     if method == "eid" and nodes is None:

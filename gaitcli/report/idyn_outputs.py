@@ -1,20 +1,19 @@
 """Writes the idyn stage's files: kinematics.csv, joint_moments.csv, residuals.csv, sagittal.csv,
-gait_cycle.csv, idyn.h5, summary.json and plots/."""
+gait_cycle.csv and idyn.h5, and gives its summary."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from gaitcli.dynamics.sagittal import sagittal_columns
 from gaitcli.dynamics.stage import IdynResult
-from gaitcli.io.outputs import Dataset, write_h5, write_json, write_table
+from gaitcli.io.h5 import Dataset, record_datasets, write_h5
+from gaitcli.io.outputs import write_table
 from gaitcli.kinematics.conventions import CONVENTION, coordinates_to_clinical, moments_to_clinical
-from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS, BodyParameters
-from gaitcli.report import plots
+from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS
 from gaitcli.signal.cycles import CYCLE_POINTS, normalise
-from gaitcli.core.events import Events
 
 
 def kinematics_columns(result: IdynResult) -> dict:
@@ -68,7 +67,7 @@ def rms(values: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum(values[finite] ** 2, axis=1)))) if finite.any() else float("nan")
 
 
-def summary(result: IdynResult, elapsed_s: float) -> dict:
+def summary(result: IdynResult) -> dict:
     """DESIGN.md's idyn keys (Table 3.1 features, residuals) plus fit quality and provenance notes."""
     m = result.measured
     info = {
@@ -87,21 +86,27 @@ def summary(result: IdynResult, elapsed_s: float) -> dict:
                                         for i, b in enumerate(BODIES)},
         "locked_segments": list(result.calibration.locked),
         "notes": result.notes,
-        "elapsed_s": round(elapsed_s, 3),
     }
     return info
 
 
-def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict, *, elapsed_s: float) -> dict:
-    """Write every file of the idyn stage into ``folder``; return the summary."""
+def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
+    """Write every table of the idyn stage and ``idyn.h5`` into ``folder``; return the summary.
+
+    ``idyn.h5``: ``sagittal/`` the :class:`~gaitcli.dynamics.sagittal.SagittalExport`
+    the muscle stage reads back; coordinates and moments in model and clinical signs;
+    residuals, segment parameters, joint centres, strides.
+    """
     folder = Path(folder)
     write_table(folder / "kinematics.csv", kinematics_columns(result))
     write_table(folder / "joint_moments.csv", moment_columns(result))
     write_table(folder / "residuals.csv", residual_columns(result))
-    write_table(folder / "sagittal.csv", result.sagittal)
+    write_table(folder / "sagittal.csv", sagittal_columns(result.sagittal))
     write_table(folder / "gait_cycle.csv", cycle_columns(result))
     p = result.parameters
-    data = {
+    data = record_datasets("sagittal", result.sagittal)
+    data.update(record_datasets("strides", list(result.strides)))
+    data.update({
         "time": Dataset(result.time_s, "s"),
         "coordinates": Dataset(result.q, "m, rad", {"columns": ",".join(COORDINATES),
                                                      "convention": "model (3.1): Cardan x-y-z pelvis, y-x-z joints"}),
@@ -128,56 +133,6 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict, *, elapsed
         "segments/reference_to_anatomical": Dataset(result.calibration.reference_to_anatomical, "1"),
         "segments/disturbances": Dataset(np.array([str(n) for n in p.notes] or [""]), "1"),
         "joint_centres": Dataset(result.joint_centres_m, "m", {"joints": ",".join(JOINTS)}),
-        "events/time": Dataset(result.events.time_s, "s"),
-        "events/frame": Dataset(result.events.frame, "frame", {"base": "0-based"}),
-        "events/side": Dataset(np.asarray(result.events.side, dtype=str), "1"),
-        "events/kind": Dataset(np.asarray(result.events.kind, dtype=str), "1"),
-        "events/source": Dataset(np.asarray(result.events.source, dtype=str), "1"),
-        "foot_load_known/r": Dataset(result.foot_measured["r"].astype(np.int8), "1"),
-        "foot_load_known/l": Dataset(result.foot_measured["l"].astype(np.int8), "1"),
-    }
-    for name, values in result.sagittal.items():
-        unit = name.rsplit("_", 1)[-1] if name != "time_s" else "s"
-        data[f"sagittal/{name}"] = Dataset(np.asarray(values), {"deg": "deg", "m": "m", "N": "N"}.get(unit, unit))
+    })
     write_h5(folder / "idyn.h5", data, attrs)
-    plots.idyn_figures(folder / "plots", result, title=attrs.get("trial", ""))
-    info = summary(result, elapsed_s)
-    write_json(folder / "summary.json", info)
-    return info
-
-
-@dataclass
-class MuscleInputs:
-    """What the muscle stage needs of the idyn stage (read back from ``idyn.h5``)."""
-
-    sagittal: dict
-    events: Events
-    foot_load_known: dict
-    parameters: BodyParameters
-    mass_kg: float
-    source: Path | None = None
-
-
-def muscle_inputs(result: IdynResult) -> MuscleInputs:
-    return MuscleInputs(sagittal=result.sagittal, events=result.events, foot_load_known=result.foot_measured,
-                        parameters=result.parameters, mass_kg=result.mass_kg)
-
-
-def read_muscle_inputs(path: Path) -> MuscleInputs:
-    """Read the sagittal export, events and segment parameters back from ``idyn.h5``."""
-    import h5py
-
-    def text(h5, key):
-        return np.array([x.decode() if isinstance(x, bytes) else str(x) for x in h5[key][()]])
-
-    with h5py.File(path, "r") as h5:
-        sagittal = {name: h5[f"sagittal/{name}"][()] for name in h5["sagittal"]}
-        events = Events(frame=h5["events/frame"][()].astype(int), time_s=h5["events/time"][()],
-                        side=text(h5, "events/side"), kind=text(h5, "events/kind"), source=text(h5, "events/source"))
-        known = {s: h5[f"foot_load_known/{s}"][()].astype(bool) for s in ("r", "l")}
-        params = BodyParameters(mass_kg=h5["segments/mass"][()], inertia_kgm2=h5["segments/inertia"][()],
-                                joint_in_parent_m=h5["segments/joint_in_parent"][()],
-                                joint_in_child_m=h5["segments/joint_in_child"][()])
-        mass = float(h5["segments/mass"].attrs["body_mass_kg"])
-    return MuscleInputs(sagittal=sagittal, events=events, foot_load_known=known, parameters=params, mass_kg=mass,
-                        source=Path(path))
+    return summary(result)

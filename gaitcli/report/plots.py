@@ -1,16 +1,23 @@
-"""Figures a clinician can read: units on every axis, events marked, right in red / left in blue."""
+"""Figures a clinician can read: units on every axis, events marked, right in red / left in blue.
+
+Every figure is drawn from a stage's HDF5 output (``filter.h5``, ``idyn.h5``,
+``muscles.h5``), so that reports can draw them again from results on disk.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from gaitcli.core.container import Trial  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
+from gaitcli.io.h5 import read_record  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
 SIDE_NAME = {"r": "right", "l": "left"}
@@ -19,7 +26,7 @@ SIDE_NAME = {"r": "right", "l": "left"}
 def save(fig, path: Path) -> Path:
     """Save a figure atomically as PNG and close it."""
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110, bbox_inches="tight")
+        fig.savefig(tmp, format="png", dpi=100)
     plt.close(fig)
     return path
 
@@ -32,11 +39,21 @@ def mark_events(ax, events, *, sides=("r", "l")) -> None:
                        ls="-" if kind == "heel_strike" else "--")
 
 
-def filter_figures(folder: Path, result, *, title: str = "") -> list[Path]:
+def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     """``markers.png`` (raw vs filtered, a few foot and pelvis landmarks) and ``grf.png`` (per foot, events)."""
+    with h5py.File(h5_path, "r") as h5:
+        trial = read_record(h5["trial"], Trial)
+        raw = h5["markers/raw"][()]
+        cutoff_hz = float(h5["trial/markers/positions_m"].attrs["cutoff_hz"])
+        plates = {}
+        for name in (h5["plates"] if "plates" in h5 else []):
+            analog = h5[f"plates/{name}/analog/raw_vertical_force"]
+            plates[name] = (h5[f"plates/{name}/force"][()], h5[f"plates/{name}/cop"][()],
+                            analog[()], float(analog.attrs["rate_hz"]))
     folder = Path(folder)
     written = []
-    raw, smooth = result.raw_markers, result.markers
+    smooth = trial.markers
+    events = trial.events
     wanted = [n for n in ("CAr", "FMr", "CAl", "FMl", "ASISr", "LMr") if n in smooth.labels]
     if not wanted:
         wanted = list(smooth.labels[:4])
@@ -48,64 +65,73 @@ def filter_figures(folder: Path, result, *, title: str = "") -> list[Path]:
             i = smooth.index(name)
             for col, (k, axis) in enumerate(((0, "forward x"), (2, "vertical z"))):
                 ax = axes[row, col]
-                ax.plot(t, raw.positions_m[:, i, k] * 1000, ".", ms=2, color="0.6", label="raw")
+                ax.plot(t, raw[:, i, k] * 1000, ".", ms=2, color="0.6", label="raw")
                 ax.plot(t, smooth.positions_m[:, i, k] * 1000, color="k", lw=1.2, label="filtered")
-                mark_events(ax, result.events)
+                mark_events(ax, events)
                 ax.set_ylabel(f"{name} {axis} (mm)")
         axes[0, 0].legend(loc="best", fontsize=8)
         for ax in axes[-1]:
             ax.set_xlabel("time (s)")
-        fig.suptitle(f"Markers, raw vs filtered ({result.config.cutoff_hz:g} Hz zero-lag) {title}", fontsize=10)
+        fig.suptitle(f"Markers, raw vs filtered ({cutoff_hz:g} Hz zero-lag) — {title}", fontsize=10)
+        fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.08, hspace=0.15, wspace=0.25)
         written.append(save(fig, folder / "markers.png"))
 
-    loads = result.feet or {f"plate {i + 1}": p for i, p in enumerate(result.plates)}
+    loads = {side: (load.force_N, load.cop_m) for side, load in trial.feet.items() if load.on_plates} \
+        or {name: (force, cop) for name, (force, cop, _, _) in plates.items()}
     if loads:
         fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
-        for name, load in loads.items():
+        t = trial.time_s
+        for name, (force, cop) in loads.items():
             colour = SIDE_COLOUR.get(name, None)
             label = SIDE_NAME.get(name, name)
-            t = np.arange(load.force_N.shape[0]) / load.rate_hz
-            axes[0].plot(t, load.force_N[:, 2], color=colour, label=label)
-            axes[1].plot(t, load.force_N[:, 0], color=colour, label=label)
-            axes[2].plot(t, load.cop_m[:, 0], color=colour, label=label)
-        for plate in result.plates:
-            if plate.raw_vertical_force_N is not None:
-                t = np.arange(plate.raw_vertical_force_N.shape[0]) / plate.raw_rate_hz
-                axes[0].plot(t, plate.raw_vertical_force_N, color="0.7", lw=0.6, zorder=0)
+            axes[0].plot(t, force[:, 2], color=colour, label=label)
+            axes[1].plot(t, force[:, 0], color=colour, label=label)
+            axes[2].plot(t, cop[:, 0], color=colour, label=label)
+        for _, _, raw_fz, rate in plates.values():
+            if raw_fz.size:
+                axes[0].plot(np.arange(raw_fz.size) / rate, raw_fz, color="0.7", lw=0.6, zorder=0)
         for ax in axes:
-            mark_events(ax, result.events)
+            mark_events(ax, events)
         axes[0].set_ylabel("vertical GRF (N)")
         axes[1].set_ylabel("fore-aft GRF (N)")
         axes[2].set_ylabel("COP forward x (m)")
         axes[2].set_xlabel("time (s)  —  solid: heel strike, dashed: toe off; grey: unfiltered plates")
         axes[0].legend(loc="upper right", fontsize=8)
-        fig.suptitle(f"Ground reactions per foot {title}", fontsize=10)
+        fig.suptitle(f"Ground reactions per foot — {title}", fontsize=10)
+        fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.08, hspace=0.12)
         written.append(save(fig, folder / "grf.png"))
     return written
 
 
-def idyn_figures(folder: Path, result, *, title: str = "") -> list[Path]:
+def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     """``cycle.png``: sagittal hip/knee/ankle angles and moments over the gait cycle (mean ± SD per side);
     ``residuals.png``: the pelvis residual force and moment over time."""
-    from gaitcli.kinematics.conventions import coordinates_to_clinical, moments_to_clinical
+    from gaitcli.dynamics.sagittal import SagittalExport
     from gaitcli.kinematics.model import COORDINATES, MOMENTS
-    from gaitcli.signal.cycles import normalise
+    from gaitcli.signal.cycles import Stride, normalise
 
+    with h5py.File(h5_path, "r") as h5:
+        export = read_record(h5["sagittal"], SagittalExport)
+        strides = [read_record(h5[f"strides/{i}"], Stride) for i in range(int(h5["strides/.length"][()]))]
+        kin = h5["coordinates_clinical"][()]
+        mom = h5["joint_moments_clinical"][()] / float(h5["segments/mass"].attrs["body_mass_kg"])
+        residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]
+        time_s = h5["time"][()]
+    events = export.events
+    measured = export.load_known["r"] & export.load_known["l"]
     folder = Path(folder)
     written = []
-    kin = coordinates_to_clinical(result.q)
-    mom = moments_to_clinical(result.joint_moments_Nm) / result.mass_kg
     joints = (("hip", "hip flexion"), ("knee", "knee flexion"), ("ankle", "ankle dorsiflexion"))
     fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
     pct = np.arange(101)
     for col, (joint, label) in enumerate(joints):
         for side in ("r", "l"):
-            ks = [s for s in result.strides if s.side == side]
-            known = result.foot_measured[side]
+            ks = [s for s in strides if s.side == side]
+            known = export.load_known[side]
             # moments only from strides whose stance was measured throughout (on a plate, or in swing)
-            kk = [s for s in ks if known[(result.time_s >= s.start_s) & (result.time_s <= s.end_s)].all()]
-            a = [normalise(kin[:, COORDINATES.index(f"{joint}_{side}_flexion")], result.time_s, s) for s in ks]
-            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], result.time_s, s) for s in kk]
+            kk = [s for s in ks if known[(time_s >= s.start_s) & (time_s <= s.end_s)].all()]
+            a = [normalise(kin[:, COORDINATES.index(f"{joint}_{side}_flexion")], time_s, s) for s in ks]
+            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], time_s, s) for s in kk]
             for row, values, count in ((0, a, len(ks)), (1, m, len(kk))):
                 if not values:
                     continue
@@ -124,40 +150,41 @@ def idyn_figures(folder: Path, result, *, title: str = "") -> list[Path]:
         for ax in axes[row]:
             ax.legend(fontsize=7, loc="best")
     fig.suptitle(f"Sagittal angles and moments over the gait cycle, mean ± SD (moments: strides with the stance "
-                 f"on a plate; + = flexion / dorsiflexion) {title}", fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
+                 f"on a plate; + = flexion / dorsiflexion) — {title}", fontsize=9)
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.9, bottom=0.09, hspace=0.12, wspace=0.3)
     written.append(save(fig, folder / "cycle.png"))
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
     for k, axis in enumerate("xyz"):
-        axes[0].plot(result.time_s, result.residual_force_N[:, k], label=axis)
-        axes[1].plot(result.time_s, result.residual_moment_Nm[:, k], label=axis)
+        axes[0].plot(time_s, residual_force[:, k], label=axis)
+        axes[1].plot(time_s, residual_moment[:, k], label=axis)
     for ax in axes:
-        ax.fill_between(result.time_s, 0, 1, where=~result.measured, transform=ax.get_xaxis_transform(),
+        ax.fill_between(time_s, 0, 1, where=~measured, transform=ax.get_xaxis_transform(),
                         color="0.9", lw=0, label="a foot on the ground off the plates")
-        mark_events(ax, result.events)
+        mark_events(ax, events)
     axes[0].set_ylabel("pelvis residual force (N)")
     axes[1].set_ylabel("pelvis residual moment (N·m)")
     axes[1].set_xlabel("time (s)")
     axes[0].legend(fontsize=8, ncol=4)
     fig.suptitle(f"Pelvis residuals (3.22): what the model and the measured ground reactions leave unexplained "
-                 f"{title}", fontsize=9)
+                 f"— {title}", fontsize=9)
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.1, hspace=0.1)
     written.append(save(fig, folder / "residuals.png"))
     return written
 
 
-def muscle_figures(folder: Path, result, events, *, title: str = "") -> list[Path]:
+def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     """Figs. 4.7–4.9: force, activation and excitation of each muscle over the interval (heel strikes and toe
     offs of the analysed side marked), and ``metabolic_cost.png``: the metabolic energy of each muscle."""
+    from gaitcli.muscles.stage import MuscleResult
+
+    with h5py.File(h5_path, "r") as h5:
+        result = read_record(h5["result"], MuscleResult)
     folder = Path(folder)
     written = []
     names = result.muscle_names
     t = result.time_s
-    side_events = type(events)(frame=events.frame[events.side == result.side],
-                               time_s=events.time_s[events.side == result.side],
-                               side=events.side[events.side == result.side],
-                               kind=events.kind[events.side == result.side],
-                               source=events.source[events.side == result.side])
+    side_events = result.events
     for name, values, label, limits in (
             ("forces.png", result.forces_N, "force (N)", None),
             ("activations.png", result.activations, "activation", (-0.05, 1.05)),
@@ -181,8 +208,8 @@ def muscle_figures(folder: Path, result, events, *, title: str = "") -> list[Pat
         infeasible = "; red: infeasible frames" if result.infeasible_frames else ""
         fig.suptitle(f"{result.method.upper()}: muscle {label.split(' ')[0]}s, {SIDE_NAME.get(result.side, '')} leg "
                      f"(solid: heel strike, dashed: toe off; grey band: the physiological range [0, 1]{infeasible}) "
-                     f"{title}", fontsize=9)
-        fig.tight_layout(rect=(0, 0, 1, 0.94))
+                     f"— {title}", fontsize=9)
+        fig.subplots_adjust(left=0.07, right=0.98, top=0.88, bottom=0.1, hspace=0.3, wspace=0.3)
         written.append(save(fig, folder / name))
     fig, ax = plt.subplots(figsize=(7, 3.8))
     rows = np.arange(len(names))[::-1]  # Table A.1 order from the top
@@ -195,8 +222,8 @@ def muscle_figures(folder: Path, result, events, *, title: str = "") -> list[Pat
         total = "not given"
     ax.set_yticks(rows, [n.replace("_", " ") for n in names])
     ax.set_xlabel("metabolic energy (J)")
-    ax.set_title(f"{result.method.upper()}: metabolic energy per muscle over the interval; {total} {title}",
+    ax.set_title(f"{result.method.upper()}: metabolic energy per muscle over the interval; {total} — {title}",
                  fontsize=9)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.25, right=0.97, top=0.9, bottom=0.14)
     written.append(save(fig, folder / "metabolic_cost.png"))
     return written

@@ -1,41 +1,40 @@
-"""Progress bars for long work (frames, optimizer iterations, trials), on stderr via rich."""
+"""Progress display for long work (stages, optimizer iterations, trials), on stderr via rich."""
 
 from __future__ import annotations
 
-from contextlib import contextmanager
+import sys
 
 
-class _Silent:
-    def advance(self, steps: float = 1) -> None:
-        pass
+class ProgressDisplay:
+    """A progress callback for :func:`gaitcli.pipeline.run_stages`: one rich bar per stage and description.
 
-    def update(self, **kwargs) -> None:
-        pass
+    Silent when disabled or when stderr is not a terminal. Use as a context manager.
+    """
 
+    def __init__(self, *, enabled: bool = True):
+        self.enabled = enabled and sys.stderr.isatty()
+        self._progress = None
+        self._tasks: dict[tuple[str, str], int] = {}
 
-class _Bar:
-    def __init__(self, progress, task):
-        self._progress = progress
-        self._task = task
+    def __enter__(self) -> ProgressDisplay:
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    def advance(self, steps: float = 1) -> None:
-        self._progress.advance(self._task, steps)
+            self._progress = Progress(TextColumn("{task.description}"), BarColumn(),
+                                      TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
+                                      console=Console(stderr=True), transient=True)
+            self._progress.start()
+        return self
 
-    def update(self, **kwargs) -> None:
-        self._progress.update(self._task, **kwargs)
+    def __exit__(self, *exc) -> None:
+        if self._progress is not None:
+            self._progress.stop()
 
-
-@contextmanager
-def progress_bar(description: str, *, total: int | None = None, enabled: bool = True):
-    """Yield an object with ``advance()``/``update()``; silent when disabled or stderr is not a terminal."""
-    import sys
-
-    if not enabled or not sys.stderr.isatty():
-        yield _Silent()
-        return
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-    with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                  TimeElapsedColumn(), console=Console(stderr=True), transient=True) as progress:
-        yield _Bar(progress, progress.add_task(description, total=total))
+    def __call__(self, report) -> None:
+        if self._progress is None:
+            return
+        key = (report.stage, report.description)
+        if key not in self._tasks:
+            self._tasks[key] = self._progress.add_task(report.description, total=report.total)
+        self._progress.update(self._tasks[key], completed=report.completed, total=report.total)

@@ -12,11 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitcli.config import FilterConfig
-from gaitcli.errors import GaitWarning
+from gaitcli.core.container import FootLoad, Trial, load_known_frames
+from gaitcli.core.events import SIDES, Events
 from gaitcli.core.recording import Markers, Recording
+from gaitcli.core.validate import parameter
+from gaitcli.errors import GaitWarning, InputError
 from gaitcli.signal.butterworth import design_frequency_hz, lowpass
-from gaitcli.core.events import Events
 from gaitcli.signal.events import Contact, EventDetection, detect_events, kinematic_events
 from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
 from gaitcli.signal.gaps import Gap, fill_gaps
@@ -27,22 +28,50 @@ TOE = {"r": ("FMr", "VMr"), "l": ("FMl", "VMl")}
 PELVIS = ("ASISr", "ASISl", "PSISr", "PSISl")
 
 
+@dataclass(frozen=True)
+class FilterConfig:
+    """Parameters of ``gait filter`` (3.1.4)."""
+
+    cutoff_hz: float = parameter(6.0, low=0.0, help="Net cut-off of the zero-lag filter for markers, Hz "
+                                                    "(0: no filtering).")
+    force_cutoff_hz: float = parameter(6.0, low=0.0, help="The same for the force-plate signals, before the COP "
+                                                          "is formed, Hz (0: no filtering).")
+    order: int = parameter(2, low=1, high=8, help="Butterworth order of one pass.")
+    max_gap_frames: int = parameter(10, low=0, help="Longer marker gaps stay NaN.")
+    force_threshold_N: float = parameter(20.0, low=0.0, low_open=True,
+                                         help="COP and free moment only above this vertical load, N.")
+
+
 @dataclass
 class FilterResult:
-    """Filtered trial at the marker rate, plus the filtered plate signals at the analog rate."""
+    """Filtered trial at the marker rate, plus the filtered plate signals at the analog rate.
 
-    raw_markers: Markers
-    markers: Markers  # gaps filled, filtered
+    ``trial``: filtered markers, per-foot loads and events (what later stages use).
+    """
+
+    trial: Trial
+    recording: Recording  # as read: raw markers, plates, lab axes, reader's notes
     gaps: list[Gap]
     plates: list[PlateLoad]  # filtered, at the marker rate
     plates_analog: list[PlateLoad]  # filtered, at the analog rate
-    feet: dict[str, PlateLoad]  # per-foot sums of the plates each foot stood on
+    plate_loads_per_foot: dict[str, PlateLoad]  # per-foot sums of the plates each foot stood on
     plate_owner: np.ndarray  # (plates, frames) 'r', 'l' or ''
     contacts: list[Contact]
-    events: Events
-    design_cutoff_hz: float
+    design_cutoff_hz: float | None
     force_design_cutoff_hz: float | None
     config: FilterConfig
+
+    @property
+    def raw_markers(self) -> Markers:
+        return self.recording.markers
+
+    @property
+    def markers(self) -> Markers:
+        return self.trial.markers
+
+    @property
+    def events(self) -> Events:
+        return self.trial.events
 
 
 def _first_present(markers: Markers, names) -> np.ndarray | None:
@@ -91,8 +120,8 @@ def calibrate_kinematic_events(events: Events, feet: dict, pelvis: np.ndarray, r
         bias = {}
         for side in feet:
             bias[side] = []
-            for t in events.of(side=side, kind=kind, source="plate").time_s:
-                candidates = zeni.of(side=side, kind=kind).time_s
+            for t in events.times(side, kind, "plate"):
+                candidates = zeni.times(side, kind)
                 near = candidates[np.abs(candidates - t) <= 0.2]
                 if near.size:
                     bias[side].append(t - near[np.argmin(np.abs(near - t))])
@@ -113,8 +142,37 @@ def filter_markers(markers: Markers, cfg: FilterConfig) -> tuple[Markers, list[G
     return Markers(markers.labels, smooth, markers.rate_hz, markers.first_frame), gaps
 
 
-def filter_trial(recording: Recording, cfg: FilterConfig) -> FilterResult:
-    """Run the filter stage on a recording whose labels are model landmarks where mapped."""
+def check_cutoffs(cfg: FilterConfig, recording: Recording, path=None) -> None:
+    """Cut-offs must lie below the Nyquist frequency of the signals they filter."""
+    rate = recording.markers.rate_hz
+    if cfg.cutoff_hz >= rate / 2:
+        raise InputError(path, "filter.cutoff_hz", f"got {cfg.cutoff_hz:g} Hz (expected below the Nyquist frequency "
+                                                   f"{rate / 2:g} Hz of its {rate:g} Hz markers)")
+    if recording.plates and cfg.force_cutoff_hz >= rate / 2:  # plate signals end up at the marker frames
+        raise InputError(path, "filter.force_cutoff_hz", f"got {cfg.force_cutoff_hz:g} Hz (expected below the "
+                                                         f"Nyquist frequency {rate / 2:g} Hz of the marker frames)")
+
+
+def foot_loads(plate_loads_per_foot: dict[str, PlateLoad], events: Events, time_s: np.ndarray) -> dict[str, FootLoad]:
+    """Both feet's loads at the marker frames, with the frames in which each is known (in swing or on a plate)."""
+    n = time_s.size
+    out = {}
+    for side in SIDES:
+        load = plate_loads_per_foot.get(side)
+        loaded = np.zeros(n, bool) if load is None else np.nan_to_num(load.force_N[:, 2]) > 0
+        known = load_known_frames(events, time_s, loaded, side)
+        out[side] = FootLoad.unmeasured(n, known) if load is None else FootLoad(
+            np.asarray(load.force_N, float), np.asarray(load.cop_m, float), np.asarray(load.free_moment_Nm, float),
+            known)
+    return out
+
+
+def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> FilterResult:
+    """Run the filter stage on a recording whose labels are model landmarks where mapped.
+
+    ``path`` names the trial file in error messages.
+    """
+    check_cutoffs(cfg, recording, path)
     markers, gaps = filter_markers(recording.markers, cfg)
     long_gaps = [g for g in gaps if not g.filled]
     if long_gaps:
@@ -152,12 +210,21 @@ def filter_trial(recording: Recording, cfg: FilterConfig) -> FilterResult:
             warnings.warn(f"{c.plate_name}: contact at {c.on_time_s:.2f}–{c.off_time_s:.2f} s not assigned to a foot "
                           f"({c.flag.replace('_', ' ')}); its load is left out of the per-foot ground reactions",
                           GaitWarning, stacklevel=2)
-    foot_loads = combine_loads(plates, detection.owner) if plates else {}
+    per_foot = combine_loads(plates, detection.owner) if plates else {}
     force_design = design_frequency_hz(cfg.force_cutoff_hz, recording.plates[0].rate_hz, order=cfg.order) \
         if recording.plates and cfg.force_cutoff_hz else None
-    return FilterResult(raw_markers=recording.markers, markers=markers, gaps=gaps, plates=plates,
-                        plates_analog=plates_analog, feet=foot_loads, plate_owner=detection.owner,
-                        contacts=detection.contacts, events=detection.events, 
-                        design_cutoff_hz=design_frequency_hz(cfg.cutoff_hz, rate, order=cfg.order)
-                        if cfg.cutoff_hz else None,
+    design = design_frequency_hz(cfg.cutoff_hz, rate, order=cfg.order) if cfg.cutoff_hz else None
+    history = (f"read {recording.source}" if recording.source else "read",
+               f"markers: gaps up to {cfg.max_gap_frames} frames filled by cubic interpolation, "
+               + (f"order-{cfg.order} Butterworth forward and backward at {design:.3f} Hz "
+                  f"(net cut-off {cfg.cutoff_hz:g} Hz)" if design else "not filtered"),
+               f"plates: {len(plates)}, filtered at net {cfg.force_cutoff_hz:g} Hz, COP above "
+               f"{cfg.force_threshold_N:g} N; events from plates and foot markers")
+    trial = Trial(markers=markers, feet=foot_loads(per_foot, detection.events, markers.time_s),
+                  events=detection.events, history=history,
+                  source="" if recording.source is None else str(recording.source),
+                  lab_to_model=np.asarray(recording.lab_to_model, float))
+    return FilterResult(trial=trial, recording=recording, gaps=gaps, plates=plates,
+                        plates_analog=plates_analog, plate_loads_per_foot=per_foot, plate_owner=detection.owner,
+                        contacts=detection.contacts, design_cutoff_hz=design,
                         force_design_cutoff_hz=force_design, config=cfg)

@@ -1,0 +1,105 @@
+"""The trial as the stages see it: filtered markers, per-foot loads, events and what was done to them.
+
+Model axes (x forward along the walk, y left, z up), SI units, time in seconds
+from the first marker frame; every array runs over the marker frames. The
+filter stage makes a :class:`Trial` from a :class:`~gaitcli.core.recording.Recording`;
+every later stage reads it (from memory or from ``filter.h5``) and never the
+CSV tables.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitcli.core.events import SIDES, Events
+from gaitcli.core.recording import Markers
+
+
+@dataclass(frozen=True)
+class FootLoad:
+    """The ground reaction on one foot, summed over the plates it stood on (marker frames).
+
+    ``force_N`` (n, 3) the force of the ground on the foot (zero where unloaded);
+    ``cop_m`` (n, 3) its centre of pressure on the floor (NaN where unloaded);
+    ``free_moment_Nm`` (n,) the vertical free moment about the COP (NaN where
+    unloaded); ``known`` (n,) whether the foot's load is known in that frame: in
+    swing, or standing on a plate. ``on_plates``: whether any plate measured
+    this foot at all.
+    """
+
+    force_N: np.ndarray
+    cop_m: np.ndarray
+    free_moment_Nm: np.ndarray
+    known: np.ndarray
+    on_plates: bool = True
+
+    @classmethod
+    def unmeasured(cls, n: int, known: np.ndarray) -> FootLoad:
+        """A foot no plate saw: zero force, NaN COP and free moment; ``known`` in swing only."""
+        return cls(np.zeros((n, 3)), np.full((n, 3), np.nan), np.full(n, np.nan), np.asarray(known, bool),
+                   on_plates=False)
+
+    @property
+    def loaded(self) -> np.ndarray:
+        """(n,) frames with a vertical load."""
+        return np.nan_to_num(self.force_N[:, 2]) > 0
+
+
+@dataclass(frozen=True)
+class Trial:
+    """Filtered markers, the load on each foot, gait events and the processing history.
+
+    ``feet`` has both sides, ``"r"`` and ``"l"``. ``history``: one line per
+    processing step, in order (written into every HDF5 file's attributes).
+    ``lab_to_model`` (3, 3): the rotation from the lab's axes, ``v_model = R @ v_lab``
+    (a standing trial read later is turned the same way).
+    """
+
+    markers: Markers
+    feet: dict[str, FootLoad]
+    events: Events
+    history: tuple[str, ...] = ()
+    source: str = ""
+    lab_to_model: np.ndarray | None = None
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return self.markers.time_s
+
+    @property
+    def n_frames(self) -> int:
+        return self.markers.n_frames
+
+    @property
+    def rate_hz(self) -> float:
+        return self.markers.rate_hz
+
+    def load_known(self, side: str) -> np.ndarray:
+        """(n,) frames in which the load on ``side``'s foot is known (its leg's joint moments are right)."""
+        return self.feet[side].known
+
+    @property
+    def all_loads_known(self) -> np.ndarray:
+        """(n,) frames in which every foot on the ground stands on a plate (the pelvis residuals are right)."""
+        return np.logical_and.reduce([self.feet[s].known for s in SIDES])
+
+    def with_step(self, line: str, **changes) -> Trial:
+        """A copy with ``line`` appended to the history (and fields replaced)."""
+        return dataclasses.replace(self, history=self.history + (line,), **changes)
+
+
+def load_known_frames(events: Events, time_s: np.ndarray, loaded: np.ndarray, side: str) -> np.ndarray:
+    """Frames in which a foot's load is known: in swing, or loaded (on a plate) during its stance.
+
+    Stance runs from each heel strike to the next toe off (or the trial's end), and
+    from the start to the first toe off when the trial begins in stance.
+    """
+    known = np.ones(time_s.size, dtype=bool)
+    for a, b in events.stances(side, open_ends=True):
+        stance = (time_s >= a) & (time_s <= b)
+        known &= ~stance | loaded
+    return known
+

@@ -1,0 +1,201 @@
+"""HDF5 files of the stages: one writer and one reader for every stage result.
+
+A stage result is a dataclass of arrays, numbers, text, nested dataclasses and
+dicts or lists of them. :func:`record_datasets` turns it into datasets under a
+group (one dataset per array field, one group per nested dataclass, dict or
+list), with the unit read from the field name's suffix (``force_N`` → ``N``,
+``cop_m`` → ``m``; :data:`UNIT_SUFFIXES`); :func:`read_record` rebuilds the same
+dataclass from the group, guided by its type annotations. So a result is written
+and read by the same two functions, and a later stage gets back exactly the
+object an earlier stage returned. Text is stored as UTF-8 strings and read with
+h5py's ``.asstr()``.
+
+Root attributes (:func:`provenance`): gaitcli version, resolved config as YAML,
+the input files' SHA-256, creation time, and the trial's processing history.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import types
+import typing
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from gaitcli import __version__
+from gaitcli.io.atomic import atomic_path
+
+#: field-name suffix → unit (longest match first); fields without one are dimensionless ("1")
+UNIT_SUFFIXES = {
+    "_J_per_m": "J/m", "_m_s2": "m/s^2", "_m_s": "m/s", "_Nms_per_rad": "N*m*s/rad", "_kgm2": "kg*m^2",
+    "_Nm": "N*m", "_hz": "Hz", "_kg": "kg", "_deg": "deg", "_rad": "rad", "_N": "N", "_m": "m", "_s": "s",
+    "_W": "W", "_J": "J",
+}
+
+
+def unit_of(name: str) -> str:
+    """The unit a field name declares by its suffix (``"1"`` when it declares none)."""
+    for suffix, unit in sorted(UNIT_SUFFIXES.items(), key=lambda kv: -len(kv[0])):
+        if name.endswith(suffix):
+            return unit
+    return "1"
+
+
+@dataclass
+class Dataset:
+    """One HDF5 dataset: values, their units, and optional extra attributes (e.g. sign convention)."""
+
+    values: Any
+    units: str
+    attrs: dict = field(default_factory=dict)
+
+
+def provenance(config_yaml: str, inputs: dict[str, str], history: tuple[str, ...] = ()) -> dict:
+    """Root attributes every HDF5 file carries: version, resolved config, input SHA-256, time, history."""
+    return {
+        "gaitcli_version": __version__,
+        "config_yaml": config_yaml,
+        "input_sha256": json.dumps(inputs, indent=0),
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "history": "\n".join(history),
+    }
+
+
+def write_h5(path: str | Path, datasets: dict[str, Dataset], root_attrs: dict) -> Path:
+    """Write one HDF5 file atomically; dataset names may contain '/' for groups; every dataset gets ``units``."""
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w") as h5:
+            for key, value in root_attrs.items():
+                h5.attrs[key] = "none" if value is None else value
+            for name, ds in datasets.items():
+                values = np.asarray(ds.values)
+                if values.dtype.kind in "UO":
+                    values = values.astype(h5py.string_dtype())
+                d = h5.create_dataset(name, data=values)
+                d.attrs["units"] = ds.units
+                for key, value in ds.attrs.items():
+                    d.attrs[key] = "none" if value is None else value
+    return Path(path)
+
+
+def strings(dataset: h5py.Dataset) -> np.ndarray:
+    """A string dataset as an array of ``str``."""
+    return np.asarray(dataset.asstr()[()], dtype=str)
+
+
+# ----------------------------------------------------------------------------------- records
+
+def record_datasets(prefix: str, obj: Any, *, units: str | None = None) -> dict[str, Dataset]:
+    """The datasets that store ``obj`` (a dataclass, dict, list, array or scalar) under ``prefix``."""
+    if dataclasses.is_dataclass(obj):
+        out = {f"{prefix}/.type": Dataset(type(obj).__name__, "1")}
+        for f in dataclasses.fields(obj):
+            value = getattr(obj, f.name)
+            if value is not None:
+                out.update(record_datasets(f"{prefix}/{f.name}", value, units=unit_of(f.name)))
+        return out
+    if isinstance(obj, dict):
+        out = {f"{prefix}/.keys": Dataset(np.array([str(k) for k in obj], dtype=object), "1")}
+        for i, (key, value) in enumerate(obj.items()):
+            if value is not None:
+                out.update(record_datasets(f"{prefix}/{_member(key, i)}", value, units=units))
+        return out
+    if isinstance(obj, list) or (isinstance(obj, tuple) and obj and dataclasses.is_dataclass(obj[0])):
+        out = {f"{prefix}/.length": Dataset(len(obj), "1")}
+        for i, value in enumerate(obj):
+            out.update(record_datasets(f"{prefix}/{i}", value, units=units))
+        return out
+    if isinstance(obj, Path):
+        obj = str(obj)
+    values = np.asarray(obj)
+    if values.dtype.kind in "UO" or isinstance(obj, str):
+        values = np.asarray(obj, dtype=object)
+    return {prefix: Dataset(values, units or "1")}
+
+
+def _member(key, index: int) -> str:
+    """The group member holding a dict entry: the key itself where it is a plain name, else its index."""
+    key = str(key)
+    return key if key and "/" not in key and not key.startswith(".") and not key.isdigit() else str(index)
+
+
+def _read_untyped(node):
+    if isinstance(node, h5py.Group):
+        if ".keys" in node:
+            keys = strings(node[".keys"])
+            return {str(k): _read_untyped(node[_member(k, i)]) for i, k in enumerate(keys) if _member(k, i) in node}
+        if ".length" in node:
+            return [_read_untyped(node[str(i)]) for i in range(int(node[".length"][()]))]
+        return {name: _read_untyped(node[name]) for name in node if not name.startswith(".")}
+    if node.dtype.kind == "O":
+        return str(node.asstr()[()]) if node.shape == () else strings(node)
+    value = node[()]
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _strip_optional(hint):
+    origin = typing.get_origin(hint)
+    if origin in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(hint) if a is not type(None)]
+        return args[0] if len(args) == 1 else hint
+    return hint
+
+
+def _read_value(node, hint):
+    hint = _strip_optional(hint)
+    origin = typing.get_origin(hint)
+    if dataclasses.is_dataclass(hint):
+        return read_record(node, hint)
+    if hint in (Any, dict, list) or (origin is dict and not typing.get_args(hint)):
+        return _read_untyped(node)
+    if hint is tuple:
+        value = _read_untyped(node)
+        return tuple(value.tolist() if isinstance(value, np.ndarray) else value)
+    if origin is dict:
+        _, value_hint = typing.get_args(hint)
+        keys = strings(node[".keys"])
+        return {str(k): _read_value(node[_member(k, i)], value_hint) if _member(k, i) in node else None
+                for i, k in enumerate(keys)}
+    if origin is list or (origin is tuple and isinstance(node, h5py.Group)):
+        args = typing.get_args(hint)
+        item_hint = args[0] if args else Any
+        items = [_read_value(node[str(i)], item_hint) for i in range(int(node[".length"][()]))]
+        return items if origin is list else tuple(items)
+    if origin is tuple:
+        args = typing.get_args(hint)
+        item = args[0] if args else float
+        values = strings(node) if node.dtype.kind == "O" else node[()]
+        return tuple(item(v) if item in (str, float, int, bool) else v for v in np.atleast_1d(values))
+    if hint is str:
+        return str(node.asstr()[()])
+    if hint in (float, int, bool):
+        return hint(node[()])
+    if node.dtype.kind == "O":
+        return strings(node)
+    return node[()]
+
+
+def read_record(group: h5py.Group, cls):
+    """Rebuild the dataclass ``cls`` from the group :func:`record_datasets` wrote (missing fields: defaults)."""
+    hints = typing.get_type_hints(cls)
+    values = {}
+    for f in dataclasses.fields(cls):
+        if not f.init:
+            continue
+        if f.name in group:
+            values[f.name] = _read_value(group[f.name], hints[f.name])
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            values[f.name] = None  # an optional field written as absent
+    return cls(**values)
+
+
+def read_result(path: str | Path, cls, prefix: str = "result"):
+    """The stage result of type ``cls`` stored under ``prefix`` in the HDF5 file ``path``."""
+    with h5py.File(path, "r") as h5:
+        return read_record(h5[prefix], cls)
