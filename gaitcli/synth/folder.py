@@ -21,18 +21,20 @@ DISTURBED_SIDE = "r"
 
 
 def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, stature_m: float, sex: str) -> str:
-    """The trial's ``subject.yaml``: the subject, and the condition's added masses written out."""
+    """The trial's ``subject.yaml``: the subject and the condition's added masses written out; the condition
+    and its disturbed side as a comment."""
     from gaitcli.kinematics.anthropometry import preset_disturbances
 
-    data = {"mass_kg": mass_kg, "stature_m": stature_m, "sex": sex, "condition": condition}
+    data = {"mass_kg": mass_kg, "stature_m": stature_m, "sex": sex}
+    comment = f"# condition: {condition}"
     if condition != "normal":
-        data["disturbed_side"] = DISTURBED_SIDE
+        comment += f" (disturbed side: {DISTURBED_SIDE})"
         data["disturbances"] = [
             {"segment": d.segment, "name": d.name, "mass_kg": round(float(d.mass_kg), 6),
              "inertia_kgm2": [round(float(x), 8) for x in np.diag(np.asarray(d.inertia_kgm2))],
              "com_offset_m": [round(float(x), 6) for x in d.com_offset_m]}
             for d in preset_disturbances(condition, trial.calibration.segments, side=DISTURBED_SIDE)]
-    return "# written by `gait synth`; the truth is in truth/\n" + yaml.safe_dump(data, sort_keys=False)
+    return f"# written by `gait synth`; the truth is in truth/\n{comment}\n" + yaml.safe_dump(data, sort_keys=False)
 
 
 def write_truth(out: Path, trial: SyntheticTrial) -> None:
