@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from gaitcli.kinematics.conventions import SIGNS
 from gaitcli.kinematics.model import BODIES, JOINTS
 from gaitcli.synth.ground import G, ground_reactions
 
@@ -125,11 +126,10 @@ def periodic_curve(points, phase, *, harmonics=5):
 def leg_angles(phase, side: str, condition: Condition):
     """The 9 internal leg coordinates (rad) of one side over its own phase (0 at its heel strike).
 
-    Clinical angles are converted to the model's Cardan signs (3.1): hip flexion,
-    ankle dorsiflexion are negative rotations about y; adduction and internal
-    rotation are mirrored on the left.
+    The angles are designed in clinical signs (both sides alike) and converted to
+    the model's Cardan signs (3.1) by the sign table of
+    :mod:`gaitcli.kinematics.conventions`: model = sign · clinical.
     """
-    mirror = 1.0 if side == "r" else -1.0
     hip_flex = np.radians(periodic_curve(HIP_FLEXION, phase))
     knee = np.radians(periodic_curve(KNEE_FLEXION, phase))
     ankle = np.radians(periodic_curve(ANKLE_DORSIFLEXION, phase))
@@ -144,9 +144,11 @@ def leg_angles(phase, side: str, condition: Condition):
     if side == "r" and condition.locked_ankle_r:
         ankle = np.zeros_like(ankle)
     zero = np.zeros_like(knee)
-    return np.column_stack([-hip_flex, mirror * adduction, mirror * rotation,
-                            knee, mirror * np.radians(2.0) * np.sin(2 * np.pi * phase), zero,
-                            -ankle, mirror * np.radians(3.0) * np.sin(2 * np.pi * phase), zero])
+    clinical = np.column_stack([hip_flex, adduction, rotation,
+                                knee, np.radians(2.0) * np.sin(2 * np.pi * phase), zero,
+                                ankle, np.radians(3.0) * np.sin(2 * np.pi * phase), zero])
+    legs = [JOINTS.index(f"{j}_{side}") for j in ("hip", "knee", "ankle")]
+    return clinical * SIGNS[legs].reshape(-1)
 
 
 def design_gait(geometry: Geometry, condition: Condition, params, *, samples: int | None = None,
