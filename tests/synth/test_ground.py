@@ -1,35 +1,12 @@
-"""The synthetic gait generator's ground reactions and options (``gaitcli.synth``)."""
+"""The ground reactions of the designed gait and their split between the feet (``gaitcli.synth.ground``)."""
 
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from gaitcli.dynamics.inverse import required_external_wrench
-from gaitcli.errors import InputError
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import JOINTS
-from gaitcli.synth import ground_reactions, simulate_trial
-
-
-@pytest.fixture(scope="module")
-def walk():
-    trial = simulate_trial(condition="normal", seed=0, noise_mm=0.0, artefact_mm=0.0, plate_noise_N=0.0,
-                           strides=1, mass_kg=55.0, stature_m=1.65, period_s=1.40)
-    design, params = trial.design, trial.calibration.body
-    qd, qdd, feet, clip = ground_reactions(design, params)
-    return design, params, qd, qdd, feet, clip
-
-
-def test_period_option_sets_the_cycle(walk):
-    design = walk[0]
-    assert design.period_s == 1.40
-    assert design.time_s[-1] + design.time_s[1] == pytest.approx(1.40)
-
-
-def test_period_outside_walking_range_is_an_input_error():
-    with pytest.raises(InputError, match="period"):
-        simulate_trial(period_s=0.2, strides=1)
 
 
 def test_feet_share_the_whole_body_wrench_exactly(walk):

@@ -1,0 +1,82 @@
+"""A synthetic trial folder (``gait synth``): trial.c3d, static.c3d, subject.yaml and truth/.
+
+The C3D files hold the noisy markers and the two TYPE-2 plates (millimetres);
+``truth/`` the exact kinematics and joint moments (clinical signs), the ground
+reactions of both feet at every contact, the events and which foot each plate
+measured.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from gaitcli.kinematics.model import COORDINATES, MOMENTS
+from gaitcli.synth.recording import SyntheticTrial, simulate_trial
+
+#: the side carrying the condition's added masses and locked joints
+DISTURBED_SIDE = "r"
+
+
+def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, stature_m: float, sex: str) -> str:
+    """The trial's ``subject.yaml``: the subject and the condition's added masses written out; the condition
+    and its disturbed side as a comment."""
+    from gaitcli.kinematics.anthropometry import preset_disturbances
+
+    data = {"mass_kg": mass_kg, "stature_m": stature_m, "sex": sex}
+    comment = f"# condition: {condition}"
+    if condition != "normal":
+        comment += f" (disturbed side: {DISTURBED_SIDE})"
+        data["disturbances"] = [
+            {"segment": d.segment, "name": d.name, "mass_kg": round(float(d.mass_kg), 6),
+             "inertia_kgm2": [round(float(x), 8) for x in np.diag(np.asarray(d.inertia_kgm2))],
+             "com_offset_m": [round(float(x), 6) for x in d.com_offset_m]}
+            for d in preset_disturbances(condition, trial.calibration.segments, side=DISTURBED_SIDE)]
+    return f"# written by `gait synth`; the truth is in truth/\n{comment}\n" + yaml.safe_dump(data, sort_keys=False)
+
+
+def write_truth(out: Path, trial: SyntheticTrial) -> None:
+    """``truth/``: kinematics.csv and joint_moments.csv (clinical signs), grf.csv, events.csv and plates.csv."""
+    from gaitcli.io.outputs import write_table
+    from gaitcli.kinematics.conventions import coordinates_to_clinical, moments_to_clinical
+
+    time_s = trial.markers.time_s
+    kin = coordinates_to_clinical(trial.q)
+    write_table(out / "kinematics.csv", {"time_s": time_s, **{c: kin[:, k] for k, c in enumerate(COORDINATES)}})
+    mom = moments_to_clinical(trial.joint_moments_Nm)
+    write_table(out / "joint_moments.csv", {"time_s": time_s, **{c: mom[:, k] for k, c in enumerate(MOMENTS)}})
+    grf = {"time_s": time_s}
+    for s in "rl":
+        for k, a in enumerate("xyz"):
+            grf[f"foot_{s}_force_{a}_N"] = trial.feet[s]["force_N"][:, k]
+        for k, a in enumerate("xyz"):
+            grf[f"foot_{s}_cop_{a}_m"] = trial.feet[s]["cop_m"][:, k]
+        grf[f"foot_{s}_free_moment_Nm"] = trial.feet[s]["free_moment_Nm"]
+    write_table(out / "grf.csv", grf)
+    ev = trial.events
+    write_table(out / "events.csv", {"time_s": [e[0] for e in ev], "frame": [e[1] + 1 for e in ev],
+                                     "side": [e[2] for e in ev], "event": [e[3] for e in ev],
+                                     "on_plate": [int(e[4]) for e in ev]})
+    write_table(out / "plates.csv", {"plate": [p.name for p in trial.plates], "foot": trial.plate_feet})
+
+
+def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0,
+                artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
+                stature_m: float = 1.78, sex: str = "male", period_s: float | None = None) -> SyntheticTrial:
+    """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/."""
+    from gaitcli.io.atomic import atomic_path
+    from gaitcli.io.c3d_write import write_c3d
+
+    trial = simulate_trial(condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
+                           plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
+                           sex=sex, period_s=period_s)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_c3d(out / "trial.c3d", trial.markers, trial.plates)
+    write_c3d(out / "static.c3d", trial.static, [])
+    with atomic_path(out / "subject.yaml") as tmp:
+        tmp.write_text(subject_yaml(trial, condition=condition, mass_kg=mass_kg, stature_m=stature_m, sex=sex))
+    write_truth(out / "truth", trial)
+    return trial

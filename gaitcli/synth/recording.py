@@ -1,0 +1,223 @@
+"""The recording of a synthetic walk: markers, force plates and the exact truth.
+
+The designed cycle (:mod:`gaitcli.synth.gait`) is tiled over the trial at the
+analog rate. Markers (Table A.6) ride rigidly on the bodies, plus white noise
+(RMS 3-D error ``noise_mm``) and a low-frequency skin artefact (peak 3-D
+displacement ``artefact_mm``). Two TYPE-2 plates measure one right and one left
+stance. The truth joint moments carry every ground contact, not only the plates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from gaitcli.core.recording import ForcePlate, Markers
+from gaitcli.errors import InputError
+from gaitcli.kinematics.model import BODIES
+from gaitcli.synth.gait import ANALOG_RATE_HZ, CONDITIONS, GaitDesign, Geometry, balanced_gait
+from gaitcli.synth.ground import ground_reactions
+
+MARKER_RATE_HZ = 100.0
+
+#: the marker set of Table A.6 and the body each marker rides on
+MARKER_BODY = {
+    "ASISr": "pelvis", "ASISl": "pelvis", "PSISr": "pelvis", "PSISl": "pelvis",
+    "C7": "hat", "ST": "hat", "ACr": "hat", "ACl": "hat",
+    "GTr": "thigh_r", "MRFr": "thigh_r", "LEFr": "thigh_r", "MEFr": "thigh_r",
+    "TTr": "shank_r", "LMr": "shank_r", "MMr": "shank_r",
+    "CAr": "foot_r", "VMr": "foot_r", "FMr": "foot_r",
+    "GTl": "thigh_l", "MRFl": "thigh_l", "LEFl": "thigh_l", "MEFl": "thigh_l",
+    "TTl": "shank_l", "LMl": "shank_l", "MMl": "shank_l",
+    "CAl": "foot_l", "VMl": "foot_l", "FMl": "foot_l",
+}
+
+
+@dataclass
+class SyntheticTrial:
+    """Everything ``write_trial`` writes, in memory (model axes, SI)."""
+
+    markers: Markers
+    static: Markers
+    plates: list
+    q: np.ndarray  # (frames, 27) at the marker rate
+    qd: np.ndarray
+    qdd: np.ndarray
+    feet: dict  # side -> force_N, cop_m, free_moment_Nm at the marker rate (all contacts)
+    plate_feet: list  # side of each plate
+    events: list  # (time_s, frame, side, kind, on_plate)
+    calibration: object
+    design: GaitDesign
+    joint_moments_Nm: np.ndarray  # (frames, 7, 3) in the distal segment frame
+    split_clip: float
+
+
+def white_noise(rng, rms_mm, shape):
+    """White marker noise (m) of RMS 3-D error ``rms_mm``: σ = rms/√3 per axis."""
+    return rng.normal(0.0, rms_mm / 1000.0 / np.sqrt(3.0), shape)
+
+
+def skin_artefact(rng, time_s, period_s, amplitude_m, bodies):
+    """Low-frequency skin artefact (m) of peak 3-D displacement ``amplitude_m`` for markers on ``bodies``.
+
+    Each axis moves as ``0.6 sin(ωt + φ₀) + 0.4 sin(2ωt + φ₁)``, ω the gait
+    frequency: per segment a common part (70 %) plus a per-marker part (30 %).
+    """
+    w = 2 * np.pi / period_s
+
+    def wave():
+        phases = rng.uniform(0, 2 * np.pi, (2, 3))
+        return 0.6 * np.sin(w * time_s[:, None] + phases[0]) + 0.4 * np.sin(2 * w * time_s[:, None] + phases[1])
+
+    common = {body: wave() for body in sorted(set(bodies))}  # a fixed order: the same seed gives the same trial
+    out = np.zeros((time_s.size, len(bodies), 3))
+    for i, body in enumerate(bodies):
+        out[:, i] = amplitude_m / np.sqrt(3.0) * (0.7 * common[body] + 0.3 * wave())  # ≤ amplitude in 3-D
+    return out
+
+
+def model_markers(q, calibration):
+    """The segment markers riding on the calibrated bodies over ``q``: names, positions (frames, markers, 3) in m,
+    and the body of each."""
+    from gaitcli.kinematics.forward import marker_positions
+    from gaitcli.kinematics.markerset import SEGMENT_MARKERS
+
+    in_body, labels = calibration.markers_in_body()
+    wanted = {bi: [k for k, name in enumerate(labels[bi]) if name in SEGMENT_MARKERS[BODIES[bi]]]
+              for bi in in_body}
+    positions = marker_positions(q, calibration.body, {bi: in_body[bi][wanted[bi]] for bi in in_body})
+    names, columns, bodies = [], [], []
+    for bi in in_body:
+        for col, k in enumerate(wanted[bi]):
+            names.append(labels[bi][k])
+            columns.append(positions[bi][:, col])
+            bodies.append(BODIES[bi])
+    return names, np.stack(columns, axis=1), bodies
+
+
+def stance_contacts(stance, samples):
+    """(side, first, end) trial indices of every stance of each side, ``samples`` being the cycle's sample
+    index of each trial sample."""
+    contacts = []
+    for s in "rl":
+        on = stance[s][samples].astype(int)
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], on, [0]])))
+        contacts += [(s, a, b) for a, b in zip(edges[::2], edges[1::2])]
+    return contacts
+
+
+def plate_recording(name, foot, first, end, rng, noise_N):
+    """A 0.6 m × 0.4 m plate centred ``o`` under the foot's mean COP ``c`` over samples ``first:end``.
+
+    Force ``F`` (N) and moment about its centre ``(c − o) × F + T e_z`` (N·m, ``T``
+    the free moment), plus white noise of σ ``noise_N`` and ``0.05 noise_N``.
+    """
+    centre = np.nanmean(foot["cop_m"][first:end], axis=0)
+    centre[2] = 0.0
+    half = np.array([0.3, 0.2])
+    corners = centre + np.array([[half[0], -half[1], 0], [-half[0], -half[1], 0],
+                                 [-half[0], half[1], 0], [half[0], half[1], 0]])
+    force = np.zeros_like(foot["force_N"])
+    moment = np.zeros_like(foot["force_N"])
+    force[first:end] = foot["force_N"][first:end]
+    lever = np.nan_to_num(foot["cop_m"][first:end] - centre)
+    moment[first:end] = np.cross(lever, force[first:end])
+    moment[first:end, 2] += foot["free_moment_Nm"][first:end]
+    force += rng.normal(0.0, noise_N, force.shape)
+    moment += rng.normal(0.0, noise_N * 0.05, moment.shape)
+    return ForcePlate(name=name, force_N=force, moment_Nm=moment, centre_m=centre, corners_m=corners,
+                      rate_hz=ANALOG_RATE_HZ)
+
+
+def contact_events(contacts, on_plates, time_s):
+    """(time_s, marker frame, side, kind, on_plate) of every heel strike and toe off inside the trial, in order."""
+    events = []
+    for side, a, b in contacts:
+        on_plate = (side, a, b) in on_plates
+        if a > 0:
+            events.append((float(time_s[a]), int(round(time_s[a] * MARKER_RATE_HZ)), side, "heel_strike", on_plate))
+        if b < time_s.size:
+            events.append((float(time_s[b - 1]), int(round(time_s[b - 1] * MARKER_RATE_HZ)), side, "toe_off",
+                           on_plate))
+    events.sort()
+    return events
+
+
+def contact_moments(q, qd, qdd, params, feet):
+    """Joint moments (frames, 7, 3), N·m in the distal segment frames, with every ground contact of ``feet``."""
+    from gaitcli.dynamics.equations import ExternalWrench
+    from gaitcli.dynamics.inverse import inverse_dynamics
+
+    external = [ExternalWrench(body=BODIES.index(f"foot_{s}"), force_N=feet[s]["force_N"],
+                               point_m=np.nan_to_num(feet[s]["cop_m"]),
+                               moment_Nm=np.column_stack([np.zeros((q.shape[0], 2)), feet[s]["free_moment_Nm"]]))
+                for s in "rl"]
+    return inverse_dynamics(q, qd, qdd, params, external).joint_moments_distal_Nm
+
+
+def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0, artefact_mm: float = 10.0,
+                   strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78, sex: str = "male",
+                   plate_noise_N: float = 1.0, period_s: float | None = None) -> SyntheticTrial:
+    """Make a synthetic walking trial with known truth (nothing written).
+
+    ``noise_mm`` is the RMS of each marker's 3-D position error (white, σ = noise/√3
+    per axis), as optical systems quote their accuracy; ``artefact_mm`` the peak
+    3-D displacement of the low-frequency skin artefact. ``period_s`` (gait cycle, s)
+    defaults to the condition's; the stride length follows from stature and angles.
+    """
+    from gaitcli.kinematics.calibration import calibrate
+    from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
+
+    if condition not in CONDITIONS:
+        raise InputError(None, "--condition", f"got {condition!r} (expected one of {', '.join(CONDITIONS)})")
+    if noise_mm < 0 or artefact_mm < 0:
+        raise InputError(None, "--noise-mm", "expected noise and artefact amplitudes ≥ 0 mm")
+    cond = CONDITIONS[condition]
+    if period_s is not None:
+        if not 0.6 <= period_s <= 3.0:
+            raise InputError(None, "--period-s", f"got {period_s} s (expected a gait cycle of 0.6–3.0 s)")
+        cond = replace(cond, period_s=float(period_s))
+    rng = np.random.default_rng(seed)
+    template = {k: v for k, v in standing_template(stature_m).items() if k in MARKER_BODY}
+    cal = calibrate(landmarks_to_markers(template, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg, stature_m=stature_m,
+                    sex=sex, disturbances=() if condition == "normal" else (condition,))
+    params = cal.body
+    design = balanced_gait(Geometry.standing(template, cal.joint_centres_m), cond, params)
+    qd_c, qdd_c, feet_c, clip = ground_reactions(design, params)
+
+    # tile the cycle over the trial at the analog rate; markers every `step` analog samples
+    n = design.q.shape[0]
+    step = int(round(ANALOG_RATE_HZ / MARKER_RATE_HZ))
+    j = np.arange(int(round(0.25 * n)), int(round((strides + 1.25) * n)))
+    cycle, i = j // n, j % n
+    t_abs = j / ANALOG_RATE_HZ
+    t = t_abs - t_abs[0]
+    q = design.q[i].copy()
+    q[:, 0] += cycle * design.stride_m
+    feet = {}
+    for s in "rl":
+        cop = feet_c[s]["cop_m"][i].copy()
+        cop[:, 0] += design.speed_m_s * t_abs
+        feet[s] = {"force_N": feet_c[s]["force_N"][i], "cop_m": cop, "free_moment_Nm": feet_c[s]["free_moment_Nm"][i]}
+
+    contacts = stance_contacts(design.stance, i)
+    complete = sorted([c for c in contacts if c[1] > 0 and c[2] < j.size], key=lambda c: c[1])
+    middle = len(complete) // 2 - 1
+    chosen = complete[middle:middle + 2]  # one right and one left stance in the middle of the walk
+    plates = [plate_recording(f"plate{k + 1}", feet[side], a, b, rng, plate_noise_N)
+              for k, (side, a, b) in enumerate(chosen)]
+
+    frames = slice(0, None, step)
+    qm, qd, qdd, tm = q[frames], qd_c[i][frames], qdd_c[i][frames], t[frames]
+    names, exact, bodies = model_markers(qm, cal)
+    noisy = exact + white_noise(rng, noise_mm, exact.shape) \
+        + skin_artefact(rng, tm, design.period_s, artefact_mm / 1000.0, bodies)
+    static_positions = np.stack([template[nm] for nm in names])[None] \
+        + white_noise(rng, noise_mm, (int(MARKER_RATE_HZ), len(names), 3))
+    sub_feet = {s: {k: v[frames] for k, v in feet[s].items()} for s in "rl"}
+    return SyntheticTrial(markers=Markers(tuple(names), noisy, MARKER_RATE_HZ),
+                          static=Markers(tuple(names), static_positions, MARKER_RATE_HZ), plates=plates, q=qm,
+                          qd=qd, qdd=qdd, feet=sub_feet, plate_feet=[c[0] for c in chosen],
+                          events=contact_events(contacts, chosen, t), calibration=cal, design=design,
+                          joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip)
