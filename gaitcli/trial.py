@@ -7,9 +7,7 @@ A trial folder holds ``trial.c3d`` (or the file ``subject.yaml`` names under
 
 from __future__ import annotations
 
-import difflib
 import hashlib
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -17,11 +15,11 @@ from typing import Any
 import numpy as np
 
 from gaitcli.io.yamlfile import read_yaml
+from gaitcli.core.validate import known_keys, number, one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.anthropometry import Disturbance
 
 SEXES = ("male", "female")
-SIDES = ("r", "l")
 SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")
 
 
@@ -38,29 +36,16 @@ class Subject:
     static: str | None = None
     static_frames: tuple[int, int] | None = None
     marker_map: dict[str, str] = field(default_factory=dict)
-    disturbed_side: str | None = None
     disturbances: tuple[Disturbance, ...] = ()  # added masses (Tables A.2–A.3), in segment axes
-    condition: str = "normal"
 
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "trial", "static",
-        "static_frames", "marker_map", "disturbed_side", "disturbances", "condition")
+        "static_frames", "marker_map", "disturbances")
 DISTURBANCE_KEYS = ("segment", "mass_kg", "inertia_kgm2", "com_offset_m", "name")
 
 
-def _unknown_key(path, where: str, key: str, allowed) -> InputError:
-    hint = difflib.get_close_matches(str(key), allowed, n=1)
-    more = f" (did you mean '{hint[0]}'?)" if hint else ""
-    return InputError(path, f"{where}{key}", f"unknown key{more}; allowed keys are {', '.join(allowed)}")
-
-
 def _number(path, where, value, *, low=None, high=None, expected="a number") -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(path, where, f"got {value!r} (expected {expected})")
-    value = float(value)
-    if not math.isfinite(value) or (low is not None and value <= low) or (high is not None and value > high):
-        raise InputError(path, where, f"got {value:g} (expected {expected})")
-    return value
+    return number(value, where=where, path=path, low=low, high=high, low_open=low is not None, expected=expected)
 
 
 def _vector3(path, where, value) -> tuple[float, float, float]:
@@ -73,9 +58,7 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     """Validate the parsed ``subject.yaml``; every problem is an :class:`InputError` naming the key."""
     if not isinstance(data, dict):
         raise InputError(path, None, "expected a YAML mapping with mass_kg, stature_m and sex")
-    for key in data:
-        if key not in KEYS:
-            raise _unknown_key(path, "", key, list(KEYS))
+    known_keys(data, KEYS, path=path)
     for key in ("stature_m", "sex"):
         if key not in data:
             raise InputError(path, key, "missing (required)")
@@ -89,9 +72,7 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
         raise InputError(path, "stature_m", f"got {stature:g} (expected metres, e.g. {stature / 100:.2f}; "
                                             "this looks like centimetres)")
     stature = _number(path, "stature_m", stature, low=0.4, high=2.6, expected="a stature in metres between 0.4 and 2.6")
-    sex = data["sex"]
-    if sex not in SEXES:
-        raise InputError(path, "sex", f"got {sex!r} (expected one of {', '.join(SEXES)})")
+    sex = one_of(data["sex"], SEXES, where="sex", path=path)
     lengths = {}
     for key in ("thigh_length_m", "shank_length_m"):
         if data.get(key) is not None:
@@ -110,9 +91,6 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     if not isinstance(marker_map, dict) or not all(isinstance(k, str) and isinstance(v, str)
                                                    for k, v in marker_map.items()):
         raise InputError(path, "marker_map", "expected a mapping of lab label → model landmark (text → text)")
-    side = data.get("disturbed_side")
-    if side is not None and side not in SIDES:
-        raise InputError(path, "disturbed_side", f"got {side!r} (expected r or l)")
     disturbances = []
     items = data.get("disturbances") or []
     if not isinstance(items, list):
@@ -121,14 +99,10 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
         where = f"disturbances[{i}]"
         if not isinstance(item, dict):
             raise InputError(path, where, "expected a mapping with segment and mass_kg")
-        for key in item:
-            if key not in DISTURBANCE_KEYS:
-                raise _unknown_key(path, f"{where}.", key, list(DISTURBANCE_KEYS))
+        known_keys(item, DISTURBANCE_KEYS, where=f"{where}.", path=path)
         if not isinstance(item.get("name", ""), str):
             raise InputError(path, f"{where}.name", f"got {item['name']!r} (expected text)")
-        segment = item.get("segment")
-        if segment not in SEGMENTS:
-            raise InputError(path, f"{where}.segment", f"got {segment!r} (expected one of {', '.join(SEGMENTS)})")
+        segment = one_of(item.get("segment"), SEGMENTS, where=f"{where}.segment", path=path)
         disturbances.append(Disturbance(
             segment=segment,
             mass_kg=_number(path, f"{where}.mass_kg", item.get("mass_kg"), low=0, high=50,
@@ -138,12 +112,8 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
             com_offset_m=np.array(_vector3(path, f"{where}.com_offset_m", item.get("com_offset_m", [0, 0, 0]))),
             name=str(item.get("name", "")),
         ))
-    condition = data.get("condition", "normal")
-    if not isinstance(condition, str):
-        raise InputError(path, "condition", f"got {condition!r} (expected text)")
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
-                   static_frames=frames, marker_map=dict(marker_map), disturbed_side=side,
-                   disturbances=tuple(disturbances), condition=condition, **lengths)
+                   static_frames=frames, marker_map=dict(marker_map), disturbances=tuple(disturbances), **lengths)
 
 
 def load_subject(path: str | Path) -> Subject:

@@ -7,10 +7,12 @@ import dataclasses
 import pytest
 import yaml
 
-from gaitcli.config import (STAGES, FilterConfig, IdynConfig, MusclesConfig, PipelineConfig, load_pipeline,
-                            pipeline_from_dict, to_yaml, with_overrides)
+from gaitcli.config import PipelineConfig, configure, load_pipeline, pipeline_from_dict, to_yaml, with_overrides
+from gaitcli.core.registry import stage_names
+from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import InputError
-from gaitcli.pipeline import configure
+from gaitcli.muscles.stage import MusclesConfig
+from gaitcli.signal.stage import FilterConfig
 from gaitcli.resources import pipeline_file
 
 SECTIONS = {"filter": FilterConfig, "idyn": IdynConfig, "muscles": MusclesConfig}
@@ -73,7 +75,7 @@ def test_partial_file_keeps_other_defaults(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("stages: [idyn, filter, muscles]\nfilter:\n  cutoff_hz: 8\nmuscles:\n  method: so\n")
     cfg = load_pipeline(path)
-    assert cfg.stages == STAGES  # run in pipeline order whatever the file's order
+    assert cfg.stages == stage_names()  # run in pipeline order whatever the file's order
     assert cfg.filter == dataclasses.replace(FilterConfig(), cutoff_hz=8.0)
     assert isinstance(cfg.filter.cutoff_hz, float)
     assert cfg.muscles == dataclasses.replace(MusclesConfig(), method="so")

@@ -44,8 +44,8 @@ def test_minimal_subject_and_defaults():
     s = subject_from_dict(BASE)
     assert (s.mass_kg, s.stature_m, s.sex) == (75.0, 1.78, "male")
     assert s.thigh_length_m is None and s.shank_length_m is None
-    assert s.marker_map == {} and s.disturbances == () and s.disturbed_side is None
-    assert s.trial is None and s.static is None and s.static_frames is None and s.condition == "normal"
+    assert s.marker_map == {} and s.disturbances == ()
+    assert s.trial is None and s.static is None and s.static_frames is None
     assert isinstance(s.mass_kg, float)
 
 
@@ -61,15 +61,13 @@ def test_mass_auto_or_missing_means_estimated(mass):
 
 def test_every_optional_field():
     data = _with(thigh_length_m=0.45, shank_length_m=0.42, trial="walk03.c3d", static="stand.c3d",
-                 static_frames=[1, 100], marker_map={"RHEE": "CAr", "LHEE": "CAl"}, disturbed_side="r",
-                 condition="ski_boot",
+                 static_frames=[1, 100], marker_map={"RHEE": "CAr", "LHEE": "CAl"},
                  disturbances=[{"segment": "foot_r", "name": "ski_boot", "mass_kg": 2.431,
                                 "inertia_kgm2": [0.02, 0.033, 0.012], "com_offset_m": [0.01, 0.0, -0.02]}])
     s = subject_from_dict(data)
     assert (s.thigh_length_m, s.shank_length_m) == (0.45, 0.42)
     assert (s.trial, s.static, s.static_frames) == ("walk03.c3d", "stand.c3d", (1, 100))
     assert s.marker_map == {"RHEE": "CAr", "LHEE": "CAl"}
-    assert s.disturbed_side == "r" and s.condition == "ski_boot"
     (d,) = s.disturbances
     assert (d.segment, d.name, d.mass_kg) == ("foot_r", "ski_boot", 2.431)
     # principal moments about the added mass's own centre become a diagonal inertia tensor
@@ -89,7 +87,7 @@ def test_sample_subjects_load(name):
     raw = yaml.safe_load(path.read_text())
     s = load_subject(path)
     # the sample subject of sample_trials/README.md
-    assert (s.mass_kg, s.stature_m, s.sex, s.condition) == (55.0, 1.65, "male", name)
+    assert (s.mass_kg, s.stature_m, s.sex) == (55.0, 1.65, "male")
     assert len(s.disturbances) == len(raw.get("disturbances", []))
     for d, r in zip(s.disturbances, raw.get("disturbances", [])):
         assert d.segment == r["segment"] and d.mass_kg == r["mass_kg"] and d.name == r["name"]
@@ -164,8 +162,7 @@ def test_marker_map_shape(mapping):
     assert _error(_with(marker_map=mapping)).field == "marker_map"
 
 
-@pytest.mark.parametrize("key,value", [("trial", 3), ("static", ["a.c3d"]), ("condition", 7),
-                                       ("disturbed_side", "right"), ("disturbed_side", ["r"])])
+@pytest.mark.parametrize("key,value", [("trial", 3), ("static", ["a.c3d"])])
 def test_other_fields(key, value):
     assert _error(_with(**{key: value})).field == key
 
@@ -218,9 +215,9 @@ def test_load_subject_file_errors(tmp_path):
 
 def test_load_subject_round_trip(tmp_path):
     path = tmp_path / "subject.yaml"
-    path.write_text(yaml.safe_dump(_with(marker_map={"RHEE": "CAr"}, disturbed_side="l")))
+    path.write_text(yaml.safe_dump(_with(marker_map={"RHEE": "CAr"})))
     s = load_subject(path)
-    assert s.marker_map == {"RHEE": "CAr"} and s.disturbed_side == "l" and s.mass_kg == 75.0
+    assert s.marker_map == {"RHEE": "CAr"} and s.mass_kg == 75.0
 
 
 # ------------------------------------------------------------------------------ open_trial
@@ -289,8 +286,7 @@ def test_open_trial_modifies_nothing(tmp_path):
     folder = tmp_path / "normal"
     shutil.copytree(sample_trial("normal"), folder, ignore=shutil.ignore_patterns("gait_out", "truth"))
     before = {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()}
-    t = open_trial(folder)
-    assert t.subject.condition == "normal"
+    open_trial(folder)
     assert {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()} == before
 
 

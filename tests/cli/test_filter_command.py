@@ -198,9 +198,9 @@ def test_h5_provenance_and_units(runs):
         h5.visititems(lambda name, obj: missing.append(name)
                       if isinstance(obj, h5py.Dataset) and not str(obj.attrs.get("units", "")) else None)
         assert not missing, f"datasets without units: {missing}"
-        assert h5["markers/filtered"].attrs["units"] == "m"
+        assert h5["trial/markers/positions_m"].attrs["units"] == "m"
         assert h5["plates/plate1/force"].attrs["units"] == "N"
-        filtered = h5["markers/filtered"][()]
+        filtered = h5["trial/markers/positions_m"][()]
     # the HDF5 holds what the CSV shows (CSV: 6 significant digits)
     markers = read_table(runs.out["normal"] / "markers_filtered.csv")
     np.testing.assert_allclose(markers.filter(regex="_m$").to_numpy(), filtered.reshape(len(markers), -1),

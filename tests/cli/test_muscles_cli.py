@@ -54,7 +54,8 @@ IPOPT_FAILURES = ("Infeasible_Problem_Detected", "Search_Direction_Becomes_Too_S
                   "Not_Enough_Degrees_Of_Freedom", "Invalid_Problem_Definition", "Invalid_Option",
                   "Invalid_Number_Detected", "Unrecoverable_Exception", "NonIpopt_Exception_Thrown",
                   "Insufficient_Memory", "Internal_Error")
-NAN_COLUMN = "knee_flexion_r_deg"
+NAN_COLUMN = "knee_flexion_r_deg"  # as sagittal.csv names it
+NAN_DATASET = "sagittal/legs/r/knee_flexion_rad"  # where idyn.h5 holds it
 NAN_OFFSET_S = (0.40, 0.50)  # where the knee angle becomes NaN, after the start of the analysed stride
 CSV_RTOL = 1e-5  # the tables' 6 significant digits
 
@@ -71,11 +72,11 @@ def _copy_with_outputs(source: Path, dest: Path) -> Path:
 
 
 def _corrupt_knee(h5_path: Path, start_s: float) -> dict:
-    """NaN in ``sagittal/knee_flexion_r_deg`` of idyn.h5 over NAN_OFFSET_S after ``start_s``; the rows and times."""
+    """NaN in the right knee flexion of idyn.h5 over NAN_OFFSET_S after ``start_s``; the rows and times."""
     with h5py.File(h5_path, "r+") as h5:
-        t = h5["sagittal/time_s"][()]
+        t = h5["sagittal/legs/r/time_s"][()]
         rows = np.flatnonzero((t >= start_s + NAN_OFFSET_S[0]) & (t <= start_s + NAN_OFFSET_S[1]))
-        data = h5[f"sagittal/{NAN_COLUMN}"]
+        data = h5[NAN_DATASET]
         values = data[()]
         values[rows] = np.nan
         data[...] = values
@@ -196,10 +197,9 @@ def test_so_h5_units_and_provenance(runs):
             assert key in h5.attrs and str(h5.attrs[key]), key
         assert json.loads(h5.attrs["input_sha256"]).keys() >= {"trial.c3d", "subject.yaml"}
         assert h5.attrs["method"] == "so" and bool(h5.attrs["converged"]) is True
-        names = [x.decode() if isinstance(x, bytes) else str(x) for x in h5["muscles"][()]]
-        assert tuple(names) == MUSCLES
-        assert h5["forces"].attrs["units"] == "N" and h5["time"].attrs["units"] == "s"
-        np.testing.assert_allclose(forces[[f"{m}_force_N" for m in MUSCLES]], h5["forces"][()], rtol=CSV_RTOL,
+        assert tuple(h5["result/muscle_names"].asstr()[()]) == MUSCLES
+        assert h5["result/forces_N"].attrs["units"] == "N" and h5["result/time_s"].attrs["units"] == "s"
+        np.testing.assert_allclose(forces[[f"{m}_force_N" for m in MUSCLES]], h5["result/forces_N"][()], rtol=CSV_RTOL,
                                    atol=1e-6)
 
 
@@ -207,10 +207,10 @@ def test_so_moment_equations_hold(runs):
     """Muscle + passive + damping moments reproduce the inverse-dynamics moments (4.20)."""
     folder = runs[1] / "so_first"
     with h5py.File(folder / "muscles.h5", "r") as h5:
-        error = (h5["muscle_moments"][()] + h5["passive_moments"][()] + h5["damping_moments"][()]
-                 - h5["joint_moments"][()])
-        np.testing.assert_allclose(h5["moment_error"][()], error, atol=1e-9)
-        peak = np.abs(h5["joint_moments"][()]).max()
+        error = (h5["result/muscle_moments_Nm"][()] + h5["result/passive_moments_Nm"][()] + h5["result/damping_moments_Nm"][()]
+                 - h5["result/joint_moments_Nm"][()])
+        np.testing.assert_allclose(h5["result/moment_error_Nm"][()], error, atol=1e-9)
+        peak = np.abs(h5["result/joint_moments_Nm"][()]).max()
     assert peak > 20.0  # a walking stride's hip/knee/ankle moments, not an empty problem
     info = summary_of(folder)
     assert np.abs(error).max() < 0.5
@@ -268,8 +268,8 @@ def test_eid_and_mso_converge_with_bounded_excitations(runs, method):
         values = pd.read_csv(folder / table)[[f"{m}_{suffix}" for m in MUSCLES]].to_numpy()
         assert _bounded(values), (table, values.min(), values.max())
     with h5py.File(folder / "muscles.h5", "r") as h5:
-        assert np.abs(h5["moment_error"][()]).max() < 0.5
-        assert _bounded(h5["excitations"][()]) and _bounded(h5["activations"][()])
+        assert np.abs(h5["result/moment_error_Nm"][()]).max() < 0.5
+        assert _bounded(h5["result/excitations"][()]) and _bounded(h5["result/activations"][()])
     assert info["metabolic_cost_J"] > 0 and info["cost_of_transport_J_per_m"] > 0
     per_muscle = info["metabolic_cost_per_muscle_J"]
     assert list(per_muscle) == list(MUSCLES)
@@ -341,8 +341,8 @@ def test_eid_not_converged_exit_3(runs):
     with h5py.File(folder / "muscles.h5", "r") as h5:
         assert isinstance(h5.attrs["converged"], (bool, np.bool_)) and not h5.attrs["converged"]
         assert h5.attrs["solver_status"] == info["status"]
-        shortfall = h5["moment_shortfall"][()]
-        assert shortfall.shape == (50, 3) and h5["moment_shortfall"].attrs["units"] == "N*m"
+        shortfall = h5["result/moment_shortfall_Nm"][()]
+        assert shortfall.shape == (50, 3) and h5["result/moment_shortfall_Nm"].attrs["units"] == "N*m"
     assert len(pd.read_csv(folder / "forces.csv")) == 50
     # the diagnosis: the hip flexors cannot follow this gait's early swing (sample_trials/README.md)
     assert info["max_moment_shortfall_Nm"]["hip"] > 1.0

@@ -29,19 +29,22 @@ ends are least accurate. Pelvis residuals in the frames where every contact is m
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from gaitcli.config import FilterConfig, IdynConfig
+from gaitcli.dynamics.stage import IdynConfig
+from gaitcli.signal.stage import FilterConfig
 from gaitcli.dynamics.derivatives import coordinate_derivatives
-from gaitcli.dynamics.stage import FilteredTrial, estimate_mass_kg, foot_measured, inverse_dynamics_stage
+from gaitcli.core.container import FootLoad, Trial, load_known_frames
+from gaitcli.dynamics.stage import estimate_mass_kg, inverse_dynamics_stage
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import COORDINATES, JOINT_CHILD, MOMENTS
 from gaitcli.core.recording import Markers, Recording
-from gaitcli.report.filter_outputs import filtered_trial
 from gaitcli.core.events import Events
 from gaitcli.signal.stage import filter_trial
 from gaitcli.synth import simulate_trial
@@ -60,6 +63,22 @@ def true_events(trial) -> Events:
                   kind=[e[3] for e in ev], source=["plate" if e[4] else "kinematics" for e in ev])
 
 
+def filtered_trial(markers, feet: dict, events: Events) -> Trial:
+    """The container the idyn stage takes, from the synthetic truth's per-foot loads (dicts of arrays)."""
+    t = markers.time_s
+    loads = {}
+    for side in ("r", "l"):
+        load = feet.get(side)
+        if load is None:
+            loads[side] = FootLoad.unmeasured(t.size, load_known_frames(events, t, np.zeros(t.size, bool), side))
+            continue
+        force = np.asarray(load["force_N"], float)
+        known = load_known_frames(events, t, np.nan_to_num(force[:, 2]) > 0, side)
+        loads[side] = FootLoad(force, np.asarray(load["cop_m"], float), np.asarray(load["free_moment_Nm"], float),
+                               known)
+    return Trial(markers=markers, feet=loads, events=events)
+
+
 def calibration_of(trial):
     return calibrate(trial.static, mass_kg=MASS_KG, stature_m=STATURE_M, sex="male")
 
@@ -67,7 +86,7 @@ def calibration_of(trial):
 @pytest.fixture(scope="module")
 def exact():
     trial = simulate_trial(condition="normal", seed=0, noise_mm=0.0, artefact_mm=0.0, plate_noise_N=0.0)
-    filtered = FilteredTrial(markers=trial.markers, feet=trial.feet, events=true_events(trial))
+    filtered = filtered_trial(trial.markers, trial.feet, true_events(trial))
     calibration = calibration_of(trial)
     result = inverse_dynamics_stage(filtered, calibration, IdynConfig(), mass_kg=MASS_KG, mass_source="test")
     return trial, filtered, calibration, result
@@ -129,7 +148,7 @@ def test_body_mass_from_the_plates(exact):
     # over a periodic stride each foot's vertical impulse is m g T / 2 (2·∫Fz dt / (g T) = m)
     _, filtered, _, _ = exact
     assert estimate_mass_kg(filtered) == pytest.approx(MASS_KG, rel=1e-3)
-    no_plates = FilteredTrial(filtered.markers, filtered.feet, filtered.events.of(source="kinematics"))
+    no_plates = dataclasses.replace(filtered, events=filtered.events.of(source="kinematics"))
     assert estimate_mass_kg(no_plates) is None
 
 
@@ -142,7 +161,8 @@ def test_foot_load_known_in_swing_and_on_the_plate_only():
     force = np.zeros((100, 3))
     force[30:61, 2] = 500.0
     feet = {"r": {"force_N": force, "cop_m": np.zeros((100, 3)), "free_moment_Nm": np.zeros(100)}}
-    known = foot_measured(FilteredTrial(Markers((), np.zeros((100, 0, 3)), 100.0), feet, events))
+    trial = filtered_trial(Markers((), np.zeros((100, 0, 3)), 100.0), feet, events)
+    known = {side: trial.load_known(side) for side in ("r", "l")}
     expect_r = ~((t >= 0.2) & (t < 0.3))
     expect_l = (t > 0.1) & (t < 0.5)
     np.testing.assert_array_equal(known["r"], expect_r)
@@ -156,7 +176,7 @@ def test_untracked_thigh_frames_are_nan_with_a_warning(exact):
     gap = slice(100, 120)  # file frames 101–120 (first frame 1)
     for name in ("GTr", "MRFr"):
         positions[gap, labels.index(name)] = np.nan
-    holed = FilteredTrial(Markers(labels, positions, trial.markers.rate_hz), filtered.feet, filtered.events)
+    holed = dataclasses.replace(filtered, markers=Markers(labels, positions, trial.markers.rate_hz))
     with pytest.warns(GaitWarning, match=r"thigh_r has < 3 markers in frames 101–120"):
         result = inverse_dynamics_stage(holed, calibration, IdynConfig(), mass_kg=MASS_KG, mass_source="test")
     thigh = [COORDINATES.index(f"{j}_r_{a}") for j in ("hip", "knee") for a in ("flexion", "adduction", "rotation")]
@@ -183,7 +203,7 @@ def noisy():
     out = {}
     for seed in NOISY_SEEDS:
         trial = simulate_trial(condition="normal", seed=seed)
-        filtered = filtered_trial(filter_trial(Recording(trial.markers, trial.plates), FilterConfig()))
+        filtered = filter_trial(Recording(trial.markers, trial.plates), FilterConfig()).trial
         result = inverse_dynamics_stage(filtered, calibration_of(trial), IdynConfig(), mass_kg=MASS_KG,
                                         mass_source="test")
         out[seed] = (trial, filtered, result)
@@ -224,7 +244,7 @@ def test_residual_force_is_what_newtons_law_leaves_over(noisy, seed):
     masses = result.parameters.mass_kg
     com = forward_kinematics(result.q, result.parameters).com_m
     _, acceleration = coordinate_derivatives(np.einsum("b,nbk->nk", masses, com), trial.markers.rate_hz)
-    ground = sum(np.nan_to_num(np.asarray(load["force_N"])) for load in filtered.feet.values())
+    ground = sum(np.nan_to_num(load.force_N) for load in filtered.feet.values())
     newton = acceleration + masses.sum() * np.array([0.0, 0.0, 9.81]) - ground
     np.testing.assert_allclose(result.residual_force_N[measured], newton[measured], rtol=0, atol=0.1)
     # the noise shows in the residuals: they are not hidden (RMS 46–65 N measured over seeds 0–9)

@@ -14,7 +14,8 @@ import pytest
 import yaml
 
 from gaitcli import __version__
-from gaitcli.io.outputs import Dataset, provenance, stage_folder, write_h5, write_json, write_table
+from gaitcli.io.h5 import Dataset, provenance, write_h5
+from gaitcli.io.outputs import stage_folder, write_json, write_table
 
 
 def _tree(folder: Path) -> dict[str, bytes]:

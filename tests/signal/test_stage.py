@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gaitcli.config import FilterConfig
+from gaitcli.signal.stage import FilterConfig
 from gaitcli.errors import GaitWarning
 from gaitcli.pipeline import load_recording
 from gaitcli.core.recording import Markers, Recording
@@ -143,7 +143,7 @@ def test_result_shapes_and_summary_fields(samples):
     n = r.markers.n_frames
     assert r.raw_markers.positions_m.shape == r.markers.positions_m.shape
     assert r.plate_owner.shape == (len(r.plates), n)
-    for load in r.plates + list(r.feet.values()):
+    for load in r.plates + list(r.plate_loads_per_foot.values()):
         assert load.force_N.shape == (n, 3) and load.cop_m.shape == (n, 3) and load.free_moment_Nm.shape == (n,)
     for load in r.plates_analog:
         assert load.rate_hz == 1000.0 and load.force_N.shape[0] == 10 * n
@@ -214,7 +214,7 @@ def test_walk_plate_events_and_feet(walk_factory):
             assert np.abs(truth - t[0]).min() * walk.rate_hz <= 1.0
     # each foot's load is the sum of the plates it owns: here one plate each
     for i, side in enumerate(("r", "l")):
-        np.testing.assert_allclose(result.feet[side].force_N, result.plates[i].force_N * (result.plate_owner[i] ==
+        np.testing.assert_allclose(result.trial.feet[side].force_N, result.plates[i].force_N * (result.plate_owner[i] ==
                                                                                           side)[:, None])
 
 
@@ -222,7 +222,8 @@ def test_no_plates_gives_kinematic_events_only(walk_factory):
     walk = walk_factory()
     result = filter_trial(_recording(walk), FilterConfig())
     assert len(result.events) > 0 and set(result.events.source) == {"kinematics"}
-    assert result.plates == [] and result.feet == {}
+    assert result.plates == [] and result.plate_loads_per_foot == {}
+    assert not any(load.on_plates for load in result.trial.feet.values())
     assert result.plate_owner.shape[0] == 0
 
 
