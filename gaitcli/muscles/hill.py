@@ -26,6 +26,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.numerics import finite_difference_matrix
+
 from .evaluation import evaluate
 from .parameters import MuscleParameters, table_a1
 
@@ -42,40 +44,6 @@ def path_angles(q):
     This is the only place where the two sign conventions meet.
     """
     return -q[0], q[1], -q[2]
-
-
-def finite_difference_matrix(n: int, dt: float, scheme: str) -> np.ndarray:
-    """Matrix D (n × n) with ẋ ≈ D·x for samples x spaced ``dt`` s apart.
-
-    ``scheme``: ``"periodic"`` central differences wrapping around (4.10, for a
-    full cycle, one time step between the last and the first node);
-    ``"central"`` central inside, forward at the first and backward at the last
-    sample (4.10–4.12); ``"backward"`` backward differences (4.31, 4.33) with a
-    forward difference at the first sample (4.4: first-frame treatment of MSO).
-    """
-    if n < 2:
-        raise ValueError("finite differences need at least 2 samples")
-    d = np.zeros((n, n))
-    if scheme == "periodic":
-        if n < 3:
-            raise ValueError("periodic central differences need at least 3 samples")
-        idx = np.arange(n)
-        d[idx, (idx + 1) % n] = 1.0 / (2 * dt)
-        d[idx, (idx - 1) % n] = -1.0 / (2 * dt)
-    elif scheme == "central":
-        idx = np.arange(1, n - 1)
-        d[idx, idx + 1] = 1.0 / (2 * dt)
-        d[idx, idx - 1] = -1.0 / (2 * dt)
-        d[0, 0], d[0, 1] = -1.0 / dt, 1.0 / dt  # (4.12)
-        d[n - 1, n - 2], d[n - 1, n - 1] = -1.0 / dt, 1.0 / dt  # (4.11)
-    elif scheme == "backward":
-        idx = np.arange(1, n)
-        d[idx, idx] = 1.0 / dt
-        d[idx, idx - 1] = -1.0 / dt
-        d[0, 0], d[0, 1] = -1.0 / dt, 1.0 / dt
-    else:
-        raise ValueError(f"unknown finite-difference scheme {scheme!r}")
-    return d
 
 
 def _smooth_max(x, y, width: float):
