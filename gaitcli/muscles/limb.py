@@ -10,9 +10,10 @@ Absolute segment angles, counter-clockwise seen with x to the right and z up
 θ − β + δ. The generalized forces conjugate to q are the hip flexion, knee
 flexion and ankle dorsiflexion moments, the signs of the output tables.
 
-Segment inertia from de Leva (1996) (MODEL_CONSTANTS A), written here with the
-few numbers needed. The ground reaction acts on the foot at (cop_x, 0): the
-floor is the plane z = 0.
+The equations come from the planar-chain builder (:mod:`gaitcli.dynamics.planar`,
+prescribed base = the hip); segment inertia from de Leva (1996) (MODEL_CONSTANTS A,
+the table of :mod:`gaitcli.kinematics.anthropometry`). The ground reaction acts
+on the foot at (cop_x, 0): the floor is the plane z = 0.
 """
 
 from __future__ import annotations
@@ -23,12 +24,15 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from gaitcli.dynamics.planar import Joint, PlanarChain, Segment
 from gaitcli.dynamics.sagittal import SagittalMotion
 from gaitcli.errors import InputError
 
 from .evaluation import evaluate
 
 GRAVITY_M_S2 = 9.81
+#: the limb's generalized coordinates, in order
+LIMB_COORDINATES = ("thigh_angle", "knee_flexion", "ankle_dorsiflexion")
 
 #: de Leva (1996) Table 4 (MODEL_CONSTANTS A), lengths in mm of the reference
 #: subjects (male 1741 mm, female 1735 mm); mass, CoM and radius of gyration in %.
@@ -138,9 +142,27 @@ class LimbParameters:
                    "(gait2dc), CoM 0.024·H below the ankle (Diss. Table A.5, subject 1)",))
 
 
-def _unit(phi):
-    """Unit vector of a segment at absolute angle φ from the downward vertical, (x, z)."""
-    return ca.vertcat(ca.sin(phi), -ca.cos(phi))
+def limb_chain(params: LimbParameters) -> PlanarChain:
+    """The thigh–shank–foot chain on a prescribed hip (4.5.1), built with :mod:`gaitcli.dynamics.planar`.
+
+    Coordinates (θ, β, δ): thigh absolute angle, knee flexion (turns the shank
+    backward, sign −1), ankle dorsiflexion. The foot frame's *along* axis is
+    ⟂ to the foot (down at neutral) and its *across* axis along the foot (forward),
+    so the foot CoM is at (foot_com_down_m, foot_com_forward_m) from the ankle.
+    """
+    p = params
+    segments = [
+        Segment("thigh", p.thigh_mass_kg, p.thigh_inertia_kgm2, p.thigh_length_m, p.thigh_com_m,
+                points={"knee": (p.thigh_length_m, 0.0)}),
+        Segment("shank", p.shank_mass_kg, p.shank_inertia_kgm2, p.shank_length_m, p.shank_com_m,
+                points={"ankle": (p.shank_length_m, 0.0)}),
+        Segment("foot", p.foot_mass_kg, p.foot_inertia_kgm2, p.foot_length_m, p.foot_com_down_m,
+                com_across_m=p.foot_com_forward_m),
+    ]
+    joints = [Joint(LIMB_COORDINATES[0], None, "thigh", absolute=True),
+              Joint(LIMB_COORDINATES[1], "thigh", "shank", sign=-1.0),
+              Joint(LIMB_COORDINATES[2], "shank", "foot")]
+    return PlanarChain(segments, joints, base="prescribed", gravity_m_s2=p.gravity_m_s2)
 
 
 class LimbModel:
@@ -153,44 +175,33 @@ class LimbModel:
       motion, τ = M(q)q̈ + k(q, q̇, ḧ) − q_g(q) − q_gr(q, f_gr) (4.2, 4.21)
     - ``forward_dynamics(q, qd, tau, hip, hip_acc, grf, cop_x) → q̈`` (2.29)
     - ``mass_matrix(q) → M`` (3 × 3)
+    - ``joint_angles(q) → ψ``: hip flexion, knee flexion, ankle dorsiflexion, the
+      angles the muscle and passive-joint models take. ψ = P·q is linear (hip
+      flexion = thigh angle − trunk angle), so the same map gives the joint angle
+      rates and Pᵀ turns joint moments into generalized forces; with the trunk
+      upright P = I: ψ = q and the joint moments are τ.
     """
 
     def __init__(self, params: LimbParameters):
-        self.params = p = params
+        self.params = params
+        self.chain = chain = limb_chain(params)
         sym = ca.SX.sym
         q, qd, qdd, tau = sym("q", 3), sym("qd", 3), sym("qdd", 3), sym("tau", 3)
         hip, hip_acc, grf, cop = sym("hip", 2), sym("hip_acc", 2), sym("grf", 2), sym("cop_x")
-        th, sh, ft = q[0], q[0] - q[1], q[0] - q[1] + q[2]
-        knee = hip + p.thigh_length_m * _unit(th)
-        ankle = knee + p.shank_length_m * _unit(sh)
-        foot_fwd = ca.vertcat(ca.cos(ft), ca.sin(ft))
-        foot_up = ca.vertcat(-ca.sin(ft), ca.cos(ft))
-        coms = [hip + p.thigh_com_m * _unit(th), knee + p.shank_com_m * _unit(sh),
-                ankle + p.foot_com_forward_m * foot_fwd - p.foot_com_down_m * foot_up]
-        masses = [p.thigh_mass_kg, p.shank_mass_kg, p.foot_mass_kg]
-        inertias = [p.thigh_inertia_kgm2, p.shank_inertia_kgm2, p.foot_inertia_kgm2]
-        rates = [ca.DM([[1, 0, 0]]), ca.DM([[1, -1, 0]]), ca.DM([[1, -1, 1]])]  # ω_b = c_b·q̇
-        gravity = ca.vertcat(0, p.gravity_m_s2)
-        mass_matrix = ca.SX.zeros(3, 3)
-        tau_id = ca.SX.zeros(3)
-        for com, mass, inertia, c in zip(coms, masses, inertias, rates):
-            jac = ca.jacobian(com, q)
-            acc = jac @ qdd + ca.jacobian(jac @ qd, q) @ qd + hip_acc  # CoM acceleration
-            mass_matrix += mass * jac.T @ jac + inertia * c.T @ c
-            tau_id += jac.T @ (mass * (acc + gravity)) + c.T * (inertia * (c @ qdd))
-        # ground reaction at (cop_x, 0) on the foot: force at the ankle plus its moment
-        r = ca.vertcat(cop, 0) - ankle
-        q_gr = ca.jacobian(ankle, q).T @ grf + rates[2].T * (r[0] * grf[1] - r[1] * grf[0])
-        tau_id -= q_gr
-        bias = ca.substitute(tau_id, qdd, ca.SX.zeros(3))
+        mass_matrix = chain.mass_matrix(q)
+        # ground reaction at (cop_x, 0) on the foot, the floor being the plane z = 0
+        q_gr = chain.applied_force["foot"](q, hip, ca.vertcat(cop, 0), grf, 0)
+        tau_id = chain.inverse_dynamics(q, qd, qdd, hip_acc) - q_gr
+        bias = chain.inverse_dynamics(q, qd, ca.SX.zeros(3), hip_acc) - q_gr  # k − g − q_gr
+        knee, ankle = chain.points(q, hip)
+        args, names = [hip, hip_acc, grf, cop], ["hip", "hip_acc", "grf", "cop_x"]
         self.points = ca.Function("points", [q, hip], [knee, ankle], ["q", "hip"], ["knee", "ankle"])
         self.mass_matrix = ca.Function("mass_matrix", [q], [mass_matrix], ["q"], ["M"])
-        self.inverse_dynamics = ca.Function(
-            "inverse_dynamics", [q, qd, qdd, hip, hip_acc, grf, cop], [tau_id],
-            ["q", "qd", "qdd", "hip", "hip_acc", "grf", "cop_x"], ["tau"])
-        self.forward_dynamics = ca.Function(
-            "forward_dynamics", [q, qd, tau, hip, hip_acc, grf, cop], [ca.solve(mass_matrix, tau - bias)],
-            ["q", "qd", "tau", "hip", "hip_acc", "grf", "cop_x"], ["qdd"])
+        self.inverse_dynamics = ca.Function("inverse_dynamics", [q, qd, qdd, *args], [tau_id],
+                                            ["q", "qd", "qdd", *names], ["tau"])
+        self.forward_dynamics = ca.Function("forward_dynamics", [q, qd, tau, *args],
+                                            [ca.solve(mass_matrix, tau - bias)], ["q", "qd", "tau", *names], ["qdd"])
+        self.joint_angles = ca.Function("joint_angles", [q], [q], ["q"], ["joint_angles"])
 
     def evaluate(self, name: str, *args):
         """Evaluate Function ``name`` on arrays shaped (n, k) (see ``evaluation.evaluate``)."""
