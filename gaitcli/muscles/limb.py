@@ -27,6 +27,7 @@ from scipy.interpolate import CubicSpline
 from gaitcli.dynamics.planar import Joint, PlanarChain, Segment
 from gaitcli.dynamics.sagittal import SagittalMotion
 from gaitcli.errors import InputError
+from gaitcli.kinematics.anthropometry import DE_LEVA, REFERENCE_STATURE_M, normalise_sex
 
 from .evaluation import evaluate
 
@@ -34,18 +35,10 @@ GRAVITY_M_S2 = 9.81
 #: the limb's generalized coordinates, in order
 LIMB_COORDINATES = ("thigh_angle", "knee_flexion", "ankle_dorsiflexion")
 
-#: de Leva (1996) Table 4 (MODEL_CONSTANTS A), lengths in mm of the reference
-#: subjects (male 1741 mm, female 1735 mm); mass, CoM and radius of gyration in %.
-#: thigh HJC→KJC, shank KJC→AJC, foot HEEL→TTIP; r_trans for the sagittal plane
-#: except the foot, where the dissertation (Table A.5, I_Y = 0.0047 kg m²) uses r_sag.
-_DE_LEVA = {
-    "male": {"stature_mm": 1741.0,
-             "thigh": (422.2, 14.16, 40.95, 32.9), "shank": (440.3, 4.33, 43.95, 24.6),
-             "foot": (258.1, 1.37, 44.15, 25.7)},
-    "female": {"stature_mm": 1735.0,
-               "thigh": (368.5, 14.78, 36.12, 36.4), "shank": (438.6, 4.81, 43.52, 26.3),
-               "foot": (228.3, 1.29, 40.14, 29.9)},
-}
+#: de Leva (1996) segments of the limb (kinematics.anthropometry.DE_LEVA): thigh HJC→KJC, shank KJC→AJC,
+#: foot HEEL→TTIP, and the radius of gyration of each for the sagittal plane: r_trans, except the foot,
+#: where the dissertation (Table A.5, I_Y = 0.0047 kg m²) uses r_sag
+_SAGITTAL_GYRATION = {"thigh": "r_trans_pct", "shank": "r_trans_pct", "foot": "r_sag_pct"}
 #: heel-to-ankle distance along the foot / stature (gait2dc: 0.06 m at 1.8 m; MODEL_CONSTANTS H)
 _HEEL_TO_ANKLE_PER_STATURE = 0.060 / 1.8
 #: foot CoM below the ankle / stature (Diss. Table A.5, subject 1: 0.043 m at 1.792 m)
@@ -116,18 +109,18 @@ class LimbParameters:
                            thigh_length_m: float | None = None,
                            shank_length_m: float | None = None) -> "LimbParameters":
         """de Leva (1996) parameters; lengths scaled by stature unless measured."""
-        if sex not in _DE_LEVA:
-            raise InputError(None, "sex", f"got {sex!r} (expected 'male' or 'female')")
+        sex = normalise_sex(sex)
         if not (mass_kg > 0 and stature_m > 0):
             raise InputError(None, "mass_kg/stature_m", f"got {mass_kg}, {stature_m} (expected numbers > 0)")
-        table = _DE_LEVA[sex]
-        scale = stature_m * 1000.0 / table["stature_mm"]
+        table = DE_LEVA[sex]
+        scale = stature_m * 1000.0 / (REFERENCE_STATURE_M[sex] * 1000.0)
         segs = {}
         for name, measured in (("thigh", thigh_length_m), ("shank", shank_length_m), ("foot", None)):
-            length_mm, mass_pct, com_pct, gyr_pct = table[name]
-            length = measured if measured is not None else length_mm * scale / 1000.0
-            mass = mass_pct / 100.0 * mass_kg
-            segs[name] = (length, mass, com_pct / 100.0 * length, mass * (gyr_pct / 100.0 * length) ** 2)
+            row = table[name]
+            length = measured if measured is not None else row.length_mm * scale / 1000.0
+            mass = row.mass_pct / 100.0 * mass_kg
+            gyration = getattr(row, _SAGITTAL_GYRATION[name]) / 100.0 * length
+            segs[name] = (length, mass, row.com_pct / 100.0 * length, mass * gyration ** 2)
         foot_len = segs["foot"][0]
         return cls(
             body_mass_kg=float(mass_kg), stature_m=float(stature_m),

@@ -115,6 +115,29 @@ def test_de_leva_parameters(limb):
         LimbParameters.from_anthropometry(70, 1.7, "x")
 
 
+def test_de_leva_parameters_unchanged_by_the_shared_table():
+    """from_anthropometry reads kinematics.anthropometry.DE_LEVA; the numbers are those of the limb's own
+    former copy of the table (recorded at commit 9e9ac57), male 73.0 kg / 1.792 m and female 61.9 kg / 1.735 m."""
+    former = {
+        ("male", 73.0, 1.792): dict(
+            thigh_length_m=0.4345677197013211, shank_length_m=0.4531979322228605, foot_length_m=0.2656606547960942,
+            thigh_mass_kg=10.3368, shank_mass_kg=3.1609, foot_mass_kg=1.0001, thigh_com_m=0.177955481217691,
+            shank_com_m=0.19918049121194717, foot_com_forward_m=0.05755584575914226, foot_com_down_m=0.043,
+            thigh_inertia_kgm2=0.21129675905263215, shank_inertia_kgm2=0.03928771855799649,
+            foot_inertia_kgm2=0.00466191285970484),
+        ("female", 61.9, 1.735): dict(
+            thigh_length_m=0.3685, shank_length_m=0.4386, foot_length_m=0.2283, thigh_mass_kg=9.14882,
+            shank_mass_kg=2.97739, foot_mass_kg=0.79851, thigh_com_m=0.1331022, shank_com_m=0.19087872,
+            foot_com_forward_m=0.03380628666666666, foot_com_down_m=0.041632254464285715,
+            thigh_inertia_kgm2=0.1646049286200519, shank_inertia_kgm2=0.039617263775893155,
+            foot_inertia_kgm2=0.003720784856578533),
+    }
+    for (sex, mass, stature), values in former.items():
+        params = LimbParameters.from_anthropometry(mass, stature, sex)
+        for name, value in values.items():
+            assert getattr(params, name) == pytest.approx(value, rel=1e-14), (sex, name)
+
+
 def test_static_leg_hanging_vertical(model, limb):
     """q = 0, at rest, no ground reaction: each joint holds the weight moment of the foot CoM offset.
 
