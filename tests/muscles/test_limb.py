@@ -87,6 +87,8 @@ def test_rebuilt_limb_matches_reference(model, limb):
         new, old = evaluate(rebuilt, *args), evaluate(reference, *args)
         for a, b in zip(new if isinstance(new, tuple) else (new,), old if isinstance(old, tuple) else (old,)):
             np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10, err_msg=name)
+    # the muscle and joint models take the joint angles; with the trunk upright hip flexion = thigh angle
+    np.testing.assert_array_equal(model.evaluate("joint_angles", q), q)
 
 
 @pytest.fixture(scope="module")
