@@ -21,16 +21,8 @@ def _reference_unit(phi):
 
 
 class ReferenceLimbModel:
-    """The limb model as written before the planar builder (commit 9e9ac57), kept verbatim as the reference.
-
-    Functions:
-    - ``points(q, hip) → (knee, ankle)`` joint centres (x, z) in m
-    - ``inverse_dynamics(q, qd, qdd, hip, hip_acc, grf, cop_x) → τ`` (3): the hip
-      flexion, knee flexion and ankle dorsiflexion moments that reproduce the
-      motion, τ = M(q)q̈ + k(q, q̇, ḧ) − q_g(q) − q_gr(q, f_gr) (4.2, 4.21)
-    - ``forward_dynamics(q, qd, tau, hip, hip_acc, grf, cop_x) → q̈`` (2.29)
-    - ``mass_matrix(q) → M`` (3 × 3)
-    """
+    """The limb model as written before the planar builder (commit 9e9ac57), kept as the reference;
+    the same Functions and signatures as :class:`LimbModel`."""
 
     def __init__(self, params: LimbParameters):
         self.params = p = params
