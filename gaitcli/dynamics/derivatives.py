@@ -22,6 +22,7 @@ import warnings
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
+from gaitcli.core.validate import one_of
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.model import COORDINATES
 
@@ -53,8 +54,7 @@ def coordinate_derivatives(q, rate_hz: float, *, method: str = "quintic_spline",
     unwrapped first; default the 24 Cardan angles when ``q`` has the 27 model
     columns, none otherwise. Units: those of ``q`` per s and per s².
     """
-    if method not in METHODS:
-        raise InputError(None, "method", f"got {method!r} (expected one of {', '.join(METHODS)})")
+    one_of(method, METHODS, where="method")
     if not np.isfinite(rate_hz) or rate_hz <= 0:
         raise InputError(None, "rate_hz", f"got {rate_hz} (expected a number > 0)")
     q = np.asarray(q, dtype=float)

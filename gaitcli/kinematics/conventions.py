@@ -8,13 +8,20 @@ dorsiflexion, adduction and internal rotation positive, and every joint moment
 positive in the same sense as its angle (the moment the proximal segment exerts
 on the distal one). Pelvis angles and the lumbar joint keep the model's signs
 (lumbar: forward flexion, left bending, left rotation positive).
+
+The sagittal joint angles of the 2-D models (limb, predict) are the clinical
+ones: hip flexion relative to the pelvis/HAT, knee flexion, ankle dorsiflexion
+(0 with the foot ⟂ shank), in rad. Two published models read them with other
+signs; :func:`muscle_path_angles` and :func:`riener_edrich_angles` /
+:func:`riener_edrich_moments` are the only conversions (pure arithmetic, so
+they work on numpy arrays and CasADi SX alike).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gaitcli.kinematics.model import COORDINATES, JOINTS
+from gaitcli.kinematics.model import JOINTS
 
 #: sign per joint and axis (flexion about y, adduction about x, rotation about z): clinical = sign · model
 CLINICAL_SIGN = {
@@ -60,6 +67,25 @@ def moments_from_clinical(table: np.ndarray) -> np.ndarray:
     return ordered[:, :, [1, 0, 2]]
 
 
-def coordinate_units() -> dict[str, str]:
-    """Units of the output coordinate columns."""
-    return {name: ("m" if i < 3 else "deg") for i, name in enumerate(COORDINATES)}
+def muscle_path_angles(hip_flexion, knee_flexion, ankle_dorsiflexion):
+    """Sagittal joint angles (rad) → the angles (α, β, γ) of the muscle path (A.9), MODEL_CONSTANTS decision 4.
+
+    α = hip extension = −hip flexion, β = knee flexion, γ = ankle plantarflexion
+    from neutral = −dorsiflexion.
+    """
+    return -hip_flexion, knee_flexion, -ankle_dorsiflexion
+
+
+def riener_edrich_angles(hip_flexion, knee_flexion, ankle_dorsiflexion):
+    """Sagittal joint angles (rad) → Riener & Edrich's (φ_H, φ_K, φ_A) in degrees (MODEL_CONSTANTS B).
+
+    Their angles are hip flexion, knee flexion and ankle *plantar*flexion positive.
+    """
+    deg = 180.0 / np.pi
+    return hip_flexion * deg, knee_flexion * deg, -ankle_dorsiflexion * deg
+
+
+def riener_edrich_moments(m_hip, m_knee, m_ankle):
+    """Riener & Edrich's moments (N·m, positive in the sense of their angle) → hip flexion,
+    knee flexion and ankle dorsiflexion moments."""
+    return m_hip, m_knee, -m_ankle

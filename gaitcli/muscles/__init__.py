@@ -5,7 +5,7 @@ Entry point: :func:`run_muscles` on a :class:`SagittalMotion` and
 """
 
 from .forward import ValidationResult, validate_forward
-from .hill import MuscleModel, finite_difference_matrix, path_angles
+from .hill import MuscleModel, path_angles
 from .limb import LimbModel, LimbParameters, MotionInterpolant
 from .parameters import MUSCLE_ABBREVIATIONS, MUSCLE_NAMES, JointParameters, MuscleParameters, table_a1
 from .passive import JointModel
@@ -17,6 +17,6 @@ __all__ = [
     "JointModel", "JointParameters", "LimbModel", "LimbParameters", "METHODS", "MUSCLE_ABBREVIATIONS",
     "MUSCLE_NAMES", "Models", "MotionInterpolant", "MuscleModel", "MuscleOptions", "MuscleParameters",
     "MuscleResult", "Problem", "SolverSettings", "ValidationResult", "build_problem",
-    "default_interval", "finite_difference_matrix", "path_angles", "ralston_cost_of_transport", "run_muscles",
+    "default_interval", "path_angles", "ralston_cost_of_transport", "run_muscles",
     "table_a1", "validate_forward",
 ]

@@ -31,8 +31,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .hill import finite_difference_matrix
-from .mso import MOMENT_SCALE_NM
+from gaitcli.core.numerics import (MOMENT_SCALE_NM, finite_difference_matrix, force_from_stretch,
+                                   stretch_from_force)
+from gaitcli.core.validate import one_of
+
 from .problem import Problem
 from .so import moment_constraints, solve_so
 from .solver import Outcome, SolverSettings, build_solver, solve
@@ -115,7 +117,7 @@ def _bounds_and_start(problem: Problem, so_force: np.ndarray, extra: int):
     ubx = np.concatenate([np.full(m * n, s_max), np.ones(2 * m * n), np.full(extra, np.inf)])  # (4.26), (4.27)
     # warm start: SO forces and the activations/excitations they need, moved inside the bounds
     inv = muscle.invert_forces(so_force, problem.l_m, problem.v_m, problem.dt_s, problem.scheme)
-    s0 = np.clip(np.sqrt(so_force / par.max_isometric_force_N), 0, s_max)
+    s0 = np.clip(stretch_from_force(so_force, par.max_isometric_force_N), 0, s_max)
     a0 = np.clip(np.nan_to_num(inv["a"], nan=0.0, posinf=1.0, neginf=0.0), 0, 1)
     u0 = np.clip(np.nan_to_num(inv["u"], nan=0.0, posinf=1.0, neginf=0.0), 0, 1)
     x0 = np.concatenate([s0.ravel(), a0.ravel(), u0.ravel(), np.zeros(extra)])  # (n, m) row-major = vec of (m, n)
@@ -128,8 +130,7 @@ def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objec
 
     ``warm_start`` = (SO forces (n, m), SO outcome) on the same nodes; computed when omitted.
     """
-    if objective not in OBJECTIVES:
-        raise ValueError(f"objective {objective!r} not in {OBJECTIVES}")
+    one_of(objective, OBJECTIVES, where="objective")
     par = problem.models.muscle.params
     m, n = problem.models.muscle.m, problem.n
     so_force, so_out = warm_start if warm_start is not None else solve_so(problem, settings)
@@ -139,7 +140,7 @@ def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objec
     out = solve(solver, x0, lbx, ubx, 0.0, 0.0)
     blocks = out.x.reshape(3, n, m)
     s_opt = np.clip(blocks[0], 0.0, s_max)  # IPOPT's bound relaxation is 1e-8 of the bound
-    return EidSolution(force_N=par.max_isometric_force_N * s_opt ** 2, activation=blocks[1],
+    return EidSolution(force_N=force_from_stretch(s_opt, par.max_isometric_force_N), activation=blocks[1],
                        excitation=blocks[2], outcome=out, warm_start_outcome=so_out, warm_start_force_N=so_force,
                        node_weights=quadrature_weights(n, problem.periodic))
 

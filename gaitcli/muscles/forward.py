@@ -59,8 +59,9 @@ def state_equations(problem: Problem) -> tuple[ca.Function, ca.Function]:
     hip, hip_acc, grf, cop = sym("hip", 2), sym("hip_acc", 2), sym("grf", 2), sym("cop_x")
     a, s, q, qd = x[:m], x[m:2 * m], x[2 * m:2 * m + NQ], x[2 * m + NQ:]
     adot = muscle.activation_rate(u, a)  # (2.17)
-    sdot, force, _, _ = muscle.contraction_rate(a, s, muscle.length(q), muscle.velocity(q, qd))  # (2.25)
-    tau = muscle.moment_arms(q) @ force + joints.total(q, qd)
+    angles, rates = limb.joint_angles(q), limb.joint_angles(qd)  # ψ = q for the limb: joint moments are τ
+    sdot, force, _, _ = muscle.contraction_rate(a, s, muscle.length(angles), muscle.velocity(angles, rates))  # (2.25)
+    tau = muscle.moment_arms(angles) @ force + joints.total(angles, rates)
     qdd = limb.forward_dynamics(q, qd, tau, hip, hip_acc, grf, cop)  # (2.13)
     xdot = ca.vertcat(adot, sdot, qd, qdd)
     args = [x, u, hip, hip_acc, grf, cop]
@@ -125,7 +126,7 @@ def validate_forward(problem: Problem, motion_interp: MotionInterpolant, force_N
                         rtol=rtol, atol=atol)
         ok &= bool(sol.success and sol.t.size == t_eval.size)
         messages.add(str(sol.message))
-        rate = _metabolic_rate(muscle, sol.t, sol.y.T, t_nodes, u_nodes)
+        rate = _metabolic_rate(problem.models, sol.t, sol.y.T, t_nodes, u_nodes)
         costs.append(float(np.trapezoid(rate, sol.t)) if sol.t.size > 1 else float("nan"))
         keep = slice(0 if not times else 1, None)  # segment starts after the first equal the input
         times.append(sol.t[keep])
@@ -134,9 +135,7 @@ def validate_forward(problem: Problem, motion_interp: MotionInterpolant, force_N
     ref = motion_interp(t_out)
     angles = xs[:, 2 * m:2 * m + NQ]
     err_deg = np.rad2deg(angles - ref.q)
-    q, qd = angles, xs[:, 2 * m + NQ:]
-    _, force, _, _ = muscle.evaluate("contraction_rate", xs[:, :m], xs[:, m:2 * m],
-                                     muscle.evaluate("length", q), muscle.evaluate("velocity", q, qd))
+    force, _, _ = _contraction_along(problem.models, xs)
     return ValidationResult(time_s=t_out, angles_rad=angles, reference_rad=ref.q, force_N=force,
                             activation=xs[:, :m], rms_deg=np.sqrt(np.mean(err_deg ** 2, axis=0)),
                             rms_total_deg=float(np.sqrt(np.mean(err_deg ** 2))),
@@ -145,13 +144,23 @@ def validate_forward(problem: Problem, motion_interp: MotionInterpolant, force_N
                             message="; ".join(sorted(messages)), restarted_at_nodes=restart_at_nodes)
 
 
-def _metabolic_rate(muscle, t, xs, t_nodes, u_nodes) -> np.ndarray:
-    """Total metabolic rate (W) along a simulated trajectory (A.12)."""
+def _contraction_along(models, xs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Tendon force, fibre length and fibre velocity (n, m) along simulated states ``xs`` (n, 2m + 6) (2.25)."""
+    muscle, limb = models.muscle, models.limb
     m = muscle.m
-    q, qd = xs[:, 2 * m:2 * m + NQ], xs[:, 2 * m + NQ:]
-    a, s = xs[:, :m], xs[:, m:2 * m]
-    _, force, l_ce, v_ce = muscle.evaluate("contraction_rate", a, s, muscle.evaluate("length", q),
-                                           muscle.evaluate("velocity", q, qd))
+    angles = limb.evaluate("joint_angles", xs[:, 2 * m:2 * m + NQ])
+    rates = limb.evaluate("joint_angles", xs[:, 2 * m + NQ:])
+    _, force, l_ce, v_ce = muscle.evaluate("contraction_rate", xs[:, :m], xs[:, m:2 * m],
+                                           muscle.evaluate("length", angles),
+                                           muscle.evaluate("velocity", angles, rates))
+    return force, l_ce, v_ce
+
+
+def _metabolic_rate(models, t, xs, t_nodes, u_nodes) -> np.ndarray:
+    """Total metabolic rate (W) along a simulated trajectory (A.12)."""
+    muscle = models.muscle
+    m = muscle.m
+    force, l_ce, v_ce = _contraction_along(models, xs)
     u = np.column_stack([np.interp(t, t_nodes, u_nodes[:, i]) for i in range(m)])
     f_ce = force / np.cos(muscle.params.pennation_rad)
-    return muscle.evaluate("metabolic_rate", u, a, l_ce, v_ce, f_ce).sum(axis=1)
+    return muscle.evaluate("metabolic_rate", u, xs[:, :m], l_ce, v_ce, f_ce).sum(axis=1)

@@ -6,9 +6,12 @@ symbolically and outputs/tests evaluate the very same Functions numerically
 (``evaluate``). All Functions take column vectors with one entry per muscle;
 called with ``m × n`` matrices they evaluate ``n`` samples at once.
 
-Generalized coordinates of the limb model, ``q = (thigh angle, knee flexion,
-ankle dorsiflexion)`` in rad (see ``limb.py``); the conversion to the angles of
-the muscle path (A.9) happens only in :func:`path_angles`.
+The muscle path takes the sagittal joint angles ``ψ = (hip flexion relative to
+the pelvis/HAT, knee flexion, ankle dorsiflexion)`` in rad, whatever model
+supplies them (the limb of ``limb.py``, with an upright trunk, has ψ = q); the
+conversion to the angles of the muscle path (A.9) happens only in
+:func:`gaitcli.kinematics.conventions.muscle_path_angles`. Moment arms are
+joint moments per newton, conjugate to ψ.
 
 Conventions and deliberate readings of the dissertation:
 - activation dynamics (2.17) with t1 = 1/τ_act − 1/τ_deact, t2 = 1/τ_deact (decision 1);
@@ -26,56 +29,23 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.numerics import finite_difference_matrix
+from gaitcli.kinematics.conventions import muscle_path_angles
+
 from .evaluation import evaluate
 from .parameters import MuscleParameters, table_a1
 
-#: number of generalized coordinates of the limb model
+#: number of sagittal joint angles the muscles span (hip, knee, ankle)
 NQ = 3
 
 
-def path_angles(q):
-    """Limb coordinates → the angles of the muscle path (A.9) (decision 4).
+def path_angles(joint_angles):
+    """Joint angles ψ = (hip flexion, knee flexion, ankle dorsiflexion) → (α, β, γ) of the muscle path (A.9).
 
-    ``q = (thigh angle θ, knee flexion β, ankle dorsiflexion δ)``; with the
-    trunk upright θ is hip flexion. Returns ``(α, β, γ)`` with α = hip
-    extension = −θ, β = knee flexion, γ = ankle plantarflexion from neutral = −δ.
-    This is the only place where the two sign conventions meet.
+    α hip extension, β knee flexion, γ ankle plantarflexion (decision 4), through
+    :func:`gaitcli.kinematics.conventions.muscle_path_angles`.
     """
-    return -q[0], q[1], -q[2]
-
-
-def finite_difference_matrix(n: int, dt: float, scheme: str) -> np.ndarray:
-    """Matrix D (n × n) with ẋ ≈ D·x for samples x spaced ``dt`` s apart.
-
-    ``scheme``: ``"periodic"`` central differences wrapping around (4.10, for a
-    full cycle, one time step between the last and the first node);
-    ``"central"`` central inside, forward at the first and backward at the last
-    sample (4.10–4.12); ``"backward"`` backward differences (4.31, 4.33) with a
-    forward difference at the first sample (4.4: first-frame treatment of MSO).
-    """
-    if n < 2:
-        raise ValueError("finite differences need at least 2 samples")
-    d = np.zeros((n, n))
-    if scheme == "periodic":
-        if n < 3:
-            raise ValueError("periodic central differences need at least 3 samples")
-        idx = np.arange(n)
-        d[idx, (idx + 1) % n] = 1.0 / (2 * dt)
-        d[idx, (idx - 1) % n] = -1.0 / (2 * dt)
-    elif scheme == "central":
-        idx = np.arange(1, n - 1)
-        d[idx, idx + 1] = 1.0 / (2 * dt)
-        d[idx, idx - 1] = -1.0 / (2 * dt)
-        d[0, 0], d[0, 1] = -1.0 / dt, 1.0 / dt  # (4.12)
-        d[n - 1, n - 2], d[n - 1, n - 1] = -1.0 / dt, 1.0 / dt  # (4.11)
-    elif scheme == "backward":
-        idx = np.arange(1, n)
-        d[idx, idx] = 1.0 / dt
-        d[idx, idx - 1] = -1.0 / dt
-        d[0, 0], d[0, 1] = -1.0 / dt, 1.0 / dt
-    else:
-        raise ValueError(f"unknown finite-difference scheme {scheme!r}")
-    return d
+    return muscle_path_angles(joint_angles[0], joint_angles[1], joint_angles[2])
 
 
 def _smooth_max(x, y, width: float):
@@ -106,7 +76,8 @@ def _col(values) -> ca.DM:
 class MuscleModel:
     """The compiled CasADi Functions of the muscle model for one parameter set.
 
-    Functions (vectors have one entry per muscle, ``q``/``qd`` have 3):
+    Functions (vectors have one entry per muscle; ``q``/``qd`` are the 3 joint angles
+    ψ = (hip flexion, knee flexion, ankle dorsiflexion) and their rates, see the module doc):
 
     - ``activation_rate(u, a) → ȧ`` (2.17)
     - ``excitation(a, ȧ) → u`` root rule of 4.3.3 (4.19)
@@ -117,7 +88,7 @@ class MuscleModel:
       ``tendon_velocity(F, Ḟ) → v_se`` (2.21); ``stretch_tendon(ŝ) → (F, l_se)``
       (2.19) in terms of the normalised tendon stretch, the force variable of the optimisations
     - ``length(q) → l_m`` (A.9); ``moment_arms(q) → R`` (3 × m, A.11: generalized
-      force per newton, positive in the direction of q); ``velocity(q, qd) → v_m``
+      moment per newton, positive in the direction of ψ); ``velocity(q, qd) → v_m``
     - ``fibre_kinematics(l_se, v_se, l_m, v_m) → (l_ce, v_ce)`` (4.15, 4.17)
     - ``activation_from_force(F, v_se, l_m, v_m) → a`` (4.13–4.18)
     - ``contraction_rate(a, s, l_m, v_m) → (ṡ, F, l_ce, v_ce)`` forward

@@ -10,9 +10,10 @@ Absolute segment angles, counter-clockwise seen with x to the right and z up
 θ − β + δ. The generalized forces conjugate to q are the hip flexion, knee
 flexion and ankle dorsiflexion moments, the signs of the output tables.
 
-Segment inertia from de Leva (1996) (MODEL_CONSTANTS A), written here with the
-few numbers needed. The ground reaction acts on the foot at (cop_x, 0): the
-floor is the plane z = 0.
+The equations come from the planar-chain builder (:mod:`gaitcli.dynamics.planar`,
+prescribed base = the hip); segment inertia from de Leva (1996) (MODEL_CONSTANTS A,
+the table of :mod:`gaitcli.kinematics.anthropometry`). The ground reaction acts
+on the foot at (cop_x, 0): the floor is the plane z = 0.
 """
 
 from __future__ import annotations
@@ -23,25 +24,21 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from gaitcli.dynamics.planar import Joint, PlanarChain, Segment
 from gaitcli.dynamics.sagittal import SagittalMotion
 from gaitcli.errors import InputError
+from gaitcli.kinematics.anthropometry import DE_LEVA, REFERENCE_STATURE_M, normalise_sex
 
 from .evaluation import evaluate
 
 GRAVITY_M_S2 = 9.81
+#: the limb's generalized coordinates, in order
+LIMB_COORDINATES = ("thigh_angle", "knee_flexion", "ankle_dorsiflexion")
 
-#: de Leva (1996) Table 4 (MODEL_CONSTANTS A), lengths in mm of the reference
-#: subjects (male 1741 mm, female 1735 mm); mass, CoM and radius of gyration in %.
-#: thigh HJC→KJC, shank KJC→AJC, foot HEEL→TTIP; r_trans for the sagittal plane
-#: except the foot, where the dissertation (Table A.5, I_Y = 0.0047 kg m²) uses r_sag.
-_DE_LEVA = {
-    "male": {"stature_mm": 1741.0,
-             "thigh": (422.2, 14.16, 40.95, 32.9), "shank": (440.3, 4.33, 43.95, 24.6),
-             "foot": (258.1, 1.37, 44.15, 25.7)},
-    "female": {"stature_mm": 1735.0,
-               "thigh": (368.5, 14.78, 36.12, 36.4), "shank": (438.6, 4.81, 43.52, 26.3),
-               "foot": (228.3, 1.29, 40.14, 29.9)},
-}
+#: de Leva (1996) segments of the limb (kinematics.anthropometry.DE_LEVA): thigh HJC→KJC, shank KJC→AJC,
+#: foot HEEL→TTIP, and the radius of gyration of each for the sagittal plane: r_trans, except the foot,
+#: where the dissertation (Table A.5, I_Y = 0.0047 kg m²) uses r_sag
+_SAGITTAL_GYRATION = {"thigh": "r_trans_pct", "shank": "r_trans_pct", "foot": "r_sag_pct"}
 #: heel-to-ankle distance along the foot / stature (gait2dc: 0.06 m at 1.8 m; MODEL_CONSTANTS H)
 _HEEL_TO_ANKLE_PER_STATURE = 0.060 / 1.8
 #: foot CoM below the ankle / stature (Diss. Table A.5, subject 1: 0.043 m at 1.792 m)
@@ -112,18 +109,18 @@ class LimbParameters:
                            thigh_length_m: float | None = None,
                            shank_length_m: float | None = None) -> "LimbParameters":
         """de Leva (1996) parameters; lengths scaled by stature unless measured."""
-        if sex not in _DE_LEVA:
-            raise InputError(None, "sex", f"got {sex!r} (expected 'male' or 'female')")
+        sex = normalise_sex(sex)
         if not (mass_kg > 0 and stature_m > 0):
             raise InputError(None, "mass_kg/stature_m", f"got {mass_kg}, {stature_m} (expected numbers > 0)")
-        table = _DE_LEVA[sex]
-        scale = stature_m * 1000.0 / table["stature_mm"]
+        table = DE_LEVA[sex]
+        scale = stature_m * 1000.0 / (REFERENCE_STATURE_M[sex] * 1000.0)
         segs = {}
         for name, measured in (("thigh", thigh_length_m), ("shank", shank_length_m), ("foot", None)):
-            length_mm, mass_pct, com_pct, gyr_pct = table[name]
-            length = measured if measured is not None else length_mm * scale / 1000.0
-            mass = mass_pct / 100.0 * mass_kg
-            segs[name] = (length, mass, com_pct / 100.0 * length, mass * (gyr_pct / 100.0 * length) ** 2)
+            row = table[name]
+            length = measured if measured is not None else row.length_mm * scale / 1000.0
+            mass = row.mass_pct / 100.0 * mass_kg
+            gyration = getattr(row, _SAGITTAL_GYRATION[name]) / 100.0 * length
+            segs[name] = (length, mass, row.com_pct / 100.0 * length, mass * gyration ** 2)
         foot_len = segs["foot"][0]
         return cls(
             body_mass_kg=float(mass_kg), stature_m=float(stature_m),
@@ -138,9 +135,27 @@ class LimbParameters:
                    "(gait2dc), CoM 0.024·H below the ankle (Diss. Table A.5, subject 1)",))
 
 
-def _unit(phi):
-    """Unit vector of a segment at absolute angle φ from the downward vertical, (x, z)."""
-    return ca.vertcat(ca.sin(phi), -ca.cos(phi))
+def limb_chain(params: LimbParameters) -> PlanarChain:
+    """The thigh–shank–foot chain on a prescribed hip (4.5.1), built with :mod:`gaitcli.dynamics.planar`.
+
+    Coordinates (θ, β, δ): thigh absolute angle, knee flexion (turns the shank
+    backward, sign −1), ankle dorsiflexion. The foot frame's *along* axis is
+    ⟂ to the foot (down at neutral) and its *across* axis along the foot (forward),
+    so the foot CoM is at (foot_com_down_m, foot_com_forward_m) from the ankle.
+    """
+    p = params
+    segments = [
+        Segment("thigh", p.thigh_mass_kg, p.thigh_inertia_kgm2, p.thigh_length_m, p.thigh_com_m,
+                points={"knee": (p.thigh_length_m, 0.0)}),
+        Segment("shank", p.shank_mass_kg, p.shank_inertia_kgm2, p.shank_length_m, p.shank_com_m,
+                points={"ankle": (p.shank_length_m, 0.0)}),
+        Segment("foot", p.foot_mass_kg, p.foot_inertia_kgm2, p.foot_length_m, p.foot_com_down_m,
+                com_across_m=p.foot_com_forward_m),
+    ]
+    joints = [Joint(LIMB_COORDINATES[0], None, "thigh", absolute=True),
+              Joint(LIMB_COORDINATES[1], "thigh", "shank", sign=-1.0),
+              Joint(LIMB_COORDINATES[2], "shank", "foot")]
+    return PlanarChain(segments, joints, base="prescribed", gravity_m_s2=p.gravity_m_s2)
 
 
 class LimbModel:
@@ -153,44 +168,33 @@ class LimbModel:
       motion, τ = M(q)q̈ + k(q, q̇, ḧ) − q_g(q) − q_gr(q, f_gr) (4.2, 4.21)
     - ``forward_dynamics(q, qd, tau, hip, hip_acc, grf, cop_x) → q̈`` (2.29)
     - ``mass_matrix(q) → M`` (3 × 3)
+    - ``joint_angles(q) → ψ``: hip flexion, knee flexion, ankle dorsiflexion, the
+      angles the muscle and passive-joint models take. ψ = P·q is linear (hip
+      flexion = thigh angle − trunk angle), so the same map gives the joint angle
+      rates and Pᵀ turns joint moments into generalized forces; with the trunk
+      upright P = I: ψ = q and the joint moments are τ.
     """
 
     def __init__(self, params: LimbParameters):
-        self.params = p = params
+        self.params = params
+        self.chain = chain = limb_chain(params)
         sym = ca.SX.sym
         q, qd, qdd, tau = sym("q", 3), sym("qd", 3), sym("qdd", 3), sym("tau", 3)
         hip, hip_acc, grf, cop = sym("hip", 2), sym("hip_acc", 2), sym("grf", 2), sym("cop_x")
-        th, sh, ft = q[0], q[0] - q[1], q[0] - q[1] + q[2]
-        knee = hip + p.thigh_length_m * _unit(th)
-        ankle = knee + p.shank_length_m * _unit(sh)
-        foot_fwd = ca.vertcat(ca.cos(ft), ca.sin(ft))
-        foot_up = ca.vertcat(-ca.sin(ft), ca.cos(ft))
-        coms = [hip + p.thigh_com_m * _unit(th), knee + p.shank_com_m * _unit(sh),
-                ankle + p.foot_com_forward_m * foot_fwd - p.foot_com_down_m * foot_up]
-        masses = [p.thigh_mass_kg, p.shank_mass_kg, p.foot_mass_kg]
-        inertias = [p.thigh_inertia_kgm2, p.shank_inertia_kgm2, p.foot_inertia_kgm2]
-        rates = [ca.DM([[1, 0, 0]]), ca.DM([[1, -1, 0]]), ca.DM([[1, -1, 1]])]  # ω_b = c_b·q̇
-        gravity = ca.vertcat(0, p.gravity_m_s2)
-        mass_matrix = ca.SX.zeros(3, 3)
-        tau_id = ca.SX.zeros(3)
-        for com, mass, inertia, c in zip(coms, masses, inertias, rates):
-            jac = ca.jacobian(com, q)
-            acc = jac @ qdd + ca.jacobian(jac @ qd, q) @ qd + hip_acc  # CoM acceleration
-            mass_matrix += mass * jac.T @ jac + inertia * c.T @ c
-            tau_id += jac.T @ (mass * (acc + gravity)) + c.T * (inertia * (c @ qdd))
-        # ground reaction at (cop_x, 0) on the foot: force at the ankle plus its moment
-        r = ca.vertcat(cop, 0) - ankle
-        q_gr = ca.jacobian(ankle, q).T @ grf + rates[2].T * (r[0] * grf[1] - r[1] * grf[0])
-        tau_id -= q_gr
-        bias = ca.substitute(tau_id, qdd, ca.SX.zeros(3))
+        mass_matrix = chain.mass_matrix(q)
+        # ground reaction at (cop_x, 0) on the foot, the floor being the plane z = 0
+        q_gr = chain.applied_force["foot"](q, hip, ca.vertcat(cop, 0), grf, 0)
+        tau_id = chain.inverse_dynamics(q, qd, qdd, hip_acc) - q_gr
+        bias = chain.inverse_dynamics(q, qd, ca.SX.zeros(3), hip_acc) - q_gr  # k − g − q_gr
+        knee, ankle = chain.points(q, hip)
+        args, names = [hip, hip_acc, grf, cop], ["hip", "hip_acc", "grf", "cop_x"]
         self.points = ca.Function("points", [q, hip], [knee, ankle], ["q", "hip"], ["knee", "ankle"])
         self.mass_matrix = ca.Function("mass_matrix", [q], [mass_matrix], ["q"], ["M"])
-        self.inverse_dynamics = ca.Function(
-            "inverse_dynamics", [q, qd, qdd, hip, hip_acc, grf, cop], [tau_id],
-            ["q", "qd", "qdd", "hip", "hip_acc", "grf", "cop_x"], ["tau"])
-        self.forward_dynamics = ca.Function(
-            "forward_dynamics", [q, qd, tau, hip, hip_acc, grf, cop], [ca.solve(mass_matrix, tau - bias)],
-            ["q", "qd", "tau", "hip", "hip_acc", "grf", "cop_x"], ["qdd"])
+        self.inverse_dynamics = ca.Function("inverse_dynamics", [q, qd, qdd, *args], [tau_id],
+                                            ["q", "qd", "qdd", *names], ["tau"])
+        self.forward_dynamics = ca.Function("forward_dynamics", [q, qd, tau, *args],
+                                            [ca.solve(mass_matrix, tau - bias)], ["q", "qd", "tau", *names], ["qdd"])
+        self.joint_angles = ca.Function("joint_angles", [q], [q], ["q"], ["joint_angles"])
 
     def evaluate(self, name: str, *args):
         """Evaluate Function ``name`` on arrays shaped (n, k) (see ``evaluation.evaluate``)."""

@@ -27,12 +27,11 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.numerics import MOMENT_SCALE_NM, force_from_stretch, stretch_from_force
+
 from .problem import Problem
 from .so import solve_so
 from .solver import Outcome, SolverSettings, build_solver, solve
-
-#: moments are scaled by this (N·m) inside the NLPs so that all constraints are O(1)
-MOMENT_SCALE_NM = 10.0
 
 
 @dataclass(frozen=True)
@@ -97,7 +96,7 @@ def solve_mso(problem: Problem, settings: SolverSettings | None = None, *,
     solver, lbx, ubx, lbg, ubg = _frame_solver(problem, penalty, settings)
     # first frame (4.4): SO forces, activation from the contraction inversion with a forward difference
     first = muscle.invert_forces(so_force[:2], problem.l_m[:2], problem.v_m[:2], dt, "central")
-    s_prev = np.sqrt(so_force[0] / f_max)
+    s_prev = stretch_from_force(so_force[0], f_max)
     a_prev = first["a"][0]
     forces, act, exc = np.zeros((n, m)), np.zeros((n, m)), np.zeros((n, m))
     forces[0], act[0] = so_force[0], a_prev
@@ -111,7 +110,7 @@ def solve_mso(problem: Problem, settings: SolverSettings | None = None, *,
         outcomes.append(out)
         x = out.x
         s_j = np.maximum(x[:m], 0.0)
-        forces[j] = f_max * s_j ** 2
+        forces[j] = force_from_stretch(s_j, f_max)
         u = x[2 * m:3 * m]
         act[j], exc[j] = x[m:2 * m], u
         violation[j] = max(0.0, float(np.max(-u)), float(np.max(u - 1.0)))

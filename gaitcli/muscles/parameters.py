@@ -11,6 +11,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from gaitcli.core.validate import one_of
+
 #: the eight muscle groups of Fig. 4.5a, in Table A.1 order
 MUSCLE_NAMES = ("iliopsoas", "rectus_femoris", "glutei", "hamstrings", "vasti",
                 "gastrocnemius", "tibialis_anterior", "soleus")
@@ -78,8 +80,7 @@ class MuscleParameters:
     notes: tuple = field(default=())
 
     def __post_init__(self):
-        if self.metabolic_model not in METABOLIC_MODELS:
-            raise ValueError(f"metabolic_model {self.metabolic_model!r} not in {METABOLIC_MODELS}")
+        one_of(self.metabolic_model, METABOLIC_MODELS, where="metabolic_model")
 
     @property
     def count(self) -> int:
@@ -119,11 +120,6 @@ class MuscleParameters:
     def tendon_stiffness_N_per_m2(self) -> np.ndarray:
         """k_T = F_max/(ε0·l_slack)² of (2.19)."""
         return self.max_isometric_force_N / (self.tendon_strain_at_max_force * self.tendon_slack_length_m) ** 2
-
-    @property
-    def max_force_N(self) -> np.ndarray:
-        """Largest force the CE can reach: f_asympt·F_max (a = 1, l_opt, fast lengthening) (4.28)."""
-        return self.eccentric_asymptote * self.max_isometric_force_N
 
     def with_options(self, **changes) -> "MuscleParameters":
         """A copy with some constants changed (e.g. ``metabolic_model="umberger2010"``)."""

@@ -1,15 +1,18 @@
 """Passive joint moments (Riener & Edrich 1999) and hip/knee damping (Stein et al. 1996) (4.5.1).
 
-The moments are generalized forces of the limb model (hip flexion, knee
-flexion, ankle dorsiflexion positive). Riener & Edrich's formulas (MODEL_CONSTANTS B)
-take degrees with hip flexion, knee flexion and ankle *plantar*flexion positive
-and return moments positive in the same sense as their angle.
+The model takes the sagittal joint angles ψ = (hip flexion relative to the
+pelvis/HAT, knee flexion, ankle dorsiflexion) in rad and their rates, and returns
+joint moments in the same senses (for the limb of ``limb.py``, upright trunk,
+ψ = q and these are its generalized forces). Riener & Edrich's formulas
+(MODEL_CONSTANTS B) take degrees with hip flexion, knee flexion and ankle
+*plantar*flexion positive and return moments positive in the same sense as
+their angle; the conversions are those of :mod:`gaitcli.kinematics.conventions`.
 """
 
 from __future__ import annotations
 
 import casadi as ca
-import numpy as np
+from gaitcli.kinematics.conventions import riener_edrich_angles, riener_edrich_moments
 
 from .evaluation import evaluate
 from .parameters import JointParameters
@@ -32,7 +35,8 @@ class JointModel:
 
     Functions: ``riener_edrich(phi_deg) → M`` (their own angles/signs, for
     checks against published values); ``passive(q) → τ_p`` and
-    ``damping(qd) → τ_d`` as generalized forces of the limb model; ``total(q, qd)``.
+    ``damping(qd) → τ_d`` as joint moments from the joint angles ψ (``q``) and
+    their rates (``qd``); ``total(q, qd)``.
     """
 
     def __init__(self, params: JointParameters | None = None):
@@ -40,11 +44,9 @@ class JointModel:
         phi, q, qd = ca.SX.sym("phi", 3), ca.SX.sym("q", 3), ca.SX.sym("qd", 3)
         self.riener_edrich = ca.Function("riener_edrich", [phi], [ca.vertcat(*_riener_edrich(*ca.vertsplit(phi)))],
                                          ["phi_deg"], ["M_Nm"])
-        deg = 180.0 / np.pi
-        # hip flexion = thigh angle (trunk upright), knee flexion, plantarflexion = −dorsiflexion
-        m_h, m_k, m_a = _riener_edrich(q[0] * deg, q[1] * deg, -q[2] * deg)
+        moments = riener_edrich_moments(*_riener_edrich(*riener_edrich_angles(q[0], q[1], q[2])))
         scale = 1.0 if p.passive_moments else 0.0
-        passive = scale * ca.vertcat(m_h, m_k, -m_a)
+        passive = scale * ca.vertcat(*moments)
         damping = ca.vertcat(-p.hip_damping_Nms_per_rad * qd[0], -p.knee_damping_Nms_per_rad * qd[1], 0)
         self.passive = ca.Function("passive", [q], [passive], ["q"], ["tau_p"])
         self.damping = ca.Function("damping", [qd], [damping], ["qd"], ["tau_d"])

@@ -133,13 +133,15 @@ def build_problem(motion: SagittalMotion, models: Models, *, nodes: int | None =
     s = interp(times)
     muscle, limb, joints = models.muscle, models.limb, models.joints
     tau_id = limb.evaluate("inverse_dynamics", s.q, s.qd, s.qdd, s.hip_m, s.hip_acc, s.grf_N, s.cop_x_m[:, None])
-    tau_p = joints.evaluate("passive", s.q)
-    tau_d = joints.evaluate("damping", s.qd)
+    # joint angles and rates of the muscle and joint models; ψ = q for the limb, so their moments are τ
+    angles, rates = limb.evaluate("joint_angles", s.q), limb.evaluate("joint_angles", s.qd)
+    tau_p = joints.evaluate("passive", angles)
+    tau_d = joints.evaluate("damping", rates)
     hip_end = interp(np.array([t1])).hip_m[0, 0]
     return Problem(models=models, samples=s, dt_s=dt, periodic=periodic, interval=interior,
                    t_start_s=t0, t_end_s=t1,
-                   l_m=muscle.evaluate("length", s.q), v_m=muscle.evaluate("velocity", s.q, s.qd),
-                   arms=muscle.evaluate("moment_arms", s.q), tau_id=tau_id, tau_passive=tau_p,
+                   l_m=muscle.evaluate("length", angles), v_m=muscle.evaluate("velocity", angles, rates),
+                   arms=muscle.evaluate("moment_arms", angles), tau_id=tau_id, tau_passive=tau_p,
                    tau_damping=tau_d, required=tau_id - tau_p - tau_d,
                    distance_m=float(hip_end - interp(np.array([t0])).hip_m[0, 0]),
                    body_mass_kg=limb.params.body_mass_kg)

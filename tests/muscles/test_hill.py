@@ -6,7 +6,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gaitcli.muscles import MUSCLE_NAMES, MuscleModel, finite_difference_matrix, table_a1
+from gaitcli.core.numerics import finite_difference_matrix
+from gaitcli.errors import InputError
+from gaitcli.muscles import MUSCLE_NAMES, MuscleModel, table_a1
 
 IDX = {name: i for i, name in enumerate(MUSCLE_NAMES)}
 
@@ -216,6 +218,15 @@ def test_finite_difference_matrices():
     np.testing.assert_allclose(back[1:], (t[1:] ** 2 - t[:-1] ** 2) / dt)
     cen = finite_difference_matrix(n, dt, "central") @ t ** 2
     np.testing.assert_allclose(cen[1:-1], 2 * t[1:-1])
+
+
+def test_finite_difference_bad_requests():
+    """A misspelt scheme or too few nodes is a user error with a hint, not a ValueError."""
+    with pytest.raises(InputError, match="scheme: got 'periodc'.*did you mean 'periodic'"):
+        finite_difference_matrix(10, 0.01, "periodc")
+    with pytest.raises(InputError, match="nodes: got 2"):
+        finite_difference_matrix(2, 0.01, "periodic")
+    assert finite_difference_matrix(2, 0.01, "central").shape == (2, 2)
 
 
 # ------------------------------------------------------------------- energetics (A.12–A.21)

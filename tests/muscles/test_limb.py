@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -9,8 +10,77 @@ from scipy.integrate import solve_ivp
 from gaitcli.errors import InputError
 from gaitcli.dynamics.sagittal import SagittalMotion
 from gaitcli.muscles import LimbModel, LimbParameters, MotionInterpolant
+from gaitcli.muscles.evaluation import evaluate
 
 G = 9.81
+
+
+def _reference_unit(phi):
+    """Unit vector of a segment at absolute angle φ from the downward vertical, (x, z)."""
+    return ca.vertcat(ca.sin(phi), -ca.cos(phi))
+
+
+class ReferenceLimbModel:
+    """The limb model as written before the planar builder (commit 9e9ac57), kept as the reference;
+    the same Functions and signatures as :class:`LimbModel`."""
+
+    def __init__(self, params: LimbParameters):
+        self.params = p = params
+        sym = ca.SX.sym
+        q, qd, qdd, tau = sym("q", 3), sym("qd", 3), sym("qdd", 3), sym("tau", 3)
+        hip, hip_acc, grf, cop = sym("hip", 2), sym("hip_acc", 2), sym("grf", 2), sym("cop_x")
+        th, sh, ft = q[0], q[0] - q[1], q[0] - q[1] + q[2]
+        knee = hip + p.thigh_length_m * _reference_unit(th)
+        ankle = knee + p.shank_length_m * _reference_unit(sh)
+        foot_fwd = ca.vertcat(ca.cos(ft), ca.sin(ft))
+        foot_up = ca.vertcat(-ca.sin(ft), ca.cos(ft))
+        coms = [hip + p.thigh_com_m * _reference_unit(th), knee + p.shank_com_m * _reference_unit(sh),
+                ankle + p.foot_com_forward_m * foot_fwd - p.foot_com_down_m * foot_up]
+        masses = [p.thigh_mass_kg, p.shank_mass_kg, p.foot_mass_kg]
+        inertias = [p.thigh_inertia_kgm2, p.shank_inertia_kgm2, p.foot_inertia_kgm2]
+        rates = [ca.DM([[1, 0, 0]]), ca.DM([[1, -1, 0]]), ca.DM([[1, -1, 1]])]  # ω_b = c_b·q̇
+        gravity = ca.vertcat(0, p.gravity_m_s2)
+        mass_matrix = ca.SX.zeros(3, 3)
+        tau_id = ca.SX.zeros(3)
+        for com, mass, inertia, c in zip(coms, masses, inertias, rates):
+            jac = ca.jacobian(com, q)
+            acc = jac @ qdd + ca.jacobian(jac @ qd, q) @ qd + hip_acc  # CoM acceleration
+            mass_matrix += mass * jac.T @ jac + inertia * c.T @ c
+            tau_id += jac.T @ (mass * (acc + gravity)) + c.T * (inertia * (c @ qdd))
+        # ground reaction at (cop_x, 0) on the foot: force at the ankle plus its moment
+        r = ca.vertcat(cop, 0) - ankle
+        q_gr = ca.jacobian(ankle, q).T @ grf + rates[2].T * (r[0] * grf[1] - r[1] * grf[0])
+        tau_id -= q_gr
+        bias = ca.substitute(tau_id, qdd, ca.SX.zeros(3))
+        self.points = ca.Function("points", [q, hip], [knee, ankle], ["q", "hip"], ["knee", "ankle"])
+        self.mass_matrix = ca.Function("mass_matrix", [q], [mass_matrix], ["q"], ["M"])
+        self.inverse_dynamics = ca.Function(
+            "inverse_dynamics", [q, qd, qdd, hip, hip_acc, grf, cop], [tau_id],
+            ["q", "qd", "qdd", "hip", "hip_acc", "grf", "cop_x"], ["tau"])
+        self.forward_dynamics = ca.Function(
+            "forward_dynamics", [q, qd, tau, hip, hip_acc, grf, cop], [ca.solve(mass_matrix, tau - bias)],
+            ["q", "qd", "tau", "hip", "hip_acc", "grf", "cop_x"], ["qdd"])
+
+
+def test_rebuilt_limb_matches_reference(model, limb):
+    """The limb built with dynamics/planar.py gives the equations of the hand-written model to 1e-10."""
+    ref = ReferenceLimbModel(limb)
+    rng = np.random.default_rng(11)
+    n = 200
+    q, qd, qdd = rng.normal(0, 1.0, (n, 3)), rng.normal(0, 5, (n, 3)), rng.normal(0, 30, (n, 3))
+    hip, hip_acc = rng.normal(0, 1.0, (n, 2)), rng.normal(0, 5, (n, 2))
+    grf, cop = rng.normal(0, 500, (n, 2)), rng.normal(0, 0.5, (n, 1))
+    cases = {"points": (q, hip), "mass_matrix": (q,),
+             "inverse_dynamics": (q, qd, qdd, hip, hip_acc, grf, cop),
+             "forward_dynamics": (q, qd, qdd * 10, hip, hip_acc, grf, cop)}
+    for name, args in cases.items():
+        rebuilt, reference = getattr(model, name), getattr(ref, name)
+        assert (rebuilt.name_in(), rebuilt.name_out()) == (reference.name_in(), reference.name_out())
+        new, old = evaluate(rebuilt, *args), evaluate(reference, *args)
+        for a, b in zip(new if isinstance(new, tuple) else (new,), old if isinstance(old, tuple) else (old,)):
+            np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10, err_msg=name)
+    # the muscle and joint models take the joint angles; with the trunk upright hip flexion = thigh angle
+    np.testing.assert_array_equal(model.evaluate("joint_angles", q), q)
 
 
 @pytest.fixture(scope="module")
@@ -37,6 +107,29 @@ def test_de_leva_parameters(limb):
     assert female.thigh_length_m == pytest.approx(0.3685)
     with pytest.raises(InputError, match="sex"):
         LimbParameters.from_anthropometry(70, 1.7, "x")
+
+
+def test_de_leva_parameters_unchanged_by_the_shared_table():
+    """from_anthropometry reads kinematics.anthropometry.DE_LEVA; the numbers are those of the limb's own
+    former copy of the table (recorded at commit 9e9ac57), male 73.0 kg / 1.792 m and female 61.9 kg / 1.735 m."""
+    former = {
+        ("male", 73.0, 1.792): dict(
+            thigh_length_m=0.4345677197013211, shank_length_m=0.4531979322228605, foot_length_m=0.2656606547960942,
+            thigh_mass_kg=10.3368, shank_mass_kg=3.1609, foot_mass_kg=1.0001, thigh_com_m=0.177955481217691,
+            shank_com_m=0.19918049121194717, foot_com_forward_m=0.05755584575914226, foot_com_down_m=0.043,
+            thigh_inertia_kgm2=0.21129675905263215, shank_inertia_kgm2=0.03928771855799649,
+            foot_inertia_kgm2=0.00466191285970484),
+        ("female", 61.9, 1.735): dict(
+            thigh_length_m=0.3685, shank_length_m=0.4386, foot_length_m=0.2283, thigh_mass_kg=9.14882,
+            shank_mass_kg=2.97739, foot_mass_kg=0.79851, thigh_com_m=0.1331022, shank_com_m=0.19087872,
+            foot_com_forward_m=0.03380628666666666, foot_com_down_m=0.041632254464285715,
+            thigh_inertia_kgm2=0.1646049286200519, shank_inertia_kgm2=0.039617263775893155,
+            foot_inertia_kgm2=0.003720784856578533),
+    }
+    for (sex, mass, stature), values in former.items():
+        params = LimbParameters.from_anthropometry(mass, stature, sex)
+        for name, value in values.items():
+            assert getattr(params, name) == pytest.approx(value, rel=1e-14), (sex, name)
 
 
 def test_static_leg_hanging_vertical(model, limb):

@@ -60,6 +60,21 @@ def test_eid_metabolic_cost_below_mso(results):
     assert 50 < eid.metabolic_cost_J < 500  # one leg, one stride (Diss.: 201 J and 168 J)
 
 
+#: EID metabolic cost (J) of the synthetic cycle, 50 nodes, recorded with the hand-written limb model
+#: (commit 9e9ac57) before the limb was rebuilt on dynamics/planar.py
+EID_COST_SYNTHETIC_J = 190.60242681596333
+
+
+def test_eid_cost_unchanged(results):
+    """The EID cost of the synthetic cycle stays what it was (1e-6 relative).
+
+    The EID optimum is flat: perturbing the inverse-dynamics moments by 2e-14 N·m (round-off) moves
+    IPOPT's answer by ~3e-5 relative, so this also checks that the rebuilt limb reproduces the
+    former moments bit for bit (test_limb.py checks the Functions to 1e-10).
+    """
+    assert results["eid"].metabolic_cost_J == pytest.approx(EID_COST_SYNTHETIC_J, rel=1e-6)
+
+
 def test_periodic_grid_and_transport_figures(results, gait):
     motion, limb = gait
     eid, mso = results["eid"], results["mso"]

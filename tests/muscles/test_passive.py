@@ -38,3 +38,21 @@ def test_damping_and_switches():
     np.testing.assert_allclose(joints.evaluate("damping", qd), [-1.0, 0.6, 0.0])
     np.testing.assert_allclose(joints.evaluate("passive", np.array([0.3, 0.2, 0.1])), 0.0)
     np.testing.assert_allclose(joints.evaluate("total", np.array([0.3, 0.2, 0.1]), qd), [-1.0, 0.6, 0.0])
+
+
+def test_sign_conversions_work_on_numpy_and_casadi():
+    """The two conventions' sign flips (kinematics/conventions) are pure arithmetic: numpy and SX alike."""
+    import casadi as ca
+
+    from gaitcli.kinematics.conventions import muscle_path_angles, riener_edrich_angles, riener_edrich_moments
+
+    psi = np.array([0.3, 0.5, -0.2])  # hip flexion, knee flexion, ankle dorsiflexion (rad)
+    np.testing.assert_allclose(muscle_path_angles(*psi), [-0.3, 0.5, 0.2])  # extension, flexion, plantarflexion
+    np.testing.assert_allclose(riener_edrich_angles(*psi), np.rad2deg([0.3, 0.5, 0.2]))
+    np.testing.assert_allclose(riener_edrich_moments(1.0, 2.0, 3.0), [1.0, 2.0, -3.0])
+    x = ca.SX.sym("x", 3)
+    f = ca.Function("f", [x], [ca.vertcat(*muscle_path_angles(*ca.vertsplit(x)),
+                                          *riener_edrich_angles(*ca.vertsplit(x)))])
+    np.testing.assert_allclose(np.array(f(psi)).ravel(),
+                               np.r_[muscle_path_angles(*psi), riener_edrich_angles(*psi)], rtol=1e-15)
+
