@@ -11,6 +11,7 @@ Each stage's folder is written whole or not at all (``io.outputs.stage_folder``)
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 import warnings
@@ -23,7 +24,7 @@ from gaitcli.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage
 from gaitcli.errors import GaitWarning
-from gaitcli.io.h5 import provenance
+from gaitcli.io.h5 import provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
 from gaitcli.trial import TrialFolder, open_trial, sha256
@@ -128,6 +129,23 @@ class TrialRun:
         return path if key == self.stage_key(name) else None
 
 
+def write_record(folder: Path, result, attrs: dict, *, h5_name: str) -> dict:
+    """The default writer: the result as one HDF5 record (``result/``); its scalar fields are the summary."""
+    write_h5(folder / h5_name, record_datasets("result", result), attrs)
+    return {f.name: getattr(result, f.name) for f in dataclasses.fields(result)
+            if isinstance(getattr(result, f.name), (bool, int, float, str))}
+
+
+def _write(st, folder: Path, result, attrs: dict) -> dict:
+    if st.write is not None:
+        return st.write(folder, result, attrs)
+    return write_record(folder, result, attrs, h5_name=st.h5_name)
+
+
+def _read(st, path: Path):
+    return st.read(path) if st.read is not None else read_result(path, st.result, "result")
+
+
 def _history(result) -> tuple[str, ...]:
     trial = getattr(result, "trial", None)
     return tuple(getattr(trial, "history", ()))
@@ -159,7 +177,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
             path = run.fresh(name)
             if path is not None:
                 try:
-                    handoffs[name], sources[name] = st.read(path), path
+                    handoffs[name], sources[name] = _read(st, path), path
                     outcomes.append(StageOutcome(name, "reused", path.parent))
                     continue
                 except (KeyError, OSError, ValueError, TypeError):  # an older or damaged output: make it anew
@@ -178,7 +196,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
         target = run.output_folder(name)
         started = time.perf_counter()
         with stage_folder(target) as tmp:
-            summary = st.write(tmp, result, run.attrs(name, _history(result)))
+            summary = _write(st, tmp, result, run.attrs(name, _history(result)))
             if plots and st.plots is not None:
                 st.plots(tmp / st.h5_name, tmp / "plots", run.trial.folder.resolve().name)
             summary["elapsed_s"] = round(elapsed + time.perf_counter() - started, 3)

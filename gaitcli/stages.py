@@ -71,6 +71,6 @@ IDYN = register(Stage(
 MUSCLES = register(Stage(
     name="muscles", config=MusclesConfig, depends=("idyn",), run=_muscles,
     write=_writer("muscles_outputs", "write_muscle_outputs"),
-    read=lambda path: read_result(path, MuscleResult, "result"), h5_name="muscles.h5",
+    result=MuscleResult, h5_name="muscles.h5",
     plots=_figures("muscle_figures"), folder=lambda cfg: f"muscles/{cfg.method}",
     converged=lambda result: result.converged, unconverged=_unconverged_muscles))

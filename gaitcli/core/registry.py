@@ -7,8 +7,11 @@ the stages whose results it takes, and four functions:
   trial files, the earlier stages' hand-offs) to a typed result; raises
   :class:`~gaitcli.errors.InputError` for bad input;
 - ``write(folder, result, attrs) -> summary``: the stage's files into a fresh
-  folder (CSV, HDF5 with ``attrs`` at its root, ``summary.json``);
-- ``read(h5_path) -> hand-off``: what later stages need, read back from the HDF5;
+  folder (CSV, HDF5 with ``attrs`` at its root); the pipeline adds ``summary.json``.
+  Default (``write=None``): the result dataclass as one HDF5 record and its
+  scalar fields as the summary;
+- ``read(h5_path) -> hand-off``: what later stages need, read back from the HDF5
+  (default: the ``result`` record as the ``result`` type);
 - ``plots(h5_path, folder, title)``: figures rendered from the HDF5 (optional).
 
 ``handoff(result)`` gives the same hand-off from a result in memory, so a later
@@ -88,10 +91,11 @@ class Stage:
     name: str
     config: type
     run: Callable[[StageContext, Any], Any]
-    write: Callable[[Path, Any, dict], dict]
-    read: Callable[[Path], Any]
     h5_name: str
     depends: tuple[str, ...] = ()
+    result: type | None = None  # the result dataclass (for the default writer and reader)
+    write: Callable[[Path, Any, dict], dict] | None = None
+    read: Callable[[Path], Any] | None = None
     handoff: Callable[[Any], Any] = _identity
     plots: Callable[[Path, Path, str], list] | None = None
     #: output folder below the output root, from the stage's config (default: the stage's name)

@@ -1,0 +1,90 @@
+"""The import rules of docs/architecture.md, checked on the package's source (AST, imports inside functions too)."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "gaitcli"
+#: the stage packages, each allowed to import only the ones before it
+STAGE_ORDER = ("signal", "kinematics", "dynamics", "muscles", "predict")
+#: the edges: what no stage package may import
+EDGES = ("cli", "pipeline", "report", "config", "stages", "synth")
+
+
+def module_name(path: Path) -> str:
+    return ".".join(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+
+
+def imported_modules(path: Path, module: str | None = None) -> set[str]:
+    """Every ``gaitcli`` module a source file imports, at any depth of the syntax tree (relative ones resolved).
+
+    ``module``: the file's dotted name (default: from its place in the package).
+    """
+    module = module or module_name(path)
+    package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            out.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - node.level + 1]
+                name = ".".join(base + ([node.module] if node.module else []))
+            else:
+                name = node.module or ""
+            out.add(name)
+            out.update(f"{name}.{alias.name}" for alias in node.names)
+    return {m for m in out if m == "gaitcli" or m.startswith("gaitcli.")}
+
+
+def first_part(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def sources(package: str) -> list[Path]:
+    folder = PACKAGE / package
+    return sorted(folder.rglob("*.py")) if folder.is_dir() else [PACKAGE / f"{package}.py"]
+
+
+def violations(package: str, forbidden: set[str]) -> list[str]:
+    return [f"{path.relative_to(PACKAGE.parent)} imports {m}" for path in sources(package)
+            for m in sorted(imported_modules(path)) if first_part(m) in forbidden]
+
+
+@pytest.mark.parametrize("package", STAGE_ORDER)
+def test_stage_packages_import_no_edge_and_no_later_stage(package):
+    later = set(STAGE_ORDER[STAGE_ORDER.index(package) + 1:])
+    assert not violations(package, set(EDGES) | later)
+
+
+def test_io_imports_no_model_package():
+    assert not violations("io", set(STAGE_ORDER) | set(EDGES))
+
+
+def test_core_imports_only_core_and_errors():
+    everything = {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir()
+                  if (p.is_dir() and (p / "__init__.py").is_file()) or p.suffix == ".py"}
+    assert not violations("core", everything - {"core", "errors", "__init__"})
+
+
+def test_report_is_imported_by_no_stage_and_defines_no_container():
+    from gaitcli.report import filter_outputs, idyn_outputs, muscles_outputs
+
+    for module in (filter_outputs, idyn_outputs, muscles_outputs):
+        classes = [n for n in ast.walk(ast.parse(Path(module.__file__).read_text())) if isinstance(n, ast.ClassDef)]
+        assert not classes, f"{module.__name__} defines {[c.name for c in classes]}"
+
+
+def test_the_checker_sees_imports_inside_functions(tmp_path):
+    # the rule must not be dodged by a local or relative import inside a function
+    probe = tmp_path / "probe.py"
+    probe.write_text("import numpy\n\ndef f():\n    from gaitcli.report import plots\n"
+                     "    if True:\n        from ..pipeline import run_stage\n")
+    found = imported_modules(probe, "gaitcli.signal.probe")
+    assert {"gaitcli.report", "gaitcli.report.plots", "gaitcli.pipeline", "gaitcli.pipeline.run_stage"} <= found
+    assert {first_part(m) for m in found} == {"report", "pipeline"}
