@@ -13,10 +13,10 @@ measured in a separate run because tracing slows allocation.
 
 Part 2 — the whole ``gait idyn`` stage on the bundled normal sample trial (560 frames): the stage
 function alone (``inverse_dynamics_stage`` on the filtered trial: the four kernels plus forward
-kinematics, events, gait features and the sagittal export), and the pipeline's ``Run.idyn`` in
-this process (static calibration, the stage, CSV/HDF5/JSON writers and plots; the filter stage's
-output is made once beforehand and is fresh, so it is read, not recomputed), each with its peak
-traced memory. ``--cli`` adds the wall time of ``gait -q idyn`` in a new process (imports, filter
+kinematics, events, gait features and the sagittal export), and ``pipeline.run_stage(trial, "idyn")``
+in this process, with and without figures (input hashes, filter.h5 read back, static calibration,
+the stage, CSV/HDF5/JSON writers, and the figures drawn from idyn.h5; the filter stage's output is
+made once beforehand and is fresh, so it is read, not recomputed), each with its peak traced memory. ``--cli`` adds the wall time of ``gait -q idyn`` in a new process (imports, filter
 stage and plots included). Threads are limited to one and the process to one core. Prints; asserts
 nothing.
 """
@@ -24,9 +24,7 @@ nothing.
 from __future__ import annotations
 
 import argparse
-import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -34,26 +32,26 @@ import tracemalloc
 import warnings
 from pathlib import Path
 
-for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(var, "1")
-os.environ.setdefault("MPLBACKEND", "Agg")
+import timing  # noqa: F401  (first: one thread, Agg backend)
+from timing import copy_sample, median_s, one_core, sample_outputs, time_gait
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
+import numpy as np
 
-import numpy as np  # noqa: E402
-
-from gaitcli.config import IdynConfig  # noqa: E402
-from gaitcli.dynamics.derivatives import coordinate_derivatives  # noqa: E402
-from gaitcli.dynamics.inverse import inverse_dynamics  # noqa: E402
-from gaitcli.dynamics.stage import external_wrenches, inverse_dynamics_stage  # noqa: E402
-from gaitcli.errors import GaitWarning  # noqa: E402
-from gaitcli.kinematics.calibration import calibrate  # noqa: E402
-from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments  # noqa: E402
-from gaitcli.core.recording import Markers  # noqa: E402
-from gaitcli.resources import sample_trial  # noqa: E402
-from gaitcli.synth import MARKER_RATE_HZ, simulate_trial  # noqa: E402
-from timing import QuietConsole, median_s  # benchmarks/timing.py
+from gaitcli.config import configure
+from gaitcli.core.container import FootLoad, Trial
+from gaitcli.core.events import Events
+from gaitcli.core.recording import Markers
+from gaitcli.core.registry import stage
+from gaitcli.dynamics.derivatives import coordinate_derivatives
+from gaitcli.dynamics.inverse import inverse_dynamics
+from gaitcli.dynamics.stage import (IdynConfig, body_mass, external_wrenches, inverse_dynamics_stage,
+                                    static_calibration)
+from gaitcli.errors import GaitWarning
+from gaitcli.kinematics.calibration import calibrate
+from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments
+from gaitcli.pipeline import load_static_markers, run_stage
+from gaitcli.synth import MARKER_RATE_HZ, simulate_trial
+from gaitcli.trial import open_trial
 
 MASS_KG, STATURE_M = 75.0, 1.78
 
@@ -69,20 +67,25 @@ def _peak_mb(func) -> float:
 
 
 def long_trial(frames: int):
-    """A synthetic walk of exactly ``frames`` marker frames, its calibration and per-foot loads."""
+    """A synthetic walk of exactly ``frames`` marker frames (as a :class:`Trial`, both feet's loads known) and
+    its calibration."""
     period_s = 1.2  # the normal condition's gait period
     strides = int(np.ceil(frames / (period_s * MARKER_RATE_HZ))) + 1
     trial = simulate_trial(condition="normal", seed=0, strides=strides)
     m = trial.markers
     markers = Markers(m.labels, m.positions_m[:frames], m.rate_hz, m.first_frame)
-    feet = {side: {key: np.asarray(value)[:frames] for key, value in load.items()} for side, load in trial.feet.items()}
+    feet = {side: FootLoad(force_N=np.asarray(load["force_N"])[:frames], cop_m=np.asarray(load["cop_m"])[:frames],
+                           free_moment_Nm=np.asarray(load["free_moment_Nm"])[:frames],
+                           known=np.ones(frames, dtype=bool))
+            for side, load in trial.feet.items()}
     calibration = calibrate(trial.static, mass_kg=MASS_KG, stature_m=STATURE_M, sex="male")
-    return markers, feet, calibration
+    return Trial(markers=markers, feet=feet, events=Events()), calibration
 
 
-def kernels(markers, feet, calibration, repeat: int) -> None:
+def kernels(trial: Trial, calibration, repeat: int) -> None:
+    markers = trial.markers
     n = markers.n_frames
-    wrenches = external_wrenches(feet, n)
+    wrenches = external_wrenches(trial)
     parts = {}
     parts["track_segments"], poses = median_s(lambda: track_segments(markers, calibration), repeat)
     parts["poses_to_coordinates"], q = median_s(lambda: poses_to_coordinates(poses), repeat)
@@ -110,42 +113,37 @@ def kernels(markers, feet, calibration, repeat: int) -> None:
 
 
 def whole_stage(tmp: Path, repeat: int, cli: bool) -> None:
-    from gaitcli import pipeline as pl
-
-    folder = tmp / "normal"
-    shutil.copytree(sample_trial("normal"), folder, ignore=shutil.ignore_patterns("gait_out", "truth"))
-    cfg = pl.configure(None)
-    run = pl.Run(folder, tmp / "out", cfg, QuietConsole())
-    run.filter()  # written once: Run.idyn then reads the fresh filter.h5
-    filtered = run.filtered()
-    mass_kg = run.trial.subject.mass_kg
-    calibration = run.calibration(filtered, mass_kg, run.static_markers())
+    folder, h5 = sample_outputs(tmp, ("filter",))  # written once: run_stage("idyn") then reads the fresh filter.h5
+    filtered = stage("filter").read(h5["filter"])
+    trial = open_trial(folder)
+    cfg = IdynConfig()
+    mass_kg, mass_source = body_mass(filtered, trial.subject, cfg, source=trial.subject_path)
+    calibration = static_calibration(filtered, load_static_markers(trial, filtered.lab_to_model), trial.subject,
+                                     mass_kg, subject_path=trial.subject_path, static_path=trial.static_path,
+                                     trial_path=trial.trial_path)
     frames = filtered.markers.n_frames
+    pipeline_cfg = configure(None)
 
-    def stage():
-        return inverse_dynamics_stage(filtered, calibration, IdynConfig(), mass_kg=mass_kg, mass_source="bench")
+    def stage_only():
+        return inverse_dynamics_stage(filtered, calibration, cfg, mass_kg=mass_kg, mass_source=mass_source)
 
-    stage_s, _ = median_s(stage, repeat)
-    stage_mb = _peak_mb(stage)
-    run_s, _ = median_s(run.idyn, repeat)
-    run_mb = _peak_mb(run.idyn)
+    rows = {"inverse_dynamics_stage": stage_only,
+            "run_stage idyn (read, calib., writers)": lambda: run_stage(folder, "idyn", pipeline_cfg, plots=False),
+            "run_stage idyn, with figures": lambda: run_stage(folder, "idyn", pipeline_cfg, plots=True)}
     print(f"\nthe idyn stage on the normal sample trial ({frames} frames), median of {repeat} runs, one core")
     print(f"{'':40} {'ms':>9} {'frames/s':>10} {'peak MB':>8}")
     print("-" * 70)
-    print(f"{'inverse_dynamics_stage':40} {1e3 * stage_s:9.1f} {frames / stage_s:10.0f} {stage_mb:8.1f}")
-    print(f"{'Run.idyn (calibration, writers, plots)':40} {1e3 * run_s:9.1f} {frames / run_s:10.0f} {run_mb:8.1f}")
+    for label, func in rows.items():
+        seconds, outcome = median_s(func, repeat)
+        if label != "inverse_dynamics_stage":
+            assert [o.stage for o in run_stage.__wrapped__(folder, "idyn")] if False else True
+        print(f"{label:40} {1e3 * seconds:9.1f} {frames / seconds:10.0f} {_peak_mb(func):8.1f}")
     if cli:
-        cli_folder = tmp / "cli_normal"
-        shutil.copytree(sample_trial("normal"), cli_folder, ignore=shutil.ignore_patterns("gait_out", "truth"))
-
-        def command():
-            shutil.rmtree(cli_folder / "gait_out", ignore_errors=True)
-            subprocess.run([sys.executable, "-m", "gaitcli.cli", "-q", "idyn", str(cli_folder)], check=True,
-                           capture_output=True)
-
+        cli_folder = copy_sample("normal", tmp / "cli_normal")
         runs = max(1, min(repeat, 3))
-        print(f"`gait -q idyn` in a new process, filter stage included (median of {runs}): "
-              f"{median_s(command, runs)[0]:.2f} s")
+        seconds = time_gait("-q", "idyn", cli_folder, repeat=runs,
+                            before=lambda: shutil.rmtree(cli_folder / "gait_out", ignore_errors=True))
+        print(f"`gait -q idyn` in a new process, filter stage included (median of {runs}): {seconds:.2f} s")
 
 
 def main(argv=None) -> int:
@@ -154,14 +152,13 @@ def main(argv=None) -> int:
     parser.add_argument("--frames", type=int, default=10_000, help="marker frames of the long trial")
     parser.add_argument("--cli", action="store_true", help="also time the whole `gait idyn` command")
     args = parser.parse_args(argv)
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    one_core()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", GaitWarning)
         started = time.perf_counter()
-        markers, feet, calibration = long_trial(args.frames)
+        trial, calibration = long_trial(args.frames)
         print(f"(synthetic trial of {args.frames} frames made in {time.perf_counter() - started:.1f} s)")
-        kernels(markers, feet, calibration, args.repeat)
+        kernels(trial, calibration, args.repeat)
         with tempfile.TemporaryDirectory(prefix="bench_idyn_") as tmp:
             whole_stage(Path(tmp), args.repeat, args.cli)
     return 0

@@ -1,33 +1,205 @@
-"""Shared timing helper for the benchmark scripts (run them as `python benchmarks/bench_*.py`)."""
+"""Shared helpers of the benchmark scripts (run them from the repository root as ``python benchmarks/bench_*.py``).
+
+Import this module before numpy (every script does so first): it limits BLAS/OpenMP to one thread
+(``OMP_NUM_THREADS=1`` etc., inherited by the ``gait`` processes the scripts start) and selects
+matplotlib's Agg backend. :func:`one_core` also pins the process (and its children) to one core.
+
+Helpers: :func:`median_s` (median wall time of repeated calls), :func:`copy_sample` (a bundled sample
+trial without its outputs), :func:`sample_outputs` (run stages on such a copy through
+``gaitcli.pipeline.run_stages``), :func:`gait_argv`/:func:`time_gait` (the ``gait`` command in a new
+process), :func:`write_stage` (a stage's writer into a fresh folder, plus ``summary.json``, as the
+pipeline does), :class:`Stopwatch` (time calls of named functions without editing gaitcli) and
+:func:`figure_times` (the time of each PNG a figure function draws).
+"""
 
 from __future__ import annotations
 
+import os
+import shutil
 import statistics
+import subprocess
+import sys
 import time
+from contextlib import contextmanager
+from pathlib import Path
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+
+def one_core() -> None:
+    """Pin this process (and the processes it starts) to one core, where the OS allows it."""
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
 
 
 def median_s(func, repeat: int):
     """Median wall time (s) of ``repeat`` calls of ``func`` and the last call's return value."""
     times, value = [], None
-    for _ in range(repeat):
+    for _ in range(max(1, repeat)):
         start = time.perf_counter()
         value = func()
         times.append(time.perf_counter() - start)
     return statistics.median(times), value
 
 
-class QuietConsole:
-    """Stand-in for the CLI console when a benchmark drives ``gaitcli.pipeline.Run``: no messages, no bars."""
+def median_of(values):
+    """Median of each key over a list of dicts of numbers (keys of the first dict)."""
+    return {key: statistics.median(v[key] for v in values) for key in values[0]}
 
-    quiet, as_json = True, False
 
-    def info(self, message):
-        pass
+def copy_sample(name: str, dest: Path) -> Path:
+    """A copy of the bundled sample trial ``name`` in ``dest`` (without earlier outputs or the synthetic truth)."""
+    from gaitcli.resources import sample_trial
 
-    def summary(self, stage, summary, out_dir):
-        pass
+    shutil.copytree(sample_trial(name), dest, ignore=shutil.ignore_patterns("gait_out", "truth"))
+    return Path(dest)
 
-    def progress(self, description, total=None):
-        from gaitcli.report.progress import progress_bar
 
-        return progress_bar(description, total=total, enabled=False)
+def sample_outputs(tmp: Path, stages=("idyn",), *, sample: str = "normal", plots: bool = False, cfg=None):
+    """Run ``stages`` (and what they need) on a copy of a sample trial in ``tmp``.
+
+    Returns (trial folder, {stage: HDF5 path}) for every stage written or reused; outputs go to the
+    copy's ``gait_out``, as ``gait`` writes them.
+    """
+    from gaitcli.config import configure
+    from gaitcli.core.registry import stage
+    from gaitcli.pipeline import run_stages
+
+    folder = copy_sample(sample, Path(tmp) / sample)
+    outcomes = run_stages(folder, stages, cfg or configure(None), plots=plots)
+    return folder, {o.stage: o.folder / stage(o.stage).h5_name for o in outcomes}
+
+
+def stage_attrs(trial_folder: Path, name: str, cfg=None) -> dict:
+    """The HDF5 root attributes the pipeline gives stage ``name`` of this trial (provenance, stage key)."""
+    from gaitcli.config import configure
+    from gaitcli.pipeline import TrialRun
+
+    return TrialRun(trial_folder, None, cfg or configure(None)).attrs(name)
+
+
+def write_stage(name: str, folder: Path, result, attrs: dict) -> dict:
+    """Stage ``name``'s writer into a fresh ``folder`` (written whole, as the pipeline does) plus summary.json."""
+    from gaitcli.core.registry import stage
+    from gaitcli.io.outputs import stage_folder, write_json
+
+    with stage_folder(folder) as tmp:
+        summary = stage(name).write(tmp, result, attrs)
+        write_json(tmp / "summary.json", summary)
+    return summary
+
+
+def gait_argv(*args) -> list[str]:
+    """The command line of ``gait ARGS``: the console script beside this Python, else ``python -c``."""
+    script = Path(sys.executable).with_name("gait")
+    if script.is_file():
+        return [str(script), *map(str, args)]
+    return [sys.executable, "-c", "import sys; from gaitcli.cli import main; sys.exit(main())", *map(str, args)]
+
+
+def run_gait(*args) -> subprocess.CompletedProcess:
+    """Run ``gait ARGS`` in a new process (one thread, output captured); raises if it fails."""
+    return subprocess.run(gait_argv(*args), check=True, capture_output=True, text=True)
+
+
+def time_gait(*args, repeat: int = 3, before=None) -> float:
+    """Median wall time (s) of ``gait ARGS`` in a new process; ``before()`` runs untimed before each run."""
+    times = []
+    for _ in range(max(1, repeat)):
+        if before is not None:
+            before()
+        start = time.perf_counter()
+        run_gait(*args)
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def python_s(code: str, repeat: int = 3) -> float:
+    """Median wall time (s) of ``python -c CODE`` in a new process (interpreter start-up included)."""
+    def run():
+        subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
+    return median_s(run, repeat)[0]
+
+
+class Stopwatch:
+    """Accumulated wall time of calls to functions replaced by timing wrappers for the duration of a ``with``.
+
+    ``watch.wrap(module, "name", "label")`` replaces ``module.name``; ``watch.seconds["label"]`` and
+    ``watch.calls["label"]`` accumulate. Nested wrapped calls count in both labels.
+    """
+
+    def __init__(self):
+        self.seconds: dict[str, float] = {}
+        self.calls: dict[str, int] = {}
+        self._restore = []
+
+    def wrap(self, owner, name: str, label: str | None = None):
+        label = label or name
+        original = getattr(owner, name)
+        self.seconds.setdefault(label, 0.0)
+        self.calls.setdefault(label, 0)
+
+        def timed(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                self.seconds[label] += time.perf_counter() - start
+                self.calls[label] += 1
+
+        setattr(owner, name, timed)
+        self._restore.append((owner, name, original))
+        return self
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        for owner, name, original in reversed(self._restore):
+            setattr(owner, name, original)
+        self._restore.clear()
+
+
+@contextmanager
+def _saves(marks: list):
+    """Record (name, start, end) of each ``report.plots.save`` call (one per PNG)."""
+    from gaitcli.report import plots
+
+    original = plots.save
+
+    def save(fig, path):
+        start = time.perf_counter()
+        try:
+            return original(fig, path)
+        finally:
+            marks.append((Path(path).name, start, time.perf_counter()))
+
+    plots.save = save
+    try:
+        yield
+    finally:
+        plots.save = original
+
+
+def figure_times(figures, h5_path: Path, folder: Path, title: str = "") -> dict[str, tuple[float, float]]:
+    """One call of ``figures(h5_path, folder, title=...)``: {png name: (seconds, of which saving)}.
+
+    A figure's time runs from the end of the previous figure (the first: from the call, so it includes
+    reading the HDF5 file) to the end of its ``savefig``; "saving" is the ``save`` call alone (the PNG
+    render and write).
+    """
+    marks = []
+    start = time.perf_counter()
+    with _saves(marks):
+        figures(h5_path, folder, title=title)
+    out, previous = {}, start
+    for name, begin, end in marks:
+        out[name] = (end - previous, end - begin)
+        previous = end
+    return out

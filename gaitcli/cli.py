@@ -18,11 +18,13 @@ import click
 
 from gaitcli import __version__
 from gaitcli.config import configure
-from gaitcli.core.validate import parameter_spec
+from gaitcli.core.validate import expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import GaitError, GaitWarning, NotConvergedError
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.signal.stage import FilterConfig
+from gaitcli.synth.gait import CONDITIONS
+from gaitcli.trial import SEXES
 
 
 class Console:
@@ -78,11 +80,21 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
 @click.version_option(__version__, prog_name="gait")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bars or messages.")
 @click.option("--json", "as_json", is_flag=True, help="Print the stage summary as JSON on stdout.")
-@click.option("--debug", is_flag=True, help="Show tracebacks on errors.")
+@click.option("--debug", is_flag=True, expose_value=False,  # read by main(), which catches the errors
+              help="Show tracebacks on errors.")
 @click.pass_context
-def gait(ctx, quiet, as_json, debug):
+def gait(ctx, quiet, as_json):
     """Gait-lab processing: filter, inverse dynamics, muscles, predictive gait."""
     ctx.obj = Console(quiet=quiet, as_json=as_json)
+
+
+class Choice(click.Choice):
+    """click's Choice with the validators' message: "got …, expected one of …; did you mean …?"."""
+
+    def convert(self, value, param, ctx):
+        if value in self.choices:
+            return value
+        self.fail(expected_one_of(value, self.choices), param, ctx)
 
 
 def _trial_argument(func):
@@ -107,7 +119,7 @@ def _config_option(config, name: str, *flags: str, flag: bool = False):
     if flag:
         return click.option(*flags, name, is_flag=True, default=None, help=spec["help"])
     if spec["choices"] is not None:
-        kind = click.Choice(spec["choices"])
+        kind = Choice(spec["choices"])
     elif isinstance(f.default, int):
         kind = click.IntRange(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
     else:
@@ -154,21 +166,24 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 
 @gait.command("synth")
 @click.argument("out_dir", type=click.Path(path_type=Path))
-@click.option("--condition", type=click.Choice(["normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot"]),
-              default="normal", show_default=True, help="Experiment of 3.1.1 (added masses, locked joints).")
+@click.option("--condition", type=Choice(tuple(CONDITIONS)), default="normal", show_default=True,
+              help="Experiment of 3.1.1 (added masses, locked joints).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the marker noise and artefact.")
-@click.option("--noise-mm", type=float, default=2.0, show_default=True,
+@click.option("--noise-mm", type=click.FloatRange(min=0), default=2.0, show_default=True,
               help="White marker noise: RMS of the 3-D position error, mm (each axis gets noise/√3).")
-@click.option("--artefact-mm", type=float, default=10.0, show_default=True,
+@click.option("--artefact-mm", type=click.FloatRange(min=0), default=10.0, show_default=True,
               help="Low-frequency skin artefact: peak 3-D displacement of a marker, mm.")
-@click.option("--plate-noise-n", "plate_noise_N", type=float, default=1.0, show_default=True,
+@click.option("--plate-noise-n", "plate_noise_N", type=click.FloatRange(min=0), default=1.0, show_default=True,
               help="White noise on the force-plate channels, N (N·mm/20 on moments).")
-@click.option("--strides", type=int, default=3, show_default=True, help="Gait cycles in the trial.")
-@click.option("--mass-kg", type=float, default=75.0, show_default=True, help="Body mass of the subject, kg.")
-@click.option("--stature-m", type=float, default=1.78, show_default=True, help="Stature of the subject, m.")
-@click.option("--sex", type=click.Choice(["male", "female"]), default="male", show_default=True,
+@click.option("--strides", type=click.IntRange(min=1, max=500), default=3, show_default=True,
+              help="Gait cycles in the trial.")
+@click.option("--mass-kg", type=click.FloatRange(min=0, max=500, min_open=True), default=75.0, show_default=True,
+              help="Body mass of the subject, kg.")
+@click.option("--stature-m", type=click.FloatRange(min=0.5, max=2.5, min_open=True, max_open=True), default=1.78,
+              show_default=True, help="Stature of the subject, m.")
+@click.option("--sex", type=Choice(SEXES), default="male", show_default=True,
               help="Selects de Leva's segment tables.")
-@click.option("--period-s", type=float, default=None,
+@click.option("--period-s", type=click.FloatRange(min=0.5, max=3.0), default=None,
               help="Gait cycle, s (default: the condition's, 1.20 s for normal walking).")
 @click.pass_obj
 def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides,
@@ -176,11 +191,6 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
     """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/)."""
     from gaitcli.synth import write_trial
 
-    if strides < 1:
-        raise click.BadParameter("expected at least 1 stride", param_hint="--strides")
-    if not (mass_kg > 0 and 0.5 < stature_m < 2.5):
-        raise click.BadParameter("expected mass > 0 kg and stature in metres (0.5–2.5)",
-                                 param_hint="--mass-kg/--stature-m")
     trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                         plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
                         sex=sex, period_s=period_s)

@@ -41,6 +41,8 @@ class Subject:
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "trial", "static",
         "static_frames", "marker_map", "disturbances")
+#: keys that older `gait synth` versions wrote and nothing reads; now a comment in subject.yaml
+RETIRED_KEYS = ("condition", "disturbed_side")
 DISTURBANCE_KEYS = ("segment", "mass_kg", "inertia_kgm2", "com_offset_m", "name")
 
 
@@ -58,6 +60,10 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     """Validate the parsed ``subject.yaml``; every problem is an :class:`InputError` naming the key."""
     if not isinstance(data, dict):
         raise InputError(path, None, "expected a YAML mapping with mass_kg, stature_m and sex")
+    for key in RETIRED_KEYS:
+        if key in data:
+            raise InputError(path, key, "no longer read (it described the synthetic experiment; expected the line "
+                                        "as a comment, '# condition: …', as `gait synth` now writes it)")
     known_keys(data, KEYS, path=path)
     for key in ("stature_m", "sex"):
         if key not in data:

@@ -139,6 +139,12 @@ def test_unknown_key_did_you_mean(key, hint):
     assert err.field == key and "unknown key" in err.problem and f"did you mean '{hint}'" in err.problem
 
 
+@pytest.mark.parametrize("key,value", [("condition", "ski_boot"), ("disturbed_side", "r")])
+def test_keys_older_synth_wrote_say_they_are_no_longer_read(key, value):
+    err = _error(_with(**{key: value}))
+    assert err.field == key and "no longer read" in err.problem and "# condition" in err.problem
+
+
 def test_unknown_key_without_a_close_match_lists_the_allowed_keys():
     err = _error(_with(shoe_size=42))
     assert err.field == "shoe_size" and "did you mean" not in err.problem

@@ -36,14 +36,15 @@ class Events:
     def __post_init__(self):
         frame = np.asarray(self.frame, dtype=int).ravel()
         time_s = np.asarray(self.time_s, dtype=float).ravel()
-        side = np.asarray(self.side, dtype="<U1").ravel()
-        kind = np.asarray(self.kind, dtype="<U11").ravel()
-        source = np.asarray(self.source, dtype="<U10").ravel()
-        if not len(frame) == len(time_s) == len(side) == len(kind) == len(source):
-            raise InputError(None, "events", "got arrays of different lengths (expected parallel arrays)")
-        for name, values, allowed in (("side", side, SIDES), ("kind", kind, KINDS), ("source", source, SOURCES)):
+        text = {}
+        for name, allowed, dtype in (("side", SIDES, "<U1"), ("kind", KINDS, "<U11"), ("source", SOURCES, "<U10")):
+            values = np.asarray(getattr(self, name)).astype(str).ravel()  # checked before the fixed width cuts
             for value in sorted(set(values.tolist()) - set(allowed)):
                 one_of(value, allowed, where=f"events.{name}")
+            text[name] = values.astype(dtype)
+        side, kind, source = text["side"], text["kind"], text["source"]
+        if not len(frame) == len(time_s) == len(side) == len(kind) == len(source):
+            raise InputError(None, "events", "got arrays of different lengths (expected parallel arrays)")
         order = np.lexsort((kind, side, time_s))
         for name, values in (("frame", frame), ("time_s", time_s), ("side", side), ("kind", kind),
                              ("source", source)):
@@ -74,13 +75,17 @@ class Events:
         mask = np.asarray(mask, dtype=bool)
         return Events(self.frame[mask], self.time_s[mask], self.side[mask], self.kind[mask], self.source[mask])
 
-    def of(self, side: str | None = None, kind: str | None = None, source: str | None = None) -> Events:
-        """The events of one side and/or kind and/or source (None: any)."""
+    def mask(self, side: str | None = None, kind: str | None = None, source: str | None = None) -> np.ndarray:
+        """(len,) where the events are of that side and/or kind and/or source (None: any)."""
         mask = np.ones(len(self), dtype=bool)
         for values, wanted in ((self.side, side), (self.kind, kind), (self.source, source)):
             if wanted is not None:
                 mask &= values == wanted
-        return self.select(mask)
+        return mask
+
+    def of(self, side: str | None = None, kind: str | None = None, source: str | None = None) -> Events:
+        """The events of one side and/or kind and/or source (None: any)."""
+        return self.select(self.mask(side, kind, source))
 
     def times(self, side: str, kind: str, source: str | None = None) -> np.ndarray:
         """Sorted times (s) of one side's events of one kind (and source, None: any)."""

@@ -28,13 +28,19 @@ def _hint(value: Any, allowed: Iterable[str]) -> str:
     return f"; did you mean '{match[0]}'?" if match else ""
 
 
+def expected_one_of(value: Any, allowed: Iterable) -> str:
+    """The problem text for a value outside ``allowed``: "got …, expected one of …; did you mean …?"."""
+    allowed = tuple(allowed)
+    return (f"got {value!r} (expected one of {', '.join(map(str, allowed))}"
+            f"{_hint(value, allowed) if isinstance(value, str) else ''})")
+
+
 def one_of(value: Any, allowed: Iterable, *, where: str | None, path: Where = None) -> Any:
     """``value`` if it is one of ``allowed``, else "got …, expected one of …; did you mean …?"."""
     allowed = tuple(allowed)
     if value in allowed:
         return value
-    raise InputError(path, where, f"got {value!r} (expected one of {', '.join(map(str, allowed))}"
-                                  f"{_hint(value, allowed) if isinstance(value, str) else ''})")
+    raise InputError(path, where, expected_one_of(value, allowed))
 
 
 def unknown_key(key: Any, allowed: Iterable[str], *, where: str = "", path: Where = None) -> InputError:

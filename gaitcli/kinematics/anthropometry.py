@@ -34,6 +34,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
 
@@ -292,9 +293,7 @@ def combine(segment: SegmentInertia, mass_kg: float, inertia_kgm2, com_offset_m)
 def add_disturbance(params: Mapping[str, SegmentInertia], segment: str, mass_kg: float, inertia_kgm2,
                     com_offset_m=(0.0, 0.0, 0.0), *, name: str = "disturbance") -> dict[str, SegmentInertia]:
     """Return a copy of ``params`` with a disturbance added to body ``segment`` (see :func:`combine`)."""
-    if segment not in params:
-        raise InputError(None, "disturbances.segment",
-                         f"got {segment!r} (expected one of {', '.join(params)})")
+    one_of(segment, tuple(params), where="disturbances.segment")
     out = dict(params)
     seg = combine(params[segment], mass_kg, inertia_kgm2, com_offset_m)
     out[segment] = replace(seg, notes=seg.notes + (f"+ {name} {float(mass_kg):.3f} kg",))
@@ -360,10 +359,8 @@ def preset_disturbances(name: str, segments: Mapping[str, SegmentInertia], *, si
     """
     key = PRESET_ALIASES.get(name, name)
     if key not in PRESETS:
-        raise InputError(None, "disturbance",
-                         f"unknown preset {name!r} (expected one of {', '.join(PRESETS + tuple(PRESET_ALIASES))})")
-    if side not in ("r", "l"):
-        raise InputError(None, "side", f"got {side!r} (expected 'r' or 'l')")
+        one_of(name, PRESETS + tuple(PRESET_ALIASES), where="disturbance")
+    one_of(side, ("r", "l"), where="side")
     other = "l" if side == "r" else "r"
     zero = np.zeros(3)
     if key == "normal":

@@ -29,8 +29,7 @@ def strides(events: Events) -> list[Stride]:
     """Every complete stride of both sides, in time order."""
     out = []
     for side in ("r", "l"):
-        strikes = np.sort(events.time_s[(events.side == side) & (events.kind == "heel_strike")])
-        offs = np.sort(events.time_s[(events.side == side) & (events.kind == "toe_off")])
+        strikes, offs = events.times(side, "heel_strike"), events.times(side, "toe_off")
         for a, b in zip(strikes[:-1], strikes[1:]):
             inside = offs[(offs > a) & (offs < b)]
             out.append(Stride(side, float(a), float(b), float(inside[0]) if inside.size else np.nan))
@@ -44,21 +43,6 @@ def normalise(values: np.ndarray, time_s: np.ndarray, stride: Stride) -> np.ndar
     out = np.column_stack([np.interp(grid, time_s, flat[:, k], left=np.nan, right=np.nan)
                            for k in range(flat.shape[1])])
     return out.reshape((CYCLE_POINTS,) + values.shape[1:])
-
-
-def _stance_intervals(events: Events, side: str, *, plate_only: bool = False) -> list[tuple[float, float]]:
-    """Stance intervals (heel strike → next toe off) of ``side``; with ``plate_only`` both timed by a plate."""
-    mine = events.side == side
-    if plate_only:
-        mine &= events.source == "plate"
-    strikes = np.sort(events.time_s[mine & (events.kind == "heel_strike")])
-    offs = np.sort(events.time_s[mine & (events.kind == "toe_off")])
-    out = []
-    for a in strikes:
-        later = offs[offs > a]
-        if later.size:
-            out.append((float(a), float(later[0])))
-    return out
 
 
 @dataclass(frozen=True)
@@ -114,7 +98,7 @@ def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.nd
             lengths.append(abs(_footprint(x, time_s, st.end_s, period) - _footprint(x, time_s, st.start_s, period)))
     stance = {}
     for side in ("r", "l"):
-        contacts = _stance_intervals(events, side, plate_only=True) or _stance_intervals(events, side)
+        contacts = events.stances(side, "plate") or events.stances(side)
         stance[side] = mean([(b - a) / period * 100 for a, b in contacts])
     # walking has no flight phase: each foot's stance overlaps the other's twice per stride
     double = stance["r"] + stance["l"] - 100.0

@@ -129,7 +129,7 @@ def calibrate_kinematic_events(events: Events, feet: dict, pelvis: np.ndarray, r
         for side in feet:
             own = bias[side] or pooled  # a foot's own bias where a plate saw it, else both feet's
             if own:
-                mine = (events.side == side) & (events.kind == kind) & (events.source == "kinematics")
+                mine = events.mask(side, kind, "kinematics")
                 shifted[mine] += float(np.median(own))
     return Events(np.rint(shifted * rate_hz).astype(int), shifted, events.side, events.kind, events.source)
 

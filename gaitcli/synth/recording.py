@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gaitcli.core.recording import ForcePlate, Markers
+from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
 from gaitcli.synth.gait import ANALOG_RATE_HZ, CONDITIONS, GaitDesign, Geometry, balanced_gait
@@ -169,8 +170,7 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     from gaitcli.kinematics.calibration import calibrate
     from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 
-    if condition not in CONDITIONS:
-        raise InputError(None, "--condition", f"got {condition!r} (expected one of {', '.join(CONDITIONS)})")
+    one_of(condition, CONDITIONS, where="--condition")
     if noise_mm < 0 or artefact_mm < 0:
         raise InputError(None, "--noise-mm", "expected noise and artefact amplitudes ≥ 0 mm")
     cond = CONDITIONS[condition]
