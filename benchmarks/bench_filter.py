@@ -23,7 +23,7 @@ import tempfile
 import warnings
 from pathlib import Path
 
-import timing  # noqa: F401  (first: one thread, Agg backend)
+# timing first, before numpy: one thread, Agg backend (its import sets the environment)
 from timing import REPO, copy_sample, median_s, one_core, stage_attrs, time_gait, write_stage
 
 from gaitcli.errors import GaitWarning

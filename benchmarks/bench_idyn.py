@@ -32,7 +32,7 @@ import tracemalloc
 import warnings
 from pathlib import Path
 
-import timing  # noqa: F401  (first: one thread, Agg backend)
+# timing first, before numpy: one thread, Agg backend (its import sets the environment)
 from timing import copy_sample, median_s, one_core, sample_outputs, time_gait
 
 import numpy as np
@@ -49,7 +49,7 @@ from gaitcli.dynamics.stage import (IdynConfig, body_mass, external_wrenches, in
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments
-from gaitcli.pipeline import load_static_markers, run_stage
+from gaitcli.pipeline import load_static_markers, run_stage, run_stages
 from gaitcli.synth import MARKER_RATE_HZ, simulate_trial
 from gaitcli.trial import open_trial
 
@@ -130,13 +130,14 @@ def whole_stage(tmp: Path, repeat: int, cli: bool) -> None:
     rows = {"inverse_dynamics_stage": stage_only,
             "run_stage idyn (read, calib., writers)": lambda: run_stage(folder, "idyn", pipeline_cfg, plots=False),
             "run_stage idyn, with figures": lambda: run_stage(folder, "idyn", pipeline_cfg, plots=True)}
-    print(f"\nthe idyn stage on the normal sample trial ({frames} frames), median of {repeat} runs, one core")
+    filter_status = next(o.status for o in run_stages(folder, ["idyn"], pipeline_cfg, plots=False)
+                         if o.stage == "filter")
+    print(f"\nthe idyn stage on the normal sample trial ({frames} frames), median of {repeat} runs, one core "
+          f"(filter output {filter_status} by run_stage)")
     print(f"{'':40} {'ms':>9} {'frames/s':>10} {'peak MB':>8}")
     print("-" * 70)
     for label, func in rows.items():
-        seconds, outcome = median_s(func, repeat)
-        if label != "inverse_dynamics_stage":
-            assert [o.stage for o in run_stage.__wrapped__(folder, "idyn")] if False else True
+        seconds, _ = median_s(func, repeat)
         print(f"{label:40} {1e3 * seconds:9.1f} {frames / seconds:10.0f} {_peak_mb(func):8.1f}")
     if cli:
         cli_folder = copy_sample("normal", tmp / "cli_normal")

@@ -2,7 +2,7 @@
 
 Run from the repository root: ``python benchmarks/bench_muscles.py [--repeat N] [--side r|l]``.
 The filter and idyn stages run once on a copy of ``sample_trials/normal`` (55 kg, 1.65 m,
-0.88 m/s); then, on the first stride whose stance is on a plate (periodic, 4.3.5), with the
+0.88 m/s) and the leg is read back from idyn.h5 (``stage("idyn").read``, ``prepare_leg``); then, on the first stride whose stance is on a plate (periodic, 4.3.5), with the
 8 muscles of Table A.1: SO and MSO on every 100 Hz frame of the stride (as Table 4.2 solves
 one small problem per frame) and on the 50 EID nodes ("so 50", "mso 50"), EID on 50 nodes (400
 force variables, as Table 4.2), and EID on the swing phase with the forward validation of 4.5.4. Threads are limited to one and the process
@@ -10,30 +10,20 @@ to one core. Prints median wall time of ``--repeat`` runs (the whole ``run_muscl
 set-up, NLP construction, solve, inversions, energetics), IPOPT iterations, metabolic cost of one
 leg, cost of transport (both legs) beside Ralston's (4.5), the largest moment-equation error, and
 the speed-up over the dissertation's times (subject 1: SO 5.3 s, MSO 7.6 s, EID 4.5e4 s).
-Asserts nothing.
+Asserts nothing. (The whole ``gait muscles`` command, end to end: ``benchmarks/bench_cli.py``.)
 """
 
 from __future__ import annotations
 
 import argparse
-import os
-import shutil
 import sys
 import tempfile
 from pathlib import Path
 
-for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(var, "1")
-os.environ.setdefault("MPLBACKEND", "Agg")
+# timing first, before numpy: one thread, Agg backend (its import sets the environment)
+from timing import median_s, one_core, sample_legs
 
-REPO = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO))
-
-from gaitcli import pipeline as pl  # noqa: E402
-from gaitcli.muscles import run_muscles  # noqa: E402
-from gaitcli.muscles.interval import prepare_leg  # noqa: E402
-from gaitcli.resources import sample_trial  # noqa: E402
-from timing import QuietConsole, median_s  # benchmarks/timing.py
+from gaitcli.muscles.stage import run_muscles
 
 DISSERTATION = {  # Table 4.2, subject 1: time (s), optimisation variables, metabolic cost (J)
     "so": (5.3, "8 (67x)", None),
@@ -52,16 +42,9 @@ def main(argv=None) -> int:
     parser.add_argument("--side", choices=("r", "l"), default="r")
     parser.add_argument("--nodes", type=int, default=50, help="EID nodes")
     args = parser.parse_args(argv)
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp) / "normal"
-        shutil.copytree(sample_trial("normal"), folder, ignore=shutil.ignore_patterns("gait_out", "truth"))
-        run = pl.Run(folder, Path(tmp) / "out", pl.configure(None), QuietConsole())
-        inputs = run.idyn_outputs()
-        subject = run.trial.subject
-        legs = {phase: prepare_leg(inputs, args.side, phase, stature_m=subject.stature_m, sex=subject.sex)
-                for phase in ("cycle", "swing")}
+    one_core()
+    with tempfile.TemporaryDirectory(prefix="bench_muscles_") as tmp:
+        subject, legs = sample_legs(Path(tmp), args.side, ("cycle", "swing"))
     cycle = legs["cycle"]
     start, end = cycle.interval_s
     print(f"sample_trials/normal ({subject.mass_kg:g} kg, {subject.stature_m:g} m), side {args.side}, stride "
@@ -103,4 +86,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    sys.exit(main())

@@ -6,7 +6,8 @@ matplotlib's Agg backend. :func:`one_core` also pins the process (and its childr
 
 Helpers: :func:`median_s` (median wall time of repeated calls), :func:`copy_sample` (a bundled sample
 trial without its outputs), :func:`sample_outputs` (run stages on such a copy through
-``gaitcli.pipeline.run_stages``), :func:`gait_argv`/:func:`time_gait` (the ``gait`` command in a new
+``gaitcli.pipeline.run_stages``), :func:`sample_legs` (one leg's muscle-stage inputs from a sample's
+idyn.h5), :func:`gait_argv`/:func:`time_gait` (the ``gait`` command in a new
 process), :func:`write_stage` (a stage's writer into a fresh folder, plus ``summary.json``, as the
 pipeline does), :class:`Stopwatch` (time calls of named functions without editing gaitcli) and
 :func:`figure_times` (the time of each PNG a figure function draws).
@@ -76,6 +77,23 @@ def sample_outputs(tmp: Path, stages=("idyn",), *, sample: str = "normal", plots
     return folder, {o.stage: o.folder / stage(o.stage).h5_name for o in outcomes}
 
 
+def sample_legs(tmp: Path, side: str = "r", phases=("cycle",), *, sample: str = "normal"):
+    """The muscle stage's inputs for one leg of a sample trial: (subject, {phase: LegAnalysis}).
+
+    The filter and idyn stages run once on a copy in ``tmp``; the legs come from idyn.h5 read back
+    (``stage("idyn").read``, the hand-off ``gait muscles`` gets) by ``muscles.interval.prepare_leg``.
+    """
+    from gaitcli.core.registry import stage
+    from gaitcli.muscles.interval import prepare_leg
+    from gaitcli.trial import open_trial
+
+    folder, h5 = sample_outputs(tmp, ("idyn",), sample=sample)
+    export = stage("idyn").read(h5["idyn"])
+    subject = open_trial(folder).subject
+    return subject, {phase: prepare_leg(export, side, phase, stature_m=subject.stature_m, sex=subject.sex,
+                                        source=h5["idyn"]) for phase in phases}
+
+
 def stage_attrs(trial_folder: Path, name: str, cfg=None) -> dict:
     """The HDF5 root attributes the pipeline gives stage ``name`` of this trial (provenance, stage key)."""
     from gaitcli.config import configure
@@ -130,8 +148,9 @@ def python_s(code: str, repeat: int = 3) -> float:
 class Stopwatch:
     """Accumulated wall time of calls to functions replaced by timing wrappers for the duration of a ``with``.
 
-    ``watch.wrap(module, "name", "label")`` replaces ``module.name``; ``watch.seconds["label"]`` and
-    ``watch.calls["label"]`` accumulate. Nested wrapped calls count in both labels.
+    ``watch.wrap(owner, "name", label)`` replaces the attribute ``owner.name`` (of a module or a class);
+    ``watch.seconds[label]`` and ``watch.calls[label]`` accumulate. ``label`` may be a function of the
+    call's arguments (one label per kind of call). Nested wrapped calls count in both labels.
     """
 
     def __init__(self):
@@ -139,30 +158,30 @@ class Stopwatch:
         self.calls: dict[str, int] = {}
         self._restore = []
 
-    def wrap(self, owner, name: str, label: str | None = None):
+    def wrap(self, owner, name: str, label=None):
         label = label or name
         original = getattr(owner, name)
-        self.seconds.setdefault(label, 0.0)
-        self.calls.setdefault(label, 0)
+        raw = vars(owner).get(name, original) if isinstance(owner, type) else original  # classmethods stay so
 
         def timed(*args, **kwargs):
+            key = label(*args, **kwargs) if callable(label) else label
             start = time.perf_counter()
             try:
                 return original(*args, **kwargs)
             finally:
-                self.seconds[label] += time.perf_counter() - start
-                self.calls[label] += 1
+                self.seconds[key] = self.seconds.get(key, 0.0) + time.perf_counter() - start
+                self.calls[key] = self.calls.get(key, 0) + 1
 
         setattr(owner, name, timed)
-        self._restore.append((owner, name, original))
+        self._restore.append((owner, name, raw))
         return self
 
     def __enter__(self):
         return self
 
     def __exit__(self, *exc):
-        for owner, name, original in reversed(self._restore):
-            setattr(owner, name, original)
+        for owner, name, raw in reversed(self._restore):
+            setattr(owner, name, raw)
         self._restore.clear()
 
 

@@ -14,11 +14,12 @@ import dataclasses
 import hashlib
 import json
 import os
+import queue
 import shutil
 import subprocess
 import sys
+import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -76,11 +77,69 @@ def gait(*args, cwd: Path, timeout_s: float = 180.0) -> Result:
     return Result(args, done.returncode, done.stdout, done.stderr, Path(cwd))
 
 
-def gait_many(jobs: dict) -> dict:
-    """Run several ``gait`` invocations at once: ``{key: (args, cwd)}`` → ``{key: Result}``."""
-    with ThreadPoolExecutor(max_workers=WORKERS) as pool:
-        futures = {key: pool.submit(gait, *args, cwd=cwd) for key, (args, cwd) in jobs.items()}
-        return {key: f.result() for key, f in futures.items()}
+#: a fresh interpreter that imports gaitcli once and then runs ``gait`` invocations one after another (one JSON
+#: line in, one out), each in its working folder with its own stdout/stderr, as the console script does
+_RUNNER = """
+import contextlib, io, json, os, sys
+from gaitcli.cli import main
+for line in sys.stdin:
+    args, cwd = json.loads(line)
+    os.chdir(cwd)
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+        code = main(args)
+    sys.__stdout__.write(json.dumps([code, stdout.getvalue(), stderr.getvalue()]) + "\\n")
+    sys.__stdout__.flush()
+"""
+
+
+def _runner_loop(todo: queue.Queue, done: dict, timeout_s: float) -> None:
+    """One runner process: take jobs off ``todo`` until it is empty, put each Result into ``done``."""
+    proc = subprocess.Popen([sys.executable, "-c", _RUNNER], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=ENV, text=True)
+    timer = threading.Timer(timeout_s, proc.kill)
+    timer.start()
+    try:
+        while True:
+            try:
+                key, (args, cwd) = todo.get_nowait()
+            except queue.Empty:
+                break
+            args = tuple(str(a) for a in args)
+            proc.stdin.write(json.dumps([list(args), str(cwd)]) + "\n")
+            proc.stdin.flush()
+            line = proc.stdout.readline()
+            if not line:
+                raise RuntimeError(f"the gait runner process died running gait {' '.join(args)}:\n"
+                                   f"{proc.stderr.read()}")
+            code, stdout, stderr = json.loads(line)
+            done[key] = Result(args, code, stdout, stderr, Path(cwd))
+    finally:
+        timer.cancel()
+        proc.stdin.close()
+        proc.wait()
+
+
+def gait_many(jobs: dict, *, timeout_s: float = 600.0, workers: int = WORKERS) -> dict:
+    """Run several ``gait`` invocations: ``{key: (args, cwd)}`` → ``{key: Result}``.
+
+    ``workers`` processes each import gaitcli once and take the next job when done with one (put the
+    longest first); with ``workers=1`` the jobs run in the order given, one after the other.
+    """
+    todo: queue.Queue = queue.Queue()
+    for item in jobs.items():
+        todo.put(item)
+    done: dict = {}
+    threads = [threading.Thread(target=_runner_loop, args=(todo, done, timeout_s))
+               for _ in range(max(1, min(workers, len(jobs))))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    missing = [k for k in jobs if k not in done]
+    if missing:
+        raise RuntimeError(f"gait runs without a result: {missing}")
+    return {key: done[key] for key in jobs}
 
 
 def copy_sample(name: str, dest: Path) -> Path:

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import json
 import warnings
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import h5py
@@ -43,7 +42,7 @@ from gaitcli.io.c3d_write import write_c3d
 from gaitcli.kinematics.model import BODIES, COORDINATES, MOMENTS, RESIDUALS
 from gaitcli.core.recording import Markers
 
-from .conftest import SAMPLES, WORKERS, Result, build_once, copy_sample, gait
+from .conftest import SAMPLES, Result, build_once, copy_sample, gait, gait_many
 
 IDYN_FILES = ("kinematics.csv", "joint_moments.csv", "residuals.csv", "sagittal.csv", "gait_cycle.csv", "idyn.h5",
               "summary.json")
@@ -86,13 +85,11 @@ def _build(root: Path) -> dict:
     _drop_static_marker(copy_sample("normal", root / "no_lefr"), "LEFr")
     jobs["no_lefr"] = [("idyn", root / "no_lefr")]
 
-    def chain(commands):
-        return [gait(*args, cwd=root).to_json() for args in commands]
-
-    with ThreadPoolExecutor(max_workers=WORKERS) as pool:
-        order = ["exact"] + [k for k in jobs if k != "exact"]  # the longest chain first
-        futures = {key: pool.submit(chain, jobs[key]) for key in order}
-        return {key: f.result() for key, f in futures.items()}
+    synth, run = jobs.pop("exact")
+    made = gait(*synth, cwd=root)  # the exact trial first: its `gait run` joins the others
+    jobs = {"exact": [run], **jobs}
+    results = gait_many({key: (commands[0], root) for key, commands in jobs.items()})
+    return {key: ([made.to_json()] if key == "exact" else []) + [results[key].to_json()] for key in jobs}
 
 
 @pytest.fixture(scope="module")

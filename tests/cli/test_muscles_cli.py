@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import json
 import shutil
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import h5py
@@ -86,10 +85,8 @@ def _corrupt_knee(h5_path: Path, start_s: float) -> dict:
 def _build(root: Path) -> dict:
     normal = copy_sample("normal", root / "normal")
     nan = copy_sample("normal", root / "nan")
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        first = pool.submit(gait, "muscles", normal, "--method", "so", cwd=root)
-        idyn = pool.submit(gait, "idyn", nan, cwd=root)
-        first, idyn = first.result(), idyn.result()
+    started = gait_many({"first": (("muscles", normal, "--method", "so"), root), "idyn": (("idyn", nan), root)})
+    first, idyn = started["first"], started["idyn"]
     if first.returncode != 0 or idyn.returncode != 0:
         return {"failed": [first.to_json(), idyn.to_json()]}
     out = normal / "gait_out"

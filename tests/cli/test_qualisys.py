@@ -37,7 +37,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from .conftest import Result, build_once, gait
+from .conftest import Result, build_once, gait_many
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "qualisys"
 PELVIS = ("R_IAS", "L_IAS", "R_IPS", "L_IPS")
@@ -50,9 +50,9 @@ def _build(shared_c3d_dir: Path, root: Path) -> dict:
     trial.mkdir()
     shutil.copy(shared_c3d_dir / "Qualisys.c3d", trial / "trial.c3d")
     shutil.copy(EXAMPLE / "subject.yaml", trial / "subject.yaml")
-    results = [gait(command, trial, cwd=root).to_json() for command in ("filter", "idyn")]
-    eid = gait("muscles", trial, "--method", "eid", "--side", "r", cwd=root)
-    return {"results": results, "eid": eid.to_json()}
+    runs = gait_many({"filter": (("filter", trial), root), "idyn": (("idyn", trial), root),
+                      "eid": (("muscles", trial, "--method", "eid", "--side", "r"), root)}, workers=1)
+    return {"results": [runs["filter"].to_json(), runs["idyn"].to_json()], "eid": runs["eid"].to_json()}
 
 
 @pytest.fixture(scope="module")

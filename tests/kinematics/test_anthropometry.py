@@ -167,7 +167,7 @@ def test_disturbance_errors():
     segs = segment_parameters(**SUBJECT1)
     with pytest.raises(InputError, match="segment"):
         add_disturbance(segs, "arm_r", 1.0, [0, 0, 0])
-    with pytest.raises(InputError, match="preset"):
+    with pytest.raises(InputError, match="disturbance: got .jetpack. \(expected one of normal, ankle_weight"):
         preset_disturbances("jetpack", segs)
     with pytest.raises(InputError, match="inertia"):
         apply_disturbances(segs, [Disturbance("foot_r", 1.0, np.ones(4))])
