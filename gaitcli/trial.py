@@ -17,7 +17,7 @@ import numpy as np
 from gaitcli.io.yamlfile import read_yaml
 from gaitcli.core.validate import known_keys, number, one_of
 from gaitcli.errors import InputError
-from gaitcli.kinematics.anthropometry import Disturbance
+from gaitcli.kinematics.disturbances import Disturbance
 
 SEXES = ("male", "female")
 SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")

@@ -38,8 +38,8 @@ import numpy as np
 from gaitcli.core.validate import one_of
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
-from gaitcli.kinematics.anthropometry import (Disturbance, SegmentInertia, apply_disturbances, normalise_sex,
-                                              resolve_disturbances, rotate_segment, segment_parameters)
+from gaitcli.kinematics.anthropometry import SegmentInertia, normalise_sex, rotate_segment, segment_parameters
+from gaitcli.kinematics.disturbances import Disturbance, apply_disturbances, resolve_disturbances
 from gaitcli.kinematics.markerset import (LANDMARKS, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, required_landmarks,
                                           tracking_landmarks)
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters

@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .hill import NQ
 from .limb import MotionInterpolant
@@ -122,6 +121,8 @@ def validate_forward(problem: Problem, motion_interp: MotionInterpolant, force_N
     times, states, costs, ok, messages = [], [], [], True, set()
     for (j, ta), (_, tb) in zip(starts, spans):
         t_eval = np.linspace(ta, tb, per_segment + 1)
+        from scipy.integrate import solve_ivp  # only --validate integrates: not at import
+
         sol = solve_ivp(f, (ta, tb), node_state(j, ta), method="Radau", t_eval=t_eval, jac=f_jac,
                         rtol=rtol, atol=atol)
         ok &= bool(sol.success and sol.t.size == t_eval.size)

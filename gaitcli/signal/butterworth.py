@@ -25,7 +25,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.signal import butter, sosfilt, sosfiltfilt
 
 from gaitcli.errors import InputError
 
@@ -55,6 +54,8 @@ def design_frequency_hz(cutoff_hz: float, rate_hz: float, *, order: int = 2, pas
 def design_sos(cutoff_hz: float, rate_hz: float, *, order: int = 2) -> np.ndarray:
     """Second-order sections of the single-pass low-pass filter, designed at :func:`design_frequency_hz`."""
     f_d = design_frequency_hz(cutoff_hz, rate_hz, order=order, passes=2)
+    from scipy.signal import butter  # here, not at import: scipy.signal is 0.6 s of every command's start-up
+
     return butter(int(order), f_d, btype="low", fs=rate_hz, output="sos")
 
 
@@ -67,6 +68,8 @@ def pad_length(sos: np.ndarray) -> int:
     a centimetre on marker data sampled at 1 kHz; padding by the response length keeps
     the edge error at the level set by the signal's own curvature.
     """
+    from scipy.signal import sosfilt
+
     n = 64
     while True:
         impulse = np.zeros(n)
@@ -96,6 +99,8 @@ def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int
     that share the same NaN pattern in one call. Runs shorter than the padding are
     filtered with ``padlen = run length - 1``; single samples are left unfiltered.
     """
+    from scipy.signal import sosfiltfilt
+
     x = np.asarray(x, dtype=float)
     sos = design_sos(cutoff_hz, rate_hz, order=order)
     padlen = pad_length(sos)

@@ -8,7 +8,6 @@ used wherever a foot is not on a force plate. Positions are in model axes
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from gaitcli.core.events import SIDES, Events
 from gaitcli.core.validate import one_of
@@ -76,6 +75,8 @@ def _peak_times(y: np.ndarray, distance: int, prominence: float) -> np.ndarray:
         seg = y[a:b]
         if seg.size < 3:
             continue
+        from scipy.signal import find_peaks  # here, not at import: scipy.signal is slow to import
+
         peaks, _ = find_peaks(seg, distance=distance, prominence=prominence)
         if peaks.size == 0:
             continue

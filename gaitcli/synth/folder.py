@@ -23,7 +23,7 @@ DISTURBED_SIDE = "r"
 def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, stature_m: float, sex: str) -> str:
     """The trial's ``subject.yaml``: the subject and the condition's added masses written out; the condition
     and its disturbed side as a comment."""
-    from gaitcli.kinematics.anthropometry import preset_disturbances
+    from gaitcli.kinematics.disturbances import preset_disturbances
 
     data = {"mass_kg": mass_kg, "stature_m": stature_m, "sex": sex}
     comment = f"# condition: {condition}"

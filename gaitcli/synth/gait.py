@@ -27,7 +27,7 @@ class Condition:
     """One of the dissertation's experiments (3.1.1): gait period and locked joints.
 
     The added masses of each condition are the presets of
-    :func:`gaitcli.kinematics.anthropometry.preset_disturbances` (Tables A.2–A.3);
+    :func:`gaitcli.kinematics.disturbances.preset_disturbances` (Tables A.2–A.3);
     the speed follows from the stride the joint angles make over the period.
     """
 
