@@ -147,8 +147,11 @@ def _read(st, path: Path):
 
 
 def _history(result) -> tuple[str, ...]:
-    trial = getattr(result, "trial", None)
-    return tuple(getattr(trial, "history", ()))
+    """The processing steps behind a result (its own ``history`` or its trial's), for the HDF5 attributes."""
+    history = getattr(result, "history", None)
+    if history is None:
+        history = getattr(getattr(result, "trial", None), "history", ())
+    return tuple(history)
 
 
 def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | None = None,

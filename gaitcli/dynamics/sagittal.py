@@ -146,7 +146,8 @@ class SagittalExport:
     ``legs[side]``: that leg's :class:`SagittalMotion` (SI, radians) with its
     events; ``load_known[side]`` (n,) frames in which that foot's load is known;
     ``parameters``: the 3-D model's segment parameters (de Leva with measured
-    lengths and added masses); ``body_mass_kg``; ``events`` of both feet.
+    lengths and added masses); ``body_mass_kg``; ``events`` of both feet;
+    ``history``: the processing steps that made it.
     """
 
     legs: dict[str, SagittalMotion]
@@ -154,6 +155,7 @@ class SagittalExport:
     events: Events
     parameters: BodyParameters
     body_mass_kg: float
+    history: tuple[str, ...] = ()
 
     @property
     def time_s(self) -> np.ndarray:
@@ -186,7 +188,7 @@ def sagittal_export(trial: Trial, joint_centres_m, q, parameters: BodyParameters
             heel_strike_s=tuple(trial.events.times(s, "heel_strike")),
             toe_off_s=tuple(trial.events.times(s, "toe_off")))
     return SagittalExport(legs=legs, load_known={s: trial.load_known(s) for s in SIDES}, events=trial.events,
-                          parameters=parameters, body_mass_kg=float(body_mass_kg))
+                          parameters=parameters, body_mass_kg=float(body_mass_kg), history=trial.history)
 
 
 def sagittal_columns(export: SagittalExport) -> dict[str, np.ndarray]:

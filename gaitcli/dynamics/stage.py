@@ -178,11 +178,11 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
     states = forward_kinematics(q, params)
     heel_x = {s: markers.get(HEEL[s])[:, 0] for s in SIDES if HEEL[s] in markers}
     features = gait_features(trial.events, heel_x, markers.time_s)
+    trial = trial.with_step(f"idyn: calibrated on the standing posture, body mass {mass_kg:.2f} kg "
+                            f"({mass_source}); SVD poses, 27 coordinates, inverse dynamics (3.21, 3.22), "
+                            f"moments in {cfg.frames} frames")
     export = sagittal_export(trial, states.joint_centre_m, q, params, body_mass_kg=mass_kg)
-    history = trial.history + (f"idyn: calibrated on the standing posture, body mass {mass_kg:.2f} kg "
-                               f"({mass_source}); SVD poses, 27 coordinates, inverse dynamics (3.21, 3.22), "
-                               f"moments in {cfg.frames} frames",)
-    return IdynResult(trial=trial.with_step(history[-1]), q=q, qd=qd, qdd=qdd, joint_moments_Nm=moments,
+    return IdynResult(trial=trial, q=q, qd=qd, qdd=qdd, joint_moments_Nm=moments,
                       joint_moments_global_Nm=result.joint_moments_global_Nm,
                       residual_force_N=result.residual_force_N, residual_moment_Nm=result.residual_moment_Nm,
                       frames=cfg.frames, mass_kg=mass_kg, mass_source=mass_source,

@@ -145,6 +145,7 @@ class MuscleResult:
     phase: str = "cycle"
     interval_s: tuple[float, ...] = ()
     events: Events | None = None  # the analysed side's events
+    history: tuple[str, ...] = ()  # the processing steps that made it
 
     @property
     def max_moment_error_Nm(self) -> float:
@@ -177,8 +178,11 @@ def run_muscles_stage(export: SagittalExport, cfg: MusclesConfig, *, stature_m: 
     options = replace(options or MuscleOptions(), objective=cfg.objective)
     result = run_muscles(leg.motion, leg.limb, method=cfg.method, nodes=cfg.nodes if cfg.method == "eid" else None,
                          interval=leg.interval_s, periodic=leg.periodic, options=options, validate=cfg.validate)
-    return replace(result, phase=cfg.phase, interval_s=tuple(float(t) for t in leg.interval_s),
-                   events=export.events.of(side=cfg.side))
+    start, end = leg.interval_s
+    step = (f"muscles: {cfg.method.upper()} ({result.objective}) on the {cfg.side} leg, {cfg.phase} "
+            f"{start:.3f}–{end:.3f} s, {result.nodes} nodes, {result.status}")
+    return replace(result, phase=cfg.phase, interval_s=(float(start), float(end)),
+                   events=export.events.of(side=cfg.side), history=export.history + (step,))
 
 
 def ralston_cost_of_transport(speed_m_s: float, body_mass_kg: float) -> float:

@@ -194,6 +194,10 @@ def test_so_h5_units_and_provenance(runs):
             assert key in h5.attrs and str(h5.attrs[key]), key
         assert json.loads(h5.attrs["input_sha256"]).keys() >= {"trial.c3d", "subject.yaml"}
         assert h5.attrs["method"] == "so" and bool(h5.attrs["converged"]) is True
+        history = h5.attrs["history"].splitlines()  # the steps from the C3D file to these forces, in order
+        assert history[0].startswith("read ") and history[0].endswith("trial.c3d")
+        assert [line.split(":")[0] for line in history[1:]] == ["markers", "plates", "idyn", "muscles"]
+        assert history[-1].startswith("muscles: SO (crowninshield_brand) on the r leg, cycle")
         assert tuple(h5["result/muscle_names"].asstr()[()]) == MUSCLES
         assert h5["result/forces_N"].attrs["units"] == "N" and h5["result/time_s"].attrs["units"] == "s"
         np.testing.assert_allclose(forces[[f"{m}_force_N" for m in MUSCLES]], h5["result/forces_N"][()], rtol=CSV_RTOL,
