@@ -199,7 +199,8 @@ def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
             ("forces.png", result.forces_N, "force (N)", None),
             ("activations.png", result.activations, "activation", (-0.05, 1.05)),
             ("excitations.png", result.excitations, "excitation", None)):
-        fig, axes = plt.subplots(2, 4, figsize=(13, 5.5), sharex=True)
+        # activations and excitations on one scale: muscles compare at a glance (and fewer labels to draw)
+        fig, axes = plt.subplots(2, 4, figsize=(13, 5.5), sharex=True, sharey=label != "force (N)")
         for k, ax in enumerate(axes.ravel()[: len(names)]):
             ax.plot(t, values[:, k], color=SIDE_COLOUR.get(result.side, "k"))
             if label != "force (N)":
