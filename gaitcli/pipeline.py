@@ -22,7 +22,8 @@ import h5py
 
 from gaitcli.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.core.recording import Markers, Recording
-from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage
+from gaitcli.core.container import Trial
+from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
 from gaitcli.errors import GaitWarning
 from gaitcli.io.h5 import provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
@@ -165,13 +166,14 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     """
     run = TrialRun(trial, out, cfg)
     names = tuple(names)
-    needed = [n for n in dict.fromkeys(n for name in names for n in requirements(name))]
+    wanted = {n for name in names for n in requirements(name)}
+    needed = [n for n in stage_names() if n in wanted]  # every stage after the ones it depends on
     handoffs, sources, outcomes, computed = {}, {}, [], []
 
     def static_markers():
-        filtered = handoffs.get("filter")
-        lab_to_model = run.recording().lab_to_model if filtered is None or filtered.lab_to_model is None \
-            else filtered.lab_to_model
+        # turned like the dynamic trial: by the axes its container recorded, else by reading the trial
+        filtered = next((h for h in handoffs.values() if isinstance(h, Trial) and h.lab_to_model is not None), None)
+        lab_to_model = run.recording().lab_to_model if filtered is None else filtered.lab_to_model
         return load_static_markers(run.trial, lab_to_model)
 
     for name in needed:

@@ -219,7 +219,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
             continue
         if b == "pelvis":
             raise InputError(source, "pelvis", f"fewer than {MIN_MARKERS} pelvis markers in the static trial "
-                                               f"(found {', '.join(names) or 'none'} of {', '.join(SEGMENT_MARKERS[b])})")
+                                               f"(found {', '.join(names) or 'none'} of "
+                                               f"{', '.join(SEGMENT_MARKERS[b])})")
         tracking[b] = ()
         locked.append(b)
         parent = BODIES[JOINT_PARENT[JOINT_CHILD.index(i)]]

@@ -208,7 +208,8 @@ def test_so_moment_equations_hold(runs):
     """Muscle + passive + damping moments reproduce the inverse-dynamics moments (4.20)."""
     folder = runs[1] / "so_first"
     with h5py.File(folder / "muscles.h5", "r") as h5:
-        error = (h5["result/muscle_moments_Nm"][()] + h5["result/passive_moments_Nm"][()] + h5["result/damping_moments_Nm"][()]
+        error = (h5["result/muscle_moments_Nm"][()] + h5["result/passive_moments_Nm"][()]
+                 + h5["result/damping_moments_Nm"][()]
                  - h5["result/joint_moments_Nm"][()])
         np.testing.assert_allclose(h5["result/moment_error_Nm"][()], error, atol=1e-9)
         peak = np.abs(h5["result/joint_moments_Nm"][()]).max()

@@ -129,7 +129,8 @@ def test_floating_rigid_body_matches_hand_derivation():
         phi = q[2]
         dr = a * np.array([np.cos(phi), np.sin(phi)]) + c * np.array([-np.sin(phi), np.cos(phi)])
         ddr = a * np.array([-np.sin(phi), np.cos(phi)]) + c * np.array([-np.cos(phi), -np.sin(phi)])
-        expected = np.array([[m, 0, m * dr[0]], [0, m, m * dr[1]], [m * dr[0], m * dr[1], inertia + m * (a * a + c * c)]])
+        expected = np.array([[m, 0, m * dr[0]], [0, m, m * dr[1]],
+                             [m * dr[0], m * dr[1], inertia + m * (a * a + c * c)]])
         np.testing.assert_allclose(evaluate(body.mass_matrix, q), expected, atol=1e-12)
         bias = m * ddr * qd[2] ** 2
         np.testing.assert_allclose(evaluate(body.bias, q, qd), [bias[0], bias[1], dr @ bias], atol=1e-12)

@@ -58,7 +58,8 @@ def test_apply_marker_map_lists_every_missing_label():
 
 
 def test_apply_marker_map_rejects_unknown_landmarks_and_duplicates():
-    with pytest.raises(InputError, match=r"marker_map\.RASI: got 'ASIS_r' \(expected one of .*; did you mean 'ASISr'\?\)"):
+    with pytest.raises(InputError,
+                       match=r"marker_map\.RASI: got 'ASIS_r' \(expected one of .*; did you mean 'ASISr'\?\)"):
         apply_marker_map(_lab_markers(), {"RASI": "ASIS_r"})
     with pytest.raises(InputError, match="more than once"):
         apply_marker_map(_lab_markers(), {"RASI": "ASISr", "LASI": "ASISr"})
