@@ -125,6 +125,9 @@ def unregister(name: str) -> None:
 
 
 def stage(name: str) -> Stage:
+    """The registered stage ``name`` (the built-in ones are registered by importing ``gaitcli.stages``)."""
+    if not _REGISTRY:
+        raise LookupError("no stage registered yet: import gaitcli.stages (or gaitcli.config) first")
     return _REGISTRY[one_of(name, tuple(_REGISTRY), where="stage")]
 
 
