@@ -89,3 +89,21 @@ def riener_edrich_moments(m_hip, m_knee, m_ankle):
     """Riener & Edrich's moments (N·m, positive in the sense of their angle) → hip flexion,
     knee flexion and ankle dorsiflexion moments."""
     return m_hip, m_knee, -m_ankle
+
+
+#: the sagittal joint angles of outputs for people, per side: hip flexion, knee flexion, ankle dorsiflexion
+WALKER_CLINICAL = ("hip_{s}_flexion", "knee_{s}_flexion", "ankle_{s}_dorsiflexion")
+
+
+def walker_to_clinical(y: np.ndarray) -> np.ndarray:
+    """The predictive model's coordinates (n, 9) (Diss. 5.2, clockwise-positive angles, rad) → (n, 6) clinical
+    sagittal angles in degrees: right hip flexion, knee flexion, ankle dorsiflexion, then the left's.
+
+    Hip flexion is the thigh relative to the HAT, −(y4 − y3) (CHAPTER5_NOTES §3 item 11); knee flexion is
+    y5; dorsiflexion is −y6 (the model's ankle angle is plantarflexion-positive).
+    """
+    y = np.atleast_2d(np.asarray(y, dtype=float))
+    out = []
+    for thigh, knee, ankle in ((3, 4, 5), (6, 7, 8)):
+        out += [-(y[:, thigh] - y[:, 2]), y[:, knee], -y[:, ankle]]
+    return np.degrees(np.column_stack(out))
