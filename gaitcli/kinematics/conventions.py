@@ -95,15 +95,19 @@ def riener_edrich_moments(m_hip, m_knee, m_ankle):
 WALKER_CLINICAL = ("hip_{s}_flexion", "knee_{s}_flexion", "ankle_{s}_dorsiflexion")
 
 
-def walker_to_clinical(y: np.ndarray) -> np.ndarray:
-    """The predictive model's coordinates (n, 9) (Diss. 5.2, clockwise-positive angles, rad) → (n, 6) clinical
-    sagittal angles in degrees: right hip flexion, knee flexion, ankle dorsiflexion, then the left's.
-
-    Hip flexion is the thigh relative to the HAT, −(y4 − y3) (CHAPTER5_NOTES §3 item 11); knee flexion is
-    y5; dorsiflexion is −y6 (the model's ankle angle is plantarflexion-positive).
+def walker_joint_angles(hat, thigh, knee, ankle):
+    """The predictive model's angles (Diss. 5.2: clockwise-positive, rad) of one leg → its joint angles in
+    the product's senses (rad): hip flexion −(thigh − HAT) (CHAPTER5_NOTES §3 item 11), knee flexion, ankle
+    dorsiflexion −ankle (the model's ankle angle is plantarflexion-positive). Pure arithmetic: numpy or CasADi.
     """
+    return -(thigh - hat), knee, -ankle
+
+
+def walker_to_clinical(y: np.ndarray) -> np.ndarray:
+    """The predictive model's coordinates (n, 9) → (n, 6) clinical sagittal angles in degrees: right hip
+    flexion, knee flexion, ankle dorsiflexion, then the left's (:func:`walker_joint_angles`)."""
     y = np.atleast_2d(np.asarray(y, dtype=float))
     out = []
     for thigh, knee, ankle in ((3, 4, 5), (6, 7, 8)):
-        out += [-(y[:, thigh] - y[:, 2]), y[:, knee], -y[:, ankle]]
+        out += list(walker_joint_angles(y[:, 2], y[:, thigh], y[:, knee], y[:, ankle]))
     return np.degrees(np.column_stack(out))
