@@ -1,0 +1,163 @@
+"""Periodic quartic/cubic splines (5.10–5.23): interpolation, continuity, accuracy, CasADi (notes §4 1, 6, 11)."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+from numpy.polynomial import Polynomial
+
+from gaitcli.errors import InputError
+from gaitcli.predict import splines
+
+T = 1.13  # s
+SPLINES = {"quartic": splines.quartic, "cubic": splines.cubic}
+
+
+def phase_sine(t, derivative=0, period=T, phase=0.3):
+    """d^r/dt^r sin(2πt/T + φ), written out independently of the splines."""
+    w = 2 * np.pi / period
+    return w ** derivative * np.sin(w * np.asarray(t) + phase + derivative * np.pi / 2)
+
+
+@pytest.mark.parametrize("kind", SPLINES)
+def test_interpolates_the_nodal_values_and_wraps(kind):
+    spline = SPLINES[kind](18)
+    y = np.random.default_rng(1).normal(size=(17, 3))
+    nodes = np.arange(18) * T / 17  # t_1 … t_nn; t_nn carries y_1
+    got = splines.evaluate(spline, y, T, nodes)
+    np.testing.assert_allclose(got, np.vstack([y, y[:1]]), rtol=0, atol=1e-12)
+    t = np.array([0.1, 0.5, 1.0])
+    np.testing.assert_allclose(splines.evaluate(spline, y, T, t - 2 * T), splines.evaluate(spline, y, T, t + 3 * T),
+                               atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", SPLINES)
+def test_derivatives_continuous_at_every_node_and_at_the_wrap(kind):
+    spline = SPLINES[kind](18)
+    y = np.random.default_rng(2).normal(size=17)
+    pieces = [Polynomial(c) for c in (spline.matrix @ y).reshape(17, spline.degree + 1)]
+    for k in range(17):  # k = 16 is the wrap: the last segment's end against the first's start
+        left, right = pieces[k], pieces[(k + 1) % 17]
+        for r in range(spline.degree):  # C0–C3 (quartic), C0–C2 (cubic)
+            a, b = left.deriv(r)(1.0), right.deriv(r)(0.0)
+            assert abs(a - b) <= 1e-9 * max(1.0, abs(a)), (k, r)
+    # the next derivative is not continuous in general: the spline is exactly C^(d−1)
+    jumps = [abs(pieces[k].deriv(spline.degree)(1.0) - pieces[(k + 1) % 17].deriv(spline.degree)(0.0))
+             for k in range(17)]
+    assert max(jumps) > 1e-3
+
+
+@pytest.mark.parametrize("kind", SPLINES)
+def test_constants_are_reproduced_exactly(kind):
+    spline = SPLINES[kind](14)
+    t = np.random.default_rng(3).uniform(-T, 2 * T, 50)
+    np.testing.assert_allclose(splines.evaluate(spline, np.full(13, 3.7), T, t), 3.7, rtol=1e-13)
+    for r in range(1, spline.degree):
+        np.testing.assert_allclose(splines.evaluate(spline, np.full(13, 3.7), T, t, r), 0.0, atol=1e-9)
+
+
+def test_quartic_error_on_a_sine_falls_like_dt_to_the_fifth():
+    t = np.linspace(0, T, 2001)
+    intervals = np.array([9, 17, 33])
+    errors = []
+    for n in intervals.tolist():
+        y = phase_sine(np.arange(n) * T / n)
+        errors.append(np.max(np.abs(splines.evaluate(splines.quartic(n + 1), y, T, t) - phase_sine(t))))
+    orders = np.log(np.array(errors[:-1]) / errors[1:]) / np.log(intervals[1:] / intervals[:-1])
+    assert np.all(orders >= 4.5), orders
+    assert errors[1] < 2e-6  # N = 17 (nn = 18), the dissertation's grid
+
+
+def test_derivatives_are_time_derivatives():
+    spline = splines.quartic(34)
+    y = phase_sine(np.arange(33) * T / 33)
+    t = np.linspace(0, T, 301)
+    for r, tol in ((1, 1e-5), (2, 1e-3), (3, 0.1)):
+        scale = (2 * np.pi / T) ** r
+        np.testing.assert_allclose(splines.evaluate(spline, y, T, t, r), phase_sine(t, r), atol=tol * scale)
+
+
+@pytest.mark.parametrize("nodes", [17, 19, 5])
+def test_odd_node_count_is_one_line_input_error(nodes):
+    with pytest.raises(InputError) as info:
+        splines.quartic(nodes)
+    message = str(info.value)
+    assert message.startswith(f"nodes: got {nodes} (expected an even number of nodes")
+    assert "singular" in message and "\n" not in message and info.value.exit_code == 2
+
+
+def test_cubic_accepts_every_node_count_and_derivative_is_checked():
+    for nodes in (3, 4, 17, 18):
+        assert splines.cubic(nodes).matrix.shape == (4 * (nodes - 1), nodes - 1)
+    with pytest.raises(InputError, match="derivative"):
+        splines.evaluate(splines.cubic(18), np.zeros(17), T, [0.1], derivative=3)
+
+
+def test_hip_x_advances_by_the_stride_per_cycle():
+    spline = splines.quartic(18)
+    y = np.random.default_rng(4).normal(scale=0.02, size=17)
+    stride = 1.31  # m
+    t = np.random.default_rng(5).uniform(0, T, 20)
+    for cycles in (1, 2, -1):
+        np.testing.assert_allclose(splines.hip_x(spline, y, T, stride, t + cycles * T)
+                                   - splines.hip_x(spline, y, T, stride, t), cycles * stride, atol=1e-12)
+    # the mean velocity over a cycle is ΔS/T
+    grid = np.linspace(0, T, 4001)
+    velocity = splines.hip_x(spline, y, T, stride, grid, 1)
+    assert np.trapezoid(velocity, grid) / T == pytest.approx(stride / T, rel=1e-9)
+
+
+def symbolic_and_numeric(spline, times, derivative, symbol=ca.SX):
+    """The CasADi expression of the spline (nodal values and T symbolic) as a function, and numpy evaluation."""
+    y, period = symbol.sym("y", spline.intervals), symbol.sym("T")
+    expr = splines.evaluate(spline, y, period, times, derivative)
+    return ca.Function("f", [y, period], [expr, ca.jacobian(expr, ca.vertcat(y, period))])
+
+
+@pytest.mark.parametrize("kind", SPLINES)
+@pytest.mark.parametrize("symbol", [ca.SX, ca.MX])
+def test_casadi_evaluation_equals_numpy(kind, symbol):
+    spline = SPLINES[kind](18)
+    y = np.random.default_rng(6).normal(size=17)
+    t = np.random.default_rng(7).uniform(-0.2, 2 * T, 25)
+    for r in range(spline.degree):
+        f = symbolic_and_numeric(spline, t, r, symbol)
+        expected = splines.evaluate(spline, y, T, t, r)
+        np.testing.assert_allclose(f(y, T)[0].full().ravel(), expected, rtol=1e-12, atol=1e-12)
+        fractions = ca.SX.sym("s", 25)  # symbolic fractions, numeric nodal values and period
+        g = ca.Function("g", [fractions], [splines.evaluate_fractions(spline, y, T, fractions, r)])
+        np.testing.assert_allclose(g(t / T).full().ravel(), expected, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", SPLINES)
+def test_casadi_jacobian_equals_central_differences(kind):
+    spline = SPLINES[kind](18)
+    y = np.random.default_rng(8).normal(size=17)
+    # one time 1e-7 s after node 5, so that changing T moves it across the node (segment switch)
+    t = np.array([0.05, 5 * T / 17 + 1e-7, 0.7, 1.6])
+    x0, step = np.append(y, T), 1e-6
+    for r in range(spline.degree - 1):  # the derivatives whose gradient is continuous across a node
+        f = symbolic_and_numeric(spline, t, r)
+        jac = f(y, T)[1].full()
+        fd = np.column_stack([(splines.evaluate(spline, (x0 + e)[:-1], (x0 + e)[-1], t, r)
+                               - splines.evaluate(spline, (x0 - e)[:-1], (x0 - e)[-1], t, r)) / (2 * step)
+                              for e in np.eye(18) * step])
+        np.testing.assert_allclose(jac, fd, rtol=1e-6, atol=1e-6 * np.max(np.abs(fd)))
+
+
+def test_hip_x_casadi_equals_numpy():
+    spline = splines.quartic(18)
+    y = np.random.default_rng(9).normal(size=17)
+    ys, period, stride = ca.SX.sym("y", 17), ca.SX.sym("T"), ca.SX.sym("dS")
+    t = np.array([0.1, 0.9, 1.5])
+    for r in (0, 1, 2):
+        f = ca.Function("f", [ys, period, stride], [splines.hip_x(spline, ys, period, stride, t, r)])
+        np.testing.assert_allclose(f(y, T, 1.3).full().ravel(), splines.hip_x(spline, y, T, 1.3, t, r), atol=1e-12)
+
+
+def test_design_vector_size():
+    assert splines.design_vector_size(18) == 435
+    assert [splines.design_vector_size(n) for n in (14, 16, 20)] == [335, 385, 485]
+    assert splines.design_vector_size(18, muscles=12) == 367
+    assert splines.design_vector_size(18, muscles=12, extra=6) == 373
