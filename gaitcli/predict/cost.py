@@ -92,8 +92,8 @@ def cost_of_transport(metabolic_rate_W, times, period, stride_m):
 
 
 def deviation(values, reference_mean, reference_sd, times, period):
-    """Jdev (5.28), s: Σ_k ∫ (x_k − x̂_k)²/σ_k² dt of the (I, n_d) ``values`` against the reference's mean and SD
-    at the same instants (SD > 0)."""
+    """Jdev (5.28), s: Σ_k ∫ (x_k − x̂_k)²/σ_k² dt of the (I, n_d) ``values`` against the reference's mean
+    and SD at the same instants (SD > 0)."""
     if not is_casadi(reference_sd) and np.any(np.asarray(reference_sd) <= 0):
         raise InputError(None, "reference", "standard deviations must be > 0 (Jdev divides by them, 5.28)")
     squared = ((values - reference_mean) / reference_sd) ** 2
