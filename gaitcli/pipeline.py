@@ -217,3 +217,15 @@ def run_stage(trial: Path | None, name: str, cfg: PipelineConfig, **options) -> 
     """Run one stage (and whatever it needs) on one trial; the outcome of ``name`` (see :func:`run_stages`)."""
     return next(o for o in run_stages(trial, [name], cfg, **options) if o.stage == name)
 
+
+
+def fresh_output(trial: Path | None, name: str, cfg: PipelineConfig, *, out: Path | None = None,
+                 progress: ProgressCallback = no_progress, plots: bool = True) -> Path:
+    """The HDF5 output of stage ``name`` for one trial: the existing one when fresh, else made anew (with
+    whatever it needs) by :func:`run_stages`."""
+    run = TrialRun(trial, out, cfg)
+    path = run.fresh(name)
+    if path is None:
+        run_stages(trial, [name], cfg, out=out, progress=progress, plots=plots)
+        path = run.output_folder(name) / stage(name).h5_name
+    return path

@@ -31,6 +31,12 @@ def sample_trial(name: str = "normal") -> Path:
     return sample_trials_dir() / name
 
 
+def bundled_reference() -> Path:
+    """The reference gait that ships with the package (``gait reference`` on the normal sample trial;
+    sample_trials/README.md gives the command)."""
+    return sample_trials_dir() / "reference_normal.csv"
+
+
 def pipeline_file(name: str) -> Path:
     """A bundled pipeline YAML by name (``standard``, ``muscles_eid``, ...)."""
     return _shipped_folder("gaitcli.pipelines", "pipelines") / f"{name}.yaml"

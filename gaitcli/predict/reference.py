@@ -1,0 +1,182 @@
+"""Reference gait for the deviation term Jdev (Diss. 5.2.7, 5.28): mean and SD over the gait cycle.
+
+Ten variables over the cycle from right heel strike to the next (0–100 %,
+101 points), in clinical signs (CHAPTER5_NOTES §3 item 11): the hip and knee
+flexion and ankle dorsiflexion of both legs in degrees, and each foot's
+fore-aft and vertical ground reaction in N per kg of body mass. A reference is
+made from the idyn outputs of one or more trials (``gait reference``): every
+right stride contributes its angles, and its ground reactions where that foot's
+load was known throughout the stride. The dissertation's σ are inter-subject SDs
+(Winter); the strides of one subject vary far less, which would make Jdev
+explode and change what the weights mean, so every SD is raised to a floor
+(:data:`SD_FLOOR`, our choice: about the smallest of Winter's inter-subject SDs
+over the cycle, 3° for the angles and 0.3 N/kg for the forces).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gaitcli.errors import InputError
+
+ANGLES = ("hip_r_flexion_deg", "knee_r_flexion_deg", "ankle_r_dorsiflexion_deg",
+          "hip_l_flexion_deg", "knee_l_flexion_deg", "ankle_l_dorsiflexion_deg")
+FORCES = ("grf_x_r_N_per_kg", "grf_z_r_N_per_kg", "grf_x_l_N_per_kg", "grf_z_l_N_per_kg")
+VARIABLES = ANGLES + FORCES
+SD_FLOOR = {"deg": 3.0, "N_per_kg": 0.3}
+CYCLE_PCT = np.arange(101, dtype=float)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Mean and SD (101, 10) of :data:`VARIABLES` at ``cycle_pct`` (0…100); ``strides`` (10,): how many
+    strides each variable's statistics came from; ``sources``: the trials."""
+
+    cycle_pct: np.ndarray
+    mean: np.ndarray
+    sd: np.ndarray
+    strides: np.ndarray
+    sources: tuple[str, ...] = ()
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The table of ``ref.csv``: ``cycle_pct``, then ``<variable>_mean`` and ``<variable>_sd``."""
+        out = {"cycle_pct": self.cycle_pct}
+        for k, name in enumerate(VARIABLES):
+            out[f"{name}_mean"] = self.mean[:, k]
+            out[f"{name}_sd"] = self.sd[:, k]
+        return out
+
+
+def sd_floors(floor: dict | None = None) -> np.ndarray:
+    """The SD floor of each variable (10,), by its unit."""
+    floor = {**SD_FLOOR, **(floor or {})}
+    return np.array([floor["deg"] if name.endswith("_deg") else floor["N_per_kg"] for name in VARIABLES])
+
+
+LEG_VARIABLES = ("hip_{s}_flexion_deg", "knee_{s}_flexion_deg", "ankle_{s}_dorsiflexion_deg",
+                 "grf_x_{s}_N_per_kg", "grf_z_{s}_N_per_kg")
+
+
+def _side_statistics(cycles: list[np.ndarray], side: str):
+    """Mean, SD (ddof 1; 0 for one stride) and counts of one leg's (101, 5) stride arrays, NaN-aware per column."""
+    names = [v.format(s=side) for v in LEG_VARIABLES]
+    if not cycles:
+        raise InputError(None, "reference", f"no complete {'right' if side == 'r' else 'left'} stride in the "
+                                            "trials (expected a heel strike and the next of the same foot)")
+    stack = np.stack(cycles)
+    given = np.all(np.isfinite(stack), axis=1)
+    counts = given.sum(axis=0)
+    missing = [names[k] for k in np.flatnonzero(counts == 0)]
+    if missing:
+        raise InputError(None, "reference", f"no stride gives {', '.join(missing)} (expected that foot's load "
+                                            "recorded on a plate throughout at least one of its strides)")
+    mean = np.column_stack([stack[given[:, k], :, k].mean(axis=0) for k in range(len(names))])
+    sd = np.column_stack([stack[given[:, k], :, k].std(axis=0, ddof=1) if counts[k] > 1 else np.zeros(101)
+                          for k in range(len(names))])
+    return mean, sd, counts
+
+
+def _shift(curve: np.ndarray, offset_pct: float) -> np.ndarray:
+    """A periodic (101, n) curve over its own cycle, seen from a cycle that starts ``offset_pct`` % earlier."""
+    source = (CYCLE_PCT - offset_pct) % 100.0
+    return np.column_stack([np.interp(source, CYCLE_PCT[:-1], curve[:-1, k], period=100.0)
+                            for k in range(curve.shape[1])])
+
+
+def build_reference(right: list[np.ndarray], left: list[np.ndarray], *, left_offset_pct: float = 50.0,
+                    floor: dict | None = None, sources=()) -> Reference:
+    """The reference from each leg's strides over its own cycle ((101, 5) arrays in :data:`LEG_VARIABLES`
+    order, NaN where a stride does not give a variable); the left leg's curves are moved to the right-heel-
+    strike cycle by ``left_offset_pct`` (where the left heel strikes in it). Each SD is raised to its floor."""
+    mean_r, sd_r, n_r = _side_statistics(right, "r")
+    mean_l, sd_l, n_l = _side_statistics(left, "l")
+    mean_l, sd_l = _shift(mean_l, left_offset_pct), _shift(sd_l, left_offset_pct)
+    order = [VARIABLES.index(v.format(s=s)) for s in ("r", "l") for v in LEG_VARIABLES]
+    mean, sd, counts = np.zeros((101, 10)), np.zeros((101, 10)), np.zeros(10, int)
+    mean[:, order] = np.column_stack([mean_r, mean_l])
+    sd[:, order] = np.column_stack([sd_r, sd_l])
+    counts[order] = np.concatenate([n_r, n_l])
+    return Reference(CYCLE_PCT.copy(), mean, np.maximum(sd, sd_floors(floor)), counts, tuple(map(str, sources)))
+
+
+def leg_cycles(time_s, values, load_known, strides) -> list[np.ndarray]:
+    """One (101, 5) array per stride of one leg, normalised from its heel strike to the next.
+
+    ``values`` (n, 5) over ``time_s`` (n,) in :data:`LEG_VARIABLES` order; the two force columns are NaN in
+    a stride where the foot's load (``load_known`` (n,)) was not known throughout.
+    """
+    t = np.asarray(time_s, float)
+    values = np.asarray(values, float)
+    out = []
+    for start, end in strides:
+        grid = start + (end - start) * CYCLE_PCT / 100.0
+        cycle = np.column_stack([np.interp(grid, t, values[:, k], left=np.nan, right=np.nan)
+                                 for k in range(values.shape[1])])
+        if not np.asarray(load_known, bool)[(t >= start) & (t <= end)].all():
+            cycle[:, 3:] = np.nan
+        out.append(cycle)
+    return out
+
+
+def idyn_reference_strides(path: str | Path) -> tuple[list[np.ndarray], list[np.ndarray], list[float]]:
+    """Each leg's :func:`leg_cycles` of one trial from its ``idyn.h5``, and where (%) the left heel strikes
+    in each right stride."""
+    import h5py
+
+    from gaitcli.dynamics.sagittal import SagittalExport
+    from gaitcli.io.h5 import read_record
+    from gaitcli.signal.cycles import Stride
+
+    with h5py.File(path, "r") as h5:
+        export = read_record(h5["sagittal"], SagittalExport)
+        columns = str(h5["coordinates_clinical"].attrs["columns"]).split(",")
+        clinical = h5["coordinates_clinical"][()]
+        strides = [read_record(h5[f"strides/{i}"], Stride) for i in range(int(h5["strides/.length"][()]))]
+    mass = export.body_mass_kg
+    cycles = {}
+    for s in ("r", "l"):
+        angles = clinical[:, [columns.index(f"{j}_{s}_flexion") for j in ("hip", "knee", "ankle")]]
+        leg = export.legs[s]
+        values = np.column_stack([angles, leg.grf_x_N / mass, leg.grf_z_N / mass])
+        cycles[s] = leg_cycles(export.time_s, values, export.load_known[s],
+                               [(st.start_s, st.end_s) for st in strides if st.side == s])
+    left_strikes = export.events.times("l", "heel_strike")
+    offsets = []
+    for st in (st for st in strides if st.side == "r"):
+        inside = left_strikes[(left_strikes > st.start_s) & (left_strikes < st.end_s)]
+        if inside.size:
+            offsets.append(100.0 * (inside[0] - st.start_s) / st.period_s)
+    return cycles["r"], cycles["l"], offsets
+
+
+def read_reference(path: str | Path) -> Reference:
+    """Read ``ref.csv`` (columns ``cycle_pct``, ``<variable>_mean``, ``<variable>_sd``); one-line errors."""
+    import pandas as pd
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, None, "reference file not found")
+    try:
+        table = pd.read_csv(path)
+    except (ValueError, UnicodeDecodeError):
+        raise InputError(path, None, "not a CSV table (expected the columns gait reference writes)") from None
+    needed = ["cycle_pct"] + [f"{v}_{s}" for v in VARIABLES for s in ("mean", "sd")]
+    for name in needed:
+        if name not in table:
+            raise InputError(path, name, "missing column (expected cycle_pct and <variable>_mean, _sd for "
+                                         + ", ".join(VARIABLES) + ")")
+    values = table[needed].to_numpy(dtype=float)
+    if not np.all(np.isfinite(values)):
+        raise InputError(path, None, "expected finite numbers in every column")
+    pct = values[:, 0]
+    if pct[0] != 0.0 or pct[-1] != 100.0 or np.any(np.diff(pct) <= 0):
+        raise InputError(path, "cycle_pct", "expected increasing values from 0 to 100")
+    mean, sd = values[:, 1::2], values[:, 2::2]
+    if np.any(sd <= 0):
+        raise InputError(path, "_sd columns", "expected standard deviations > 0")
+    grid = CYCLE_PCT
+    interp = (lambda v: np.column_stack([np.interp(grid, pct, v[:, k]) for k in range(v.shape[1])]))
+    return Reference(grid.copy(), interp(mean), interp(sd), np.zeros(len(VARIABLES), int), (str(path),))
