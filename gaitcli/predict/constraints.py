@@ -56,7 +56,8 @@ def feet_in_contact(phase: int) -> tuple[str, ...]:
 
 
 def friction(force_x_N, force_z_N, coefficient: float = FRICTION_COEFFICIENT):
-    """The two smooth inequalities g ≤ 0 of |f_x| ≤ μ f_z (a foot's summed reactions): (f_x − μ f_z, −f_x − μ f_z)."""
+    """The two smooth inequalities g ≤ 0 of |f_x| ≤ μ f_z (a foot's summed reactions):
+    (f_x − μ f_z, −f_x − μ f_z)."""
     mu = number(coefficient, where="friction_coefficient", low=0.0, low_open=True)
     return force_x_N - mu * force_z_N, -force_x_N - mu * force_z_N
 

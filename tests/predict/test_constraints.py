@@ -21,7 +21,8 @@ def test_clearance_and_unilateral_lists_are_the_notes():
 
 
 def test_friction_applies_where_the_foot_is_down_not_the_printed_phases():
-    # printed (5.41–5.42): right 1–7, left 1, 2, 3, 5–8 — typos (§3 item 8): right is down in 1–6, left in 5–8, 1, 2
+    # printed (5.41–5.42): right 1–7, left 1, 2, 3, 5–8 — typos (§3 item 8):
+    # the right foot is down in 1–6, the left in 5–8, 1, 2
     right = tuple(n for n in range(1, 9) if "r" in feet_in_contact(n))
     left = tuple(n for n in range(1, 9) if "l" in feet_in_contact(n))
     assert right == (1, 2, 3, 4, 5, 6) and left == (1, 2, 5, 6, 7, 8)
