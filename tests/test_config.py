@@ -202,3 +202,12 @@ def test_an_empty_stage_list_is_an_error():
 
     with pytest.raises(InputError, match="non-empty list"):
         pipeline_from_dict({"stages": []}, "p.yaml")
+
+
+def test_a_resolved_configuration_pickles(tmp_path):
+    # a batch runner sends it to worker processes
+    import pickle
+
+    cfg = configure("muscles_eid", muscles={"method": "so"})
+    back = pickle.loads(pickle.dumps(cfg))
+    assert back == cfg and back.muscles.method == "so" and back.stages == ("filter", "idyn", "muscles")

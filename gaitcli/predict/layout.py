@@ -1,0 +1,84 @@
+"""The design vector χ of the predictive gait (Diss. 5.24) and its symmetric variant (5.3.1).
+
+Full model (``symmetric=False``), N = nn − 1 intervals, signal-major blocks:
+
+    coordinates   N × 9    nodal values of y1 (periodic part) … y9      (quartic splines)
+    forces        N × 16   nodal values of the 16 muscle forces, N       (cubic splines)
+    durations     8        T_1 … T_8, s
+    steps         2        L_r, L_l, m
+    size = 25·N + 10                                                     (435 at nn = 18)
+
+Symmetric model (CHAPTER5_NOTES §3 item 6): the left leg is the right leg half a
+cycle later, and hip and HAT repeat every half cycle:
+
+    trunk         N_h × 3  y1 (periodic part), y2, y3 over T/2            (quartic, T/2-periodic)
+    right_leg     N × 3    y4, y5, y6                                      (quartic, T-periodic)
+    right_forces  N × 8    the right muscles' forces                       (cubic, T-periodic)
+    durations     4        T_1 … T_4 (T_5…8 = T_1…4)
+    steps         1        L_r (= L_l)
+    size = 11·N + 3·N_h + 5                                               (219 at nn = 18)
+
+N_h, the half cycle's number of intervals, must be odd (the periodic quartic is
+singular for an even count): the odd number nearest above N/2 (9 for N = 17).
+Blocks are stored column-major (``reshape(block, rows, cols)`` in CasADi, Fortran
+order in numpy), so each signal's nodal values are contiguous.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from gaitcli.predict.splines import is_casadi, quartic
+
+
+def half_cycle_intervals(intervals: int) -> int:
+    """The odd number of intervals of a half-period spline nearest above ``intervals``/2."""
+    half = -(-intervals // 2)
+    return half if half % 2 else half + 1
+
+
+@dataclass(frozen=True)
+class DesignLayout:
+    """Where each block of χ lies: ``blocks[name] = (start, rows, columns)``; ``size`` = len(χ)."""
+
+    nodes: int
+    symmetric: bool
+    blocks: dict[str, tuple[int, int, int]] = field(default_factory=dict)
+    size: int = 0
+
+    @classmethod
+    def build(cls, nodes: int, *, symmetric: bool = True, coordinates: int = 9, muscles: int = 16) -> DesignLayout:
+        """The layout for ``nodes`` (nn; even, see :func:`gaitcli.predict.splines.quartic`)."""
+        quartic(nodes)  # the parity check, with its one-line error
+        n = nodes - 1
+        if symmetric:
+            shapes = {"trunk": (half_cycle_intervals(n), 3), "right_leg": (n, (coordinates - 3) // 2),
+                      "right_forces": (n, muscles // 2), "durations": (4, 1), "steps": (1, 1)}
+        else:
+            shapes = {"coordinates": (n, coordinates), "forces": (n, muscles), "durations": (8, 1),
+                      "steps": (2, 1)}
+        blocks, start = {}, 0
+        for name, (rows, cols) in shapes.items():
+            blocks[name] = (start, rows, cols)
+            start += rows * cols
+        return cls(nodes=nodes, symmetric=symmetric, blocks=blocks, size=start)
+
+    def unpack(self, x) -> dict:
+        """The blocks of χ (numpy (size,) or a CasADi column) as (rows, columns) matrices."""
+        out = {}
+        for name, (start, rows, cols) in self.blocks.items():
+            part = x[start:start + rows * cols]
+            out[name] = ca.reshape(part, rows, cols) if is_casadi(x) else \
+                np.reshape(np.asarray(part, float), (rows, cols), order="F")
+        return out
+
+    def pack(self, blocks: dict) -> np.ndarray:
+        """χ (size,) from numpy blocks of the layout's shapes (the inverse of :meth:`unpack`)."""
+        x = np.zeros(self.size)
+        for name, (start, rows, cols) in self.blocks.items():
+            value = np.asarray(blocks[name], float).reshape(rows, cols)
+            x[start:start + rows * cols] = value.ravel(order="F")
+        return x
