@@ -1,0 +1,147 @@
+"""The predictive-gait NLP, transcribed (Diss. 5.2.4–5.2.9): design vector → everything at the control points.
+
+:func:`transcribe` evaluates, for a design vector χ (numpy or CasADi; layout
+:class:`gaitcli.predict.layout.DesignLayout`, full model), at the P control points
+of the phase-wise grid (``grid.py``): the coordinates and their rates from the
+quartic splines (y1 with the drift ΔS/T), the 16 muscle forces from the cubic
+splines, the equations of motion's right-hand side
+
+    rhs = M(y) ÿ + k(y, ẏ) − g(y) − Q_p(y, ẏ) − R(y) f_m                     (5.1)
+
+the ground reactions λ = G_ph⁺ rhs and residual e = rhs − G_ph λ (5.30–5.31), the
+joint-moment error B⁺ e = τm* − τm (5.49–5.51; R = B·A), the contact error c_ph
+(5.57), the clearance of the points not in contact and the per-foot reactions;
+and, at the I distinct instants, the muscle states by inversion (5.25–5.26) and
+the metabolic rates. The result is a :class:`Transcription` of (P, …) arrays or
+expressions that the NLP's constraint groups and cost are made from.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from gaitcli.predict.contact import ContactModel, joint_moment_map
+from gaitcli.predict.cost import invert_muscles
+from gaitcli.predict.grid import ControlGrid, control_grid, cycle_period, instant_times, point_times
+from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.model import WalkingModel
+from gaitcli.predict.muscles import WalkerMuscles
+from gaitcli.predict.splines import cubic, evaluate, hip_x, quartic
+
+
+@dataclass
+class Transcription:
+    """Everything at the control points (P rows, in grid order) and at the distinct instants (I rows).
+
+    ``y``, ``yd``, ``ydd`` (P × 9); ``forces_N`` (P × 16); ``reactions[j]`` λ at point j (the phase's
+    reaction names, ``ContactModel.reaction_names``); ``residual[j]`` e (9,); ``moment_error_Nm``
+    (P × 6) B⁺e; ``contact_error_m[j]`` c_ph (rows of the phase); ``period_s``, ``stride_m``,
+    ``point_times_s`` (P,), ``instant_times_s`` (I,); ``muscle_state`` (I × 16 arrays of the inversion);
+    ``metabolic_rate_W`` (I × 16).
+    """
+
+    y: object
+    yd: object
+    ydd: object
+    forces_N: object
+    reactions: list
+    residual: list
+    moment_error_Nm: list
+    contact_error_m: list
+    period_s: object
+    stride_m: object
+    point_times_s: object
+    instant_times_s: object
+    muscle_state: dict
+    metabolic_rate_W: object
+
+
+class Transcriber:
+    """The fixed parts of the transcription for one subject, node count and control grid."""
+
+    def __init__(self, nodes: int = 18, *, model: WalkingModel | None = None, grid: ControlGrid | None = None,
+                 muscles: WalkerMuscles | None = None, smoothing: float = 1e-2):
+        self.layout = DesignLayout.build(nodes, symmetric=False)
+        self.model = model or WalkingModel()
+        self.contact = ContactModel(self.model)
+        self.muscles = muscles or WalkerMuscles()
+        self.grid = grid or control_grid()
+        self.quartic, self.cubic = quartic(nodes), cubic(nodes)
+        self.joint_map_pinv = np.linalg.pinv(joint_moment_map())
+        self.metabolic = self.muscles.muscle.smoothed_metabolic_rate(smoothing)
+
+    def __call__(self, x) -> Transcription:
+        symbolic = not isinstance(x, np.ndarray)
+        blocks = self.layout.unpack(x)
+        coordinates, forces = blocks["coordinates"], blocks["forces"]
+        durations = blocks["durations"]
+        steps = blocks["steps"]
+        durations = ca.vec(durations) if symbolic else durations.ravel()
+        steps_r, steps_l = (float(steps[0, 0]), float(steps[1, 0])) if not symbolic else (steps[0, 0], steps[1, 0])
+        stride = steps_r + steps_l
+        period = cycle_period(durations)
+        times = point_times(self.grid, durations)
+        rows = []
+        for r in range(3):
+            parts = [hip_x(self.quartic, coordinates[:, 0], period, stride, times, r)]
+            parts.append(evaluate(self.quartic, coordinates[:, 1:], period, times, r))
+            rows.append(ca.horzcat(*parts) if symbolic else np.column_stack([np.ravel(parts[0]), parts[1]]))
+        y, yd, ydd = rows
+        f_m = evaluate(self.cubic, forces, period, times, 0)
+        model, contact, muscles = self.model, self.contact, self.muscles
+        reactions, residual, moment_error, contact_error = [], [], [], []
+        for j in range(self.grid.points):
+            phase = int(self.grid.phase[j]) + 1
+            yj, ydj, yddj = y[j, :].T, yd[j, :].T, ydd[j, :].T
+            if not symbolic:
+                yj, ydj, yddj = (np.ravel(v) for v in (yj, ydj, yddj))
+            fj = f_m[j, :].T if symbolic else np.ravel(f_m[j, :])
+            rhs = (model.mass_matrix(yj) @ yddj + model.bias(yj, ydj) - model.gravity(yj)
+                   - muscles.passive(yj, ydj) - muscles.moment_arms(yj) @ fj)
+            G = contact.reaction_matrix[phase](yj)
+            if not symbolic:
+                rhs, G = np.ravel(np.array(rhs)), np.array(G)
+            lam = ca.solve(G.T @ G, G.T @ rhs) if symbolic else np.linalg.lstsq(G, rhs, rcond=None)[0]
+            e = rhs - G @ lam
+            reactions.append(lam)
+            residual.append(e)
+            moment_error.append(ca.DM(self.joint_map_pinv) @ e if symbolic else self.joint_map_pinv @ e)
+            c = contact.constraint[phase](yj, steps_r, steps_l, 0.0)
+            contact_error.append(c if symbolic else np.ravel(np.array(c)))
+        # muscle states at the distinct instants (forces are continuous: one value per instant)
+        opening = self.grid.instant_points
+        inst_times = instant_times(self.grid, durations)
+        lengths, velocities = [], []
+        for i in opening:
+            yi = y[int(i), :].T if symbolic else np.ravel(y[int(i), :])
+            ydi = yd[int(i), :].T if symbolic else np.ravel(yd[int(i), :])
+            lengths.append(muscles.lengths(yi).T if symbolic else np.ravel(np.array(muscles.lengths(yi))))
+            velocities.append(muscles.velocities(yi, ydi).T if symbolic else
+                              np.ravel(np.array(muscles.velocities(yi, ydi))))
+        l_m = ca.vertcat(*lengths) if symbolic else np.vstack(lengths)
+        v_m = ca.vertcat(*velocities) if symbolic else np.vstack(velocities)
+        force_instants = f_m[[int(i) for i in opening], :]
+        # each leg's muscles on that leg's inversion: the model is one leg's 8 muscles
+        states = {}
+        for k in (0, 1):
+            cols = slice(8 * k, 8 * k + 8)
+            part = invert_muscles(muscles.muscle, force_instants[:, cols], l_m[:, cols], v_m[:, cols], inst_times,
+                                  period)
+            for name, value in part.items():
+                states.setdefault(name, []).append(value)
+        states = {name: (ca.horzcat(*v) if symbolic else np.hstack(v)) for name, v in states.items()}
+        rate = []
+        for k in (0, 1):
+            cols = slice(8 * k, 8 * k + 8)
+            args = [states[n][:, cols] for n in ("u", "a", "l_ce", "v_ce", "f_ce")]
+            rate.append(self.metabolic(*(a.T for a in args)).T if symbolic else
+                        np.array(self.metabolic(*(a.T for a in args))).T)
+        metabolic = ca.horzcat(*rate) if symbolic else np.hstack(rate)
+        return Transcription(y=y, yd=yd, ydd=ydd, forces_N=f_m, reactions=reactions, residual=residual,
+                             moment_error_Nm=moment_error, contact_error_m=contact_error, period_s=period,
+                             stride_m=stride, point_times_s=times, instant_times_s=inst_times,
+                             muscle_state=states, metabolic_rate_W=metabolic)
+

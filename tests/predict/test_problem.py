@@ -1,0 +1,75 @@
+"""The NLP's transcription (gaitcli/predict/problem.py): numeric and symbolic evaluation agree, CasADi's exact
+derivatives match finite differences (durations included), and the spline kinematics keep their periodicity."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gaitcli.predict.problem import Transcriber
+
+DURATIONS = [0.05, 0.09, 0.28, 0.16] * 2
+
+
+@pytest.fixture(scope="module")
+def transcriber() -> Transcriber:
+    return Transcriber(18)
+
+
+def design(transcriber, seed=0):
+    rng = np.random.default_rng(seed)
+    n = transcriber.layout.nodes - 1
+    coordinates = np.column_stack([rng.normal(scale=0.01, size=n), 0.9 + 0.01 * rng.normal(size=n)]
+                                  + [0.1 * rng.normal(size=n) for _ in range(7)])
+    return transcriber.layout.pack({"coordinates": coordinates, "forces": 200 + 50 * rng.random((n, 16)),
+                                    "durations": DURATIONS, "steps": [0.65, 0.62]})
+
+
+def test_numeric_and_symbolic_transcriptions_agree(transcriber):
+    x = design(transcriber)
+    numeric = transcriber(x)
+    X = ca.MX.sym("x", transcriber.layout.size)
+    symbolic = transcriber(X)
+    f = ca.Function("f", [X], [symbolic.y, symbolic.ydd, ca.vertcat(*symbolic.moment_error_Nm),
+                               ca.vertcat(*symbolic.contact_error_m), symbolic.metabolic_rate_W])
+    y, ydd, moment, contact, rate = f(x)
+    np.testing.assert_allclose(np.array(y), numeric.y, atol=1e-12)
+    np.testing.assert_allclose(np.array(ydd), numeric.ydd, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(np.array(moment).ravel(), np.concatenate(numeric.moment_error_Nm), rtol=1e-8,
+                               atol=1e-8)
+    np.testing.assert_allclose(np.array(contact).ravel(), np.concatenate(numeric.contact_error_m), atol=1e-12)
+    np.testing.assert_allclose(np.array(rate), numeric.metabolic_rate_W, rtol=1e-8, atol=1e-6)
+    assert numeric.y.shape == (80, 9) and numeric.metabolic_rate_W.shape == (72, 16)
+
+
+def test_hip_progresses_by_the_two_steps_per_cycle(transcriber):
+    x = design(transcriber)
+    t = transcriber(x)
+    # the last control point closes the cycle at t = T: hip x has advanced L_r + L_l, the rest is periodic
+    assert t.y[-1, 0] - t.y[0, 0] == pytest.approx(0.65 + 0.62, abs=1e-12)
+    np.testing.assert_allclose(t.y[-1, 1:], t.y[0, 1:], atol=1e-12)
+    assert t.period_s == pytest.approx(sum(DURATIONS))
+
+
+def test_exact_derivatives_match_finite_differences(transcriber):
+    # the moment and contact errors at every control point w.r.t. the whole design vector, durations included
+    x = design(transcriber, seed=1)
+    X = ca.MX.sym("x", transcriber.layout.size)
+    t = transcriber(X)
+    out = ca.vertcat(ca.vertcat(*t.moment_error_Nm), ca.vertcat(*t.contact_error_m))
+    value = ca.Function("v", [X], [out])
+    jacobian = ca.Function("J", [X], [ca.jacobian(out, X)])
+    J = np.array(jacobian(x))
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        direction = rng.normal(size=x.size)
+        h = 1e-6
+        fd = (np.array(value(x + h * direction)) - np.array(value(x - h * direction))).ravel() / (2 * h)
+        np.testing.assert_allclose(J @ direction, fd, rtol=1e-4, atol=1e-4 * np.abs(fd).max())
+    durations = transcriber.layout.blocks["durations"][0]
+    direction = np.zeros(x.size)
+    direction[durations + 2] = 1.0  # stretch phase 3 alone
+    h = 1e-7
+    fd = (np.array(value(x + h * direction)) - np.array(value(x - h * direction))).ravel() / (2 * h)
+    np.testing.assert_allclose(J @ direction, fd, rtol=1e-3, atol=1e-3 * np.abs(fd).max())
