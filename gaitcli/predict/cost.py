@@ -59,11 +59,14 @@ def trapezoid_periodic(values, times, period):
     return np.tensordot(steps, (x + nxt) / 2, axes=(0, 0))
 
 
-def invert_muscles(muscle: MuscleModel, force_N, length_m, velocity_m_s, times, period) -> dict:
+def invert_muscles(muscle: MuscleModel, force_N, length_m, velocity_m_s, times, period, *,
+                   tendon_length_m=None) -> dict:
     """Activations and excitations from muscle forces on the periodic control instants (5.25–5.26).
 
     ``force_N``, ``length_m`` (l_m), ``velocity_m_s`` (v_m): (I, m) arrays (numpy or CasADi) at ``times``
-    (I,). Returns (I, m) arrays: ``l_se``, ``v_se``, ``l_ce``, ``v_ce``, ``f_ce``, ``a``, ``adot``, ``u``.
+    (I,); ``tendon_length_m`` l_se where known (from the tendon stretch: smooth where F = 0), else
+    l_se(F) (2.20). Returns (I, m) arrays: ``l_se``, ``v_se``, ``l_ce``, ``v_ce``, ``f_ce``, ``a``,
+    ``adot``, ``u``.
     """
     symbolic = is_casadi(force_N, length_m, velocity_m_s, times, period)
 
@@ -74,7 +77,7 @@ def invert_muscles(muscle: MuscleModel, force_N, length_m, velocity_m_s, times, 
         return [o.T for o in out] if isinstance(out, (list, tuple)) else out.T
 
     force = force_N if symbolic else np.asarray(force_N, float)
-    l_se = per_sample("tendon_length", force)
+    l_se = per_sample("tendon_length", force) if tendon_length_m is None else tendon_length_m
     v_se = periodic_derivative(l_se, times, period)
     l_ce, v_ce = per_sample("fibre_kinematics", l_se, v_se, length_m, velocity_m_s)
     a = per_sample("activation_from_force", force, v_se, length_m, velocity_m_s)

@@ -3,7 +3,8 @@
 Full model (``symmetric=False``), N = nn − 1 intervals, signal-major blocks:
 
     coordinates   N × 9    nodal values of y1 (periodic part) … y9      (quartic splines)
-    forces        N × 16   nodal values of the 16 muscle forces, N       (cubic splines)
+    tendon_stretch N × 16  nodal values of the 16 muscles' normalised tendon stretch ŝ (cubic splines;
+                           F = F_max·ŝ², l_se = l_slack·(1 + ε0·ŝ): notes §3 item 18)
     durations     8        T_1 … T_8, s
     steps         2        L_r, L_l, m
     size = 25·N + 10                                                     (435 at nn = 18)
@@ -13,7 +14,7 @@ cycle later, and hip and HAT repeat every half cycle:
 
     trunk         N_h × 3  y1 (periodic part), y2, y3 over T/2            (quartic, T/2-periodic)
     right_leg     N × 3    y4, y5, y6                                      (quartic, T-periodic)
-    right_forces  N × 8    the right muscles' forces                       (cubic, T-periodic)
+    right_stretch N × 8    the right muscles' tendon stretch ŝ              (cubic, T-periodic)
     durations     4        T_1 … T_4 (T_5…8 = T_1…4)
     steps         1        L_r (= L_l)
     size = 11·N + 3·N_h + 5                                               (219 at nn = 18)
@@ -56,9 +57,9 @@ class DesignLayout:
         n = nodes - 1
         if symmetric:
             shapes = {"trunk": (half_cycle_intervals(n), 3), "right_leg": (n, (coordinates - 3) // 2),
-                      "right_forces": (n, muscles // 2), "durations": (4, 1), "steps": (1, 1)}
+                      "right_stretch": (n, muscles // 2), "durations": (4, 1), "steps": (1, 1)}
         else:
-            shapes = {"coordinates": (n, coordinates), "forces": (n, muscles), "durations": (8, 1),
+            shapes = {"coordinates": (n, coordinates), "tendon_stretch": (n, muscles), "durations": (8, 1),
                       "steps": (2, 1)}
         blocks, start = {}, 0
         for name, (rows, cols) in shapes.items():

@@ -6,8 +6,8 @@ splines dip below 0 between nodes (NaN tendon lengths; notes §3 item 18 propose
 stretch ŝ instead), and the per-point MX graph costs 0.5 s per iteration.
 
 Variables: the design vector χ of the full model (``layout.py``), optimised as
-z = χ / scale (coordinates in rad or m, forces per F_max, durations per 0.1 s,
-step lengths in m: all O(1)). Constraint groups g (CHAPTER5_NOTES §1.9 with the
+z = χ / scale (coordinates in rad or m, tendon stretch ŝ as it is, durations per
+0.1 s, step lengths in m: all O(1)). Constraint groups g (CHAPTER5_NOTES §1.9 with the
 corrections of §3):
 
     moment      |B⁺e| ≤ εm per joint and control point                 (5.49–5.51, 5.53)
@@ -17,6 +17,7 @@ corrections of §3):
     friction    |f_x| ≤ μ f_z per foot down (two linear inequalities)   (5.41–5.42, §3 item 8)
     clearance   z ≥ h_min of the points not in contact                  (5.33–5.36)
     excitation  0 ≤ u ≤ 1 as −t2·a ≤ ȧ ≤ (1 − a)(t1 + t2), 0 ≤ a ≤ 1   (5.32, §3 item 19)
+    stretch     ŝ ≥ 0 at the instants (a taut or just slack tendon)     (§3 item 18)
     speed       ΣT_ph − ΔS/v = 0                                        (5.43)
     shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5° (5.45–5.48, §3 item 10)
 
@@ -77,9 +78,6 @@ def variable_scale(transcriber: Transcriber) -> np.ndarray:
     """χ = scale · z."""
     layout = transcriber.layout
     scale = np.ones(layout.size)
-    start, rows, cols = layout.blocks["forces"]
-    f_max = np.tile(np.asarray(transcriber.muscles.muscle.params.max_isometric_force_N), 2)
-    scale[start:start + rows * cols] = np.repeat(f_max, rows)
     start = layout.blocks["durations"][0]
     scale[start:start + 8] = 0.1
     return scale
@@ -94,9 +92,8 @@ def box_bounds(transcriber: Transcriber) -> tuple[np.ndarray, np.ndarray]:
               (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8)]  # hip x (periodic part), hip z, HAT, thigh, knee, ankle
     for k, (lo, hi) in enumerate(ranges):
         low[start + k * rows:start + (k + 1) * rows], high[start + k * rows:start + (k + 1) * rows] = lo, hi
-    start, rows, cols = layout.blocks["forces"]
-    f_max = np.repeat(np.tile(np.asarray(transcriber.muscles.muscle.params.max_isometric_force_N), 2), rows)
-    low[start:start + rows * cols], high[start:start + rows * cols] = 0.0, 1.5 * f_max
+    start, rows, cols = layout.blocks["tendon_stretch"]
+    low[start:start + rows * cols], high[start:start + rows * cols] = 0.0, 1.3  # F ≤ 1.69 F_max
     start = layout.blocks["durations"][0]
     low[start:start + 8], high[start:start + 8] = 0.01, 0.8
     start = layout.blocks["steps"][0]
@@ -116,7 +113,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     t = transcriber(z * ca.DM(scale))
     model, contact, grid = transcriber.model, transcriber.contact, transcriber.grid
     groups: dict[str, list] = {name: [] for name in ("moment", "contact", "unilateral", "mtp", "friction",
-                                                     "clearance", "excitation", "speed", "shape")}
+                                                     "clearance", "excitation", "stretch", "speed", "shape")}
     bounds: dict[str, list] = {name: [] for name in groups}
 
     def add(name, expression, low, high):
@@ -158,6 +155,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     add("excitation", adot + T2 * a, 0.0, np.inf)
     add("excitation", (1 - a) * (T1 + T2) - adot, 0.0, np.inf)
     add("excitation", a, 0.0, 1.0)
+    add("stretch", t.stretch[[int(i) for i in grid.instant_points], :], 0.0, np.inf)
     add("speed", t.period_s - t.stride_m / s.speed_m_s, 0.0, 0.0)
     for name, (index, phases, minimum) in GAIT_SHAPE.items():
         chosen = [j for j in range(grid.points) if int(grid.phase[j]) + 1 in phases]
@@ -200,7 +198,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
 def initial_guess(transcriber: Transcriber, reference: Reference,
                   settings: PredictSettings | None = None) -> np.ndarray:
     """χ from the reference's angles (HAT upright), a hip height that puts the standing foot on the floor,
-    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max."""
+    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1)."""
     s = settings or PredictSettings()
     layout, p = transcriber.layout, transcriber.model.params
     n = layout.nodes - 1
@@ -215,9 +213,8 @@ def initial_guess(transcriber: Transcriber, reference: Reference,
     step = 0.62  # m: about half of a 1.24 m stride at the dissertation's subject 1's speed
     half = step / s.speed_m_s  # s: half a cycle
     durations = np.array([0.07, 0.13, 0.55, 0.25] * 2) * half
-    f_max = np.tile(np.asarray(transcriber.muscles.muscle.params.max_isometric_force_N), 2)
-    forces = np.tile(0.1 * f_max, (n, 1))
-    return layout.pack({"coordinates": coordinates, "forces": forces, "durations": durations,
+    return layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), np.sqrt(0.1)),
+                        "durations": durations,
                         "steps": [step, step]})
 
 

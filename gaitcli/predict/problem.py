@@ -47,6 +47,7 @@ class Transcription:
     yd: object
     ydd: object
     forces_N: object
+    stretch: object
     reactions: list
     residual: list
     moment_error_Nm: list
@@ -76,7 +77,7 @@ class Transcriber:
     def __call__(self, x) -> Transcription:
         symbolic = not isinstance(x, np.ndarray)
         blocks = self.layout.unpack(x)
-        coordinates, forces = blocks["coordinates"], blocks["forces"]
+        coordinates, stretch_nodes = blocks["coordinates"], blocks["tendon_stretch"]
         durations = blocks["durations"]
         steps = blocks["steps"]
         durations = ca.vec(durations) if symbolic else durations.ravel()
@@ -90,7 +91,10 @@ class Transcriber:
             parts.append(evaluate(self.quartic, coordinates[:, 1:], period, times, r))
             rows.append(ca.horzcat(*parts) if symbolic else np.column_stack([np.ravel(parts[0]), parts[1]]))
         y, yd, ydd = rows
-        f_m = evaluate(self.cubic, forces, period, times, 0)
+        stretch = evaluate(self.cubic, stretch_nodes, period, times, 0)  # ŝ (P × 16)
+        f_max = np.tile(np.asarray(self.muscles.muscle.params.max_isometric_force_N), 2)
+        f_m = (ca.repmat(ca.DM(f_max).T, stretch.shape[0], 1) * stretch ** 2 if symbolic
+               else f_max * stretch ** 2)  # F = F_max·ŝ² (2.19)
         model, contact, muscles = self.model, self.contact, self.muscles
         reactions, residual, moment_error, contact_error = [], [], [], []
         for j in range(self.grid.points):
@@ -124,12 +128,18 @@ class Transcriber:
         l_m = ca.vertcat(*lengths) if symbolic else np.vstack(lengths)
         v_m = ca.vertcat(*velocities) if symbolic else np.vstack(velocities)
         force_instants = f_m[[int(i) for i in opening], :]
+        stretch_instants = stretch[[int(i) for i in opening], :]
+        params = self.muscles.muscle.params
+        slack = np.tile(np.asarray(params.tendon_slack_length_m), 2)
+        eps0 = params.tendon_strain_at_max_force
+        l_se = (ca.repmat(ca.DM(slack).T, stretch_instants.shape[0], 1) * (1 + eps0 * stretch_instants) if symbolic
+                else slack * (1 + eps0 * stretch_instants))
         # each leg's muscles on that leg's inversion: the model is one leg's 8 muscles
         states = {}
         for k in (0, 1):
             cols = slice(8 * k, 8 * k + 8)
             part = invert_muscles(muscles.muscle, force_instants[:, cols], l_m[:, cols], v_m[:, cols], inst_times,
-                                  period)
+                                  period, tendon_length_m=l_se[:, cols])
             for name, value in part.items():
                 states.setdefault(name, []).append(value)
         states = {name: (ca.horzcat(*v) if symbolic else np.hstack(v)) for name, v in states.items()}
@@ -140,7 +150,7 @@ class Transcriber:
             rate.append(self.metabolic(*(a.T for a in args)).T if symbolic else
                         np.array(self.metabolic(*(a.T for a in args))).T)
         metabolic = ca.horzcat(*rate) if symbolic else np.hstack(rate)
-        return Transcription(y=y, yd=yd, ydd=ydd, forces_N=f_m, reactions=reactions, residual=residual,
+        return Transcription(y=y, yd=yd, ydd=ydd, forces_N=f_m, stretch=stretch, reactions=reactions, residual=residual,
                              moment_error_Nm=moment_error, contact_error_m=contact_error, period_s=period,
                              stride_m=stride, point_times_s=times, instant_times_s=inst_times,
                              muscle_state=states, metabolic_rate_W=metabolic)

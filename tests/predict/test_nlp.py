@@ -32,6 +32,7 @@ def test_group_sizes(built):
     assert sizes["unilateral"] == sum(sum(1 for _, axis, _ in PHASE_TABLE[p - 1].rows if axis == "z") for p in phases)
     assert sizes["mtp"] == sum(1 for p in phases if PHASE_TABLE[p - 1].mtp_moment_side)
     assert sizes["excitation"] == 3 * 16 * grid.instants  # two ȧ bounds and a per muscle and instant
+    assert sizes["stretch"] == 16 * grid.instants
     assert sizes["speed"] == 1 and sizes["shape"] == 4
     assert nlp.constraints.size1() == len(nlp.lbg) == len(nlp.ubg) == sum(sizes.values())
     assert nlp.z.size1() == 435

@@ -22,7 +22,7 @@ def design(transcriber, seed=0):
     n = transcriber.layout.nodes - 1
     coordinates = np.column_stack([rng.normal(scale=0.01, size=n), 0.9 + 0.01 * rng.normal(size=n)]
                                   + [0.1 * rng.normal(size=n) for _ in range(7)])
-    return transcriber.layout.pack({"coordinates": coordinates, "forces": 200 + 50 * rng.random((n, 16)),
+    return transcriber.layout.pack({"coordinates": coordinates, "tendon_stretch": 0.3 + 0.2 * rng.random((n, 16)),
                                     "durations": DURATIONS, "steps": [0.65, 0.62]})
 
 
