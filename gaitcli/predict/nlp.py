@@ -2,7 +2,8 @@
 
 Status: built and evaluated, not yet solved to convergence. From :func:`initial_guess`, 300 IPOPT
 iterations (limited-memory Hessian) take 212 s and end with every constraint group within 0.04 of its
-bounds (J 13.9, Et 601 J/m, Jdev 8.8); the per-point MX graph costs 0.7 s per iteration.
+bounds (J 13.9, Et 601 J/m, Jdev 8.8); 1500 iterations (1205 s) end feasible in every group, J 9.0,
+Et 375 J/m, Jdev 6.0, still not declared optimal. The per-point MX graph costs 0.7–0.8 s per iteration.
 
 Variables: the design vector χ of the full model (``layout.py``), optimised as
 z = χ / scale (coordinates in rad or m, tendon stretch ŝ as it is, durations per
