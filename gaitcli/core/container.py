@@ -42,11 +42,6 @@ class FootLoad:
         return cls(np.zeros((n, 3)), np.full((n, 3), np.nan), np.full(n, np.nan), np.asarray(known, bool),
                    on_plates=False)
 
-    @property
-    def loaded(self) -> np.ndarray:
-        """(n,) frames with a vertical load."""
-        return np.nan_to_num(self.force_N[:, 2]) > 0
-
 
 @dataclass(frozen=True)
 class Trial:

@@ -170,7 +170,7 @@ def sagittal_export(trial: Trial, joint_centres_m, q, parameters: BodyParameters
     coordinates ``q`` (n, 27); the ankle's dorsiflexion is the clinical sign of the
     3-D ankle flexion coordinate (:mod:`gaitcli.kinematics.conventions`).
     """
-    clinical = np.radians(coordinates_to_clinical(q))
+    clinical = coordinates_to_clinical(q)
     legs = {}
     for s in SIDES:
         hip = joint_centres_m[:, JOINTS.index(f"hip_{s}")]
@@ -183,7 +183,7 @@ def sagittal_export(trial: Trial, joint_centres_m, q, parameters: BodyParameters
         legs[s] = SagittalMotion(
             time_s=trial.time_s, hip_x_m=hip[:, 0], hip_z_m=hip[:, 2], thigh_angle_rad=thigh,
             knee_flexion_rad=thigh - shank,
-            ankle_dorsiflexion_rad=clinical[:, COORDINATES.index(f"ankle_{s}_flexion")],
+            ankle_dorsiflexion_rad=np.radians(clinical[:, COORDINATES.index(f"ankle_{s}_flexion")]),
             grf_x_N=force[:, 0], grf_z_N=force[:, 2], cop_x_m=np.asarray(load.cop_m)[:, 0], side=s,
             heel_strike_s=tuple(trial.events.times(s, "heel_strike")),
             toe_off_s=tuple(trial.events.times(s, "toe_off")))

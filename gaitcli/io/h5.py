@@ -195,6 +195,11 @@ def read_record(group: h5py.Group, cls):
     return cls(**values)
 
 
+def read_records(group: h5py.Group, cls) -> list:
+    """The list of ``cls`` records :func:`record_datasets` wrote for a list under ``group``."""
+    return _read_value(group, list[cls])
+
+
 def read_result(path: str | Path, cls, prefix: str = "result"):
     """The stage result of type ``cls`` stored under ``prefix`` in the HDF5 file ``path``."""
     with h5py.File(path, "r") as h5:

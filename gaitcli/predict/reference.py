@@ -127,14 +127,14 @@ def idyn_reference_strides(path: str | Path) -> tuple[list[np.ndarray], list[np.
     import h5py
 
     from gaitcli.dynamics.sagittal import SagittalExport
-    from gaitcli.io.h5 import read_record
+    from gaitcli.io.h5 import read_record, read_records
     from gaitcli.signal.cycles import Stride
 
     with h5py.File(path, "r") as h5:
         export = read_record(h5["sagittal"], SagittalExport)
         columns = str(h5["coordinates_clinical"].attrs["columns"]).split(",")
         clinical = h5["coordinates_clinical"][()]
-        strides = [read_record(h5[f"strides/{i}"], Stride) for i in range(int(h5["strides/.length"][()]))]
+        strides = read_records(h5["strides"], Stride)
     mass = export.body_mass_kg
     cycles = {}
     for s in ("r", "l"):

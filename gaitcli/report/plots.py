@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 
 from gaitcli.core.container import Trial  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
-from gaitcli.io.h5 import read_record  # noqa: E402
+from gaitcli.io.h5 import read_record, read_records  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
 SIDE_NAME = {"r": "right", "l": "left"}
@@ -122,7 +122,7 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
 
     with h5py.File(h5_path, "r") as h5:
         export = read_record(h5["sagittal"], SagittalExport)
-        strides = [read_record(h5[f"strides/{i}"], Stride) for i in range(int(h5["strides/.length"][()]))]
+        strides = read_records(h5["strides"], Stride)
         kin = h5["coordinates_clinical"][()]
         mom = h5["joint_moments_clinical"][()] / float(h5["segments/mass"].attrs["body_mass_kg"])
         residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]

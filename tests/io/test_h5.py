@@ -11,7 +11,7 @@ import pytest
 from gaitcli.core.container import FootLoad, Trial
 from gaitcli.core.events import Events
 from gaitcli.core.recording import Markers
-from gaitcli.io.h5 import read_result, record_datasets, unit_of, write_h5
+from gaitcli.io.h5 import read_records, read_result, record_datasets, unit_of, write_h5
 
 
 @dataclass(frozen=True)
@@ -60,6 +60,8 @@ def test_a_nested_record_round_trips_exactly(tmp_path):
     np.testing.assert_array_equal(back.leaves["r"].force_N, record.leaves["r"].force_N)
     assert [leaf.label for leaf in back.items] == ["", "second"]
     assert back.extra["b"] == "text"
+    with h5py.File(path, "r") as h5:
+        assert [leaf.label for leaf in read_records(h5["result/items"], Leaf)] == ["", "second"]
     np.testing.assert_array_equal(back.extra["a"], [1.0, 2.0])
     with h5py.File(path, "r") as h5:
         assert h5["result/leaves/r/force_N"].attrs["units"] == "N"
