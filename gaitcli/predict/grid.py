@@ -73,6 +73,11 @@ class ControlGrid:
         """Index of the point that opens each instant (its time lies in [0, T))."""
         return np.unique(self.instant, return_index=True)[1]
 
+    @property
+    def wraps(self) -> np.ndarray:
+        """Whether a point closes the cycle (t = T: instant 0 of the next cycle, hip x one stride on)."""
+        return np.all(self.time_weights == 1.0, axis=1)
+
 
 def control_grid(counts=DEFAULT_CONTROL_POINTS) -> ControlGrid:
     """The control points of ``counts`` (n_c,ph for the 8 phases, each ≥ 2, both end points included)."""

@@ -1,28 +1,46 @@
 """The predictive-gait NLP (Diss. 5.2.7–5.2.9): cost, constraint groups, bounds, scaling, initial guess, IPOPT.
 
-Status: built and evaluated, not yet solved to convergence. From :func:`initial_guess`, 300 IPOPT
-iterations (limited-memory Hessian) take 212 s and end with every constraint group within 0.04 of its
-bounds (J 13.9, Et 601 J/m, Jdev 8.8); 1500 iterations (1205 s) end feasible in every group, J 9.0,
-Et 375 J/m, Jdev 6.0, still not declared optimal. The per-point MX graph costs 0.7–0.8 s per iteration.
+Variables w = [z, Q, Λ] (all O(1)):
 
-Variables: the design vector χ of the full model (``layout.py``), optimised as
-z = χ / scale (coordinates in rad or m, tendon stretch ŝ as it is, durations per
-0.1 s, step lengths in m: all O(1)). Constraint groups g (CHAPTER5_NOTES §1.9 with the
-corrections of §3):
+    z   the design vector χ of the full model (``layout.py``) as χ/scale (coordinates in rad or m,
+        tendon stretch ŝ as it is, durations per 0.1 s, step lengths in m)
+    Q   I × 100, per distinct instant i, column-major (each column's I values contiguous):
+        y (9), ẏ (9), ÿ (9), ŝ (16), rhs (9), l_m (16), v_m (16), a (16), each divided by its
+        :data:`LIFTED` scale
+    Λ   the ground reactions λ_j of every control point in grid order (the phase's reaction names)
 
-    moment      |B⁺e| ≤ εm per joint and control point                 (5.49–5.51, 5.53)
-    contact     |c_ph| ≤ εk per row and control point                  (5.57)
-    unilateral  f_z ≥ 0 at the points in contact                        (5.37–5.40)
-    mtp         −10 ≤ m_B ≤ 0 N·m where a foot stands on B alone        (§3 item 3)
-    friction    |f_x| ≤ μ f_z per foot down (two linear inequalities)   (5.41–5.42, §3 item 8)
-    clearance   z ≥ h_min of the points not in contact                  (5.33–5.36)
-    excitation  0 ≤ u ≤ 1 as −t2·a ≤ ȧ ≤ (1 − a)(t1 + t2), 0 ≤ a ≤ 1   (5.32, §3 item 19)
-    stretch     ŝ ≥ 0 at the instants (a taut or just slack tendon)     (§3 item 18)
-    speed       ΣT_ph − ΔS/v = 0                                        (5.43)
-    shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5° (5.45–5.48, §3 item 10)
+Q and Λ are the transcription's intermediate quantities made variables ("lifted") and tied to
+z by equality constraints: the problem is the same, but each constraint and the cost touch
+only a few variables, so the Jacobian and the exact Hessian are sparse and cheap to build and
+evaluate (evaluated through z alone, every point depends on every node of the periodic splines
+and on all durations). At a solution the lifted values equal the transcription of χ
+(``problem.py``; λ = G⁺ rhs).
 
-Cost J = w1·Et/100 + w2·Jdev (5.29) with the heat rate's kinks smoothed for the
-optimiser as in EID (reported costs use the exact model).
+Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first five define Q and Λ):
+
+    splines     Q's y, ẏ, ÿ, ŝ = the splines of z at the instants        (5.10–5.23)
+    dynamics    rhs = M ÿ + k − g − Q_p − R f_m                           (5.1)
+    paths       l_m, v_m = the muscle paths at (y, ẏ)                     (A.9)
+    activation  a = the activation that produces F at (l_ce, v_ce)        (4.18)
+    reactions   G_phᵀ (rhs − G_ph λ) = 0: λ = G_ph⁺ rhs                   (5.30)
+    moment      |B⁺e| ≤ εm, e = rhs − G_ph λ, per joint and control point (5.49–5.51, 5.53)
+    contact     |c_ph| ≤ εk per row and control point                    (5.57)
+    unilateral  f_z ≥ 0 at the points in contact                          (5.37–5.40)
+    mtp         −10 ≤ m_B ≤ 0 N·m where a foot stands on B alone          (§3 item 3)
+    friction    |f_x| ≤ μ f_z per foot down (two linear inequalities)     (5.41–5.42, §3 item 8)
+    clearance   z ≥ h_min of the points not in contact                    (5.33–5.36)
+    excitation  0 ≤ u ≤ 1 as −t2·a ≤ ȧ ≤ (1 − a)(t1 + t2) with 0 ≤ a ≤ 1 (5.32, §3 item 19)
+    speed       ΣT_ph − ΔS/v = 0                                          (5.43)
+    shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5°  (5.45–5.48, §3 item 10)
+
+Status: from :func:`initial_guess` IPOPT (exact Hessian, MUMPS) declares the optimum after 336
+iterations, J 8.042; 419 s, most of it in factorising the KKT system, whose fronts each carry the
+435 spline variables (every instant depends on every node of a periodic spline), plus 98 s to build
+the Hessian.
+
+Bounds: z as :func:`box_bounds`; ŝ ≥ 0 (a taut or just slack tendon, §3 item 18) and 0 ≤ a ≤ 1.
+Cost J = w1·Et/100 + w2·Jdev (5.29) with the heat rate's kinks smoothed for the optimiser as in
+EID (reported costs use the exact model).
 """
 
 from __future__ import annotations
@@ -35,10 +53,30 @@ import numpy as np
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.constraints import GAIT_SHAPE, clearance_phases, feet_in_contact, friction, smooth_max
 from gaitcli.predict.cost import DEFAULT_WEIGHTS, cost_of_transport, deviation, objective
+from gaitcli.predict.grid import instant_times, periodic_derivative
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
 
 GRAVITY_M_S2 = 9.81
+#: the lifted quantities per instant (name, columns, scale: Q = value/scale)
+LIFTED = (("y", 9, 1.0), ("yd", 9, 3.0), ("ydd", 9, 30.0), ("stretch", 16, 1.0), ("rhs", 9, 100.0),
+          ("l_m", 16, 1.0), ("v_m", 16, 1.0), ("a", 16, 1.0))
+LIFTED_COLUMNS = sum(n for _, n, _ in LIFTED)
+REACTION_SCALE_N = 100.0
+
+
+def lifted_columns() -> dict[str, slice]:
+    """Where each lifted quantity lies among Q's columns."""
+    out, start = {}, 0
+    for name, n, _ in LIFTED:
+        out[name] = slice(start, start + n)
+        start += n
+    return out
+
+
+def lifted_scale() -> np.ndarray:
+    """(LIFTED_COLUMNS,) scale of Q's columns."""
+    return np.concatenate([np.full(n, scale) for _, n, scale in LIFTED])
 
 
 @dataclass(frozen=True)
@@ -60,18 +98,45 @@ class PredictSettings:
 
 @dataclass
 class NLP:
-    """The symbolic problem: z, J(z), g(z) with bounds, per-group slices of g, and box bounds on z."""
+    """The symbolic problem (module docstring): w, J(w), g(w) with bounds, per-group slices of g, box bounds on w.
 
-    z: ca.MX
-    cost: ca.MX
-    constraints: ca.MX
+    ``parts`` holds Et and Jdev as expressions of w.
+    """
+
+    w: ca.SX
+    cost: ca.SX
+    constraints: ca.SX
     lbg: np.ndarray
     ubg: np.ndarray
     groups: dict[str, slice]
-    lbz: np.ndarray
-    ubz: np.ndarray
+    lbw: np.ndarray
+    ubw: np.ndarray
     scale: np.ndarray
-    parts: dict = field(default_factory=dict)  # Et, Jdev as expressions
+    transcriber: Transcriber
+    parts: dict = field(default_factory=dict)
+
+    @property
+    def design_size(self) -> int:
+        return self.transcriber.layout.size
+
+    def start(self, x: np.ndarray) -> np.ndarray:
+        """w for the design vector χ ``x``: z clipped into its box, Q and Λ from the transcription of χ."""
+        z = np.clip(x / self.scale, self.lbw[:self.design_size], self.ubw[:self.design_size])
+        t = self.transcriber(z * self.scale)
+        grid = self.transcriber.grid
+        opening = grid.instant_points
+        rhs = np.vstack(t.generalized_forces)[opening]
+        values = {"y": t.y[opening], "yd": t.yd[opening], "ydd": t.ydd[opening], "stretch": t.stretch[opening],
+                  "rhs": rhs, "l_m": t.muscle_lengths_m, "v_m": t.muscle_velocities_m_s,
+                  "a": np.clip(t.muscle_state["a"], 0.0, 1.0)}
+        q = np.column_stack([values[name] for name, _, _ in LIFTED]) / lifted_scale()
+        q = np.nan_to_num(q)
+        reactions = np.concatenate(t.reactions) / REACTION_SCALE_N
+        return np.concatenate([z, q.ravel(order="F"), reactions])
+
+    def design(self, w) -> np.ndarray:
+        """χ of w."""
+        return np.asarray(w, float).ravel()[:self.design_size] * self.scale
 
 
 def variable_scale(transcriber: Transcriber) -> np.ndarray:
@@ -101,19 +166,34 @@ def box_bounds(transcriber: Transcriber) -> tuple[np.ndarray, np.ndarray]:
     return low, high
 
 
-def _interpolants(reference: Reference) -> list[ca.Function]:
-    return [ca.interpolant(f"ref_{k}", "linear", [CYCLE_PCT], reference.mean[:, k]) for k in range(len(VARIABLES))]
+def _interpolants(table: np.ndarray) -> list[ca.Function]:
+    """Linear interpolants over the cycle (%) of a reference table's columns (101 × 10)."""
+    return [ca.interpolant(f"reference_{k}", "linear", [CYCLE_PCT], table[:, k]) for k in range(len(VARIABLES))]
 
 
 def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None) -> NLP:
-    """The NLP of one prediction (module docstring for the groups)."""
+    """The lifted NLP of one prediction (module docstring for the variables and groups)."""
     s = settings or PredictSettings()
     scale = variable_scale(transcriber)
-    z = ca.MX.sym("z", transcriber.layout.size)
-    t = transcriber(z * ca.DM(scale))
-    model, contact, grid = transcriber.model, transcriber.contact, transcriber.grid
-    groups: dict[str, list] = {name: [] for name in ("moment", "contact", "unilateral", "mtp", "friction",
-                                                     "clearance", "excitation", "stretch", "speed", "shape")}
+    model, contact, grid, muscles = transcriber.model, transcriber.contact, transcriber.grid, transcriber.muscles
+    params = muscles.muscle.params
+    n_i = grid.instants
+    z = ca.SX.sym("z", transcriber.layout.size)
+    x = z * ca.DM(scale)
+    q = ca.SX.sym("Q", n_i, LIFTED_COLUMNS)
+    cols, qs = lifted_columns(), lifted_scale()
+    value = {name: q[:, cols[name]] * ca.repmat(ca.DM(qs[cols[name]]).T, n_i, 1) for name in cols}
+    phases = [int(p) + 1 for p in grid.phase]
+    widths = [len(contact.reaction_names[ph]) for ph in phases]
+    lam_all = ca.SX.sym("L", sum(widths))
+    offsets = np.concatenate([[0], np.cumsum(widths)])
+    reactions = [lam_all[offsets[j]:offsets[j + 1]] * REACTION_SCALE_N for j in range(grid.points)]
+
+    durations, steps_r, steps_l, period, stride = transcriber.design(x)
+    times = instant_times(grid, durations)
+    groups: dict[str, list] = {name: [] for name in (
+        "splines", "dynamics", "paths", "activation", "reactions", "moment", "contact", "unilateral", "mtp",
+        "friction", "clearance", "excitation", "speed", "shape")}
     bounds: dict[str, list] = {name: [] for name in groups}
 
     def add(name, expression, low, high):
@@ -122,62 +202,91 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         groups[name].append(expression)
         bounds[name].append((np.broadcast_to(low, (n,)).astype(float), np.broadcast_to(high, (n,)).astype(float)))
 
+    # Q's y, ẏ, ÿ, ŝ are the splines of z
+    splines = ca.horzcat(*transcriber.instant_values(x))
+    add("splines", q[:, :cols["stretch"].stop] - splines / ca.repmat(ca.DM(qs[:cols["stretch"].stop]).T, n_i, 1),
+        0.0, 0.0)
+    f_max = np.tile(np.asarray(params.max_isometric_force_N), 2)
+    forces = ca.repmat(ca.DM(f_max).T, n_i, 1) * value["stretch"] ** 2  # F = F_max·ŝ² (2.19)
+    for i in range(n_i):
+        y, yd, ydd = (value[name][i, :].T for name in ("y", "yd", "ydd"))
+        f = forces[i, :].T
+        rhs = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.passive(y, yd)
+               - muscles.moment_arms(y) @ f)
+        add("dynamics", (value["rhs"][i, :].T - rhs) / qs[cols["rhs"]], 0.0, 0.0)
+        add("paths", value["l_m"][i, :].T - muscles.lengths(y), 0.0, 0.0)
+        add("paths", value["v_m"][i, :].T - muscles.velocities(y, yd), 0.0, 0.0)
+    # the muscles: tendon from ŝ, its rate by the unequal-step differences, the activation that makes F
+    slack = np.tile(np.asarray(params.tendon_slack_length_m), 2)
+    l_se = ca.repmat(ca.DM(slack).T, n_i, 1) * (1 + params.tendon_strain_at_max_force * value["stretch"])
+    v_se = periodic_derivative(l_se, times, period)
+    a = value["a"]
+    adot = periodic_derivative(a, times, period)
+    rate = []
+    for k in (0, 1):
+        c = slice(8 * k, 8 * k + 8)
+        args = (forces[:, c].T, v_se[:, c].T, value["l_m"][:, c].T, value["v_m"][:, c].T)
+        add("activation", a[:, c] - muscles.muscle.activation_from_force(*args).T, 0.0, 0.0)
+        l_ce, v_ce = muscles.muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, args[2], args[3])
+        u = muscles.muscle.excitation(a[:, c].T, adot[:, c].T)
+        f_ce = forces[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, n_i)
+        rate.append(transcriber.metabolic(u, a[:, c].T, l_ce, v_ce, f_ce).T)
+    t1 = np.tile(np.asarray(params.activation_t1_per_s), 2)
+    t2 = np.tile(np.asarray(params.activation_t2_per_s), 2)
+    T1, T2 = ca.repmat(ca.DM(t1).T, n_i, 1), ca.repmat(ca.DM(t2).T, n_i, 1)
+
+    # per control point: reactions, moment error, contact, ground forces, clearance
     foot_forces = []  # per control point: (f_x, f_z) of each foot, N
-    for j in range(grid.points):
-        phase = int(grid.phase[j]) + 1
+    joint_map_pinv = ca.DM(transcriber.joint_map_pinv)
+    for j, phase in enumerate(phases):
+        i = int(grid.instant[j])
+        y = value["y"][i, :].T + (ca.DM([1.0] + [0.0] * 8) * stride if grid.wraps[j] else 0)
+        G = contact.reaction_matrix[phase](y)
+        lam = reactions[j]
+        e = value["rhs"][i, :].T - G @ lam
+        add("reactions", G.T @ e / REACTION_SCALE_N, 0.0, 0.0)
+        add("moment", joint_map_pinv @ e, -s.moment_tolerance_Nm, s.moment_tolerance_Nm)
+        add("contact", contact.constraint[phase](y, steps_r, steps_l, 0.0), -s.contact_tolerance_m,
+            s.contact_tolerance_m)
         names = contact.reaction_names[phase]
-        lam = t.reactions[j]
-        add("moment", t.moment_error_Nm[j], -s.moment_tolerance_Nm, s.moment_tolerance_Nm)
-        add("contact", t.contact_error_m[j], -s.contact_tolerance_m, s.contact_tolerance_m)
         feet = {}
         for side in ("r", "l"):
-            fx = sum((lam[i] for i, n in enumerate(names) if n.endswith(f"_{side}_fx_N")), ca.MX(0))
-            fz = sum((lam[i] for i, n in enumerate(names) if n.endswith(f"_{side}_fz_N")), ca.MX(0))
+            fx = sum((lam[k] for k, n in enumerate(names) if n.endswith(f"_{side}_fx_N")), ca.SX(0))
+            fz = sum((lam[k] for k, n in enumerate(names) if n.endswith(f"_{side}_fz_N")), ca.SX(0))
             feet[side] = (fx, fz)
         foot_forces.append(feet)
-        for i, n in enumerate(names):
+        for k, n in enumerate(names):
             if n.endswith("_fz_N"):
-                add("unilateral", lam[i], 0.0, np.inf)
+                add("unilateral", lam[k], 0.0, np.inf)
             elif n.endswith("_moment_Nm"):
-                add("mtp", lam[i], *s.mtp_moment_Nm)
+                add("mtp", lam[k], *s.mtp_moment_Nm)
         for side in feet_in_contact(phase):
             add("friction", ca.vertcat(*friction(*feet[side], s.friction_coefficient)), -np.inf, 0.0)
-        points = dict(zip(model.point_names, model.points(t.y[j, :].T)))
+        points = dict(zip(model.point_names, model.points(y)))
         for point in ("heel_r", "mtp_r", "heel_l", "mtp_l"):
             if phase in clearance_phases(point):
                 add("clearance", points[point][1], s.clearance_m, np.inf)
-    p = transcriber.muscles.muscle.params
-    t1 = np.tile(np.asarray(p.activation_t1_per_s), 2)
-    t2 = np.tile(np.asarray(p.activation_t2_per_s), 2)
-    a, adot = t.muscle_state["a"], t.muscle_state["adot"]
-    instants = a.size1()
-    T1, T2 = ca.repmat(ca.DM(t1).T, instants, 1), ca.repmat(ca.DM(t2).T, instants, 1)
     add("excitation", adot + T2 * a, 0.0, np.inf)
     add("excitation", (1 - a) * (T1 + T2) - adot, 0.0, np.inf)
-    add("excitation", a, 0.0, 1.0)
-    add("stretch", t.stretch[[int(i) for i in grid.instant_points], :], 0.0, np.inf)
-    add("speed", t.period_s - t.stride_m / s.speed_m_s, 0.0, 0.0)
-    for name, (index, phases, minimum) in GAIT_SHAPE.items():
-        chosen = [j for j in range(grid.points) if int(grid.phase[j]) + 1 in phases]
-        add("shape", smooth_max(ca.vertcat(*[t.y[j, index] for j in chosen])), minimum, np.inf)
+    add("speed", period - stride / s.speed_m_s, 0.0, 0.0)
+    for name, (index, shape_phases, minimum) in GAIT_SHAPE.items():
+        chosen = [int(grid.instant[j]) for j in range(grid.points) if phases[j] in shape_phases]
+        add("shape", smooth_max(ca.vertcat(*[value["y"][i, index] for i in sorted(set(chosen))])), minimum, np.inf)
 
     # cost: Et (5.27) and Jdev (5.28) at the instants
-    et = cost_of_transport(t.metabolic_rate_W, t.instant_times_s, t.period_s, t.stride_m)
-    opening = [int(i) for i in grid.instant_points]
+    et = cost_of_transport(ca.horzcat(*rate), times, period, stride)
     mass = model.total_mass_kg
     rows = []
-    for j in opening:
-        yj = t.y[j, :]
-        angles = [*walker_joint_angles(yj[2], yj[3], yj[4], yj[5]), *walker_joint_angles(yj[2], yj[6], yj[7], yj[8])]
-        forces = [foot_forces[j]["r"][0], foot_forces[j]["r"][1], foot_forces[j]["l"][0], foot_forces[j]["l"][1]]
-        rows.append(ca.horzcat(*[ang * 180 / np.pi for ang in angles], *[f / mass for f in forces]))
-    values = ca.vertcat(*rows)
-    pct = 100 * t.instant_times_s / t.period_s
-    interpolants = _interpolants(reference)
-    means = ca.horzcat(*[f(pct) for f in interpolants])
-    sds = ca.horzcat(*[ca.interpolant(f"sd_{k}", "linear", [CYCLE_PCT], reference.sd[:, k])(pct)
-                       for k in range(len(VARIABLES))])
-    jdev = deviation(values, means, sds, t.instant_times_s, t.period_s)
+    for i, j in enumerate(grid.instant_points):
+        yi = value["y"][i, :]
+        angles = [*walker_joint_angles(yi[2], yi[3], yi[4], yi[5]), *walker_joint_angles(yi[2], yi[6], yi[7], yi[8])]
+        feet = foot_forces[int(j)]
+        forces_i = [feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1]]
+        rows.append(ca.horzcat(*[ang * 180 / np.pi for ang in angles], *[f / mass for f in forces_i]))
+    pct = 100 * times / period
+    means = ca.horzcat(*[f(pct) for f in _interpolants(reference.mean)])
+    sds = ca.horzcat(*[f(pct) for f in _interpolants(reference.sd)])
+    jdev = deviation(ca.vertcat(*rows), means, sds, times, period)
     cost = objective(et, jdev, s.weights)
 
     exprs, lows, highs, slices, start = [], [], [], {}, 0
@@ -191,8 +300,15 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         slices[name] = slice(start, start + block.size1())
         start += block.size1()
     low, high = box_bounds(transcriber)
-    return NLP(z=z, cost=cost, constraints=ca.vertcat(*exprs), lbg=np.concatenate(lows), ubg=np.concatenate(highs),
-               groups=slices, lbz=low / scale, ubz=high / scale, scale=scale, parts={"Et": et, "Jdev": jdev})
+    q_low, q_high = np.full((n_i, LIFTED_COLUMNS), -np.inf), np.full((n_i, LIFTED_COLUMNS), np.inf)
+    q_low[:, cols["stretch"]] = 0.0  # ŝ ≥ 0: a taut or just slack tendon (§3 item 18)
+    q_low[:, cols["a"]], q_high[:, cols["a"]] = 0.0, 1.0
+    n_l = lam_all.size1()
+    return NLP(w=ca.vertcat(z, ca.vec(q), lam_all), cost=cost, constraints=ca.vertcat(*exprs),
+               lbg=np.concatenate(lows), ubg=np.concatenate(highs), groups=slices,
+               lbw=np.concatenate([low / scale, q_low.ravel(order="F"), np.full(n_l, -np.inf)]),
+               ubw=np.concatenate([high / scale, q_high.ravel(order="F"), np.full(n_l, np.inf)]),
+               scale=scale, transcriber=transcriber, parts={"Et": et, "Jdev": jdev})
 
 
 def initial_guess(transcriber: Transcriber, reference: Reference,
@@ -219,16 +335,14 @@ def initial_guess(transcriber: Transcriber, reference: Reference,
 
 
 def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, callback=None) -> dict:
-    """IPOPT with exact derivatives from ``x0`` (χ); returns χ, status, iterations, the cost parts."""
+    """IPOPT with exact derivatives (Hessian included) from ``x0`` (χ); returns χ, status, iterations, cost."""
     s = settings or PredictSettings()
-    problem = {"x": nlp.z, "f": nlp.cost, "g": nlp.constraints}
+    problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints}
     options = {"print_time": False, "ipopt.print_level": s.print_level, "ipopt.sb": "yes",
-               "ipopt.max_iter": s.max_iterations, "ipopt.tol": s.tolerance, "ipopt.mu_strategy": "adaptive",
-               "ipopt.hessian_approximation": "limited-memory"}
+               "ipopt.max_iter": s.max_iterations, "ipopt.tol": s.tolerance, "ipopt.mu_strategy": "adaptive"}
     solver = ca.nlpsol("predict", "ipopt", problem, options)
-    z0 = np.clip(x0 / nlp.scale, nlp.lbz, nlp.ubz)
-    result = solver(x0=z0, lbx=nlp.lbz, ubx=nlp.ubz, lbg=nlp.lbg, ubg=nlp.ubg)
+    result = solver(x0=nlp.start(x0), lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg)
     stats = solver.stats()
-    z = np.array(result["x"]).ravel()
-    return {"x": z * nlp.scale, "status": stats.get("return_status", ""), "success": bool(stats.get("success")),
-            "iterations": int(stats.get("iter_count", -1)), "cost": float(result["f"])}
+    return {"x": nlp.design(result["x"]), "status": stats.get("return_status", ""),
+            "success": bool(stats.get("success")), "iterations": int(stats.get("iter_count", -1)),
+            "cost": float(result["f"])}

@@ -23,23 +23,25 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from gaitcli.predict.contact import ContactModel, joint_moment_map
+from gaitcli.predict.contact import ContactModel, ground_reactions, joint_moment_map
 from gaitcli.predict.cost import invert_muscles
 from gaitcli.predict.grid import ControlGrid, control_grid, cycle_period, instant_times, point_times
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles
-from gaitcli.predict.splines import cubic, evaluate, hip_x, quartic
+from gaitcli.predict.splines import cubic, evaluate, hip_x, is_casadi, quartic
 
 
 @dataclass
 class Transcription:
     """Everything at the control points (P rows, in grid order) and at the distinct instants (I rows).
 
-    ``y``, ``yd``, ``ydd`` (P × 9); ``forces_N`` (P × 16); ``reactions[j]`` λ at point j (the phase's
+    ``y``, ``yd``, ``ydd`` (P × 9); ``forces_N`` (P × 16); ``generalized_forces`` rhs (P rows of 9, N or
+    N·m, what the ground must balance, 5.1); ``reactions[j]`` λ at point j (the phase's
     reaction names, ``ContactModel.reaction_names``); ``residual[j]`` e (9,); ``moment_error_Nm``
     (P × 6) B⁺e; ``contact_error_m[j]`` c_ph (rows of the phase); ``period_s``, ``stride_m``,
-    ``point_times_s`` (P,), ``instant_times_s`` (I,); ``muscle_state`` (I × 16 arrays of the inversion);
+    ``point_times_s`` (P,), ``instant_times_s`` (I,); ``muscle_lengths_m``, ``muscle_velocities_m_s``
+    (I × 16); ``muscle_state`` (I × 16 arrays of the inversion);
     ``metabolic_rate_W`` (I × 16).
     """
 
@@ -48,6 +50,7 @@ class Transcription:
     ydd: object
     forces_N: object
     stretch: object
+    generalized_forces: object
     reactions: list
     residual: list
     moment_error_Nm: list
@@ -56,6 +59,8 @@ class Transcription:
     stride_m: object
     point_times_s: object
     instant_times_s: object
+    muscle_lengths_m: object
+    muscle_velocities_m_s: object
     muscle_state: dict
     metabolic_rate_W: object
 
@@ -74,29 +79,50 @@ class Transcriber:
         self.joint_map_pinv = np.linalg.pinv(joint_moment_map())
         self.metabolic = self.muscles.muscle.smoothed_metabolic_rate(smoothing)
 
-    def __call__(self, x) -> Transcription:
-        symbolic = not isinstance(x, np.ndarray)
+    def design(self, x) -> tuple:
+        """(durations (8,), L_r, L_l, T, ΔS) of χ; CasADi expressions for a symbolic χ."""
         blocks = self.layout.unpack(x)
-        coordinates, stretch_nodes = blocks["coordinates"], blocks["tendon_stretch"]
-        durations = blocks["durations"]
-        steps = blocks["steps"]
-        durations = ca.vec(durations) if symbolic else durations.ravel()
-        steps_r, steps_l = (float(steps[0, 0]), float(steps[1, 0])) if not symbolic else (steps[0, 0], steps[1, 0])
-        stride = steps_r + steps_l
-        period = cycle_period(durations)
-        times = point_times(self.grid, durations)
+        durations, steps = blocks["durations"], blocks["steps"]
+        if is_casadi(x):
+            durations, steps_r, steps_l = ca.vec(durations), steps[0, 0], steps[1, 0]
+        else:
+            durations, steps_r, steps_l = durations.ravel(), float(steps[0, 0]), float(steps[1, 0])
+        return durations, steps_r, steps_l, cycle_period(durations), steps_r + steps_l
+
+    def instant_values(self, x) -> tuple:
+        """y, ẏ, ÿ (I × 9; hip x with its drift) and the tendon stretch ŝ (I × 16) at the I instants of χ."""
+        symbolic = is_casadi(x)
+        blocks = self.layout.unpack(x)
+        coordinates = blocks["coordinates"]
+        durations, _, _, period, stride = self.design(x)
+        times = instant_times(self.grid, durations)
         rows = []
         for r in range(3):
-            parts = [hip_x(self.quartic, coordinates[:, 0], period, stride, times, r)]
-            parts.append(evaluate(self.quartic, coordinates[:, 1:], period, times, r))
+            parts = [hip_x(self.quartic, coordinates[:, 0], period, stride, times, r),
+                     evaluate(self.quartic, coordinates[:, 1:], period, times, r)]
             rows.append(ca.horzcat(*parts) if symbolic else np.column_stack([np.ravel(parts[0]), parts[1]]))
-        y, yd, ydd = rows
-        stretch = evaluate(self.cubic, stretch_nodes, period, times, 0)  # ŝ (P × 16)
+        stretch = evaluate(self.cubic, blocks["tendon_stretch"], period, times, 0)
+        return (*rows, stretch)
+
+    def __call__(self, x, values=None) -> Transcription:
+        """The transcription of χ; ``values`` (y, ẏ, ÿ, ŝ at the instants, as :meth:`instant_values`) if they are
+        separate variables of the NLP (lifted), else evaluated from χ's splines."""
+        symbolic = not isinstance(x, np.ndarray)
+        durations, steps_r, steps_l, period, stride = self.design(x)
+        values = self.instant_values(x) if values is None else values
+        times = point_times(self.grid, durations)
+        # the points' values are their instants'; the cycle's closing point (t = T) is instant 0 one stride on
+        index = [int(i) for i in self.grid.instant]
+        wraps = np.zeros((self.grid.points, 9))
+        wraps[self.grid.wraps, 0] = 1.0
+        y_i, yd_i, ydd_i, stretch_i = values
+        y = y_i[index, :] + (ca.DM(wraps) * stride if symbolic else wraps * stride)
+        yd, ydd, stretch = yd_i[index, :], ydd_i[index, :], stretch_i[index, :]
         f_max = np.tile(np.asarray(self.muscles.muscle.params.max_isometric_force_N), 2)
         f_m = (ca.repmat(ca.DM(f_max).T, stretch.shape[0], 1) * stretch ** 2 if symbolic
                else f_max * stretch ** 2)  # F = F_max·ŝ² (2.19)
         model, contact, muscles = self.model, self.contact, self.muscles
-        reactions, residual, moment_error, contact_error = [], [], [], []
+        reactions, residual, moment_error, contact_error, generalized = [], [], [], [], []
         for j in range(self.grid.points):
             phase = int(self.grid.phase[j]) + 1
             yj, ydj, yddj = y[j, :].T, yd[j, :].T, ydd[j, :].T
@@ -108,27 +134,25 @@ class Transcriber:
             G = contact.reaction_matrix[phase](yj)
             if not symbolic:
                 rhs, G = np.ravel(np.array(rhs)), np.array(G)
-            lam = ca.solve(G.T @ G, G.T @ rhs) if symbolic else np.linalg.lstsq(G, rhs, rcond=None)[0]
-            e = rhs - G @ lam
+            lam, e = ground_reactions(G, rhs)
+            generalized.append(rhs)
             reactions.append(lam)
             residual.append(e)
             moment_error.append(ca.DM(self.joint_map_pinv) @ e if symbolic else self.joint_map_pinv @ e)
             c = contact.constraint[phase](yj, steps_r, steps_l, 0.0)
             contact_error.append(c if symbolic else np.ravel(np.array(c)))
         # muscle states at the distinct instants (forces are continuous: one value per instant)
-        opening = self.grid.instant_points
         inst_times = instant_times(self.grid, durations)
-        lengths, velocities = [], []
-        for i in opening:
-            yi = y[int(i), :].T if symbolic else np.ravel(y[int(i), :])
-            ydi = yd[int(i), :].T if symbolic else np.ravel(yd[int(i), :])
-            lengths.append(muscles.lengths(yi).T if symbolic else np.ravel(np.array(muscles.lengths(yi))))
-            velocities.append(muscles.velocities(yi, ydi).T if symbolic else
-                              np.ravel(np.array(muscles.velocities(yi, ydi))))
-        l_m = ca.vertcat(*lengths) if symbolic else np.vstack(lengths)
-        v_m = ca.vertcat(*velocities) if symbolic else np.vstack(velocities)
-        force_instants = f_m[[int(i) for i in opening], :]
-        stretch_instants = stretch[[int(i) for i in opening], :]
+        if symbolic:
+            l_m = ca.vertcat(*[muscles.lengths(y_i[i, :].T).T for i in range(self.grid.instants)])
+            v_m = ca.vertcat(*[muscles.velocities(y_i[i, :].T, yd_i[i, :].T).T for i in range(self.grid.instants)])
+        else:
+            l_m = np.vstack([np.ravel(np.array(muscles.lengths(y_i[i]))) for i in range(self.grid.instants)])
+            v_m = np.vstack([np.ravel(np.array(muscles.velocities(y_i[i], yd_i[i])))
+                             for i in range(self.grid.instants)])
+        stretch_instants = stretch_i
+        force_instants = (ca.repmat(ca.DM(f_max).T, stretch_i.shape[0], 1) * stretch_i ** 2 if symbolic
+                          else f_max * stretch_i ** 2)
         params = self.muscles.muscle.params
         slack = np.tile(np.asarray(params.tendon_slack_length_m), 2)
         eps0 = params.tendon_strain_at_max_force
@@ -150,8 +174,10 @@ class Transcriber:
             rate.append(self.metabolic(*(a.T for a in args)).T if symbolic else
                         np.array(self.metabolic(*(a.T for a in args))).T)
         metabolic = ca.horzcat(*rate) if symbolic else np.hstack(rate)
-        return Transcription(y=y, yd=yd, ydd=ydd, forces_N=f_m, stretch=stretch, reactions=reactions, residual=residual,
+        return Transcription(y=y, yd=yd, ydd=ydd, forces_N=f_m, stretch=stretch, generalized_forces=generalized,
+                             reactions=reactions, residual=residual,
                              moment_error_Nm=moment_error, contact_error_m=contact_error, period_s=period,
                              stride_m=stride, point_times_s=times, instant_times_s=inst_times,
-                             muscle_state=states, metabolic_rate_W=metabolic)
+                             muscle_lengths_m=l_m, muscle_velocities_m_s=v_m, muscle_state=states,
+                             metabolic_rate_W=metabolic)
 

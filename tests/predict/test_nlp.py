@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from gaitcli.predict.contact import PHASE_TABLE
-from gaitcli.predict.nlp import build_nlp, initial_guess
+from gaitcli.predict.nlp import LIFTED_COLUMNS, build_nlp, initial_guess
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
 from gaitcli.resources import bundled_reference
@@ -26,25 +26,42 @@ def test_group_sizes(built):
     grid = transcriber.grid
     phases = [int(p) + 1 for p in grid.phase]
     rows = [len(PHASE_TABLE[p - 1].rows) for p in phases]
+    widths = [len(transcriber.contact.reaction_names[p]) for p in phases]
     sizes = {k: v.stop - v.start for k, v in nlp.groups.items()}
+    assert sizes["splines"] == (27 + 16) * grid.instants
+    assert sizes["dynamics"] == 9 * grid.instants
+    assert sizes["paths"] == 32 * grid.instants and sizes["activation"] == 16 * grid.instants
+    assert sizes["reactions"] == sum(widths)  # one normal equation per reaction and point
     assert sizes["moment"] == 6 * grid.points  # 480
     assert sizes["contact"] == sum(rows)
     assert sizes["unilateral"] == sum(sum(1 for _, axis, _ in PHASE_TABLE[p - 1].rows if axis == "z") for p in phases)
     assert sizes["mtp"] == sum(1 for p in phases if PHASE_TABLE[p - 1].mtp_moment_side)
-    assert sizes["excitation"] == 3 * 16 * grid.instants  # two ȧ bounds and a per muscle and instant
-    assert sizes["stretch"] == 16 * grid.instants
+    assert sizes["excitation"] == 2 * 16 * grid.instants  # the two ȧ bounds per muscle and instant
     assert sizes["speed"] == 1 and sizes["shape"] == 4
     assert nlp.constraints.size1() == len(nlp.lbg) == len(nlp.ubg) == sum(sizes.values())
-    assert nlp.z.size1() == 435
+    assert nlp.w.size1() == 435 + LIFTED_COLUMNS * grid.instants + sum(widths)
+
+
+def test_lifted_start_solves_the_defining_equations(built):
+    # w from the transcription of χ (problem.py, λ by the pseudoinverse) satisfies the lifted NLP's own
+    # equations: two implementations of the same quantities agree
+    transcriber, reference, nlp = built
+    x0 = initial_guess(transcriber, reference)
+    w0 = nlp.start(x0)
+    g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w0)).ravel()
+    for name in ("splines", "dynamics", "paths", "activation", "reactions"):
+        assert np.abs(g[nlp.groups[name]]).max() < 1e-9, name
+    t = transcriber(x0)
+    np.testing.assert_allclose(g[nlp.groups["moment"]], np.concatenate(t.moment_error_Nm), atol=1e-9)
 
 
 def test_initial_guess_is_inside_the_box_and_evaluates(built):
     transcriber, reference, nlp = built
     x0 = initial_guess(transcriber, reference)
-    z0 = x0 / nlp.scale
-    assert np.all(z0 >= nlp.lbz) and np.all(z0 <= nlp.ubz)
-    f = ca.Function("f", [nlp.z], [nlp.cost, nlp.parts["Et"], nlp.parts["Jdev"], nlp.constraints])
-    cost, et, jdev, g = (np.array(v).ravel() for v in f(z0))
+    w0 = nlp.start(x0)
+    assert np.all(w0 >= nlp.lbw) and np.all(w0 <= nlp.ubw)
+    f = ca.Function("f", [nlp.w], [nlp.cost, nlp.parts["Et"], nlp.parts["Jdev"], nlp.constraints])
+    cost, et, jdev, g = (np.array(v).ravel() for v in f(w0))
     assert np.isfinite(cost).all() and np.isfinite(g).all()
     assert 100 < et.item() < 2000  # J/m: a walking order of magnitude from 10 % F_max everywhere
     assert jdev.item() > 0

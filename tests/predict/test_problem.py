@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from gaitcli.predict.problem import Transcriber
+from gaitcli.predict.splines import evaluate, hip_x
 
 DURATIONS = [0.05, 0.09, 0.28, 0.16] * 2
 
@@ -50,6 +51,31 @@ def test_hip_progresses_by_the_two_steps_per_cycle(transcriber):
     assert t.y[-1, 0] - t.y[0, 0] == pytest.approx(0.65 + 0.62, abs=1e-12)
     np.testing.assert_allclose(t.y[-1, 1:], t.y[0, 1:], atol=1e-12)
     assert t.period_s == pytest.approx(sum(DURATIONS))
+
+
+def test_points_take_the_splines_at_their_own_times(transcriber):
+    # every point, the two at each phase transition and the one closing the cycle at t = T included, carries
+    # the splines evaluated at its own time (hip x with its drift)
+    x = design(transcriber)
+    t = transcriber(x)
+    blocks = transcriber.layout.unpack(x)
+    times, period, stride = t.point_times_s, t.period_s, t.stride_m
+    for r, values in enumerate((t.y, t.yd, t.ydd)):
+        hip = hip_x(transcriber.quartic, blocks["coordinates"][:, 0], period, stride, times, r)
+        rest = evaluate(transcriber.quartic, blocks["coordinates"][:, 1:], period, times, r)
+        np.testing.assert_allclose(values, np.column_stack([hip, rest]), rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(t.stretch, evaluate(transcriber.cubic, blocks["tendon_stretch"], period, times),
+                               atol=1e-12)
+
+
+def test_lifted_values_give_the_same_transcription(transcriber):
+    # the NLP makes the instants' spline values separate variables; given the splines' own values the
+    # transcription is the same one
+    x = design(transcriber)
+    direct, lifted = transcriber(x), transcriber(x, values=transcriber.instant_values(x))
+    np.testing.assert_allclose(np.concatenate(lifted.moment_error_Nm), np.concatenate(direct.moment_error_Nm),
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(lifted.metabolic_rate_W, direct.metabolic_rate_W, rtol=1e-12)
 
 
 def test_exact_derivatives_match_finite_differences(transcriber):
