@@ -223,3 +223,53 @@ def hip_x(spline: PeriodicSpline, values, period, stride_m, times, derivative: i
         return np.ravel(periodic) + (speed * t if derivative == 0 else speed * np.ones_like(t))
     t = casadi_column(times)
     return periodic + (speed * t if derivative == 0 else speed * ca.DM.ones(t.size1(), 1))
+
+
+@cache
+def _continuity_matrix(degree: int, intervals: int) -> np.ndarray:
+    width = degree + 1
+    out = np.zeros((degree * intervals, width * intervals))
+    for k in range(intervals):
+        nxt = (k + 1) % intervals
+        for r in range(degree):
+            out[degree * k + r, width * k:width * (k + 1)] = [_rate(p, r) for p in range(width)]
+            out[degree * k + r, width * nxt + r] -= factorial(r)
+    out.setflags(write=False)
+    return out
+
+
+def continuity_matrix(spline: PeriodicSpline) -> np.ndarray:
+    """K (N·d × (d + 1)·N): K·p = 0 are the continuity conditions (5.14)–(5.21) (cubic: 5.22–5.23) of the
+    segment coefficients p (rows as :attr:`PeriodicSpline.matrix`'s), φ_k^(r)(1) = φ_{k+1}^(r)(0) for
+    r = 0 … d − 1 with the wrap. With p_{k,0} = y_k (5.13) they define the spline: K·matrix = 0."""
+    return _continuity_matrix(spline.degree, spline.intervals)
+
+
+def evaluate_window(spline: PeriodicSpline, coefficients, period, fraction: float | object, window: tuple[int, int],
+                    derivative: int = 0):
+    """d^r y/dt^r at one cycle fraction s = t/T ∈ [0, 1) from segment coefficients (rows as
+    :attr:`PeriodicSpline.matrix`'s, one column per signal), looking only at the segments
+    ``window`` = (first, last) (indices taken modulo N).
+
+    The segment is ⌊N·s⌋ clamped into the window (beyond it the nearest window segment's polynomial is
+    extrapolated), so the expression depends on the window's coefficients alone: what makes the NLP's
+    Jacobian and Hessian sparse. A caller checks that ⌊N·s⌋ lies in the window at the solution
+    (:func:`segment_of`); then the value is the spline's.
+    """
+    n, width = spline.intervals, spline.degree + 1
+    first, last = window
+    x = fraction * n
+    k = ca.fmin(ca.fmax(ca.floor(x), first), last)
+    tau = x - k
+    scale = (period / n) ** derivative
+    out = 0
+    for kappa in range(first, last + 1):
+        rows = coefficients[width * (kappa % n):width * (kappa % n + 1), :]
+        value = sum(rate * tau ** (p - derivative) * rows[p, :] for p, rate in _terms(spline, derivative))
+        out += (k == kappa) * value if last > first else value
+    return out / scale
+
+
+def segment_of(spline: PeriodicSpline, fractions) -> np.ndarray:
+    """⌊N·s⌋ of numeric cycle fractions s ∈ [0, 1): the segment each one lies in."""
+    return np.minimum(np.floor(np.asarray(fractions, float) * spline.intervals), spline.intervals - 1).astype(int)

@@ -39,7 +39,8 @@ def test_group_sizes(built):
     assert sizes["excitation"] == 2 * 16 * grid.instants  # the two ȧ bounds per muscle and instant
     assert sizes["speed"] == 1 and sizes["shape"] == 4
     assert nlp.constraints.size1() == len(nlp.lbg) == len(nlp.ubg) == sum(sizes.values())
-    assert nlp.w.size1() == 435 + LIFTED_COLUMNS * grid.instants + sum(widths)
+    assert nlp.w.size1() == (5 * 9 + 4 * 16) * 17 + 10 + LIFTED_COLUMNS * grid.instants + sum(widths)
+    assert sizes["continuity"] == (4 * 9 + 3 * 16) * 17
 
 
 def test_lifted_start_solves_the_defining_equations(built):
@@ -49,7 +50,7 @@ def test_lifted_start_solves_the_defining_equations(built):
     x0 = initial_guess(transcriber, reference)
     w0 = nlp.start(x0)
     g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w0)).ravel()
-    for name in ("splines", "dynamics", "paths", "activation", "reactions"):
+    for name in ("continuity", "splines", "dynamics", "paths", "activation", "reactions"):
         assert np.abs(g[nlp.groups[name]]).max() < 1e-9, name
     t = transcriber(x0)
     np.testing.assert_allclose(g[nlp.groups["moment"]], np.concatenate(t.moment_error_Nm), atol=1e-9)

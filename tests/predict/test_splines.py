@@ -9,6 +9,7 @@ from numpy.polynomial import Polynomial
 
 from gaitcli.errors import InputError
 from gaitcli.predict import splines
+from gaitcli.predict.splines import continuity_matrix, cubic, evaluate_fractions, evaluate_window, quartic, segment_of
 
 T = 1.13  # s
 SPLINES = {"quartic": splines.quartic, "cubic": splines.cubic}
@@ -161,3 +162,32 @@ def test_design_vector_size():
     assert [splines.design_vector_size(n) for n in (14, 16, 20)] == [335, 385, 485]
     assert splines.design_vector_size(18, muscles=12) == 367
     assert splines.design_vector_size(18, muscles=12, extra=6) == 373
+
+
+@pytest.mark.parametrize("make", [quartic, cubic])
+def test_continuity_matrix_holds_exactly_for_the_periodic_splines(make):
+    # K·p = 0 on every column of the nodal-value → coefficient map, and its null space has exactly N
+    # dimensions (the nodal values p_{k,0} then fix the spline, 5.13)
+    spline = make(18)
+    K = continuity_matrix(spline)
+    assert np.abs(K @ spline.matrix).max() < 1e-12
+    assert K.shape[1] - np.linalg.matrix_rank(K) == spline.intervals
+
+
+@pytest.mark.parametrize("make", [quartic, cubic])
+def test_windowed_evaluation_equals_the_spline_inside_its_window(make):
+    spline = make(18)
+    rng = np.random.default_rng(5)
+    y = rng.normal(size=(17, 3))
+    coefficients = ca.DM(spline.matrix @ y)
+    period = 1.17
+    for fraction in (0.0, 0.013, 0.4237, 0.5, 0.9999):
+        k = int(segment_of(spline, fraction))
+        for window in ((k - 1, k + 1), (k, k), (k - 1, k)):
+            for r in range(spline.degree - 1):
+                value = np.array(evaluate_window(spline, coefficients, period, fraction, window, r)).ravel()
+                np.testing.assert_allclose(value, evaluate_fractions(spline, y, period, [fraction], r).ravel(),
+                                           rtol=1e-12, atol=1e-9)
+    # outside its window the nearest window segment's polynomial is extrapolated: a different, smooth value
+    outside = np.array(evaluate_window(spline, coefficients, period, 0.5, (0, 1), 0)).ravel()
+    assert not np.allclose(outside, evaluate_fractions(spline, y, period, [0.5]).ravel())
