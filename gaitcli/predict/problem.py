@@ -104,11 +104,12 @@ class Transcriber:
         stretch = evaluate(self.cubic, blocks["tendon_stretch"], period, times, 0)
         return (*rows, stretch)
 
-    def __call__(self, x) -> Transcription:
-        """The transcription of χ (numpy or CasADi)."""
+    def __call__(self, x, values=None) -> Transcription:
+        """The transcription of χ; ``values`` (y, ẏ, ÿ, ŝ at the instants, as :meth:`instant_values`) if they are
+        separate variables of the NLP (lifted), else evaluated from χ's splines."""
         symbolic = not isinstance(x, np.ndarray)
         durations, steps_r, steps_l, period, stride = self.design(x)
-        values = self.instant_values(x)
+        values = self.instant_values(x) if values is None else values
         times = point_times(self.grid, durations)
         # the points' values are their instants'; the cycle's closing point (t = T) is instant 0 one stride on
         index = [int(i) for i in self.grid.instant]

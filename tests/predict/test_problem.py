@@ -68,6 +68,16 @@ def test_points_take_the_splines_at_their_own_times(transcriber):
                                atol=1e-12)
 
 
+def test_lifted_values_give_the_same_transcription(transcriber):
+    # the NLP makes the instants' spline values separate variables; given the splines' own values the
+    # transcription is the same one
+    x = design(transcriber)
+    direct, lifted = transcriber(x), transcriber(x, values=transcriber.instant_values(x))
+    np.testing.assert_allclose(np.concatenate(lifted.moment_error_Nm), np.concatenate(direct.moment_error_Nm),
+                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(lifted.metabolic_rate_W, direct.metabolic_rate_W, rtol=1e-12)
+
+
 def test_exact_derivatives_match_finite_differences(transcriber):
     # the moment and contact errors at every control point w.r.t. the whole design vector, durations included
     x = design(transcriber, seed=1)
