@@ -123,6 +123,7 @@ class NLP:
     ubw: np.ndarray
     transcriber: Transcriber
     segments: np.ndarray
+    reach: int
     parts: dict = field(default_factory=dict)
 
     @property
@@ -162,7 +163,7 @@ class NLP:
 
     def segments_hold(self, x: np.ndarray) -> bool:
         """Whether every instant of χ ``x`` lies in its window of segments (the solution is the splines')."""
-        return bool(np.all(np.abs(instant_segments(self.transcriber, x) - self.segments) <= 1))
+        return bool(np.all(np.abs(instant_segments(self.transcriber, x) - self.segments) <= self.reach))
 
 
 def instant_segments(transcriber: Transcriber, x: np.ndarray) -> np.ndarray:
@@ -195,9 +196,9 @@ def _interpolants(table: np.ndarray) -> list[ca.Function]:
 
 
 def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
-              segments=None) -> NLP:
-    """The lifted NLP of one prediction (module docstring for the variables and groups), each instant looking at
-    the spline segments ``segments`` ± 1 (default: where the default guess puts the instants)."""
+              segments=None, reach: int = 0) -> NLP:
+    """The lifted NLP of one prediction (module docstring for the variables and groups), each instant reading
+    the spline segments ``segments`` ± ``reach`` (default: where the default guess puts the instants)."""
     if segments is None:
         segments = instant_segments(transcriber, initial_guess(transcriber, reference, settings))
     s = settings or PredictSettings()
@@ -238,7 +239,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     segments = np.asarray(segments, int)
     fractions = times / period
     for i in range(n_i):
-        window = (int(segments[i]) - 1, int(segments[i]) + 1)
+        window = (int(segments[i]) - reach, int(segments[i]) + reach)
         rows = [evaluate_window(quartic_spline, coordinates, period, fractions[i], window, r) for r in range(3)]
         drift = stride / period  # hip x: y1 = periodic + (ΔS/T)·t (notes §3 item 4)
         rows[0][0] += drift * times[i]
@@ -358,7 +359,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     return NLP(w=w, cost=cost, constraints=ca.vertcat(*exprs), lbg=np.concatenate(lows), ubg=np.concatenate(highs),
                groups=slices, lbw=np.concatenate([*spline_low, q_low.ravel(order="F"), np.full(n_l, -np.inf)]),
                ubw=np.concatenate([*spline_high, q_high.ravel(order="F"), np.full(n_l, np.inf)]),
-               transcriber=transcriber, segments=segments, parts={"Et": et, "Jdev": jdev})
+               transcriber=transcriber, segments=segments, reach=reach, parts={"Et": et, "Jdev": jdev})
 
 
 def initial_guess(transcriber: Transcriber, reference: Reference,

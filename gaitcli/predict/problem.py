@@ -104,12 +104,16 @@ class Transcriber:
         stretch = evaluate(self.cubic, blocks["tendon_stretch"], period, times, 0)
         return (*rows, stretch)
 
-    def __call__(self, x, values=None) -> Transcription:
-        """The transcription of χ; ``values`` (y, ẏ, ÿ, ŝ at the instants, as :meth:`instant_values`) if they are
-        separate variables of the NLP (lifted), else evaluated from χ's splines."""
-        symbolic = not isinstance(x, np.ndarray)
-        durations, steps_r, steps_l, period, stride = self.design(x)
-        values = self.instant_values(x) if values is None else values
+    def __call__(self, x) -> Transcription:
+        """The transcription of χ (numpy or CasADi; the full model's layout)."""
+        durations, steps_r, steps_l, _, _ = self.design(x)
+        return self.at(durations, steps_r, steps_l, self.instant_values(x))
+
+    def at(self, durations, steps_r, steps_l, values) -> Transcription:
+        """The transcription of a gait given by its phase durations (8), step lengths and ``values`` = (y, ẏ, ÿ,
+        ŝ) at the I instants (as :meth:`instant_values`; e.g. from the symmetric model's splines)."""
+        symbolic = is_casadi(durations, steps_r, steps_l, *values)
+        period, stride = cycle_period(durations), steps_r + steps_l
         times = point_times(self.grid, durations)
         # the points' values are their instants'; the cycle's closing point (t = T) is instant 0 one stride on
         index = [int(i) for i in self.grid.instant]

@@ -68,14 +68,15 @@ def test_points_take_the_splines_at_their_own_times(transcriber):
                                atol=1e-12)
 
 
-def test_lifted_values_give_the_same_transcription(transcriber):
-    # the NLP makes the instants' spline values separate variables; given the splines' own values the
-    # transcription is the same one
+def test_a_gait_given_by_its_instant_values_transcribes_as_its_design_vector(transcriber):
+    # what the symmetric model uses: durations, steps and the splines' values at the instants
     x = design(transcriber)
-    direct, lifted = transcriber(x), transcriber(x, values=transcriber.instant_values(x))
-    np.testing.assert_allclose(np.concatenate(lifted.moment_error_Nm), np.concatenate(direct.moment_error_Nm),
+    direct = transcriber(x)
+    durations, steps_r, steps_l, _, _ = transcriber.design(x)
+    given = transcriber.at(durations, steps_r, steps_l, transcriber.instant_values(x))
+    np.testing.assert_allclose(np.concatenate(given.moment_error_Nm), np.concatenate(direct.moment_error_Nm),
                                rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(lifted.metabolic_rate_W, direct.metabolic_rate_W, rtol=1e-12)
+    np.testing.assert_allclose(given.metabolic_rate_W, direct.metabolic_rate_W, rtol=1e-12)
 
 
 def test_exact_derivatives_match_finite_differences(transcriber):
