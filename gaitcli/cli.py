@@ -22,6 +22,7 @@ from gaitcli.core.validate import expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import GaitError, GaitWarning, NotConvergedError
 from gaitcli.muscles.stage import MusclesConfig
+from gaitcli.predict.stage import PredictConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.synth.gait import CONDITIONS
 from gaitcli.trial import SEXES
@@ -47,6 +48,12 @@ class Console:
             self.summaries[outcome.stage] = outcome.summary
             if not self.quiet and not self.as_json:
                 click.echo(f"{outcome.stage}: wrote {outcome.folder}", err=True)
+
+    def progress(self):
+        """The rich progress display (silent with --quiet)."""
+        from gaitcli.report.progress import ProgressDisplay
+
+        return ProgressDisplay(enabled=not self.quiet)
 
     def print_json(self, stage: str | None = None) -> None:
         """With ``--json``: one JSON document on stdout — the stage's summary, or all of them for ``run``."""
@@ -162,6 +169,43 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
     cfg = configure(pipeline, muscles={"method": method, "side": side, "nodes": nodes, "phase": phase,
                                        "validate": validate, "objective": objective})
     console.run(trial, ["muscles"], cfg, out=out, plots=not no_plots, show="muscles")
+
+
+@gait.command("predict")
+@_trial_argument
+@click.option("-o", "--out", "out", type=click.Path(path_type=Path),
+              help="Output root (default TRIAL/gait_out; ./gait_out without a trial).")
+@_config_option(PredictConfig, "speed_m_s", "--speed")
+@click.option("--weights", "weights", default=None, metavar="W1,W2",
+              help="W1,W2 of J = W1·Et/100 + W2·Jdev (5.29), ≥ 0 and summing to 2 (default 4/3,2/3).")
+@_config_option(PredictConfig, "nodes", "--nodes")
+@click.option("--symmetric/--no-symmetric", "symmetric", default=None,
+              help="Left leg = right leg half a cycle later (5.3.1; default on).")
+@_config_option(PredictConfig, "max_iterations", "--max-iterations")
+@click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
+              help="Reference CSV of `gait reference` (default: the trial's own, or the bundled normal one).")
+@click.option("--subject", "subject", type=click.Path(path_type=Path, dir_okay=False),
+              help="subject.yaml of the person to predict for (default: the trial's, or the dissertation's "
+                   "subject 1, 73.0 kg, 1.792 m).")
+@click.option("--init", "init", type=click.Path(path_type=Path, dir_okay=False),
+              help="Start from the solution in an earlier predict.h5 (same --nodes and --symmetric).")
+@click.pass_obj
+def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, symmetric, max_iterations, reference,
+                    subject, init):
+    """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
+    from gaitcli.pipeline import predict_trial
+
+    cfg = dataclasses.replace(PredictConfig(), **{k: v for k, v in {
+        "speed_m_s": speed_m_s, "weights": weights, "nodes": nodes, "symmetric": symmetric,
+        "max_iterations": max_iterations}.items() if v is not None})
+    with console.progress() as progress:
+        outcome = predict_trial(trial, cfg, out=out, reference_path=reference, subject_path=subject,
+                                init_path=init, progress=progress)
+    console.summaries["predict"] = outcome.summary
+    console.info(f"predict: wrote {outcome.folder}")
+    console.print_json("predict")
+    if not outcome.converged:
+        raise NotConvergedError(f"{outcome.message}; results written to {outcome.folder} with converged: false")
 
 
 @gait.command("synth")

@@ -229,3 +229,104 @@ def fresh_output(trial: Path | None, name: str, cfg: PipelineConfig, *, out: Pat
         run_stages(trial, [name], cfg, out=out, progress=progress, plots=plots)
         path = run.output_folder(name) / stage(name).h5_name
     return path
+
+
+@dataclass(frozen=True)
+class PredictOutcome:
+    """What ``gait predict`` wrote: the folder, its summary, whether the optimization converged and, if not,
+    a one-line ``message`` naming the violated constraint groups."""
+
+    folder: Path
+    summary: dict
+    converged: bool
+    message: str = ""
+
+
+def _read_init(path: Path):
+    """The design vector χ of an earlier ``predict.h5`` (``--init``)."""
+    import numpy as np
+
+    from gaitcli.errors import InputError
+
+    try:
+        with h5py.File(path, "r") as h5:
+            return np.asarray(h5["result/design"][()], float)
+    except FileNotFoundError:
+        raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)") from None
+    except (OSError, KeyError):
+        raise InputError(path, "--init", "not a predict.h5 (expected result/design, the solution of an earlier "
+                                         "gait predict)") from None
+
+
+def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference_path: Path | None = None,
+                  subject_path: Path | None = None, init_path: Path | None = None,
+                  progress: ProgressCallback = no_progress, pipeline: PipelineConfig | None = None) -> PredictOutcome:
+    """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`), write
+    ``OUT/predict/`` whole (``report.predict_outputs``) with its ``summary.json``.
+
+    The subject is ``subject_path``'s, else the trial's, else the dissertation's subject 1; the reference is
+    ``reference_path``'s, else one built from the trial's idyn output (made if missing or stale), else the
+    bundled one.
+    """
+    import numpy as np
+
+    from gaitcli.config import configure
+    from gaitcli.core.registry import Progress
+    from gaitcli.errors import InputError
+    from gaitcli.predict.layout import DesignLayout
+    from gaitcli.predict.model import WalkerParameters
+    from gaitcli.predict.reference import build_reference, idyn_reference_strides, read_reference
+    from gaitcli.predict.stage import run_predict, violated_groups
+    from gaitcli.report.predict_outputs import write_predict_outputs
+    from gaitcli.resources import bundled_reference
+    from gaitcli.trial import load_subject
+
+    # everything is validated before anything runs or is written
+    cfg.weight_pair()
+    try:
+        DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
+    except InputError as exc:
+        raise InputError(None, "--nodes", exc.problem) from None
+    folder = open_trial(trial) if trial is not None else None
+    reference = read_reference(reference_path) if reference_path is not None else None
+    subject = load_subject(subject_path) if subject_path is not None else (folder.subject if folder else None)
+    if subject is not None and subject_path is not None and subject.mass_kg is None:
+        raise InputError(subject_path, "mass_kg", "got 'auto' (expected the body mass in kg: gait predict has no "
+                                                  "force plates to weigh the subject)")
+    init = _read_init(Path(init_path)) if init_path is not None else None
+    inputs = {str(p): sha256(p) for p in (reference_path, subject_path, init_path) if p is not None}
+    mass = subject.mass_kg if subject is not None else None
+    if folder is not None and (reference is None or mass is None):
+        idyn = fresh_output(trial, "idyn", pipeline or configure(None), out=out, progress=progress, plots=False)
+        inputs[str(idyn)] = sha256(idyn)
+        right, left, offsets = idyn_reference_strides(idyn)
+        if reference is None:
+            reference = build_reference(right, left, left_offset_pct=float(np.mean(offsets)) if offsets else 50.0,
+                                        sources=[folder.folder.resolve().name])
+        if mass is None:
+            with h5py.File(idyn, "r") as h5:
+                mass = float(h5["sagittal/body_mass_kg"][()])
+    if reference is None:
+        reference = read_reference(bundled_reference())
+        inputs[str(bundled_reference())] = sha256(bundled_reference())
+    params = (WalkerParameters.from_subject(mass, subject.stature_m, subject.sex,
+                                            thigh_length_m=subject.thigh_length_m,
+                                            shank_length_m=subject.shank_length_m)
+              if subject is not None else WalkerParameters.subject_1())
+    progress(Progress("predict", "predict (IPOPT)", 0, 1))
+    result = run_predict(cfg, params=params, reference=reference, init=init)
+    progress(Progress("predict", "predict (IPOPT)", 1, 1))
+    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
+    target = root / "predict"
+    attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs, result.history)
+    attrs["predict_config"] = json.dumps(dataclasses.asdict(cfg))
+    with stage_folder(target) as tmp:
+        summary = write_predict_outputs(tmp, result, attrs)
+        write_json(tmp / "summary.json", summary)
+    message = ""
+    if not result.converged:
+        bad = violated_groups(result.violations)
+        parts = [f"{name} by {value:.3g}" for name, value in bad.items()]
+        message = (f"the prediction did not converge ({result.status}"
+                   + (f"; violated: {', '.join(parts)}" if parts else "") + ")")
+    return PredictOutcome(folder=target, summary=summary, converged=result.converged, message=message)

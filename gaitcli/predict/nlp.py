@@ -61,31 +61,28 @@ from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.constraints import GAIT_SHAPE, clearance_phases, feet_in_contact, friction, smooth_max
 from gaitcli.predict.cost import DEFAULT_WEIGHTS, cost_of_transport, deviation, objective
 from gaitcli.predict.grid import instant_times, periodic_derivative
+from gaitcli.predict.layout import DesignLayout, half_cycle_intervals
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
-from gaitcli.predict.splines import continuity_matrix, evaluate_window, segment_of
+from gaitcli.predict.splines import PeriodicSpline, continuity_matrix, evaluate_window, quartic, segment_of
 
 GRAVITY_M_S2 = 9.81
-#: the lifted quantities per instant (name, columns, scale: Q = value/scale)
-LIFTED = (("y", 9, 1.0), ("yd", 9, 3.0), ("ydd", 9, 30.0), ("stretch", 16, 1.0), ("rhs", 9, 100.0),
-          ("l_m", 16, 1.0), ("v_m", 16, 1.0), ("a", 16, 1.0))
-LIFTED_COLUMNS = sum(n for _, n, _ in LIFTED)
 REACTION_SCALE_N = 100.0
 DURATION_SCALE_S = 0.1
-
-
-def lifted_columns() -> dict[str, slice]:
-    """Where each lifted quantity lies among Q's columns."""
-    out, start = {}, 0
-    for name, n, _ in LIFTED:
-        out[name] = slice(start, start + n)
-        start += n
-    return out
-
-
-def lifted_scale() -> np.ndarray:
-    """(LIFTED_COLUMNS,) scale of Q's columns."""
-    return np.concatenate([np.full(n, scale) for _, n, scale in LIFTED])
+#: scale of each lifted quantity (its variables are value/scale)
+LIFTED_SCALE = {"y": 1.0, "yd": 3.0, "ydd": 30.0, "stretch": 1.0, "rhs": 100.0, "l_m": 1.0, "v_m": 1.0, "a": 1.0}
+#: the lifted blocks: (name, rows: "instants" or "half", [(quantity, columns)])
+FULL_LIFTED = (("Q", "instants", (("y", 9), ("yd", 9), ("ydd", 9), ("stretch", 16), ("rhs", 9), ("l_m", 16),
+                                  ("v_m", 16), ("a", 16))),)
+SYMMETRIC_LIFTED = (("Q", "instants", (("y", 3), ("yd", 3), ("ydd", 3), ("stretch", 8), ("l_m", 8), ("v_m", 8),
+                                       ("a", 8))),
+                    ("P", "half", (("y", 3), ("yd", 3), ("ydd", 3), ("rhs", 9))))
+#: box bounds of the nodal values (5.44 prints none: ranges wide enough for walking), per coordinate y1 … y9
+COORDINATE_RANGES = ((-0.5, 0.5), (0.5, 1.3), (-0.6, 0.6), (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8),
+                     (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8))  # hip x (periodic part), hip z, HAT, thigh, knee, ankle
+STRETCH_RANGE = (0.0, 1.3)  # F ≤ 1.69 F_max
+DURATION_RANGE_S = (0.01, 0.8)
+STEP_RANGE_M = (0.2, 1.2)
 
 
 @dataclass(frozen=True)
@@ -105,12 +102,43 @@ class PredictSettings:
     print_level: int = 0
 
 
+def box_bounds(layout: DesignLayout) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on χ of ``layout`` (full or symmetric)."""
+    ranges = {"coordinates": COORDINATE_RANGES, "trunk": COORDINATE_RANGES[:3], "right_leg": COORDINATE_RANGES[3:6],
+              "tendon_stretch": (STRETCH_RANGE,) * 16, "right_stretch": (STRETCH_RANGE,) * 8,
+              "durations": (DURATION_RANGE_S,), "steps": (STEP_RANGE_M,)}
+    low, high = np.empty(layout.size), np.empty(layout.size)
+    for name, (start, rows, cols) in layout.blocks.items():
+        per_column = ranges[name] if len(ranges[name]) == cols else ranges[name] * cols
+        for k, (lo, hi) in enumerate(per_column):
+            low[start + k * rows:start + (k + 1) * rows], high[start + k * rows:start + (k + 1) * rows] = lo, hi
+    return low, high
+
+
+def phase_durations(layout: DesignLayout, x) -> np.ndarray:
+    """T_1 … T_8 (s) of χ (the symmetric model repeats its four)."""
+    d = layout.unpack(np.asarray(x, float))["durations"].ravel()
+    return np.tile(d, 2) if layout.symmetric else d
+
+
+@dataclass
+class SplineBlock:
+    """One spline family of w: its coefficients (``rows`` × ``columns`` SX), spline, the χ block it stands for."""
+
+    name: str
+    spline: PeriodicSpline
+    coefficients: ca.SX
+    design_block: str
+
+
 @dataclass
 class NLP:
     """The symbolic problem (module docstring): w, J(w), g(w) with bounds, per-group slices of g, box bounds on w.
 
-    ``segments`` (I,): the spline segment each instant was placed near (its window is one segment either
-    side); ``parts`` holds Et and Jdev as expressions of w.
+    ``segments`` (name → per-instant segment index) are where each spline family's windows were placed;
+    ``values`` maps w's spline part to the gait (durations (8,), L_r, L_l, y, ẏ, ÿ, ŝ at the I instants,
+    the full model's 9 coordinates and 16 muscles) that :meth:`Transcriber.at` transcribes; ``parts`` holds
+    Et and Jdev as expressions of w.
     """
 
     w: ca.SX
@@ -122,72 +150,93 @@ class NLP:
     lbw: np.ndarray
     ubw: np.ndarray
     transcriber: Transcriber
-    segments: np.ndarray
+    layout: DesignLayout
+    splines: list
+    segments: dict
     reach: int
+    values: ca.Function
+    lifted: tuple
     parts: dict = field(default_factory=dict)
 
     @property
     def spline_size(self) -> int:
         """Length of w's first part: the segment coefficients, durations and step lengths."""
-        n = self.transcriber.layout.nodes - 1
-        return (5 * 9 + 4 * 16) * n + 10
+        return sum(b.coefficients.numel() for b in self.splines) + self.layout.blocks["durations"][1] + \
+            self.layout.blocks["steps"][1]
+
+    def coefficients_of(self, x: np.ndarray) -> np.ndarray:
+        """w's spline part for χ ``x``: the segment coefficients of its splines, durations, steps."""
+        blocks = self.layout.unpack(np.asarray(x, float))
+        parts = [(b.spline.matrix @ blocks[b.design_block]).ravel(order="F") for b in self.splines]
+        return np.concatenate(parts + [blocks["durations"].ravel() / DURATION_SCALE_S, blocks["steps"].ravel()])
+
+    def gait(self, w) -> tuple:
+        """(durations (8,), L_r, L_l, (y, ẏ, ÿ, ŝ) at the instants) of w, for :meth:`Transcriber.at`."""
+        out = self.values(np.asarray(w, float).ravel()[:self.spline_size])
+        durations = np.array(out[0]).ravel()
+        return durations, float(out[1]), float(out[2]), tuple(np.array(v) for v in out[3:])
 
     def start(self, x: np.ndarray) -> np.ndarray:
-        """w for the design vector χ ``x`` (clipped into its box): the coefficients of its splines, Q and Λ
-        from the transcription of χ (``problem.py``)."""
-        tr = self.transcriber
-        low, high = box_bounds(tr)
-        x = np.clip(x, low, high)
-        blocks = tr.layout.unpack(x)
-        t = tr(x)
-        opening = tr.grid.instant_points
-        rhs = np.vstack(t.generalized_forces)[opening]
-        values = {"y": t.y[opening], "yd": t.yd[opening], "ydd": t.ydd[opening], "stretch": t.stretch[opening],
-                  "rhs": rhs, "l_m": t.muscle_lengths_m, "v_m": t.muscle_velocities_m_s,
-                  "a": np.clip(t.muscle_state["a"], 0.0, 1.0)}
-        q = np.nan_to_num(np.column_stack([values[name] for name, _, _ in LIFTED]) / lifted_scale())
-        return np.concatenate([(tr.quartic.matrix @ blocks["coordinates"]).ravel(order="F"),
-                               (tr.cubic.matrix @ blocks["tendon_stretch"]).ravel(order="F"),
-                               blocks["durations"].ravel() / DURATION_SCALE_S, blocks["steps"].ravel(),
-                               q.ravel(order="F"), np.concatenate(t.reactions) / REACTION_SCALE_N])
+        """w for the design vector χ ``x`` (clipped into its box): the coefficients of its splines, the lifted
+        values and λ from the transcription of that gait (``problem.py``, λ = G⁺ rhs)."""
+        low, high = box_bounds(self.layout)
+        head = self.coefficients_of(np.clip(x, low, high))
+        t = self.transcriber.at(*self.gait(head))
+        grid = self.transcriber.grid
+        opening = grid.instant_points
+        full = {"y": t.y[opening], "yd": t.yd[opening], "ydd": t.ydd[opening], "stretch": t.stretch[opening],
+                "rhs": np.vstack(t.generalized_forces)[opening], "l_m": t.muscle_lengths_m,
+                "v_m": t.muscle_velocities_m_s, "a": np.clip(t.muscle_state["a"], 0.0, 1.0)}
+        parts = [head]
+        for _, rows, quantities in self.lifted:
+            block = []
+            for name, cols in quantities:
+                v = full[name][:grid.instants // 2] if rows == "half" else full[name]
+                if self.layout.symmetric and name in ("y", "yd", "ydd"):
+                    v = v[:, :3] if rows == "half" else v[:, 3:6]
+                elif self.layout.symmetric and rows != "half":
+                    v = v[:, :cols]
+                block.append(v / LIFTED_SCALE[name])
+            parts.append(np.nan_to_num(np.column_stack(block)).ravel(order="F"))
+        points = grid.points // 2 if self.layout.symmetric else grid.points
+        parts.append(np.concatenate(t.reactions[:points]) / REACTION_SCALE_N)
+        return np.concatenate(parts)
 
     def design(self, w) -> np.ndarray:
         """χ of w: the nodal values p_{k,0} (5.13), durations and step lengths."""
         w = np.asarray(w, float).ravel()
-        n = self.transcriber.layout.nodes - 1
-        cq = w[:45 * n].reshape(5 * n, 9, order="F")
-        cs = w[45 * n:109 * n].reshape(4 * n, 16, order="F")
-        rest = w[109 * n:109 * n + 10]
-        return self.transcriber.layout.pack({"coordinates": cq[0::5], "tendon_stretch": cs[0::4],
-                                             "durations": rest[:8] * DURATION_SCALE_S, "steps": rest[8:]})
+        blocks, start = {}, 0
+        for b in self.splines:
+            rows, cols = b.coefficients.shape
+            c = w[start:start + rows * cols].reshape(rows, cols, order="F")
+            blocks[b.design_block] = c[0::b.spline.degree + 1]
+            start += rows * cols
+        n_d = self.layout.blocks["durations"][1]
+        blocks["durations"] = w[start:start + n_d] * DURATION_SCALE_S
+        blocks["steps"] = w[start + n_d:start + n_d + self.layout.blocks["steps"][1]]
+        return self.layout.pack(blocks)
 
     def segments_hold(self, x: np.ndarray) -> bool:
-        """Whether every instant of χ ``x`` lies in its window of segments (the solution is the splines')."""
-        return bool(np.all(np.abs(instant_segments(self.transcriber, x) - self.segments) <= self.reach))
+        """Whether every instant of χ ``x`` lies in its windows (then the solution is the splines')."""
+        now = instant_segments(self.transcriber, self.layout, x)
+        return all(np.all(np.abs(now[k] - self.segments[k]) <= self.reach) for k in self.segments)
 
 
-def instant_segments(transcriber: Transcriber, x: np.ndarray) -> np.ndarray:
-    """The spline segment of each instant of χ ``x`` (their cycle fractions t_i/T)."""
-    durations = transcriber.layout.unpack(x)["durations"].ravel()
-    return segment_of(transcriber.quartic, instant_times(transcriber.grid, durations) / durations.sum())
+def instant_segments(transcriber: Transcriber, layout: DesignLayout, x: np.ndarray) -> dict:
+    """The spline segment of each instant of χ ``x``: "cycle" (I,) for the T-periodic splines and, in the
+    symmetric model, "half" (I/2,) for the T/2-periodic trunk splines."""
+    durations = phase_durations(layout, x)
+    fractions = instant_times(transcriber.grid, durations) / durations.sum()
+    out = {"cycle": segment_of(transcriber.quartic, fractions)}
+    if layout.symmetric:
+        half = transcriber.grid.instants // 2
+        out["half"] = segment_of(_half_spline(layout), 2 * fractions[:half])
+    return out
 
 
-def box_bounds(transcriber: Transcriber) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on χ (5.44; no numbers printed: ranges of motion and magnitudes wide enough for walking)."""
-    layout = transcriber.layout
-    low, high = np.full(layout.size, -np.inf), np.full(layout.size, np.inf)
-    start, rows, _ = layout.blocks["coordinates"]
-    ranges = [(-0.5, 0.5), (0.5, 1.3), (-0.6, 0.6), (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8),
-              (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8)]  # hip x (periodic part), hip z, HAT, thigh, knee, ankle
-    for k, (lo, hi) in enumerate(ranges):
-        low[start + k * rows:start + (k + 1) * rows], high[start + k * rows:start + (k + 1) * rows] = lo, hi
-    start, rows, cols = layout.blocks["tendon_stretch"]
-    low[start:start + rows * cols], high[start:start + rows * cols] = 0.0, 1.3  # F ≤ 1.69 F_max
-    start = layout.blocks["durations"][0]
-    low[start:start + 8], high[start:start + 8] = 0.01, 0.8
-    start = layout.blocks["steps"][0]
-    low[start:start + 2], high[start:start + 2] = 0.2, 1.2
-    return low, high
+def _half_spline(layout: DesignLayout) -> PeriodicSpline:
+    """The trunk's T/2-periodic quartic of the symmetric model (N_h odd intervals)."""
+    return quartic(half_cycle_intervals(layout.nodes - 1) + 1)
 
 
 def _interpolants(table: np.ndarray) -> list[ca.Function]:
@@ -195,36 +244,66 @@ def _interpolants(table: np.ndarray) -> list[ca.Function]:
     return [ca.interpolant(f"reference_{k}", "linear", [CYCLE_PCT], table[:, k]) for k in range(len(VARIABLES))]
 
 
+def _mirror(row):
+    """A 9-vector of generalized forces (or coordinates' rates) with the legs swapped."""
+    return ca.vertcat(row[0:3], row[6:9], row[3:6])
+
+
 def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
-              segments=None, reach: int = 0) -> NLP:
+              symmetric: bool = False, segments: dict | None = None, reach: int = 0) -> NLP:
     """The lifted NLP of one prediction (module docstring for the variables and groups), each instant reading
     the spline segments ``segments`` ± ``reach`` (default: where the default guess puts the instants)."""
-    if segments is None:
-        segments = instant_segments(transcriber, initial_guess(transcriber, reference, settings))
     s = settings or PredictSettings()
+    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
+    if segments is None:
+        segments = instant_segments(transcriber, layout, initial_guess(transcriber, reference, s, symmetric=symmetric))
     model, contact, grid, muscles = transcriber.model, transcriber.contact, transcriber.grid, transcriber.muscles
     params = muscles.muscle.params
-    n_i, n = grid.instants, transcriber.layout.nodes - 1
+    n_i, n = grid.instants, layout.nodes - 1
+    half = n_i // 2
     quartic_spline, cubic_spline = transcriber.quartic, transcriber.cubic
-    coordinates = ca.SX.sym("Cq", 5 * n, 9)
-    stretches = ca.SX.sym("Cs", 4 * n, 16)
-    durations_z, steps = ca.SX.sym("T", 8), ca.SX.sym("L", 2)
-    q = ca.SX.sym("Q", n_i, LIFTED_COLUMNS)
-    cols, qs = lifted_columns(), lifted_scale()
-    value = {name: q[:, cols[name]] * ca.repmat(ca.DM(qs[cols[name]]).T, n_i, 1) for name in cols}
-    phases = [int(p) + 1 for p in grid.phase]
-    widths = [len(contact.reaction_names[ph]) for ph in phases]
-    lam_all = ca.SX.sym("L", sum(widths))
-    offsets = np.concatenate([[0], np.cumsum(widths)])
-    reactions = [lam_all[offsets[j]:offsets[j + 1]] * REACTION_SCALE_N for j in range(grid.points)]
-
-    durations = durations_z * DURATION_SCALE_S
-    steps_r, steps_l = steps[0], steps[1]
+    sym = ca.SX.sym
+    if symmetric:
+        half_spline = _half_spline(layout)
+        splines = [SplineBlock("trunk", half_spline, sym("Ct", 5 * half_spline.intervals, 3), "trunk"),
+                   SplineBlock("leg", quartic_spline, sym("Cy", 5 * n, 3), "right_leg"),
+                   SplineBlock("stretch", cubic_spline, sym("Cs", 4 * n, 8), "right_stretch")]
+        durations_z, steps = sym("T", 4), sym("L", 1)
+        durations = ca.vertcat(durations_z, durations_z) * DURATION_SCALE_S
+        steps_r = steps_l = steps[0]
+        lifted_blocks, points = SYMMETRIC_LIFTED, list(range(grid.points // 2))
+        dynamics_instants, muscle_columns, energy_factor = range(half), slice(0, 8), 2.0
+    else:
+        splines = [SplineBlock("coordinates", quartic_spline, sym("Cy", 5 * n, 9), "coordinates"),
+                   SplineBlock("stretch", cubic_spline, sym("Cs", 4 * n, 16), "tendon_stretch")]
+        durations_z, steps = sym("T", 8), sym("L", 2)
+        durations = durations_z * DURATION_SCALE_S
+        steps_r, steps_l = steps[0], steps[1]
+        lifted_blocks, points = FULL_LIFTED, list(range(grid.points))
+        dynamics_instants, muscle_columns, energy_factor = range(n_i), slice(0, 16), 1.0
     period, stride = ca.sum1(durations), steps_r + steps_l
     times = instant_times(grid, durations)
+    fractions = times / period
+
+    # lifted variables: block name → quantity → (rows × columns) values (variables × scale)
+    lifted_symbols, lifted = [], {}
+    for block, rows, quantities in lifted_blocks:
+        count = half if rows == "half" else n_i
+        q = sym(block, count, sum(c for _, c in quantities))
+        lifted_symbols.append(q)
+        start = 0
+        for name, cols in quantities:
+            lifted[(block, name)] = q[:, start:start + cols] * LIFTED_SCALE[name]
+            start += cols
+    phases = [int(p) + 1 for p in grid.phase]
+    widths = [len(contact.reaction_names[phases[j]]) for j in points]
+    lam_all = sym("R", sum(widths))
+    offsets = np.concatenate([[0], np.cumsum(widths)])
+    reactions = {j: lam_all[offsets[k]:offsets[k + 1]] * REACTION_SCALE_N for k, j in enumerate(points)}
+
     groups: dict[str, list] = {name: [] for name in (
         "continuity", "splines", "dynamics", "paths", "activation", "reactions", "moment", "contact", "unilateral",
-        "mtp", "friction", "clearance", "excitation", "speed", "shape")}
+        "mtp", "friction", "clearance", "excitation", "speed", "shape", "windows")}
     bounds: dict[str, list] = {name: [] for name in groups}
 
     def add(name, expression, low, high):
@@ -233,58 +312,124 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         groups[name].append(expression)
         bounds[name].append((np.broadcast_to(low, (k,)).astype(float), np.broadcast_to(high, (k,)).astype(float)))
 
-    # the segment coefficients form periodic splines (5.14–5.21, 5.22–5.23); Q's y, ẏ, ÿ, ŝ are their values
-    add("continuity", ca.DM(continuity_matrix(quartic_spline)) @ coordinates, 0.0, 0.0)
-    add("continuity", ca.DM(continuity_matrix(cubic_spline)) @ stretches, 0.0, 0.0)
-    segments = np.asarray(segments, int)
-    fractions = times / period
+    # every instant stays inside its window of segments: its polynomials are never extrapolated (a quartic's
+    # ÿ one segment beyond its node is off by 12·Δp4·τ²/Δt²); a solution pressing on a window's edge is
+    # re-solved with that window moved on (solve_windowed)
+    for key, spline, count, scale in (("cycle", quartic_spline, n_i, 1.0), ("half", None, half, 2.0)):
+        if key in segments:
+            intervals = (spline or _half_spline(layout)).intervals
+            k0 = np.asarray(segments[key], float)
+            add("windows", scale * fractions[:count] * intervals - ca.DM(k0), -float(reach), reach + 1.0)
+
+    # the segment coefficients form periodic splines (5.14–5.23); the lifted y, ẏ, ÿ, ŝ are their values
+    for b in splines:
+        add("continuity", ca.DM(continuity_matrix(b.spline)) @ b.coefficients, 0.0, 0.0)
+    drift = stride / period  # hip x: y1 = periodic + (ΔS/T)·t (notes §3 item 4)
+    spline_rows = {}  # (family, instant) → [y, ẏ, ÿ] or [ŝ] rows from the splines
+
+    def spline_values(b: SplineBlock, i: int, fraction, span, derivatives):
+        key = "half" if b.name == "trunk" else "cycle"
+        k = int(segments[key][i])
+        return [evaluate_window(b.spline, b.coefficients, span, fraction, (k - reach, k + reach), r)
+                for r in derivatives]
+
+    by_name = {b.name: b for b in splines}
     for i in range(n_i):
-        window = (int(segments[i]) - reach, int(segments[i]) + reach)
-        rows = [evaluate_window(quartic_spline, coordinates, period, fractions[i], window, r) for r in range(3)]
-        drift = stride / period  # hip x: y1 = periodic + (ΔS/T)·t (notes §3 item 4)
-        rows[0][0] += drift * times[i]
-        rows[1][0] += drift
-        rows.append(evaluate_window(cubic_spline, stretches, period, fractions[i], window, 0))
-        add("splines", q[i, :cols["stretch"].stop] - ca.horzcat(*rows) / ca.DM(qs[:cols["stretch"].stop]).T,
-            0.0, 0.0)
+        if symmetric:
+            leg = spline_values(by_name["leg"], i, fractions[i], period, range(3))
+            spline_rows[("leg", i)] = leg + spline_values(by_name["stretch"], i, fractions[i], period, (0,))
+            if i < half:
+                trunk = spline_values(by_name["trunk"], i, 2 * fractions[i], period / 2, range(3))
+                trunk[0][0] += drift * times[i]
+                trunk[1][0] += drift
+                spline_rows[("trunk", i)] = trunk
+        else:
+            rows = spline_values(by_name["coordinates"], i, fractions[i], period, range(3))
+            rows[0][0] += drift * times[i]
+            rows[1][0] += drift
+            spline_rows[("coordinates", i)] = rows + spline_values(by_name["stretch"], i, fractions[i], period, (0,))
+
+    def tie(block, i, rows, names):
+        for row, name in zip(rows, names):
+            add("splines", (lifted[(block, name)][i, :] - row) / LIFTED_SCALE[name], 0.0, 0.0)
+
+    for i in range(n_i):
+        if symmetric:
+            tie("Q", i, spline_rows[("leg", i)], ("y", "yd", "ydd", "stretch"))
+            if i < half:
+                tie("P", i, spline_rows[("trunk", i)], ("y", "yd", "ydd"))
+        else:
+            tie("Q", i, spline_rows[("coordinates", i)], ("y", "yd", "ydd", "stretch"))
+
+    # the full cycle's values at every instant (the symmetric model: left = right half a cycle later)
+    def full_rows(name):
+        if not symmetric:
+            return [lifted[("Q", name)][i, :].T for i in range(n_i)]
+        out = []
+        for i in range(n_i):
+            right, left = lifted[("Q", name)][i, :].T, lifted[("Q", name)][(i + half) % n_i, :].T
+            if name in ("y", "yd", "ydd"):
+                trunk = lifted[("P", name)][i % half, :].T
+                if name == "y" and i >= half:
+                    trunk = trunk + ca.vertcat(stride / 2, 0, 0)  # y1(t + T/2) = y1(t) + ΔS/2
+                out.append(ca.vertcat(trunk, right, left))
+            else:
+                out.append(ca.vertcat(right, left))
+        return out
+
+    value = {name: full_rows(name) for name in ("y", "yd", "ydd", "stretch", "l_m", "v_m", "a")}
+    if symmetric:
+        rhs = [lifted[("P", "rhs")][i % half, :].T if i < half else _mirror(lifted[("P", "rhs")][i % half, :].T)
+               for i in range(n_i)]
+    else:
+        rhs = [lifted[("Q", "rhs")][i, :].T for i in range(n_i)]
     f_max = np.tile(np.asarray(params.max_isometric_force_N), 2)
-    forces = ca.repmat(ca.DM(f_max).T, n_i, 1) * value["stretch"] ** 2  # F = F_max·ŝ² (2.19)
+    forces = [ca.DM(f_max) * value["stretch"][i] ** 2 for i in range(n_i)]  # F = F_max·ŝ² (2.19)
+    for i in dynamics_instants:
+        y, yd, ydd = value["y"][i], value["yd"][i], value["ydd"][i]
+        physics = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.passive(y, yd)
+                   - muscles.moment_arms(y) @ forces[i])
+        add("dynamics", (rhs[i] - physics) / LIFTED_SCALE["rhs"], 0.0, 0.0)
     for i in range(n_i):
-        y, yd, ydd = (value[name][i, :].T for name in ("y", "yd", "ydd"))
-        f = forces[i, :].T
-        rhs = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.passive(y, yd)
-               - muscles.moment_arms(y) @ f)
-        add("dynamics", (value["rhs"][i, :].T - rhs) / qs[cols["rhs"]], 0.0, 0.0)
-        add("paths", value["l_m"][i, :].T - muscles.lengths(y), 0.0, 0.0)
-        add("paths", value["v_m"][i, :].T - muscles.velocities(y, yd), 0.0, 0.0)
-    # the muscles: tendon from ŝ, its rate by the unequal-step differences, the activation that makes F
+        y, yd = value["y"][i], value["yd"][i]
+        add("paths", value["l_m"][i][muscle_columns] - muscles.lengths(y)[muscle_columns], 0.0, 0.0)
+        add("paths", value["v_m"][i][muscle_columns] - muscles.velocities(y, yd)[muscle_columns], 0.0, 0.0)
+
+    # the muscles (one leg's 8 per evaluation): tendon from ŝ, rates by the unequal-step differences, the
+    # activation that makes F, excitation bounds, metabolic rates
+    def matrix(name):
+        return ca.horzcat(*value[name]).T  # (I × 16)
+
+    stretch_m, a_m = matrix("stretch"), matrix("a")
+    force_m = ca.horzcat(*forces).T
     slack = np.tile(np.asarray(params.tendon_slack_length_m), 2)
-    l_se = ca.repmat(ca.DM(slack).T, n_i, 1) * (1 + params.tendon_strain_at_max_force * value["stretch"])
+    l_se = ca.repmat(ca.DM(slack).T, n_i, 1) * (1 + params.tendon_strain_at_max_force * stretch_m)
     v_se = periodic_derivative(l_se, times, period)
-    a = value["a"]
-    adot = periodic_derivative(a, times, period)
-    rate = []
-    for k in (0, 1):
-        c = slice(8 * k, 8 * k + 8)
-        args = (forces[:, c].T, v_se[:, c].T, value["l_m"][:, c].T, value["v_m"][:, c].T)
-        add("activation", a[:, c] - muscles.muscle.activation_from_force(*args).T, 0.0, 0.0)
-        l_ce, v_ce = muscles.muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, args[2], args[3])
-        u = muscles.muscle.excitation(a[:, c].T, adot[:, c].T)
-        f_ce = forces[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, n_i)
-        rate.append(transcriber.metabolic(u, a[:, c].T, l_ce, v_ce, f_ce).T)
+    adot = periodic_derivative(a_m, times, period)
     t1 = np.tile(np.asarray(params.activation_t1_per_s), 2)
     t2 = np.tile(np.asarray(params.activation_t2_per_s), 2)
-    T1, T2 = ca.repmat(ca.DM(t1).T, n_i, 1), ca.repmat(ca.DM(t2).T, n_i, 1)
+    rate = []
+    for k in range(muscle_columns.stop // 8):
+        c = slice(8 * k, 8 * k + 8)
+        args = (force_m[:, c].T, v_se[:, c].T, matrix("l_m")[:, c].T, matrix("v_m")[:, c].T)
+        add("activation", a_m[:, c] - muscles.muscle.activation_from_force(*args).T, 0.0, 0.0)
+        l_ce, v_ce = muscles.muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, args[2], args[3])
+        u = muscles.muscle.excitation(a_m[:, c].T, adot[:, c].T)
+        f_ce = force_m[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, n_i)
+        rate.append(transcriber.metabolic(u, a_m[:, c].T, l_ce, v_ce, f_ce).T)
+        T1, T2 = ca.repmat(ca.DM(t1[c]).T, n_i, 1), ca.repmat(ca.DM(t2[c]).T, n_i, 1)
+        add("excitation", adot[:, c] + T2 * a_m[:, c], 0.0, np.inf)
+        add("excitation", (1 - a_m[:, c]) * (T1 + T2) - adot[:, c], 0.0, np.inf)
 
     # per control point: reactions, moment error, contact, ground forces, clearance
-    foot_forces = []  # per control point: (f_x, f_z) of each foot, N
+    foot_forces = {}  # point → side → (f_x, f_z), N
     joint_map_pinv = ca.DM(transcriber.joint_map_pinv)
-    for j, phase in enumerate(phases):
-        i = int(grid.instant[j])
-        y = value["y"][i, :].T + (ca.DM([1.0] + [0.0] * 8) * stride if grid.wraps[j] else 0)
+    for j in points:
+        phase, i = phases[j], int(grid.instant[j])
+        y = value["y"][i] + (ca.DM([1.0] + [0.0] * 8) * stride if grid.wraps[j] else 0)
         G = contact.reaction_matrix[phase](y)
         lam = reactions[j]
-        e = value["rhs"][i, :].T - G @ lam
+        e = rhs[i] - G @ lam
         add("reactions", G.T @ e / REACTION_SCALE_N, 0.0, 0.0)
         add("moment", joint_map_pinv @ e, -s.moment_tolerance_Nm, s.moment_tolerance_Nm)
         add("contact", contact.constraint[phase](y, steps_r, steps_l, 0.0), -s.contact_tolerance_m,
@@ -295,7 +440,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
             fx = sum((lam[k] for k, name in enumerate(names) if name.endswith(f"_{side}_fx_N")), ca.SX(0))
             fz = sum((lam[k] for k, name in enumerate(names) if name.endswith(f"_{side}_fz_N")), ca.SX(0))
             feet[side] = (fx, fz)
-        foot_forces.append(feet)
+        foot_forces[j] = feet
         for k, name in enumerate(names):
             if name.endswith("_fz_N"):
                 add("unilateral", lam[k], 0.0, np.inf)
@@ -303,31 +448,33 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
                 add("mtp", lam[k], *s.mtp_moment_Nm)
         for side in feet_in_contact(phase):
             add("friction", ca.vertcat(*friction(*feet[side], s.friction_coefficient)), -np.inf, 0.0)
-        points = dict(zip(model.point_names, model.points(y)))
+        heights = dict(zip(model.point_names, model.points(y)))
         for point in ("heel_r", "mtp_r", "heel_l", "mtp_l"):
             if phase in clearance_phases(point):
-                add("clearance", points[point][1], s.clearance_m, np.inf)
-    add("excitation", adot + T2 * a, 0.0, np.inf)
-    add("excitation", (1 - a) * (T1 + T2) - adot, 0.0, np.inf)
+                add("clearance", heights[point][1], s.clearance_m, np.inf)
     add("speed", period - stride / s.speed_m_s, 0.0, 0.0)
     for name, (index, shape_phases, minimum) in GAIT_SHAPE.items():
-        chosen = [int(grid.instant[j]) for j in range(grid.points) if phases[j] in shape_phases]
-        add("shape", smooth_max(ca.vertcat(*[value["y"][i, index] for i in sorted(set(chosen))])), minimum, np.inf)
+        chosen = sorted({int(grid.instant[j]) for j in range(grid.points) if phases[j] in shape_phases})
+        add("shape", smooth_max(ca.vertcat(*[value["y"][i][index] for i in chosen])), minimum, np.inf)
 
     # cost: Et (5.27) and Jdev (5.28) at the instants
-    et = cost_of_transport(ca.horzcat(*rate), times, period, stride)
+    et = energy_factor * cost_of_transport(ca.horzcat(*rate), times, period, stride)
     mass = model.total_mass_kg
-    rows = []
+    deviation_rows = []
     for i, j in enumerate(grid.instant_points):
-        yi = value["y"][i, :]
-        angles = [*walker_joint_angles(yi[2], yi[3], yi[4], yi[5]), *walker_joint_angles(yi[2], yi[6], yi[7], yi[8])]
-        feet = foot_forces[int(j)]
-        forces_i = [feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1]]
-        rows.append(ca.horzcat(*[ang * 180 / np.pi for ang in angles], *[f / mass for f in forces_i]))
-    pct = 100 * times / period
+        y = value["y"][i]
+        angles = [*walker_joint_angles(y[2], y[3], y[4], y[5]), *walker_joint_angles(y[2], y[6], y[7], y[8])]
+        if int(j) in foot_forces:
+            feet = foot_forces[int(j)]
+        else:  # the symmetric model's second half: the first half's forces, sides swapped
+            mirrored = foot_forces[int(grid.instant_points[i - half])]
+            feet = {"r": mirrored["l"], "l": mirrored["r"]}
+        ground = [feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1]]
+        deviation_rows.append(ca.horzcat(*[angle * 180 / np.pi for angle in angles], *[f / mass for f in ground]))
+    pct = 100 * fractions
     means = ca.horzcat(*[f(pct) for f in _interpolants(reference.mean)])
     sds = ca.horzcat(*[f(pct) for f in _interpolants(reference.sd)])
-    jdev = deviation(ca.vertcat(*rows), means, sds, times, period)
+    jdev = deviation(ca.vertcat(*deviation_rows), means, sds, times, period)
     cost = objective(et, jdev, s.weights)
 
     exprs, lows, highs, slices, start = [], [], [], {}, 0
@@ -340,82 +487,145 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         highs += [b[1] for b in bounds[name]]
         slices[name] = slice(start, start + block.size1())
         start += block.size1()
-    low, high = box_bounds(transcriber)
-    blocks_low, blocks_high = transcriber.layout.unpack(low), transcriber.layout.unpack(high)
-    spline_low, spline_high = [], []
-    for name, spline, columns in (("coordinates", quartic_spline, 9), ("tendon_stretch", cubic_spline, 16)):
-        width = spline.degree + 1
-        lo, hi = np.full((width * n, columns), -np.inf), np.full((width * n, columns), np.inf)
-        lo[0::width], hi[0::width] = blocks_low[name], blocks_high[name]  # the nodal values p_{k,0} (5.13)
-        spline_low.append(lo.ravel(order="F"))
-        spline_high.append(hi.ravel(order="F"))
-    spline_low += [blocks_low["durations"].ravel() / DURATION_SCALE_S, blocks_low["steps"].ravel()]
-    spline_high += [blocks_high["durations"].ravel() / DURATION_SCALE_S, blocks_high["steps"].ravel()]
-    q_low, q_high = np.full((n_i, LIFTED_COLUMNS), -np.inf), np.full((n_i, LIFTED_COLUMNS), np.inf)
-    q_low[:, cols["stretch"]] = 0.0  # ŝ ≥ 0: a taut or just slack tendon (§3 item 18)
-    q_low[:, cols["a"]], q_high[:, cols["a"]] = 0.0, 1.0
-    n_l = lam_all.size1()
-    w = ca.vertcat(ca.vec(coordinates), ca.vec(stretches), durations_z, steps, ca.vec(q), lam_all)
+
+    # bounds: nodal values p_{k,0}, durations and steps as box_bounds; ŝ ≥ 0, 0 ≤ a ≤ 1
+    low, high = box_bounds(layout)
+    blocks_low, blocks_high = layout.unpack(low), layout.unpack(high)
+    lbw, ubw = [], []
+    for b in splines:
+        width = b.spline.degree + 1
+        lo, hi = np.full(b.coefficients.shape, -np.inf), np.full(b.coefficients.shape, np.inf)
+        lo[0::width], hi[0::width] = blocks_low[b.design_block], blocks_high[b.design_block]
+        lbw.append(lo.ravel(order="F"))
+        ubw.append(hi.ravel(order="F"))
+    lbw += [blocks_low["durations"].ravel() / DURATION_SCALE_S, blocks_low["steps"].ravel()]
+    ubw += [blocks_high["durations"].ravel() / DURATION_SCALE_S, blocks_high["steps"].ravel()]
+    for (block, rows, quantities), q in zip(lifted_blocks, lifted_symbols):
+        lo, hi = [], []
+        for name, cols in quantities:
+            lo.append(np.full((q.size1(), cols), 0.0 if name in ("stretch", "a") else -np.inf))
+            hi.append(np.full((q.size1(), cols), 1.0 if name == "a" else np.inf))
+        lbw.append(np.hstack(lo).ravel(order="F"))
+        ubw.append(np.hstack(hi).ravel(order="F"))
+    lbw.append(np.full(lam_all.size1(), -np.inf))
+    ubw.append(np.full(lam_all.size1(), np.inf))
+
+    head = ca.vertcat(*[ca.vec(b.coefficients) for b in splines], durations_z, steps)
+    full_values = []
+    for r, name in enumerate(("y", "yd", "ydd")):
+        if symmetric:
+            rows = []
+            for i in range(n_i):
+                trunk = spline_rows[("trunk", i % half)][r]
+                if r == 0 and i >= half:
+                    trunk = trunk + ca.horzcat(stride / 2, 0, 0)
+                rows.append(ca.horzcat(trunk, spline_rows[("leg", i)][r], spline_rows[("leg", (i + half) % n_i)][r]))
+        else:
+            rows = [spline_rows[("coordinates", i)][r] for i in range(n_i)]
+        full_values.append(ca.vertcat(*rows))
+    if symmetric:
+        full_values.append(ca.vertcat(*[ca.horzcat(spline_rows[("leg", i)][3], spline_rows[("leg", (i + half) % n_i)][3])
+                                        for i in range(n_i)]))
+    else:
+        full_values.append(ca.vertcat(*[spline_rows[("coordinates", i)][3] for i in range(n_i)]))
+    values = ca.Function("gait_values", [head], [durations, steps_r, steps_l, *full_values])
+    w = ca.vertcat(head, *[ca.vec(q) for q in lifted_symbols], lam_all)
     return NLP(w=w, cost=cost, constraints=ca.vertcat(*exprs), lbg=np.concatenate(lows), ubg=np.concatenate(highs),
-               groups=slices, lbw=np.concatenate([*spline_low, q_low.ravel(order="F"), np.full(n_l, -np.inf)]),
-               ubw=np.concatenate([*spline_high, q_high.ravel(order="F"), np.full(n_l, np.inf)]),
-               transcriber=transcriber, segments=segments, reach=reach, parts={"Et": et, "Jdev": jdev})
+               groups=slices, lbw=np.concatenate(lbw), ubw=np.concatenate(ubw), transcriber=transcriber,
+               layout=layout, splines=splines, segments=segments, reach=reach, values=values,
+               lifted=lifted_blocks, parts={"Et": et, "Jdev": jdev})
 
 
-def initial_guess(transcriber: Transcriber, reference: Reference,
-                  settings: PredictSettings | None = None) -> np.ndarray:
+def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
+                  symmetric: bool = False) -> np.ndarray:
     """χ from the reference's angles (HAT upright), a hip height that puts the standing foot on the floor,
     phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1)."""
     s = settings or PredictSettings()
-    layout, p = transcriber.layout, transcriber.model.params
+    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
+    p = transcriber.model.params
     n = layout.nodes - 1
     pct = 100 * np.arange(n) / n
     mean = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[:, k]) for k in range(len(VARIABLES))])
     rad = np.radians
     hip_flex_r, knee_r, dorsi_r, hip_flex_l, knee_l, dorsi_l = (mean[:, VARIABLES.index(v)] for v in VARIABLES[:6])
     leg = p.limb.thigh_length_m + p.limb.shank_length_m + p.contact_below_ankle_m
-    coordinates = np.column_stack([np.zeros(n), np.full(n, 0.97 * leg), np.zeros(n),
-                                   -rad(hip_flex_r), rad(knee_r), -rad(dorsi_r),
-                                   -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
+    right = [-rad(hip_flex_r), rad(knee_r), -rad(dorsi_r)]
     step = 0.62  # m: about half of a 1.24 m stride at the dissertation's subject 1's speed
     half = step / s.speed_m_s  # s: half a cycle
-    durations = np.array([0.07, 0.13, 0.55, 0.25] * 2) * half
+    phases = np.array([0.07, 0.13, 0.55, 0.25]) * half
+    if symmetric:
+        n_h = layout.blocks["trunk"][1]
+        trunk = np.column_stack([np.zeros(n_h), np.full(n_h, 0.97 * leg), np.zeros(n_h)])
+        return layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
+                            "right_stretch": np.full((n, 8), np.sqrt(0.1)), "durations": phases, "steps": [step]})
+    coordinates = np.column_stack([np.zeros(n), np.full(n, 0.97 * leg), np.zeros(n), *right,
+                                   -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
     return layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), np.sqrt(0.1)),
-                        "durations": durations,
-                        "steps": [step, step]})
+                        "durations": np.tile(phases, 2), "steps": [step, step]})
 
 
 def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
-          options: dict | None = None) -> dict:
-    """IPOPT with exact derivatives (Hessian included) from χ ``x0`` (or the whole ``w0``); returns χ, w, the
-    status, iterations and cost. ``options``: further IPOPT/CasADi options."""
+          multipliers: dict | None = None, options: dict | None = None) -> dict:
+    """IPOPT with exact derivatives (Hessian included) from χ ``x0`` (or the whole ``w0``, and IPOPT's
+    ``multipliers`` of an earlier solve for a warm start); returns χ, w, the multipliers, the status,
+    iterations and cost. ``options``: further IPOPT/CasADi options."""
     s = settings or PredictSettings()
     problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints}
     opts = {"print_time": False, "ipopt.print_level": s.print_level, "ipopt.sb": "yes",
             "ipopt.max_iter": s.max_iterations, "ipopt.tol": s.tolerance, "ipopt.mu_strategy": "adaptive",
             "ipopt.mumps_pivot_order": 5}  # METIS: the fastest ordering measured on this KKT system
+    if multipliers:
+        opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
+                     "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9})
     opts.update(options or {})
     solver = ca.nlpsol("predict", "ipopt", problem, opts)
     start = nlp.start(x0) if w0 is None else w0
-    result = solver(x0=start, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg)
+    extra = {"lam_g0": multipliers["lam_g"], "lam_x0": multipliers["lam_x"]} if multipliers else {}
+    result = solver(x0=start, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, **extra)
     stats = solver.stats()
     w = np.array(result["x"]).ravel()
     return {"x": nlp.design(w), "w": w, "status": stats.get("return_status", ""),
+            "multipliers": {"lam_g": np.array(result["lam_g"]).ravel(), "lam_x": np.array(result["lam_x"]).ravel()},
             "success": bool(stats.get("success")), "iterations": int(stats.get("iter_count", -1)),
             "cost": float(result["f"])}
 
 
+def moved_windows(nlp: NLP, multipliers: dict, threshold: float = 1e-8) -> dict | None:
+    """The segments with every window whose edge an instant presses on (a non-zero multiplier of its
+    ``windows`` row) moved one segment that way; ``None`` when no window binds (a solution of the
+    problem without windows)."""
+    lam = multipliers["lam_g"][nlp.groups["windows"]]
+    moved, start, changed = {}, 0, False
+    for key in ("cycle", "half"):
+        if key not in nlp.segments:
+            continue
+        k = np.asarray(nlp.segments[key], int)
+        step = np.where(lam[start:start + k.size] > threshold, 1, np.where(lam[start:start + k.size] < -threshold,
+                                                                              -1, 0))
+        intervals = (nlp.transcriber.quartic if key == "cycle" else _half_spline(nlp.layout)).intervals
+        moved[key] = np.clip(k + step, 0, intervals - 1)
+        changed |= bool(np.any(moved[key] != k))
+        start += k.size
+    return moved if changed else None
+
+
 def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarray,
-                   settings: PredictSettings | None = None, *, rounds: int = 4, options: dict | None = None) -> dict:
-    """:func:`solve` with the spline windows placed where ``x0`` puts the instants, re-placed and re-solved
-    from the last solution while a solution's instants leave their windows (at most ``rounds`` solves).
-    Adds ``rounds`` (solves made) and ``windows_hold`` to the result."""
-    x, w, total = x0, None, 0
+                   settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
+                   options: dict | None = None) -> dict:
+    """:func:`solve` with the spline windows placed where ``x0`` puts the instants; while a solution presses on
+    a window's edge, that window moves on and the problem is solved again from the last solution (warm, with
+    its multipliers; at most ``rounds`` solves). Adds ``rounds``, ``windows_hold`` (no window binds) and the last
+    ``nlp``."""
+    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
+    segments = instant_segments(transcriber, layout, x0)
+    x, w, multipliers, total = x0, None, None, 0
     for k in range(1, rounds + 1):
-        nlp = build_nlp(transcriber, reference, settings, segments=instant_segments(transcriber, x))
-        result = solve(nlp, x, settings, w0=w, options=options)
+        nlp = build_nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
+        result = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options)
         total += result["iterations"]
-        x, w = result["x"], result["w"]
-        if nlp.segments_hold(x):
+        x, w, multipliers = result["x"], result["w"], result["multipliers"]
+        segments = moved_windows(nlp, multipliers)
+        multipliers["lam_g"][nlp.groups["windows"]] = 0.0  # the moved windows no longer bind
+        if segments is None or not result["success"]:
             break
-    return {**result, "iterations": total, "rounds": k, "windows_hold": nlp.segments_hold(x)}
+    return {**result, "iterations": total, "rounds": k, "windows_hold": segments is None, "nlp": nlp}

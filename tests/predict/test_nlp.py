@@ -1,5 +1,7 @@
 """The predictive-gait NLP (gaitcli/predict/nlp.py): the constraint groups' sizes follow the grid and the phase
-table, the default initial guess lies inside the box bounds, and the cost parts evaluate to finite values."""
+table; the lifted variables of a design vector solve the NLP's own defining equations (two implementations
+of the same quantities agree); the symmetric model's gait is symmetric to round-off; windows move only
+where a solution presses on them."""
 
 from __future__ import annotations
 
@@ -8,63 +10,97 @@ import numpy as np
 import pytest
 
 from gaitcli.predict.contact import PHASE_TABLE
-from gaitcli.predict.nlp import LIFTED_COLUMNS, build_nlp, initial_guess
+from gaitcli.predict.nlp import box_bounds, build_nlp, initial_guess, moved_windows
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
 from gaitcli.resources import bundled_reference
 
+DEFINING = ("continuity", "splines", "dynamics", "paths", "activation", "reactions")
+
 
 @pytest.fixture(scope="module")
-def built():
-    transcriber = Transcriber(18)
-    reference = read_reference(bundled_reference())
-    return transcriber, reference, build_nlp(transcriber, reference)
+def transcriber():
+    return Transcriber(18)
 
 
-def test_group_sizes(built):
-    transcriber, _, nlp = built
+@pytest.fixture(scope="module")
+def reference():
+    return read_reference(bundled_reference())
+
+
+@pytest.fixture(scope="module", params=[False, True], ids=["full", "symmetric"])
+def built(request, transcriber, reference):
+    symmetric = request.param
+    return symmetric, build_nlp(transcriber, reference, symmetric=symmetric)
+
+
+def test_group_sizes(transcriber, built):
+    symmetric, nlp = built
     grid = transcriber.grid
-    phases = [int(p) + 1 for p in grid.phase]
+    share = 2 if symmetric else 1  # the symmetric model states the first half cycle only
+    points = range(grid.points // share)
+    phases = [int(grid.phase[j]) + 1 for j in points]
     rows = [len(PHASE_TABLE[p - 1].rows) for p in phases]
     widths = [len(transcriber.contact.reaction_names[p]) for p in phases]
     sizes = {k: v.stop - v.start for k, v in nlp.groups.items()}
-    assert sizes["splines"] == (27 + 16) * grid.instants
-    assert sizes["dynamics"] == 9 * grid.instants
-    assert sizes["paths"] == 32 * grid.instants and sizes["activation"] == 16 * grid.instants
+    muscles = 16 // share
+    assert sizes["dynamics"] == 9 * grid.instants // share
+    assert sizes["paths"] == 2 * muscles * grid.instants and sizes["activation"] == muscles * grid.instants
     assert sizes["reactions"] == sum(widths)  # one normal equation per reaction and point
-    assert sizes["moment"] == 6 * grid.points  # 480
+    assert sizes["moment"] == 6 * len(points)  # 480 full
     assert sizes["contact"] == sum(rows)
     assert sizes["unilateral"] == sum(sum(1 for _, axis, _ in PHASE_TABLE[p - 1].rows if axis == "z") for p in phases)
     assert sizes["mtp"] == sum(1 for p in phases if PHASE_TABLE[p - 1].mtp_moment_side)
-    assert sizes["excitation"] == 2 * 16 * grid.instants  # the two ȧ bounds per muscle and instant
+    assert sizes["excitation"] == 2 * muscles * grid.instants  # the two ȧ bounds per muscle and instant
     assert sizes["speed"] == 1 and sizes["shape"] == 4
     assert nlp.constraints.size1() == len(nlp.lbg) == len(nlp.ubg) == sum(sizes.values())
-    assert nlp.w.size1() == (5 * 9 + 4 * 16) * 17 + 10 + LIFTED_COLUMNS * grid.instants + sum(widths)
-    assert sizes["continuity"] == (4 * 9 + 3 * 16) * 17
+    assert nlp.layout.size == (219 if symmetric else 435)
 
 
-def test_lifted_start_solves_the_defining_equations(built):
-    # w from the transcription of χ (problem.py, λ by the pseudoinverse) satisfies the lifted NLP's own
-    # equations: two implementations of the same quantities agree
-    transcriber, reference, nlp = built
-    x0 = initial_guess(transcriber, reference)
+def test_lifted_start_solves_the_defining_equations(transcriber, reference, built):
+    # w from the numeric transcription of χ (problem.py, λ by the pseudoinverse) satisfies the lifted NLP's own
+    # equations, and its moment errors are the transcription's
+    symmetric, nlp = built
+    x0 = initial_guess(transcriber, reference, symmetric=symmetric)
     w0 = nlp.start(x0)
+    np.testing.assert_allclose(nlp.design(w0), x0, atol=1e-12)  # χ → w → χ
     g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w0)).ravel()
-    for name in ("continuity", "splines", "dynamics", "paths", "activation", "reactions"):
+    for name in DEFINING:
         assert np.abs(g[nlp.groups[name]]).max() < 1e-9, name
-    t = transcriber(x0)
-    np.testing.assert_allclose(g[nlp.groups["moment"]], np.concatenate(t.moment_error_Nm), atol=1e-9)
-
-
-def test_initial_guess_is_inside_the_box_and_evaluates(built):
-    transcriber, reference, nlp = built
-    x0 = initial_guess(transcriber, reference)
-    w0 = nlp.start(x0)
+    t = transcriber.at(*nlp.gait(w0))
+    half = transcriber.grid.points // 2 if symmetric else transcriber.grid.points
+    np.testing.assert_allclose(g[nlp.groups["moment"]], np.concatenate(t.moment_error_Nm[:half]), atol=1e-9)
     assert np.all(w0 >= nlp.lbw) and np.all(w0 <= nlp.ubw)
-    f = ca.Function("f", [nlp.w], [nlp.cost, nlp.parts["Et"], nlp.parts["Jdev"], nlp.constraints])
-    cost, et, jdev, g = (np.array(v).ravel() for v in f(w0))
-    assert np.isfinite(cost).all() and np.isfinite(g).all()
-    assert 100 < et.item() < 2000  # J/m: a walking order of magnitude from 10 % F_max everywhere
-    assert jdev.item() > 0
-    speed = np.array(g)[nlp.groups["speed"]]
-    assert abs(float(speed[0])) < 1e-12  # the guess walks at the set speed: T = (L_r + L_l)/v
+    f = ca.Function("f", [nlp.w], [nlp.cost, nlp.parts["Et"], nlp.parts["Jdev"]])
+    cost, et, jdev = (float(v) for v in f(w0))
+    assert np.isfinite(cost) and 100 < et < 2000 and jdev > 0  # J/m: a walking order of magnitude at 10 % F_max
+    assert abs(g[nlp.groups["speed"]][0]) < 1e-12  # the guess walks at the set speed: T = (L_r + L_l)/v
+
+
+def test_symmetric_gait_is_symmetric_to_round_off(transcriber, reference):
+    # the full transcription of a symmetric design: the second half cycle is the first with the legs swapped,
+    # so every contact-dependent quantity of phase p + 4 equals phase p's mirrored
+    nlp = build_nlp(transcriber, reference, symmetric=True)
+    rng = np.random.default_rng(0)
+    x = initial_guess(transcriber, reference, symmetric=True)
+    x = np.clip(x + 0.01 * rng.normal(size=x.size), *box_bounds(nlp.layout))
+    t = transcriber.at(*nlp.gait(nlp.start(x)))
+    half = transcriber.grid.points // 2
+    for j in range(half):
+        first, second = t.moment_error_Nm[j], t.moment_error_Nm[j + half]
+        np.testing.assert_allclose(second, np.concatenate([first[3:], first[:3]]), atol=1e-9)
+        np.testing.assert_allclose(np.sort(t.reactions[j + half]), np.sort(t.reactions[j]), atol=1e-6)
+    instants = transcriber.grid.instants // 2
+    np.testing.assert_allclose(t.metabolic_rate_W[instants:, 8:], t.metabolic_rate_W[:instants, :8], rtol=1e-9)
+
+
+def test_windows_move_only_where_a_solution_presses_on_them(built):
+    _, nlp = built
+    lam_g = np.zeros(nlp.constraints.size1())
+    assert moved_windows(nlp, {"lam_g": lam_g}) is None
+    rows = nlp.groups["windows"]
+    lam_g[rows.start + 3], lam_g[rows.start + 5] = 1e-3, -1e-3  # instant 3 presses forward, instant 5 back
+    moved = moved_windows(nlp, {"lam_g": lam_g})
+    before = nlp.segments["cycle"]
+    assert moved["cycle"][3] == before[3] + 1 and moved["cycle"][5] == max(before[5] - 1, 0)
+    assert np.array_equal(np.delete(moved["cycle"], [3, 5]), np.delete(before, [3, 5]))

@@ -1,0 +1,62 @@
+"""``gait predict`` as a command: bad options and files are one line and exit 2 with nothing written; an
+optimization stopped early (``--max-iterations``) writes every output with ``converged: false``, exits 3 and
+names the violated constraint groups; ``gait predict TRIAL`` takes that trial's subject and reference."""
+
+from __future__ import annotations
+
+import json
+
+import h5py
+import numpy as np
+import pandas as pd
+
+from .conftest import copy_sample, gait_many
+
+PREDICT_FILES = ("motion.csv", "grf.csv", "moments.csv", "muscles.csv", "predict.h5", "summary.json")
+#: DESIGN.md's summary.json keys of the predict stage
+PREDICT_SUMMARY_KEYS = ("speed_m_s", "cost_of_transport_J_per_m", "deviation", "objective", "weights",
+                        "max_moment_error_Nm", "max_contact_error_m", "min_excitation", "max_excitation",
+                        "converged", "iterations", "solve_time_s")
+
+
+def test_bad_options_and_files_exit_2_naming_them(tmp_path):
+    (tmp_path / "ref.csv").write_text("cycle_pct,hip_r_flexion_deg_mean\n0,1\n100,1\n")
+    cases = {"odd nodes": (("--nodes", "17"), "--nodes: got 17"),
+             "weights": (("--weights", "1,2"), "--weights: got 1,2"),
+             "speed": (("--speed", "0"), "--speed"),
+             "reference": (("--reference", "ref.csv"), "ref.csv: hip_r_flexion_deg_sd: missing column"),
+             "init": (("--init", "none.h5"), "none.h5: --init: file not found")}
+    runs = gait_many({name: (("predict", *args, "-o", "out"), tmp_path) for name, (args, _) in cases.items()})
+    for name, (_, expected) in cases.items():
+        run = runs[name]
+        assert run.returncode == 2 and len(run.stderr_lines) == 1, run.describe()
+        assert expected in run.stderr, run.describe()
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_unconverged_prediction_writes_everything_and_exits_3(tmp_path):
+    copy_sample("normal", tmp_path / "normal")
+    runs = gait_many({"default": (("predict", "--nodes", "8", "--max-iterations", "2", "-o", "out"), tmp_path),
+                      "trial": (("predict", "normal", "--nodes", "8", "--max-iterations", "1", "--no-symmetric"),
+                                tmp_path)}, workers=2)
+    for name, folder in (("default", tmp_path / "out" / "predict"),
+                         ("trial", tmp_path / "normal" / "gait_out" / "predict")):
+        run = runs[name]
+        assert run.returncode == 3, run.describe()
+        assert "did not converge" in run.stderr and "violated: " in run.stderr and "moment by" in run.stderr
+        assert all((folder / f).is_file() for f in PREDICT_FILES), sorted(p.name for p in folder.iterdir())
+        summary = json.loads((folder / "summary.json").read_text())
+        assert set(PREDICT_SUMMARY_KEYS) <= set(summary) and summary["converged"] is False
+        assert summary["violations"]["moment"] > 2.0  # the guess's moment error, far beyond εm = 2 N·m
+        motion = pd.read_csv(folder / "motion.csv")
+        assert motion.columns[0] == "time_s" and len(motion) == 72
+        with h5py.File(folder / "predict.h5", "r") as h5:
+            assert h5.attrs["converged"] == 0 and "result/design" in h5
+            design = np.asarray(h5["result/design"][()])
+        assert design.size == (11 * 7 + 3 * 5 + 5 if name == "default" else 25 * 7 + 10)
+    # the trial's own subject (55 kg) and reference, and its idyn made on the way
+    trial_summary = json.loads((tmp_path / "normal" / "gait_out" / "predict" / "summary.json").read_text())
+    assert trial_summary["symmetric"] is False
+    assert (tmp_path / "normal" / "gait_out" / "idyn" / "idyn.h5").is_file()
+    with h5py.File(tmp_path / "normal" / "gait_out" / "predict" / "predict.h5", "r") as h5:
+        assert abs(float(h5["result/body_mass_kg"][()]) - 55.0) < 0.5
