@@ -189,9 +189,10 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
                    "subject 1, 73.0 kg, 1.792 m).")
 @click.option("--init", "init", type=click.Path(path_type=Path, dir_okay=False),
               help="Start from the solution in an earlier predict.h5 (same --nodes and --symmetric).")
+@click.option("--no-plots", "no_plots", is_flag=True, help="Skip the figures (plots/).")
 @click.pass_obj
 def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, symmetric, max_iterations, reference,
-                    subject, init):
+                    subject, init, no_plots):
     """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
     from gaitcli.pipeline import predict_trial
 
@@ -200,7 +201,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
         "max_iterations": max_iterations}.items() if v is not None})
     with console.progress() as progress:
         outcome = predict_trial(trial, cfg, out=out, reference_path=reference, subject_path=subject,
-                                init_path=init, progress=progress)
+                                init_path=init, progress=progress, plots=not no_plots)
     console.summaries["predict"] = outcome.summary
     console.info(f"predict: wrote {outcome.folder}")
     console.print_json("predict")

@@ -260,7 +260,8 @@ def _read_init(path: Path):
 
 def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference_path: Path | None = None,
                   subject_path: Path | None = None, init_path: Path | None = None,
-                  progress: ProgressCallback = no_progress, pipeline: PipelineConfig | None = None) -> PredictOutcome:
+                  progress: ProgressCallback = no_progress, pipeline: PipelineConfig | None = None,
+                  plots: bool = True) -> PredictOutcome:
     """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`), write
     ``OUT/predict/`` whole (``report.predict_outputs``) with its ``summary.json``.
 
@@ -323,6 +324,12 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     with stage_folder(target) as tmp:
         summary = write_predict_outputs(tmp, result, attrs)
         write_json(tmp / "summary.json", summary)
+        if plots:
+            from gaitcli.report.predict_plots import predict_figures
+
+            progress(Progress("predict", "figures", 0, 1))
+            predict_figures(tmp / "predict.h5", tmp / "plots", title=folder.folder.name if folder else "subject 1")
+            progress(Progress("predict", "figures", 1, 1))
     message = ""
     if not result.converged:
         bad = violated_groups(result.violations)

@@ -65,6 +65,8 @@ class PredictResult:
     ``joint_moments_Nm`` (P, 6) from inverse dynamics with the ground reactions λ and
     ``muscle_moments_Nm`` (P, 6) from muscles and passive structures (5.49–5.51), joint senses of
     ``clinical_angles_deg``; ``moment_error_Nm`` (P, 6) B⁺e; ``contact_error_m`` (P,) the largest |c_ph|.
+    ``points_m`` (I, n, 2): x, z of the model's ``point_names`` (hip, HAT CoM, knees, ankles, heels, MTPs);
+    ``reference_mean``/``reference_sd`` (101, 10): the reference the deviation was measured against.
     """
 
     speed_m_s: float
@@ -91,6 +93,10 @@ class PredictResult:
     phase_durations_s: np.ndarray
     step_lengths_m: np.ndarray
     body_mass_kg: float
+    point_names: tuple[str, ...]
+    points_m: np.ndarray
+    reference_mean: np.ndarray
+    reference_sd: np.ndarray
     cost_of_transport_J_per_m: float
     deviation: float
     objective: float
@@ -204,6 +210,9 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
                 muscle_moments_Nm=np.array(muscle), moment_error_Nm=np.array(error),
                 contact_error_m=np.array([np.abs(c).max() for c in t.contact_error_m]),
                 residual_norm_by_phase=residual_by_phase, phase_durations_s=np.asarray(durations, float),
-                step_lengths_m=np.asarray(steps, float), body_mass_kg=mass, cost_of_transport_J_per_m=float(et),
+                step_lengths_m=np.asarray(steps, float), body_mass_kg=mass, point_names=tuple(tr.model.point_names),
+                points_m=np.array([np.column_stack([np.ravel(np.array(v)) for v in tr.model.points(y)]).T
+                                   for y in t.y[opening]]),
+                reference_mean=reference.mean, reference_sd=reference.sd, cost_of_transport_J_per_m=float(et),
                 deviation=float(jdev), objective=float(objective(et, jdev, weights)), violations=violations)
 

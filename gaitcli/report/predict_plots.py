@@ -1,0 +1,184 @@
+"""Figures of a predicted gait (Diss. Figs. 5.7–5.12), drawn from ``predict.h5``: right in red, left in blue,
+the reference's mean ± SD as a grey band, cycle in % from right heel strike."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from gaitcli.io.h5 import read_record
+from gaitcli.report.plots import SIDE_COLOUR, plt, save
+
+ANGLE_LABELS = ("hip flexion (°)", "knee flexion (°)", "ankle dorsiflexion (°)")
+GRF_LABELS = ("fore-aft GRF (N/kg)", "vertical GRF (N/kg)")
+MOMENT_LABELS = ("hip flexion moment (N·m)", "knee flexion moment (N·m)", "ankle dorsiflexion moment (N·m)")
+#: segments of the stick figure: pairs of point names
+STICKS = (("hip", "hat_com"), ("hip", "knee_r"), ("knee_r", "ankle_r"), ("ankle_r", "heel_r"), ("heel_r", "mtp_r"),
+          ("ankle_r", "mtp_r"), ("hip", "knee_l"), ("knee_l", "ankle_l"), ("ankle_l", "heel_l"), ("heel_l", "mtp_l"),
+          ("ankle_l", "mtp_l"))
+
+
+def _band(ax, reference_mean, reference_sd, k):
+    pct = np.arange(101)
+    m, s = reference_mean[:, k], reference_sd[:, k]
+    ax.fill_between(pct, m - s, m + s, color="0.85", lw=0, label="reference ± SD")
+    ax.plot(pct, m, color="0.55", lw=0.8)
+
+
+def _stance_end(ax, result):
+    """The right toe off (end of phase 6) and the left heel strike (end of phase 4) as vertical lines."""
+    d = result.phase_durations_s
+    for pct, side in ((100 * d[:6].sum() / d.sum(), "r"), (100 * d[:4].sum() / d.sum(), "l")):
+        ax.axvline(pct, color=SIDE_COLOUR[side], lw=0.7, ls="--", alpha=0.6)
+
+
+def predict_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
+    """angles.png (Fig. 5.8), grf.png (5.9), moments.png (5.10), muscles.png (5.12), stick.png (5.7) and the
+    animated walk.gif."""
+    from gaitcli.predict.stage import PredictResult
+
+    with h5py.File(h5_path, "r") as h5:
+        r = read_record(h5["result"], PredictResult)
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    state = "" if r.converged else " (NOT CONVERGED)"
+    caption = (f"predicted gait{state}, {r.speed_m_s:.2f} m/s — {title}; dashed: right toe off (red), left heel "
+               "strike (blue)")
+    written = []
+    pct_i = r.cycle_pct
+    pct_p = 100 * r.point_time_s / r.period_s
+
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
+    for side, row in (("r", 0), ("l", 1)):
+        for k in range(3):
+            ax = axes[row, k]
+            _band(ax, r.reference_mean, r.reference_sd, 3 * row + k)
+            ax.plot(pct_i, r.clinical_angles_deg[:, 3 * row + k], color=SIDE_COLOUR[side], lw=1.5)
+            _stance_end(ax, r)
+            ax.set_ylabel(f"{'right' if side == 'r' else 'left'} {ANGLE_LABELS[k]}", fontsize=9)
+            ax.set_xlim(0, 100)
+    for ax in axes[-1]:
+        ax.set_xlabel("gait cycle (%)")
+    fig.suptitle(f"Joint angles: {caption}", fontsize=9)
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.09, hspace=0.15, wspace=0.3)
+    written.append(save(fig, folder / "angles.png"))
+
+    fig, axes = plt.subplots(2, 2, figsize=(10, 6), sharex=True)
+    for side, row in (("r", 0), ("l", 1)):
+        for k in range(2):
+            ax = axes[row, k]
+            _band(ax, r.reference_mean, r.reference_sd, 6 + 2 * row + k)
+            ax.plot(pct_p, r.grf_N[:, 2 * row + k] / r.body_mass_kg, color=SIDE_COLOUR[side], lw=1.5)
+            if k == 1:
+                ax.axhline(9.81, color="k", lw=0.6, ls=":")  # body weight
+            _stance_end(ax, r)
+            ax.set_ylabel(f"{'right' if side == 'r' else 'left'} {GRF_LABELS[k]}", fontsize=9)
+            ax.set_xlim(0, 100)
+    for ax in axes[-1]:
+        ax.set_xlabel("gait cycle (%)")
+    fig.suptitle(f"Ground reactions (dotted: body weight): {caption}", fontsize=9)
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.09, hspace=0.15, wspace=0.25)
+    written.append(save(fig, folder / "grf.png"))
+
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
+    for side, row in (("r", 0), ("l", 1)):
+        for k in range(3):
+            ax = axes[row, k]
+            ax.plot(pct_p, r.joint_moments_Nm[:, 3 * row + k], color="k", lw=1.2, label="inverse dynamics")
+            ax.plot(pct_p, r.muscle_moments_Nm[:, 3 * row + k], color=SIDE_COLOUR[side], lw=1.2, ls="--",
+                    label="muscles + passive")
+            _stance_end(ax, r)
+            ax.set_ylabel(f"{'right' if side == 'r' else 'left'} {MOMENT_LABELS[k]}", fontsize=8)
+            ax.set_xlim(0, 100)
+    axes[0, 0].legend(fontsize=8, frameon=False)
+    for ax in axes[-1]:
+        ax.set_xlabel("gait cycle (%)")
+    fig.suptitle(f"Joint moments, inverse dynamics vs muscles (5.49–5.51): {caption}", fontsize=9)
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.09, hspace=0.15, wspace=0.3)
+    written.append(save(fig, folder / "moments.png"))
+
+    fig, axes = plt.subplots(2, 4, figsize=(13, 5.5), sharex=True, sharey=True)
+    for k, ax in enumerate(axes.ravel()):
+        ax.axhspan(0, 1, color="0.93", zorder=0)
+        ax.plot(pct_i, r.activations[:, k], color=SIDE_COLOUR["r"], lw=1.3, label="activation")
+        ax.plot(pct_i, r.excitations[:, k], color="k", lw=0.9, ls="--", label="excitation")
+        _stance_end(ax, r)
+        ax.set_title(r.muscle_names[k].removesuffix("_r").replace("_", " "), fontsize=9)
+        ax.set_xlim(0, 100)
+    axes[0, 0].legend(fontsize=7, frameon=False)
+    for ax in axes[-1]:
+        ax.set_xlabel("gait cycle (%)")
+    fig.suptitle(f"Right-leg activations and excitations (grey: [0, 1]): {caption}", fontsize=9)
+    fig.subplots_adjust(left=0.05, right=0.98, top=0.88, bottom=0.1, hspace=0.3, wspace=0.15)
+    written.append(save(fig, folder / "muscles.png"))
+
+    index = {name: k for k, name in enumerate(r.point_names)}
+    fig, ax = plt.subplots(figsize=(13, 3.4))
+    frames = [int(np.argmin(np.abs(r.cycle_pct - pct))) for pct in range(0, 100, 10)]
+    opening = _opening_points(r)
+    for k, i in enumerate(frames):  # side by side, each about its own hip
+        _draw_stick(ax, r, index, i, opening, shift=0.8 * k - r.points_m[i, index["hip"], 0])
+        ax.text(0.8 * k, -0.12, f"{r.cycle_pct[i]:.0f} %", ha="center", fontsize=8)
+    ax.axhline(0, color="k", lw=0.8)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_ylabel("up (m)")
+    ax.set_title(f"Stick figure every 10 % of the cycle, ground reactions as arrows (1 m per 1000 N): {caption}",
+                 fontsize=8)
+    fig.subplots_adjust(left=0.06, right=0.99, top=0.9, bottom=0.15)
+    written.append(save(fig, folder / "stick.png"))
+    written.append(_walk_gif(r, index, opening, folder / "walk.gif"))
+    return written
+
+
+def _opening_points(r) -> np.ndarray:
+    """The control point that opens each instant (the first with that time)."""
+    _, first = np.unique(np.round(r.point_time_s, 12), return_index=True)
+    return first[:len(r.time_s)]
+
+
+def _draw_stick(ax, r, index, i, opening, *, alpha=1.0, shift=0.0):
+    p = r.points_m[i] + np.array([shift, 0.0])
+    for a, b in STICKS:
+        side = "l" if b.endswith("_l") else "r" if b.endswith("_r") else None
+        ax.plot([p[index[a], 0], p[index[b], 0]], [p[index[a], 1], p[index[b], 1]],
+                color=SIDE_COLOUR.get(side, "k"), lw=1.2, alpha=alpha)
+    j = opening[i] if i < len(opening) else 0
+    for k, side in enumerate(("r", "l")):
+        fx, fz = r.grf_N[j, 2 * k], r.grf_N[j, 2 * k + 1]
+        if fz > 5.0:
+            heel, mtp = p[index[f"heel_{side}"]], p[index[f"mtp_{side}"]]
+            x0 = 0.5 * (heel[0] + mtp[0])
+            ax.arrow(x0, 0.0, fx / 1000, fz / 1000, color=SIDE_COLOUR[side], width=0.004, alpha=0.6,
+                     length_includes_head=True)
+
+
+def _walk_gif(r, index, opening, path: Path) -> Path:
+    """The cycle animated, 20 frames per second."""
+    from matplotlib.animation import FuncAnimation, PillowWriter
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    hip = r.points_m[:, index["hip"], 0]
+
+    def frame(i):
+        ax.clear()
+        _draw_stick(ax, r, index, i, opening)
+        ax.axhline(0, color="k", lw=0.8)
+        ax.set_xlim(hip[i] - 1.0, hip[i] + 1.0)
+        ax.set_ylim(-0.1, 1.8)
+        ax.set_aspect("equal")
+        ax.set_title(f"{r.cycle_pct[i]:5.1f} % of the cycle", fontsize=9)
+        return []
+
+    animation = FuncAnimation(fig, frame, frames=len(r.time_s), blit=False)
+    tmp = path.with_name(f".{path.stem}.part.gif")  # Pillow picks the format from the suffix
+    try:
+        animation.save(tmp, writer=PillowWriter(fps=20))
+        os.replace(tmp, path)
+    finally:
+        plt.close(fig)
+        tmp.unlink(missing_ok=True)
+    return path
