@@ -19,9 +19,10 @@ import numpy as np
 from gaitcli.core.validate import parameter
 from gaitcli.errors import InputError
 from gaitcli.kinematics.conventions import walker_to_clinical
+from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
 from gaitcli.predict.layout import DesignLayout
-from gaitcli.predict.model import WalkerParameters, WalkingModel
+from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
 from gaitcli.predict.nlp import PredictSettings, initial_guess, solve_windowed
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
@@ -130,7 +131,26 @@ class PredictResult:
             "double_support_pct": 100 * float(sum(d[p - 1] for p in DOUBLE_SUPPORT_PHASES)) / T,
             "max_residual_norm_by_phase": [float(v) for v in self.residual_norm_by_phase],
             "violations": {k: float(v) for k, v in self.violations.items()},
+            "gait_checks": self.gait_checks(),
+            "vertical_impulse_ratio": self.vertical_impulse_ratio(),
         }
+
+    def vertical_impulse_ratio(self) -> float:
+        """∫ΣF_z dt / (m·g·T) over the cycle, trapezoid over the control points: 1 for a periodic motion that
+        obeys Newton's second law (the centre of mass's vertical momentum returns to its start)."""
+        from scipy.integrate import trapezoid
+
+        t, fz = self.point_time_s, self.grf_N[:, 1] + self.grf_N[:, 3]
+        return float(trapezoid(fz, t) / (self.body_mass_kg * GRAVITY_M_S2 * self.period_s))
+
+    def gait_checks(self) -> dict:
+        """Whether the right leg walks as people do (``checks.py``)."""
+        d, T = self.phase_durations_s, self.period_s
+        grf_pct = 100 * self.point_time_s / T
+        return gait_checks(self.cycle_pct, self.clinical_angles_deg[:, 1], self.grf_N[:, 1] / self.body_mass_kg,
+                           grf_pct, self.joint_moments_Nm[:, 2], grf_pct,
+                           stance_pct=100 * float(sum(d[p - 1] for p in RIGHT_STANCE_PHASES)) / T,
+                           double_support_pct=100 * float(sum(d[p - 1] for p in DOUBLE_SUPPORT_PHASES)) / T)
 
 
 def violated_groups(violations: dict, tolerance: float = FEASIBILITY_TOLERANCE) -> dict:
