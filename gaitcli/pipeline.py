@@ -314,9 +314,11 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
                                             thigh_length_m=subject.thigh_length_m,
                                             shank_length_m=subject.shank_length_m)
               if subject is not None else WalkerParameters.subject_1())
-    progress(Progress("predict", "predict (IPOPT)", 0, 1))
-    result = run_predict(cfg, params=params, reference=reference, init=init)
-    progress(Progress("predict", "predict (IPOPT)", 1, 1))
+    def iteration(k, objective, violation):
+        progress(Progress("predict", "IPOPT iterations", k + 1, cfg.max_iterations,
+                          detail=f"J {objective:.4g}, max violation {violation:.2g}"))
+
+    result = run_predict(cfg, params=params, reference=reference, init=init, report=iteration)
     root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
     target = root / "predict"
     attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs, result.history)

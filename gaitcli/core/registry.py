@@ -40,12 +40,14 @@ def _converged(result) -> bool:
 
 @dataclass(frozen=True)
 class Progress:
-    """A progress report from a running stage: ``completed`` of ``total`` steps (None: unknown)."""
+    """A progress report from a running stage: ``completed`` of ``total`` steps (None: unknown); ``detail`` what
+    the step reached (e.g. an optimizer's objective), shown beside the description."""
 
     stage: str
     description: str
     completed: float = 0.0
     total: float | None = None
+    detail: str = ""
 
 
 ProgressCallback = Callable[[Progress], None]

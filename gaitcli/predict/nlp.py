@@ -98,6 +98,7 @@ class PredictSettings:
     mtp_moment_Nm: tuple[float, float] = (-10.0, 0.0)
     smoothing: float = 1e-2
     max_iterations: int = 3000
+    window_reach: int = 0  # segments either side of its own that an instant may move to within one solve
     tolerance: float = 1e-6
     print_level: int = 0
 
@@ -250,10 +251,11 @@ def _mirror(row):
 
 
 def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
-              symmetric: bool = False, segments: dict | None = None, reach: int = 0) -> NLP:
+              symmetric: bool = False, segments: dict | None = None, reach: int | None = None) -> NLP:
     """The lifted NLP of one prediction (module docstring for the variables and groups), each instant reading
     the spline segments ``segments`` ± ``reach`` (default: where the default guess puts the instants)."""
     s = settings or PredictSettings()
+    reach = s.window_reach if reach is None else reach
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
     if segments is None:
         segments = instant_segments(transcriber, layout, initial_guess(transcriber, reference, s, symmetric=symmetric))
@@ -564,11 +566,52 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
                         "durations": np.tile(phases, 2), "steps": [step, step]})
 
 
+class IterationReport(ca.Callback):
+    """IPOPT's iteration callback: ``report(iteration, objective, constraint_violation)`` after each iteration
+    (the violation is the largest distance of g from its bounds)."""
+
+    def __init__(self, nlp: NLP, report):
+        ca.Callback.__init__(self)
+        self.report, self.lbg, self.ubg, self.iteration = report, nlp.lbg, nlp.ubg, 0
+        self.sizes = {"x": nlp.w.size1(), "g": nlp.constraints.size1()}
+        self.construct("iteration_report", {"enable_fd": False})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "ret"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name in ("f",):
+            return ca.Sparsity.scalar()
+        if name in ("x", "lam_x"):
+            return ca.Sparsity.dense(self.sizes["x"])
+        if name in ("g", "lam_g"):
+            return ca.Sparsity.dense(self.sizes["g"])
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg):
+        g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
+        violation = float(np.max(np.maximum(self.lbg - g, 0) + np.maximum(g - self.ubg, 0))) if g.size else 0.0
+        self.report(self.iteration, float(arg[ca.nlpsol_out().index("f")]), violation)
+        self.iteration += 1
+        return [0]
+
+
 def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
-          multipliers: dict | None = None, options: dict | None = None) -> dict:
+          multipliers: dict | None = None, options: dict | None = None, report=None) -> dict:
     """IPOPT with exact derivatives (Hessian included) from χ ``x0`` (or the whole ``w0``, and IPOPT's
     ``multipliers`` of an earlier solve for a warm start); returns χ, w, the multipliers, the status,
-    iterations and cost. ``options``: further IPOPT/CasADi options."""
+    iterations and cost. ``options``: further IPOPT/CasADi options; ``report(iteration, objective, violation)``
+    is called after every IPOPT iteration."""
     s = settings or PredictSettings()
     problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints}
     opts = {"print_time": False, "ipopt.print_level": s.print_level, "ipopt.sb": "yes",
@@ -578,6 +621,9 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
         opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                      "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9})
     opts.update(options or {})
+    callback = IterationReport(nlp, report) if report is not None else None
+    if callback is not None:
+        opts["iteration_callback"] = callback
     solver = ca.nlpsol("predict", "ipopt", problem, opts)
     start = nlp.start(x0) if w0 is None else w0
     extra = {"lam_g0": multipliers["lam_g"], "lam_x0": multipliers["lam_x"]} if multipliers else {}
@@ -611,7 +657,7 @@ def moved_windows(nlp: NLP, multipliers: dict, threshold: float = 1e-8) -> dict 
 
 def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarray,
                    settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
-                   options: dict | None = None) -> dict:
+                   options: dict | None = None, report=None) -> dict:
     """:func:`solve` with the spline windows placed where ``x0`` puts the instants; while a solution presses on
     a window's edge, that window moves on and the problem is solved again from the last solution (warm, with
     its multipliers; at most ``rounds`` solves). Adds ``rounds``, ``windows_hold`` (no window binds) and the last
@@ -621,7 +667,7 @@ def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarra
     x, w, multipliers, total = x0, None, None, 0
     for k in range(1, rounds + 1):
         nlp = build_nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
-        result = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options)
+        result = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report)
         total += result["iterations"]
         x, w, multipliers = result["x"], result["w"], result["multipliers"]
         segments = moved_windows(nlp, multipliers)

@@ -159,8 +159,9 @@ def violated_groups(violations: dict, tolerance: float = FEASIBILITY_TOLERANCE) 
 
 
 def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Reference,
-                init: np.ndarray | None = None) -> PredictResult:
-    """Predict one gait cycle (module docstring). ``init``: a design vector χ of the same layout to start from."""
+                init: np.ndarray | None = None, report=None) -> PredictResult:
+    """Predict one gait cycle (module docstring). ``init``: a design vector χ of the same layout to start from;
+    ``report(iteration, objective, violation)`` after every IPOPT iteration."""
     weights = cfg.weight_pair()
     settings = PredictSettings(speed_m_s=cfg.speed_m_s, weights=weights, max_iterations=cfg.max_iterations)
     model = WalkingModel(params)
@@ -171,7 +172,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
                                          f"{cfg.nodes} nodes, {'symmetric' if cfg.symmetric else 'full'} model)")
     x0 = initial_guess(transcriber, reference, settings, symmetric=cfg.symmetric) if init is None else init
     start = time.perf_counter()
-    solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric)
+    solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report)
     solve_time = time.perf_counter() - start
     nlp, w = solved["nlp"], solved["w"]
     g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w)).ravel()

@@ -37,4 +37,5 @@ class ProgressDisplay:
         key = (report.stage, report.description)
         if key not in self._tasks:
             self._tasks[key] = self._progress.add_task(report.description, total=report.total)
-        self._progress.update(self._tasks[key], completed=report.completed, total=report.total)
+        label = f"{report.description} {report.detail}" if getattr(report, "detail", "") else report.description
+        self._progress.update(self._tasks[key], completed=report.completed, total=report.total, description=label)

@@ -1,0 +1,47 @@
+"""The predict stage (gaitcli/predict/stage.py) on a small problem stopped early: IPOPT's iteration callback
+reports every iteration with the violation the result then states, the result's parts agree with each other
+(J from Et and Jdev, the stance from the durations), and a warm start must match the layout."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitcli.errors import InputError
+from gaitcli.predict.cost import objective
+from gaitcli.predict.reference import read_reference
+from gaitcli.predict.stage import PredictConfig, run_predict
+from gaitcli.resources import bundled_reference
+
+
+@pytest.fixture(scope="module")
+def stopped():
+    seen = []
+    cfg = PredictConfig(nodes=6, max_iterations=2)
+    result = run_predict(cfg, reference=read_reference(bundled_reference()),
+                         report=lambda k, f, v: seen.append((k, f, v)))
+    return result, seen
+
+
+def test_every_iteration_is_reported_with_the_stated_violation(stopped):
+    result, seen = stopped
+    assert [k for k, _, _ in seen] == list(range(result.iterations + 1))
+    assert not result.converged and result.status == "Maximum_Iterations_Exceeded"
+    assert seen[-1][2] == pytest.approx(max(result.violations.values()), rel=1e-6)
+
+
+def test_the_result_parts_agree(stopped):
+    result, _ = stopped
+    assert result.objective == pytest.approx(objective(result.cost_of_transport_J_per_m, result.deviation,
+                                                       result.weights), rel=1e-12)
+    d = result.phase_durations_s
+    assert np.allclose(d[:4], d[4:])  # the symmetric model's mirrored phases
+    summary = result.summary()
+    assert summary["stance_pct"] == pytest.approx(100 * d[:6].sum() / d.sum())
+    assert summary["converged"] is False and set(summary["gait_checks"]) >= {"stance_pct", "vertical_grf"}
+    assert result.excitations.shape == (72, 16) and result.grf_N.shape == (80, 4)
+
+
+def test_a_warm_start_of_another_layout_is_refused():
+    with pytest.raises(InputError, match="--init"):
+        run_predict(PredictConfig(nodes=6), reference=read_reference(bundled_reference()), init=np.zeros(10))
