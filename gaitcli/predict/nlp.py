@@ -38,11 +38,16 @@ Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first
     speed       ΣT_ph − ΔS/v = 0                                          (5.43)
     shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5°  (5.45–5.48, §3 item 10)
 
-Status (nn = 18, full model, from :func:`initial_guess`): with χ's splines evaluated directly (only
-Q's physics lifted) IPOPT with the exact Hessian reached its optimum, J 8.042, after 336 iterations
-in 419 s plus 98 s to build the Hessian. With the windowed coefficients the Hessian builds in 25–28 s
-and is evaluated in 55–65 ms, the constraint Jacobian in 5 ms; 0.4–0.6 s of each iteration go into
-MUMPS (METIS ordering 0.44 s, default 0.6 s, AMD 2.2 s; fixing the durations does not change it).
+Status (nn = 18, from :func:`initial_guess`, one core shared with a second solve): the symmetric
+model with windows of ±3 segments reaches IPOPT's optimum in one solve, 392 iterations, J 8.140, in
+351 s. Narrower windows are cheaper per iteration but each solve is confined (instants cannot cross
+nodes) and the chain of re-centred solves ends in worse optima (J 12.5–14.0) or infeasible; the full
+model with ±2 segments was at J 19.9 after 190 iterations. Of each iteration, 55–65 ms go into the
+exact Hessian and 5 ms into the Jacobian; the rest is MUMPS (METIS ordering 0.44 s per iteration for
+the full model with ±0, default ordering 0.6 s, AMD 2.2 s): the KKT factor has 6–7 million entries,
+because every instant couples the coefficients of all 25 splines over its window.
+Earlier, with χ's splines evaluated directly (only the physics lifted), the full model reached J 8.042
+after 336 iterations in 419 s plus 98 s to build the Hessian.
 
 Bounds: the nodal values p_{k,0}, durations and steps as :func:`box_bounds`; ŝ ≥ 0 (a taut or just
 slack tendon, §3 item 18) and 0 ≤ a ≤ 1.
@@ -98,7 +103,7 @@ class PredictSettings:
     mtp_moment_Nm: tuple[float, float] = (-10.0, 0.0)
     smoothing: float = 1e-2
     max_iterations: int = 3000
-    window_reach: int = 0  # segments either side of its own that an instant may move to within one solve
+    window_reach: int = 3  # segments either side of its own that an instant may move to within one solve
     tolerance: float = 1e-6
     print_level: int = 0
 
