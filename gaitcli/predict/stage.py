@@ -23,7 +23,7 @@ from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
-from gaitcli.predict.nlp import PredictSettings, initial_guess, solve_windowed
+from gaitcli.predict.nlp import PredictSettings, build_nlp, initial_guess, instant_segments, solve_windowed
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
 
@@ -174,20 +174,41 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     start = time.perf_counter()
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report)
     solve_time = time.perf_counter() - start
-    nlp, w = solved["nlp"], solved["w"]
-    g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w)).ravel()
-    violations = {name: float(np.max(np.maximum(nlp.lbg[sl] - g[sl], 0) + np.maximum(g[sl] - nlp.ubg[sl], 0)))
-                  for name, sl in nlp.groups.items()}
-    durations, steps_r, steps_l, values = nlp.gait(w)
-    report = Transcriber(cfg.nodes, model=model, smoothing=0.0)  # the exact heat-rate model for the figures
-    t = report.at(durations, steps_r, steps_l, values)
-    result = _result(cfg, weights, report, t, durations, (steps_r, steps_l), reference, violations)
+    result, violations = describe(cfg, solved["nlp"], solved["w"], reference, model)
     converged = solved["success"] and solved["windows_hold"] and not violated_groups(violations)
     step = (f"predict: {'symmetric' if cfg.symmetric else 'full'} model, {cfg.nodes} nodes, {cfg.speed_m_s:g} m/s, "
             f"weights {weights[0]:.4g},{weights[1]:.4g}: {solved['status']} after {solved['iterations']} iterations")
     return PredictResult(**result, design=np.asarray(solved["x"], float), converged=bool(converged),
                          status=solved["status"], iterations=solved["iterations"], rounds=solved["rounds"],
                          solve_time_s=solve_time, history=(step,))
+
+
+def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model: WalkingModel) -> tuple[dict, dict]:
+    """The fields of a :class:`PredictResult` for the NLP's variables ``w`` (the gait transcribed anew with the
+    exact heat-rate model) and every constraint group's largest violation there."""
+    g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w)).ravel()
+    violations = {name: float(np.max(np.maximum(nlp.lbg[sl] - g[sl], 0) + np.maximum(g[sl] - nlp.ubg[sl], 0)))
+                  for name, sl in nlp.groups.items()}
+    durations, steps_r, steps_l, values = nlp.gait(w)
+    exact = Transcriber(cfg.nodes, model=model, smoothing=0.0)
+    t = exact.at(durations, steps_r, steps_l, values)
+    fields = _result(cfg, cfg.weight_pair(), exact, t, durations, (steps_r, steps_l), reference, violations)
+    return fields, violations
+
+
+def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Reference,
+                    params: WalkerParameters | None = None) -> PredictResult:
+    """The :class:`PredictResult` of a given design vector χ ``x`` (e.g. a stored solution), without solving;
+    ``converged`` says whether every constraint group holds there."""
+    model = WalkingModel(params)
+    transcriber = Transcriber(cfg.nodes, model=model)
+    settings = PredictSettings(speed_m_s=cfg.speed_m_s, weights=cfg.weight_pair())
+    layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
+    nlp = build_nlp(transcriber, reference, settings, symmetric=cfg.symmetric,
+                    segments=instant_segments(transcriber, layout, x))
+    fields, violations = describe(cfg, nlp, nlp.start(x), reference, model)
+    return PredictResult(**fields, design=np.asarray(x, float), converged=not violated_groups(violations),
+                         status="evaluated", history=("predict: a given design vector, evaluated",))
 
 
 def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Reference, violations) -> dict:

@@ -1,0 +1,51 @@
+"""A converged prediction of normal walking (stored: tests/predict/data, how it was made in its header), checked
+on its own outputs and not by eye: every constraint group holds, the excitations stay in [0, 1], Newton's second
+law holds over the cycle (∫ΣF_z dt = m·g·T within 1 %), and the gait is one a clinician recognises."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitcli.predict.reference import read_reference
+from gaitcli.predict.stage import PredictConfig, evaluate_design
+from gaitcli.resources import bundled_reference
+
+STORED = Path(__file__).parent / "data" / "predicted_normal_symmetric_nn18.csv"
+
+
+@pytest.fixture(scope="module")
+def prediction():
+    return evaluate_design(PredictConfig(), np.loadtxt(STORED), reference=read_reference(bundled_reference()))
+
+
+def test_every_constraint_holds(prediction):
+    assert prediction.converged, prediction.violations
+    summary = prediction.summary()
+    assert summary["max_moment_error_Nm"] <= 2.0 + 1e-6  # εm
+    assert summary["max_contact_error_m"] <= 0.002 + 1e-6  # εk
+    assert -1e-6 <= summary["min_excitation"] and summary["max_excitation"] <= 1.0 + 1e-6
+    assert np.all(prediction.grf_N[:, [1, 3]] >= -1e-6)  # f_z ≥ 0
+
+
+def test_newton_euler_over_the_cycle(prediction):
+    # the centre of mass's vertical momentum is periodic: the floor carries the body weight on average
+    assert prediction.vertical_impulse_ratio() == pytest.approx(1.0, abs=0.01)
+
+
+def test_it_is_a_walk(prediction):
+    checks = prediction.gait_checks()
+    assert all(c["ok"] for c in checks.values()), checks
+    assert 55 <= checks["stance_pct"]["value"] <= 68 and checks["knee_swing_peak_deg"]["value"] >= 55
+    first, valley, second = checks["vertical_grf"]["value"]
+    assert first > 1.0 and second > 1.0 and valley < 1.0
+
+
+def test_the_symmetric_gait_repeats_mirrored(prediction):
+    d = prediction.phase_durations_s
+    np.testing.assert_allclose(d[:4], d[4:])
+    half = len(prediction.time_s) // 2
+    angles = prediction.clinical_angles_deg
+    np.testing.assert_allclose(angles[half:, 3:], angles[:half, :3], atol=1e-9)  # left = right half a cycle on
