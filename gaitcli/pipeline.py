@@ -314,6 +314,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
                                             thigh_length_m=subject.thigh_length_m,
                                             shank_length_m=subject.shank_length_m)
               if subject is not None else WalkerParameters.subject_1())
+
     def iteration(k, objective, violation):
         progress(Progress("predict", "IPOPT iterations", k + 1, cfg.max_iterations,
                           detail=f"J {objective:.4g}, max violation {violation:.2g}"))

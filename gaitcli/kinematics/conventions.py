@@ -103,6 +103,13 @@ def walker_joint_angles(hat, thigh, knee, ankle):
     return -(thigh - hat), knee, -ankle
 
 
+def walker_moments_to_clinical(moments: np.ndarray) -> np.ndarray:
+    """The predictive model's joint moments (…, 6: hip, knee, ankle right then left, each positive in the sense of
+    its model angle, ``predict.contact.joint_moment_map``) → the senses of :func:`walker_joint_angles`: hip
+    flexion, knee flexion, ankle dorsiflexion positive, N·m."""
+    return np.asarray(moments, dtype=float) * np.array([-1.0, 1.0, -1.0] * 2)
+
+
 def walker_to_clinical(y: np.ndarray) -> np.ndarray:
     """The predictive model's coordinates (n, 9) → (n, 6) clinical sagittal angles in degrees: right hip
     flexion, knee flexion, ankle dorsiflexion, then the left's (:func:`walker_joint_angles`)."""

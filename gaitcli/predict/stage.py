@@ -18,7 +18,7 @@ import numpy as np
 
 from gaitcli.core.validate import parameter
 from gaitcli.errors import InputError
-from gaitcli.kinematics.conventions import walker_to_clinical
+from gaitcli.kinematics.conventions import walker_moments_to_clinical, walker_to_clinical
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
 from gaitcli.predict.layout import DesignLayout
@@ -231,15 +231,14 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
     et = cost_of_transport(t.metabolic_rate_W, times, period, stride)
     # joint moments: muscles (and passive structures) vs what the motion and λ require (5.49–5.51)
     B_pinv = tr.joint_map_pinv
-    senses = np.array([-1.0, 1.0, -1.0] * 2)  # model joint senses → hip flexion, knee flexion, dorsiflexion
     muscle, required, error = [], [], []
     for j in range(grid.points):
         e = np.asarray(t.residual[j], float)
         yj = t.y[j]
         f = t.forces_N[j]
         tau_m = B_pinv @ (np.array(tr.muscles.moment_arms(yj)) @ f + np.array(tr.muscles.passive(yj, t.yd[j])).ravel())
-        muscle.append(senses * tau_m)
-        required.append(senses * (tau_m + B_pinv @ e))  # τ* = B⁺(M ÿ + k − g − G λ) = τm + B⁺e
+        muscle.append(walker_moments_to_clinical(tau_m))
+        required.append(walker_moments_to_clinical(tau_m + B_pinv @ e))  # τ* = B⁺(M ÿ + k − g − G λ) = τm + B⁺e
         error.append(B_pinv @ e)
     residual_by_phase = np.array([max(np.linalg.norm(t.residual[j]) for j in range(grid.points)
                                       if int(grid.phase[j]) == p) for p in range(8)])
