@@ -1,6 +1,6 @@
 """The predictive-gait NLP (Diss. 5.2.7–5.2.9): cost, constraint groups, bounds, scaling, initial guess, IPOPT.
 
-Variables w = [C_y, C_s, T, L, Q, Λ] (all O(1)):
+Variables w = [C…, T, L, Q…, Λ] (all O(1)); full model:
 
     C_y (5N × 9), C_s (4N × 16)  the segment coefficients p_{k,0…d} of the quartic coordinate splines and
         the cubic tendon-stretch splines, column-major, rows as ``PeriodicSpline.matrix``; the nodal values
@@ -8,17 +8,23 @@ Variables w = [C_y, C_s, T, L, Q, Λ] (all O(1)):
     T (8)  the phase durations per 0.1 s;  L (2)  the step lengths L_r, L_l, m
     Q   I × 100, per distinct instant i, column-major (each column's I values contiguous):
         y (9), ẏ (9), ÿ (9), ŝ (16), rhs (9), l_m (16), v_m (16), a (16), each divided by its
-        :data:`LIFTED` scale
+        :data:`LIFTED_SCALE`
     Λ   the ground reactions λ_j of every control point in grid order (the phase's reaction names), per 100 N
 
-C, Q and Λ are the transcription's intermediate quantities made variables ("lifted") and tied
+Symmetric model (``layout.py``; left = right half a cycle later): C_t (5N_h × 3) the trunk's T/2-periodic
+quartics, C_y (5N × 3) and C_s (4N × 8) the right leg's; T (4), L (1); Q (I × 41): the right leg's y, ẏ, ÿ
+(3 each), ŝ, l_m, v_m, a (8 each); P (I/2 × 18): the trunk's y, ẏ, ÿ (3 each) and rhs (9) over the first half
+cycle; Λ at the first half's 40 points. Only the first half cycle's physics and the right leg's muscles are
+stated; the rest is their mirror image.
+
+C, Q (P) and Λ are the transcription's intermediate quantities made variables ("lifted") and tied
 together by equality constraints: the problem is the same as (5.24)'s over χ, but each constraint
 touches only a few variables. Evaluated through χ alone every instant depends on every node of
-a periodic spline; here instant i reads only the coefficients of the segments ``segments[i]`` ± 1
-(:func:`gaitcli.predict.splines.evaluate_window`), chosen where the starting point puts it; a
-solution whose instants left their windows is re-solved with new windows
-(:meth:`NLP.segments_hold`). At a solution the lifted values equal the transcription of χ
-(``problem.py``; λ = G⁺ rhs).
+a periodic spline; here instant i reads only the coefficients of the segments ``segments[i]`` ± reach
+(:func:`gaitcli.predict.splines.evaluate_window`; ``PredictSettings.window_reach``), placed where the
+starting point puts it, and a ``windows`` constraint keeps it there (never extrapolated); a solution
+pressing on a window's edge is re-solved with that window moved (:func:`solve_windowed`). At a
+solution the lifted values equal the transcription of χ (``problem.py``; λ = G⁺ rhs).
 
 Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first six define C, Q and Λ):
 
@@ -37,10 +43,11 @@ Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first
     excitation  0 ≤ u ≤ 1 as −t2·a ≤ ȧ ≤ (1 − a)(t1 + t2) with 0 ≤ a ≤ 1 (5.32, §3 item 19)
     speed       ΣT_ph − ΔS/v = 0                                          (5.43)
     shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5°  (5.45–5.48, §3 item 10)
+    windows     each instant inside its window of segments
 
 Status (nn = 18, from :func:`initial_guess`, one core shared with a second solve): the symmetric
-model with windows of ±3 segments reaches IPOPT's optimum in one solve, 392 iterations, J 8.140, in
-351 s. Narrower windows are cheaper per iteration but each solve is confined (instants cannot cross
+model with windows of ±3 segments reaches IPOPT's optimum in one solve (``gait predict``: 468 iterations,
+J 7.953, 382 s; 1.00 and 1.33 m/s: 362 and 368 iterations). Narrower windows are cheaper per iteration but each solve is confined (instants cannot cross
 nodes) and the chain of re-centred solves ends in worse optima (J 12.5–14.0) or infeasible; the full
 model with ±2 segments was at J 19.9 after 190 iterations. Of each iteration, 55–65 ms go into the
 exact Hessian and 5 ms into the Jacobian; the rest is MUMPS (METIS ordering 0.44 s per iteration for
