@@ -64,6 +64,9 @@ EID (reported costs use the exact model).
 
 from __future__ import annotations
 
+import signal
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -578,6 +581,29 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
                         "durations": np.tile(phases, 2), "steps": [step, step]})
 
 
+@contextmanager
+def interrupts_raised():
+    """Ctrl-C during IPOPT raises KeyboardInterrupt after the solver returns. CasADi stops IPOPT on it but then
+    returns the iterate as an ordinary failure ("NonIpopt_Exception_Thrown"), which would be written as a
+    result; an interrupt must write nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    interrupted = []
+
+    def on_interrupt(signum, frame):
+        interrupted.append(signum)
+        raise KeyboardInterrupt  # what stops IPOPT (CasADi checks for it between iterations)
+
+    previous = signal.signal(signal.SIGINT, on_interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if interrupted:
+        raise KeyboardInterrupt
+
+
 class IterationReport(ca.Callback):
     """IPOPT's iteration callback: ``report(iteration, objective, constraint_violation)`` after each iteration
     (the violation is the largest distance of g from its bounds)."""
@@ -639,7 +665,8 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
     solver = ca.nlpsol("predict", "ipopt", problem, opts)
     start = nlp.start(x0) if w0 is None else w0
     extra = {"lam_g0": multipliers["lam_g"], "lam_x0": multipliers["lam_x"]} if multipliers else {}
-    result = solver(x0=start, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, **extra)
+    with interrupts_raised():
+        result = solver(x0=start, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, **extra)
     stats = solver.stats()
     w = np.array(result["x"]).ravel()
     return {"x": nlp.design(w), "w": w, "status": stats.get("return_status", ""),
