@@ -252,22 +252,16 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
 @click.pass_obj
 def reference_command(console: Console, trials, out, pipeline):
     """A reference gait (mean and SD over the cycle) from the idyn outputs of one or more trials."""
-    import numpy as np
-
     from gaitcli.io.outputs import write_table
     from gaitcli.pipeline import fresh_output
-    from gaitcli.predict.reference import build_reference, idyn_reference_strides
+    from gaitcli.predict.reference import reference_from_idyn
 
     cfg = configure(pipeline)
-    right, left, offsets = [], [], []
-    for trial in trials:
-        r, l, o = idyn_reference_strides(fresh_output(trial, "idyn", cfg, plots=False))
-        right, left, offsets = right + r, left + l, offsets + o
-    reference = build_reference(right, left, left_offset_pct=float(np.mean(offsets)) if offsets else 50.0,
-                                sources=[Path(t).resolve().name for t in trials])
+    reference, right, left = reference_from_idyn([fresh_output(trial, "idyn", cfg, plots=False) for trial in trials],
+                                                 sources=[Path(t).resolve().name for t in trials])
     out.parent.mkdir(parents=True, exist_ok=True)
     write_table(out, reference.columns())
-    console.info(f"reference: wrote {out} ({len(right)} right and {len(left)} left strides of {len(trials)} "
+    console.info(f"reference: wrote {out} ({right} right and {left} left strides of {len(trials)} "
                  f"trial(s); forces from {int(reference.strides[6:].min())}–{int(reference.strides[6:].max())} "
                  "strides per variable)")
 

@@ -269,14 +269,12 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     ``reference_path``'s, else one built from the trial's idyn output (made if missing or stale), else the
     bundled one.
     """
-    import numpy as np
-
     from gaitcli.config import configure
     from gaitcli.core.registry import Progress
     from gaitcli.errors import InputError
     from gaitcli.predict.layout import DesignLayout
     from gaitcli.predict.model import WalkerParameters
-    from gaitcli.predict.reference import build_reference, idyn_reference_strides, read_reference
+    from gaitcli.predict.reference import read_reference, reference_from_idyn
     from gaitcli.predict.stage import run_predict, violated_groups
     from gaitcli.report.predict_outputs import write_predict_outputs
     from gaitcli.resources import bundled_reference
@@ -300,10 +298,8 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     if folder is not None and (reference is None or mass is None):
         idyn = fresh_output(trial, "idyn", pipeline or configure(None), out=out, progress=progress, plots=False)
         inputs[str(idyn)] = sha256(idyn)
-        right, left, offsets = idyn_reference_strides(idyn)
         if reference is None:
-            reference = build_reference(right, left, left_offset_pct=float(np.mean(offsets)) if offsets else 50.0,
-                                        sources=[folder.folder.resolve().name])
+            reference, _, _ = reference_from_idyn([idyn], sources=[folder.folder.resolve().name])
         if mass is None:
             with h5py.File(idyn, "r") as h5:
                 mass = float(h5["sagittal/body_mass_kg"][()])

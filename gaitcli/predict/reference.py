@@ -180,3 +180,15 @@ def read_reference(path: str | Path) -> Reference:
     grid = CYCLE_PCT
     interp = (lambda v: np.column_stack([np.interp(grid, pct, v[:, k]) for k in range(v.shape[1])]))
     return Reference(grid.copy(), interp(mean), interp(sd), np.zeros(len(VARIABLES), int), (str(path),))
+
+
+def reference_from_idyn(paths, sources=()) -> tuple[Reference, int, int]:
+    """The reference of every stride in the idyn outputs ``paths`` (``idyn.h5``), and how many right and left
+    strides it has; the left leg moved by the mean offset of its heel strikes (50 % where none was seen)."""
+    right, left, offsets = [], [], []
+    for path in paths:
+        r, l, o = idyn_reference_strides(path)
+        right, left, offsets = right + r, left + l, offsets + o
+    reference = build_reference(right, left, left_offset_pct=float(np.mean(offsets)) if offsets else 50.0,
+                                sources=list(sources))
+    return reference, len(right), len(left)

@@ -28,6 +28,29 @@ def _band(ax, reference_mean, reference_sd, k):
     ax.plot(pct, m, color="0.55", lw=0.8)
 
 
+def _against_reference(r, pct, values, first_reference, labels, path: Path, title: str, *, figsize, left, wspace,
+                       body_weight: bool = False) -> Path:
+    """A 2 × len(labels) figure, right leg above left: ``values`` (n, 2·len(labels)) at ``pct`` over the
+    reference band of columns ``first_reference`` + k; a dotted body-weight line on vertical forces."""
+    columns = len(labels)
+    fig, axes = plt.subplots(2, columns, figsize=figsize, sharex=True)
+    for side, row in (("r", 0), ("l", 1)):
+        for k in range(columns):
+            ax = axes[row, k]
+            _band(ax, r.reference_mean, r.reference_sd, first_reference + columns * row + k)
+            ax.plot(pct, values[:, columns * row + k], color=SIDE_COLOUR[side], lw=1.5)
+            if body_weight and labels[k].startswith("vertical"):
+                ax.axhline(9.81, color="k", lw=0.6, ls=":")
+            _stance_end(ax, r)
+            ax.set_ylabel(f"{'right' if side == 'r' else 'left'} {labels[k]}", fontsize=9)
+            ax.set_xlim(0, 100)
+    for ax in axes[-1]:
+        ax.set_xlabel("gait cycle (%)")
+    fig.suptitle(title, fontsize=9)
+    fig.subplots_adjust(left=left, right=0.98, top=0.92, bottom=0.09, hspace=0.15, wspace=wspace)
+    return save(fig, path)
+
+
 def _stance_end(ax, result):
     """The right toe off (end of phase 6) and the left heel strike (end of phase 4) as vertical lines."""
     d = result.phase_durations_s
@@ -51,37 +74,11 @@ def predict_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Pat
     pct_i = r.cycle_pct
     pct_p = 100 * r.point_time_s / r.period_s
 
-    fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
-    for side, row in (("r", 0), ("l", 1)):
-        for k in range(3):
-            ax = axes[row, k]
-            _band(ax, r.reference_mean, r.reference_sd, 3 * row + k)
-            ax.plot(pct_i, r.clinical_angles_deg[:, 3 * row + k], color=SIDE_COLOUR[side], lw=1.5)
-            _stance_end(ax, r)
-            ax.set_ylabel(f"{'right' if side == 'r' else 'left'} {ANGLE_LABELS[k]}", fontsize=9)
-            ax.set_xlim(0, 100)
-    for ax in axes[-1]:
-        ax.set_xlabel("gait cycle (%)")
-    fig.suptitle(f"Joint angles: {caption}", fontsize=9)
-    fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.09, hspace=0.15, wspace=0.3)
-    written.append(save(fig, folder / "angles.png"))
-
-    fig, axes = plt.subplots(2, 2, figsize=(10, 6), sharex=True)
-    for side, row in (("r", 0), ("l", 1)):
-        for k in range(2):
-            ax = axes[row, k]
-            _band(ax, r.reference_mean, r.reference_sd, 6 + 2 * row + k)
-            ax.plot(pct_p, r.grf_N[:, 2 * row + k] / r.body_mass_kg, color=SIDE_COLOUR[side], lw=1.5)
-            if k == 1:
-                ax.axhline(9.81, color="k", lw=0.6, ls=":")  # body weight
-            _stance_end(ax, r)
-            ax.set_ylabel(f"{'right' if side == 'r' else 'left'} {GRF_LABELS[k]}", fontsize=9)
-            ax.set_xlim(0, 100)
-    for ax in axes[-1]:
-        ax.set_xlabel("gait cycle (%)")
-    fig.suptitle(f"Ground reactions (dotted: body weight): {caption}", fontsize=9)
-    fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.09, hspace=0.15, wspace=0.25)
-    written.append(save(fig, folder / "grf.png"))
+    written.append(_against_reference(r, pct_i, r.clinical_angles_deg, 0, ANGLE_LABELS, folder / "angles.png",
+                                      f"Joint angles: {caption}", figsize=(12, 6), left=0.07, wspace=0.3))
+    written.append(_against_reference(r, pct_p, r.grf_N / r.body_mass_kg, 6, GRF_LABELS, folder / "grf.png",
+                                      f"Ground reactions (dotted: body weight): {caption}", figsize=(10, 6),
+                                      left=0.08, wspace=0.25, body_weight=True))
 
     fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
     for side, row in (("r", 0), ("l", 1)):
