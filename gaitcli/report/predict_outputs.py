@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from gaitcli.io.h5 import record_datasets, write_h5
 from gaitcli.io.outputs import write_table
 from gaitcli.predict.stage import JOINTS, PredictResult
@@ -18,7 +20,7 @@ def write_predict_outputs(folder: Path, result: PredictResult, attrs: dict) -> d
     folder = Path(folder)
     motion = {"time_s": result.time_s, "cycle_pct": result.cycle_pct,
               "hip_x_m": result.coordinates[:, 0], "hip_z_m": result.coordinates[:, 1],
-              "trunk_lean_deg": -result.coordinates[:, 2] * 180 / 3.141592653589793}  # forward lean positive
+              "trunk_lean_deg": np.degrees(-result.coordinates[:, 2])}  # forward lean positive
     motion.update({name: result.clinical_angles_deg[:, k] for k, name in enumerate(ANGLE_COLUMNS)})
     write_table(folder / "motion.csv", motion)
     pct = 100 * result.point_time_s / result.period_s
