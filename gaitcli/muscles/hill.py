@@ -90,7 +90,8 @@ class MuscleModel:
     - ``length(q) → l_m`` (A.9); ``moment_arms(q) → R`` (3 × m, A.11: generalized
       moment per newton, positive in the direction of ψ); ``velocity(q, qd) → v_m``
     - ``fibre_kinematics(l_se, v_se, l_m, v_m) → (l_ce, v_ce)`` (4.15, 4.17)
-    - ``activation_from_force(F, v_se, l_m, v_m) → a`` (4.13–4.18)
+    - ``activation_from_force(F, v_se, l_m, v_m) → a`` (4.13–4.18); ``activation_from_stretch(ŝ, v_se, l_m,
+      v_m) → a`` the same with the tendon from ŝ, whose derivatives exist at F = 0 (√(F/k_T) has none)
     - ``contraction_rate(a, s, l_m, v_m) → (ṡ, F, l_ce, v_ce)`` forward
       contraction dynamics (2.20–2.25) with the tendon stretch s = l_se − l_slack as state
     - ``metabolic_rate(u, a, l_ce, v_ce, f_ce) → Ė`` [W] (A.12–A.21), and
@@ -153,6 +154,12 @@ class MuscleModel:
         a_expr = (force / self._cos_pen) / (self._f_max * self._flv(lce_f, vce_f))  # (4.16), (4.18)
         self.activation_from_force = F("activation_from_force", [force, v_se, l_m, v_m], [a_expr],
                                        ["F", "v_se", "l_m", "v_m"], ["a"])
+        stretch_force, stretch_length = self._stretch_tendon(stretch)
+        lce_s, vce_s = self._fibre_kinematics(stretch_length, v_se, l_m, v_m)
+        self.activation_from_stretch = F(
+            "activation_from_stretch", [stretch, v_se, l_m, v_m],
+            [(stretch_force / self._cos_pen) / (self._f_max * self._flv(lce_s, vce_s))],
+            ["s_norm", "v_se", "l_m", "v_m"], ["a"])
         self.contraction_rate = F("contraction_rate", [a, stretch, l_m, v_m],
                                   list(self._contraction_rate(a, stretch, l_m, v_m)),
                                   ["a", "s", "l_m", "v_m"], ["sdot", "F", "l_ce", "v_ce"])
@@ -278,8 +285,10 @@ class MuscleModel:
         alpha_l = (4.0 if p.metabolic_model == "umberger2003" else 0.3) * alpha_st  # (A.21) / 2010
         longer = _step(l_ce / self._l_opt - 1, eps)
         scale = longer * f_iso + (1 - longer)  # f_iso factors of (A.16)
-        # a_m^0.6 has an infinite slope at 0; the guard keeps its derivative finite there (same values)
-        a_m_06 = ca.if_else(a_m > 0, a_m ** 0.6, 0)
+        # a_m^0.6 has an infinite slope at 0: evaluated at max(a_m, 1e-8) where a_m > 0 (values within
+        # 2e-5·h_am·S W/kg of the formula's below a_m = 1e-8, slope ≤ 950) and 0 below, so that its derivative
+        # is finite at a_m = 0 too (if_else differentiates both branches)
+        a_m_06 = ca.if_else(a_m > 0, ca.fmax(a_m, 1e-8) ** 0.6, 0)
         maintenance = (longer * (0.4 + 0.6 * f_iso) + (1 - longer)) * h_am * a_m_06 * s
         shortening = (_smooth_min(-alpha_st * v_norm * scale, p.shortening_heat_cap_W_per_kg, 10 * eps)
                       * (1 - ft) - alpha_ft * v_norm * scale * ft) * a_m ** 2 * s

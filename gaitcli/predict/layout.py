@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from gaitcli.predict.splines import is_casadi, quartic
+from gaitcli.predict.splines import cubic, evaluate_fractions, is_casadi, quartic
 
 
 def half_cycle_intervals(intervals: int) -> int:
@@ -83,3 +83,22 @@ class DesignLayout:
             value = np.asarray(blocks[name], float).reshape(rows, cols)
             x[start:start + rows * cols] = value.ravel(order="F")
         return x
+
+
+def full_from_symmetric(nodes: int, x) -> np.ndarray:
+    """The full model's χ of the gait a symmetric χ ``x`` describes: at the full cycle's nodes s_k = k/N, hip
+    and HAT from the T/2-periodic trunk splines at 2·s_k, the right leg's nodal values as they are, the left
+    leg's the right leg's splines at s_k + 1/2; durations T_1…4 twice, L_l = L_r. Nodal values of periodic
+    splines, so the full splines interpolate the symmetric gait at the nodes (between them they differ by the
+    interpolation error)."""
+    symmetric, full = DesignLayout.build(nodes, symmetric=True), DesignLayout.build(nodes, symmetric=False)
+    blocks = symmetric.unpack(np.asarray(x, float))
+    n = nodes - 1
+    s = np.arange(n) / n
+    trunk = evaluate_fractions(quartic(half_cycle_intervals(n) + 1), blocks["trunk"], 1.0, 2 * s)
+    left_leg = evaluate_fractions(quartic(nodes), blocks["right_leg"], 1.0, s + 0.5)
+    left_stretch = evaluate_fractions(cubic(nodes), blocks["right_stretch"], 1.0, s + 0.5)
+    durations, steps = blocks["durations"].ravel(), blocks["steps"].ravel()
+    return full.pack({"coordinates": np.column_stack([trunk, blocks["right_leg"], left_leg]),
+                      "tendon_stretch": np.column_stack([blocks["right_stretch"], left_stretch]),
+                      "durations": np.tile(durations, 2), "steps": [steps[0], steps[0]]})

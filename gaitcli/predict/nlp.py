@@ -420,6 +420,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     stretch_m, a_m = matrix("stretch"), matrix("a")
     force_m = ca.horzcat(*forces).T
     slack = np.tile(np.asarray(params.tendon_slack_length_m), 2)
+    f_max_n = np.tile(np.asarray(params.max_isometric_force_N), 2)
     l_se = ca.repmat(ca.DM(slack).T, n_i, 1) * (1 + params.tendon_strain_at_max_force * stretch_m)
     v_se = periodic_derivative(l_se, times, period)
     adot = periodic_derivative(a_m, times, period)
@@ -428,11 +429,14 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     rate = []
     for k in range(muscle_columns.stop // 8):
         c = slice(8 * k, 8 * k + 8)
-        args = (force_m[:, c].T, v_se[:, c].T, matrix("l_m")[:, c].T, matrix("v_m")[:, c].T)
-        add("activation", a_m[:, c] - muscles.muscle.activation_from_force(*args).T, 0.0, 0.0)
-        l_ce, v_ce = muscles.muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, args[2], args[3])
+        l_ce, v_ce = muscles.muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, matrix("l_m")[:, c].T,
+                                                     matrix("v_m")[:, c].T)
         u = muscles.muscle.excitation(a_m[:, c].T, adot[:, c].T)
         f_ce = force_m[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, n_i)
+        # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
+        # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ~1e6 where g is small
+        f_max = ca.repmat(ca.DM(f_max_n[c]), 1, n_i)
+        add("activation", (muscles.muscle.fibre_force(a_m[:, c].T, l_ce, v_ce) - f_ce) / f_max, 0.0, 0.0)
         rate.append(transcriber.metabolic(u, a_m[:, c].T, l_ce, v_ce, f_ce).T)
         T1, T2 = ca.repmat(ca.DM(t1[c]).T, n_i, 1), ca.repmat(ca.DM(t2[c]).T, n_i, 1)
         add("excitation", adot[:, c] + T2 * a_m[:, c], 0.0, np.inf)

@@ -10,6 +10,7 @@ its cost parts and every constraint group's largest violation. The CLI writes it
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, field
 
@@ -21,7 +22,7 @@ from gaitcli.errors import InputError
 from gaitcli.kinematics.conventions import walker_moments_to_clinical, walker_to_clinical
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
-from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.layout import DesignLayout, full_from_symmetric
 from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
 from gaitcli.predict.nlp import PredictSettings, build_nlp, initial_guess, instant_segments, solve_windowed
 from gaitcli.predict.problem import Transcriber
@@ -170,17 +171,35 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     if init is not None and np.size(init) != layout.size:
         raise InputError(None, "--init", f"holds {np.size(init)} design variables (expected {layout.size} for "
                                          f"{cfg.nodes} nodes, {'symmetric' if cfg.symmetric else 'full'} model)")
-    x0 = initial_guess(transcriber, reference, settings, symmetric=cfg.symmetric) if init is None else init
-    start = time.perf_counter()
+    start, history, iterations, rounds = time.perf_counter(), [], 0, 0
+    if report is not None:  # one count over every solve (each IPOPT run counts from 0)
+        calls, each = itertools.count(), report
+        report = lambda k, objective, violation: each(next(calls), objective, violation)  # noqa: E731
+    label = (f"{cfg.nodes} nodes, {cfg.speed_m_s:g} m/s, weights {weights[0]:.4g},{weights[1]:.4g}")
+    if init is not None:
+        x0 = init
+    elif cfg.symmetric:
+        x0 = initial_guess(transcriber, reference, settings, symmetric=True)
+    else:
+        # the full model starts from the symmetric model's solution (its default guess): a gait that already
+        # walks, which the full model's splines interpolate at their nodes
+        first = solve_windowed(transcriber, reference, initial_guess(transcriber, reference, settings,
+                                                                     symmetric=True),
+                               settings, symmetric=True, report=report)
+        iterations, rounds = first["iterations"], first["rounds"]
+        history.append(f"predict: symmetric model (the full model's start), {label}: {first['status']} after "
+                       f"{first['iterations']} iterations")
+        x0 = (full_from_symmetric(cfg.nodes, first["x"]) if first["success"]
+              else initial_guess(transcriber, reference, settings, symmetric=False))
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report)
     solve_time = time.perf_counter() - start
     result, violations = describe(cfg, solved["nlp"], solved["w"], reference, model)
     converged = solved["success"] and solved["windows_hold"] and not violated_groups(violations)
-    step = (f"predict: {'symmetric' if cfg.symmetric else 'full'} model, {cfg.nodes} nodes, {cfg.speed_m_s:g} m/s, "
-            f"weights {weights[0]:.4g},{weights[1]:.4g}: {solved['status']} after {solved['iterations']} iterations")
+    history.append(f"predict: {'symmetric' if cfg.symmetric else 'full'} model, {label}: {solved['status']} after "
+                   f"{solved['iterations']} iterations")
     return PredictResult(**result, design=np.asarray(solved["x"], float), converged=bool(converged),
-                         status=solved["status"], iterations=solved["iterations"], rounds=solved["rounds"],
-                         solve_time_s=solve_time, history=(step,))
+                         status=solved["status"], iterations=iterations + solved["iterations"],
+                         rounds=rounds + solved["rounds"], solve_time_s=solve_time, history=tuple(history))
 
 
 def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model: WalkingModel) -> tuple[dict, dict]:

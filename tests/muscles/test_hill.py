@@ -150,9 +150,26 @@ def test_contraction_round_trip_pointwise(model):
         f_ce = model.evaluate("fibre_force", a, l_ce_out, v_ce)
         np.testing.assert_allclose(f_ce * np.cos(p.pennation_rad), force, rtol=1e-6)
         np.testing.assert_allclose(model.evaluate("activation_from_force", force, sdot, lm, vm), a, rtol=1e-9)
+        s_norm = s / (p.tendon_slack_length_m * p.tendon_strain_at_max_force)
+        np.testing.assert_allclose(model.evaluate("activation_from_stretch", s_norm, sdot, lm, vm), a, rtol=1e-9)
         # the same through the force derivative: v_se = Ḟ/(dF/dl_se) (2.21)
         fdot = 2 * np.sqrt(p.tendon_stiffness_N_per_m2 * force) * sdot
         np.testing.assert_allclose(model.evaluate("tendon_velocity", force, fdot), sdot, rtol=1e-9, atol=1e-15)
+
+
+def test_activation_from_stretch_differentiable_at_slack_tendon(model):
+    """At ŝ = 0 (F = 0) ∂a/∂ŝ is finite, 0 (a ∝ ŝ²), where a(F) through √(F/k_T) has no derivative: the
+    predictive NLP's starting points may put a tendon exactly there (its lower bound)."""
+    s, v_se, l_m, v_m = (ca.SX.sym(k, 8) for k in ("s", "v_se", "l_m", "v_m"))
+    a = model.activation_from_stretch(s, v_se, l_m, v_m)
+    grad = ca.Function("g", [s, v_se, l_m, v_m], [ca.jacobian(a, s)])
+    lm = model.evaluate("length", np.array([0.2, 0.5, 0.05]))
+    value = np.array(grad(np.zeros(8), np.zeros(8), lm, np.zeros(8)))
+    assert np.all(np.isfinite(value)) and np.allclose(value, 0.0)
+    force = ca.SX.sym("F", 8)
+    via_force = ca.jacobian(model.activation_from_force(force, v_se, l_m, v_m), force)
+    assert not np.all(np.isfinite(np.array(ca.Function("h", [force, v_se, l_m, v_m], [via_force])(
+        np.zeros(8), np.zeros(8), lm, np.zeros(8)))))
 
 
 def test_fibre_force_round_trip(model):
