@@ -2,7 +2,8 @@
 
 Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--iterations N]
 [--model symmetric full]``. For each node count and model: ``run_predict`` on normal walking (subject 1,
-the bundled reference, weights 4/3, 2/3, 1.1275 m/s) from the default initial guess: the lifted NLP solved
+the bundled reference, weights 4/3, 2/3, 1.1275 m/s) from the default initial guess (the full model: from the
+symmetric model's solution, whose solve its figures include): the lifted NLP solved
 by IPOPT with exact derivatives, its windows moved and re-solved while they bind (``solve_windowed``).
 Prints the build time (the CasADi expressions and the sparsity counts), the whole call's wall time
 (IPOPT's derivative functions included) with its IPOPT iterations and solves, the exit status, J, Et and Jdev of the last iterate, the
@@ -35,7 +36,7 @@ MOCO_PREDICTION_S = 1379.0
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--nodes", type=int, nargs="+", default=[18])
+    parser.add_argument("--nodes", type=int, nargs="+", default=[14, 16, 18, 20])
     parser.add_argument("--model", nargs="+", default=["symmetric", "full"], choices=["symmetric", "full"])
     parser.add_argument("--iterations", type=int, default=3000)
     args = parser.parse_args()

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from gaitcli.predict.splines import cubic, evaluate_fractions, is_casadi, quartic
+from gaitcli.predict.splines import cubic, evaluation_matrix, is_casadi, quartic
 
 
 def half_cycle_intervals(intervals: int) -> int:
@@ -85,19 +85,32 @@ class DesignLayout:
         return x
 
 
+def _fitted(spline, target, nodal, shift: float, scale: float, derivatives, fractions) -> np.ndarray:
+    """Nodal values of the periodic ``spline`` whose value and derivatives (per interval of ``spline``) best
+    match, in least squares at the cycle ``fractions`` s, those of ``target`` (nodal values ``nodal``) at
+    scale·s + shift."""
+    a, b = [], []
+    for r in derivatives:
+        weight = spline.intervals ** -r  # d^r/ds^r in units of one interval of the fitted spline
+        a.append(weight * evaluation_matrix(spline, fractions, r) * spline.intervals ** r)
+        b.append(weight * evaluation_matrix(target, scale * fractions + shift, r) @ nodal
+                 * (target.intervals * scale) ** r)
+    return np.linalg.lstsq(np.vstack(a), np.vstack(b), rcond=None)[0]
+
+
 def full_from_symmetric(nodes: int, x) -> np.ndarray:
-    """The full model's χ of the gait a symmetric χ ``x`` describes: at the full cycle's nodes s_k = k/N, hip
-    and HAT from the T/2-periodic trunk splines at 2·s_k, the right leg's nodal values as they are, the left
-    leg's the right leg's splines at s_k + 1/2; durations T_1…4 twice, L_l = L_r. Nodal values of periodic
-    splines, so the full splines interpolate the symmetric gait at the nodes (between them they differ by the
-    interpolation error)."""
+    """The full model's χ nearest the gait a symmetric χ ``x`` describes: the right leg's nodal values as they
+    are; the left leg's (= the right leg's splines half a cycle on) and hip and HAT's (T/2-periodic splines)
+    fitted in least squares to value, first and second derivative at 20 points per interval; durations
+    T_1…4 twice, L_l = L_r. Not exact: with N = nn − 1 odd (nn must be even) half a cycle is not a whole
+    number of intervals, so the full splines cannot repeat the right leg's half a cycle later."""
     symmetric, full = DesignLayout.build(nodes, symmetric=True), DesignLayout.build(nodes, symmetric=False)
     blocks = symmetric.unpack(np.asarray(x, float))
-    n = nodes - 1
-    s = np.arange(n) / n
-    trunk = evaluate_fractions(quartic(half_cycle_intervals(n) + 1), blocks["trunk"], 1.0, 2 * s)
-    left_leg = evaluate_fractions(quartic(nodes), blocks["right_leg"], 1.0, s + 0.5)
-    left_stretch = evaluate_fractions(cubic(nodes), blocks["right_stretch"], 1.0, s + 0.5)
+    leg, forces = quartic(nodes), cubic(nodes)
+    s = np.linspace(0.0, 1.0, 20 * (nodes - 1), endpoint=False)
+    trunk = _fitted(leg, quartic(half_cycle_intervals(nodes - 1) + 1), blocks["trunk"], 0.0, 2.0, (0, 1, 2), s)
+    left_leg = _fitted(leg, leg, blocks["right_leg"], 0.5, 1.0, (0, 1, 2), s)
+    left_stretch = _fitted(forces, forces, blocks["right_stretch"], 0.5, 1.0, (0, 1), s)
     durations, steps = blocks["durations"].ravel(), blocks["steps"].ravel()
     return full.pack({"coordinates": np.column_stack([trunk, blocks["right_leg"], left_leg]),
                       "tendon_stretch": np.column_stack([blocks["right_stretch"], left_stretch]),

@@ -82,7 +82,7 @@ def _expansion_errors(nodes):
 
 def test_full_from_symmetric_describes_the_same_gait():
     """The full χ's splines reproduce the symmetric gait: the right leg exactly (same nodal values); the left
-    leg (= right leg half a cycle on) and the trunk (T/2-periodic) up to the interpolation error, which falls
+    leg (= right leg half a cycle on) and the trunk (T/2-periodic) up to the least-squares fit's error, which falls
     with the node count at least as N⁻⁴ for the quartics and N⁻³ for the cubics."""
     coarse, fine = _expansion_errors(12), _expansion_errors(24)
     assert np.all(coarse[:2] < 1e-12) and np.all(fine[:2] < 1e-12)
