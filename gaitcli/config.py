@@ -20,7 +20,7 @@ import yaml
 from gaitcli import stages as _builtin_stages  # noqa: F401  (registers the built-in stages)
 from gaitcli.core.registry import stage, stage_names
 from gaitcli.core.validate import known_keys, replace_checked
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.io.yamlfile import read_yaml
 
 #: what ``gait run`` does without a pipeline file (``pipelines/standard.yaml``)
@@ -72,7 +72,7 @@ def pipeline_from_dict(data: dict | None, path: str | Path | None = None) -> Pip
     known_keys(data, ("stages", *names), path=path)
     chosen = data.get("stages", DEFAULT_STAGES)
     if not isinstance(chosen, (list, tuple)) or not chosen or not all(s in names for s in chosen):
-        raise InputError(path, "stages", f"got {chosen!r} (expected a non-empty list drawn from {', '.join(names)})")
+        raise InputError(path, "stages", f"got {shown(chosen)} (expected a non-empty list drawn from {', '.join(names)})")
     return PipelineConfig(stages=tuple(s for s in names if s in chosen),
                           sections={name: _section(path, name, data.get(name)) for name in names})
 

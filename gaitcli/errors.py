@@ -5,6 +5,18 @@ from __future__ import annotations
 from pathlib import Path
 
 
+#: the longest piece of an input that an error message repeats
+SHOWN_CHARACTERS = 80
+
+
+def shown(value) -> str:
+    """``repr(value)`` for an error message, cut to ``SHOWN_CHARACTERS`` (an input is never echoed whole)."""
+    if type(value).__module__ == "numpy" and hasattr(value, "item") and getattr(value, "ndim", 1) == 0:
+        value = value.item()  # 'abc', not np.str_('abc')
+    text = repr(value)
+    return text if len(text) <= SHOWN_CHARACTERS else text[:SHOWN_CHARACTERS - 1] + "…"
+
+
 class GaitError(Exception):
     """Base class of gaitcli's own errors; ``exit_code`` is what the CLI returns."""
 
@@ -22,6 +34,8 @@ class InputError(GaitError):
 
     def __init__(self, path: str | Path | None, field: str | None, problem: str):
         self.path = None if path is None else Path(path)
+        if field and len(field) > SHOWN_CHARACTERS:  # e.g. a column name read from the file
+            field = field[:SHOWN_CHARACTERS - 1] + "…"
         self.field = field
         self.problem = problem
         parts = [str(p) for p in (self.path, field) if p]

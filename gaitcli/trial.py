@@ -16,7 +16,7 @@ import numpy as np
 
 from gaitcli.io.yamlfile import read_yaml
 from gaitcli.core.validate import known_keys, number, one_of
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.kinematics.disturbances import Disturbance
 
 SEXES = ("male", "female")
@@ -52,7 +52,7 @@ def _number(path, where, value, *, low=None, high=None, expected="a number") -> 
 
 def _vector3(path, where, value) -> tuple[float, float, float]:
     if not isinstance(value, (list, tuple)) or len(value) != 3:
-        raise InputError(path, where, f"got {value!r} (expected a list of 3 numbers)")
+        raise InputError(path, where, f"got {shown(value)} (expected a list of 3 numbers)")
     return tuple(_number(path, where, v, expected="a list of 3 numbers") for v in value)
 
 
@@ -85,13 +85,13 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
             lengths[key] = _number(path, key, data[key], low=0.1, high=0.8, expected="a length in metres, 0.1–0.8")
     for key in ("trial", "static"):
         if data.get(key) is not None and not isinstance(data[key], str):
-            raise InputError(path, key, f"got {data[key]!r} (expected a file name)")
+            raise InputError(path, key, f"got {shown(data[key])} (expected a file name)")
     frames = data.get("static_frames")
     if frames is not None:
         ok = (isinstance(frames, (list, tuple)) and len(frames) == 2
               and all(isinstance(f, int) and not isinstance(f, bool) for f in frames) and 1 <= frames[0] <= frames[1])
         if not ok:
-            raise InputError(path, "static_frames", f"got {frames!r} (expected [first, last] frame numbers, 1-based)")
+            raise InputError(path, "static_frames", f"got {shown(frames)} (expected [first, last] frame numbers, 1-based)")
         frames = (int(frames[0]), int(frames[1]))
     marker_map = data.get("marker_map") or {}
     if not isinstance(marker_map, dict) or not all(isinstance(k, str) and isinstance(v, str)
@@ -107,7 +107,7 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
             raise InputError(path, where, "expected a mapping with segment and mass_kg")
         known_keys(item, DISTURBANCE_KEYS, where=f"{where}.", path=path)
         if not isinstance(item.get("name", ""), str):
-            raise InputError(path, f"{where}.name", f"got {item['name']!r} (expected text)")
+            raise InputError(path, f"{where}.name", f"got {shown(item['name'])} (expected text)")
         segment = one_of(item.get("segment"), SEGMENTS, where=f"{where}.segment", path=path)
         disturbances.append(Disturbance(
             segment=segment,
@@ -150,13 +150,21 @@ class TrialFolder:
         return [p for p in (self.subject_path, self.trial_path, self.forces_path, self.static_path) if p]
 
 
-def _named_file(folder: Path, name: str | None, key: str) -> Path | None:
-    """The file ``subject.yaml`` names under ``key`` (None when it names none); it must exist."""
-    if not name:
+def _named_file(folder: Path, name, key: str) -> Path | None:
+    """The file ``subject.yaml`` names under ``key`` (None when it names none): a path relative to the trial
+    folder that resolves (symlinks followed) to an existing file inside it."""
+    if name is None or name == "":
         return None
+    subject = folder / "subject.yaml"
+    if not isinstance(name, str):
+        raise InputError(subject, key, f"got {shown(name)} (expected a file name inside the trial folder)")
     path = folder / name
+    inside = folder.resolve()
+    if Path(name).is_absolute() or not path.resolve().is_relative_to(inside):
+        raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
+                                       "(expected a file inside it)")
     if not path.is_file():
-        raise InputError(folder / "subject.yaml", key, f"names {name}, which is not in {folder}")
+        raise InputError(subject, key, f"names {shown(name)}, which is not in {folder}")
     return path
 
 

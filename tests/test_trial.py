@@ -274,6 +274,31 @@ def test_open_trial_named_file_missing(tmp_path, key):
     assert info.value.path == folder / "subject.yaml" and info.value.field == key and "gone.c3d" in str(info.value)
 
 
+@pytest.mark.parametrize("key", ["trial", "static"])
+def test_named_files_stay_inside_the_trial_folder(tmp_path, key):
+    """``../``, absolute paths and symlinks that lead out of the folder are refused, naming the key; the outside
+    file is neither read nor quoted."""
+    outside = tmp_path / "secret.c3d"
+    outside.write_bytes(b"top secret")
+    for name in ("../secret.c3d", str(outside), "link.c3d", "sub/../../secret.c3d"):
+        folder = _folder(tmp_path, "trial.c3d", subject=_with(**{key: name}))
+        (folder / "link.c3d").symlink_to(outside)
+        with pytest.raises(InputError, match="outside the trial folder") as info:
+            open_trial(folder)
+        assert info.value.path == folder / "subject.yaml" and info.value.field == key
+        assert "top secret" not in str(info.value)
+        shutil.rmtree(folder)
+
+
+def test_named_files_inside_the_folder_by_subfolder_or_symlink(tmp_path):
+    folder = _folder(tmp_path, "trial.c3d", subject=_with(trial="raw/walk.c3d", static="stand.c3d"))
+    (folder / "raw").mkdir()
+    (folder / "raw" / "walk.c3d").write_bytes(b"x")
+    (folder / "stand.c3d").symlink_to(folder / "raw" / "walk.c3d")
+    t = open_trial(folder)
+    assert t.trial_path == folder / "raw" / "walk.c3d" and t.static_path == folder / "stand.c3d"
+
+
 def test_open_trial_missing_files(tmp_path):
     with pytest.raises(InputError, match="trial folder not found"):
         open_trial(tmp_path / "nowhere")

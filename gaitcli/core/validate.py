@@ -18,7 +18,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 
 Where = str | Path | None
 
@@ -31,7 +31,7 @@ def _hint(value: Any, allowed: Iterable[str]) -> str:
 def expected_one_of(value: Any, allowed: Iterable) -> str:
     """The problem text for a value outside ``allowed``: "got …, expected one of …; did you mean …?"."""
     allowed = tuple(allowed)
-    return (f"got {value!r} (expected one of {', '.join(map(str, allowed))}"
+    return (f"got {shown(value)} (expected one of {', '.join(map(str, allowed))}"
             f"{_hint(value, allowed) if isinstance(value, str) else ''})")
 
 
@@ -71,7 +71,7 @@ def number(value: Any, *, where: str | None, path: Where = None, low: float | No
         default = f"a number {'>' if low_open else '≥'} {low:g} and ≤ {high:g}"
     expected = expected or default
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(path, where, f"got {value!r} (expected {expected})")
+        raise InputError(path, where, f"got {shown(value)} (expected {expected})")
     value = float(value)
     too_low = low is not None and (value <= low if low_open else value < low)
     if not math.isfinite(value) or too_low or (high is not None and value > high):
@@ -83,23 +83,23 @@ def integer(value: Any, *, where: str | None, path: Where = None, low: int | Non
             high: int | None = None) -> int:
     """An integer within [low, high]."""
     if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(path, where, f"got {value!r} (expected an integer)")
+        raise InputError(path, where, f"got {shown(value)} (expected an integer)")
     if (low is not None and value < low) or (high is not None and value > high):
         bounds = (f"between {low} and {high}" if low is not None and high is not None
                   else f"≥ {low}" if low is not None else f"≤ {high}")
-        raise InputError(path, where, f"got {value!r} (expected an integer {bounds})")
+        raise InputError(path, where, f"got {shown(value)} (expected an integer {bounds})")
     return value
 
 
 def boolean(value: Any, *, where: str | None, path: Where = None) -> bool:
     if not isinstance(value, bool):
-        raise InputError(path, where, f"got {value!r} (expected true or false)")
+        raise InputError(path, where, f"got {shown(value)} (expected true or false)")
     return value
 
 
 def text(value: Any, *, where: str | None, path: Where = None, expected: str = "text") -> str:
     if not isinstance(value, str):
-        raise InputError(path, where, f"got {value!r} (expected {expected})")
+        raise InputError(path, where, f"got {shown(value)} (expected {expected})")
     return value
 
 

@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from gaitcli.core.validate import one_of
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 
 BASES = ("floating", "prescribed")
 GRAVITY_M_S2 = 9.81
@@ -119,7 +119,7 @@ class PlanarChain:
         by_child = {j.child: j for j in joints}
         if floating:
             if root not in self.segments or root in by_child:
-                raise InputError(None, "root", f"got {root!r} (expected the one segment without a joint)")
+                raise InputError(None, "root", f"got {shown(root)} (expected the one segment without a joint)")
         unjointed = [s for s in self.segments if s not in by_child and s != root]
         if unjointed:
             raise InputError(None, "joints", f"segments {', '.join(unjointed)} have no joint")
@@ -135,7 +135,7 @@ class PlanarChain:
             origin[root], angle[root] = q[0:2], q[2]
         for k, joint in enumerate(joints, start=3 if floating else 0):
             if joint.child in origin or joint.child not in self.segments:
-                raise InputError(None, "joints", f"{joint.coordinate}: child {joint.child!r} is unknown or "
+                raise InputError(None, "joints", f"{joint.coordinate}: child {shown(joint.child)} is unknown or "
                                                  f"already placed")
             if joint.parent is None:
                 if floating:
@@ -147,7 +147,7 @@ class PlanarChain:
                 phi_p = angle[joint.parent]
                 at, parent_angle = origin[joint.parent] + a * _along(phi_p) + c * _across(phi_p), phi_p
             else:
-                raise InputError(None, "joints", f"{joint.coordinate}: parent {joint.parent!r} must come "
+                raise InputError(None, "joints", f"{joint.coordinate}: parent {shown(joint.parent)} must come "
                                                  f"before its children")
             origin[joint.child] = at
             angle[joint.child] = (0 if joint.absolute else parent_angle) + joint.sign * q[k]

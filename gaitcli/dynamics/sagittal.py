@@ -23,7 +23,7 @@ import numpy as np
 
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDES, Events
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.kinematics.conventions import coordinates_to_clinical
 from gaitcli.kinematics.model import COORDINATES, JOINTS, BodyParameters
 
@@ -66,7 +66,7 @@ class SagittalMotion:
         (:meth:`check_finite`).
         """
         if side not in ("r", "l"):
-            raise InputError(path, "side", f"got {side!r} (expected 'r' or 'l')")
+            raise InputError(path, "side", f"got {shown(side)} (expected 'r' or 'l')")
         names = ["time_s"] + [c.format(s=side) for c in SAGITTAL_COLUMNS]
         cols = {}
         for name in names:

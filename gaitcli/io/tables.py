@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gaitcli.errors import GaitWarning, InputError
+from gaitcli.errors import GaitWarning, InputError, shown
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.axes import LOAD_THRESHOLD_N, apply_rotation, infer_lab_to_model
 from gaitcli.core.recording import ForcePlate, Markers, Recording
@@ -107,7 +107,7 @@ def _read_numeric_csv(path: Path) -> tuple[list[str], np.ndarray]:
             try:
                 float(cell)
             except ValueError:
-                raise InputError(path, names[col], f"line {row + 2}: got '{cell}' (expected a number)") from None
+                raise InputError(path, names[col], f"line {row + 2}: got {shown(cell)} (expected a number)") from None
         raise
 
 
@@ -252,7 +252,7 @@ def _float(path: Path, line_no: int, cell: str, column: str) -> float:
     try:
         return float(cell)
     except ValueError:
-        raise InputError(path, column, f"line {line_no}: got '{cell}' (expected a number)") from None
+        raise InputError(path, column, f"line {line_no}: got {shown(cell)} (expected a number)") from None
 
 
 def read_trc(path) -> Markers:
@@ -268,7 +268,7 @@ def read_trc(path) -> Markers:
     meta = dict(zip(_TRC_KEYS, (v.strip() for v in values)))
     unit = meta["Units"].lower()
     if unit not in _LENGTH_M:
-        raise InputError(path, "Units", f"got '{meta['Units']}' (expected mm, cm or m)")
+        raise InputError(path, "Units", f"got {shown(meta['Units'])} (expected mm, cm or m)")
     rate = _float(path, 3, meta["DataRate"], "DataRate")
     n_markers = int(_float(path, 3, meta["NumMarkers"], "NumMarkers"))
     labels = [s.strip() for s in lines[3].split("\t") if s.strip()]
@@ -305,7 +305,7 @@ def write_trc(path, markers: Markers, *, units: str = "mm") -> Path:
     """Write markers (coordinates as given, e.g. rotated to OpenSim's y-up first) to an OpenSim .trc file."""
     path = Path(path)
     if units not in _LENGTH_M:
-        raise InputError(path, "units", f"got '{units}' (expected mm, cm or m)")
+        raise InputError(path, "units", f"got {shown(units)} (expected mm, cm or m)")
     n, m = markers.n_frames, len(markers.labels)
     for label in markers.labels:
         if not label or any(ch.isspace() for ch in label):

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import yaml
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 
 MAX_YAML_BYTES = 1_000_000
 MAX_EXPANDED_NODES = 10_000
@@ -91,7 +91,7 @@ def read_yaml(path: str | Path):
         return None if node is None else loader.construct_document(node)
     except _Duplicate as dup:
         raise InputError(path, f"line {dup.mark.line + 1}",
-                         f"key {str(dup.key)[:80]!r} given twice (expected each key once)") from None
+                         f"key {shown(dup.key)} given twice (expected each key once)") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         raise InputError(path, f"line {mark.line + 1}" if mark else None, "not valid YAML") from None

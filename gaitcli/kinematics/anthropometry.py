@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.kinematics.model import BODIES
 
 
@@ -118,7 +118,7 @@ def normalise_sex(sex: str) -> str:
     key = str(sex).strip().lower()
     key = {"m": "male", "f": "female"}.get(key, key)
     if key not in DE_LEVA:
-        raise InputError(None, "sex", f"got {sex!r} (expected 'male' or 'female')")
+        raise InputError(None, "sex", f"got {shown(sex)} (expected 'male' or 'female')")
     return key
 
 
@@ -126,9 +126,9 @@ def _positive(value, name: str) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise InputError(None, name, f"got {value!r} (expected a number > 0)") from None
+        raise InputError(None, name, f"got {shown(value)} (expected a number > 0)") from None
     if not np.isfinite(v) or v <= 0:
-        raise InputError(None, name, f"got {value!r} (expected a number > 0)")
+        raise InputError(None, name, f"got {shown(value)} (expected a number > 0)")
     return v
 
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from gaitcli.core.validate import one_of
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.kinematics.anthropometry import SegmentInertia, parallel_axis
 
 
@@ -61,7 +61,7 @@ def combine(segment: SegmentInertia, mass_kg: float, inertia_kgm2, com_offset_m)
     """
     m2 = float(mass_kg)
     if not np.isfinite(m2) or m2 < 0:
-        raise InputError(None, "mass_kg", f"got {mass_kg!r} (expected a number >= 0)")
+        raise InputError(None, "mass_kg", f"got {shown(mass_kg)} (expected a number >= 0)")
     I2 = _as_tensor(inertia_kgm2)
     o = np.asarray(com_offset_m, dtype=float).reshape(3)
     m1 = segment.mass_kg

@@ -22,7 +22,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.muscles.hill import MuscleModel
 from gaitcli.predict.grid import periodic_derivative
 from gaitcli.predict.splines import is_casadi
@@ -36,7 +36,7 @@ def check_weights(weights) -> tuple[float, float]:
     try:
         w1, w2 = (float(w) for w in weights)
     except (TypeError, ValueError):
-        raise InputError(None, "--weights", f"got {weights!r} (expected two numbers W1,W2)") from None
+        raise InputError(None, "--weights", f"got {shown(weights)} (expected two numbers W1,W2)") from None
     if not (np.isfinite(w1) and np.isfinite(w2) and w1 >= 0 and w2 >= 0 and abs(w1 + w2 - 2.0) < 1e-9):
         raise InputError(None, "--weights", f"got {w1:g},{w2:g} (expected two weights ≥ 0 that sum to 2, (5.29); "
                                             "e.g. 1.3333,0.6667)")

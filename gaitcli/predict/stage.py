@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.core.validate import parameter
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.kinematics.conventions import walker_moments_to_clinical, walker_to_clinical
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
@@ -52,7 +52,7 @@ class PredictConfig:
         """(w1, w2) of ``weights`` "W1,W2" (an InputError naming ``--weights`` otherwise)."""
         parts = str(self.weights).split(",")
         if len(parts) != 2:
-            raise InputError(None, "--weights", f"got {self.weights!r} (expected two numbers W1,W2 that sum to 2)")
+            raise InputError(None, "--weights", f"got {shown(self.weights)} (expected two numbers W1,W2 that sum to 2)")
         return check_weights(parts)
 
 

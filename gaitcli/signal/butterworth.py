@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 
 __all__ = ["correction_factor", "design_frequency_hz", "design_sos", "pad_length", "lowpass", "finite_runs"]
 
@@ -44,9 +44,9 @@ def design_frequency_hz(cutoff_hz: float, rate_hz: float, *, order: int = 2, pas
     """
     _check_rates(cutoff_hz, rate_hz)
     if int(order) != order or order < 1:
-        raise InputError(None, "order", f"got {order!r} (expected an integer >= 1)")
+        raise InputError(None, "order", f"got {shown(order)} (expected an integer >= 1)")
     if int(passes) != passes or passes < 1:
-        raise InputError(None, "passes", f"got {passes!r} (expected an integer >= 1)")
+        raise InputError(None, "passes", f"got {shown(passes)} (expected an integer >= 1)")
     c = correction_factor(order=order, passes=passes)
     return rate_hz / math.pi * math.atan(math.tan(math.pi * cutoff_hz / rate_hz) / c)
 
@@ -127,7 +127,7 @@ def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int
 
 def _check_rates(cutoff_hz: float, rate_hz: float) -> None:
     if not (np.isfinite(rate_hz) and rate_hz > 0):
-        raise InputError(None, "rate_hz", f"got {rate_hz!r} (expected a sampling rate > 0 Hz)")
+        raise InputError(None, "rate_hz", f"got {shown(rate_hz)} (expected a sampling rate > 0 Hz)")
     if not (np.isfinite(cutoff_hz) and 0 < cutoff_hz < rate_hz / 2):
         raise InputError(None, "cutoff_hz",
-                         f"got {cutoff_hz!r} Hz (expected 0 < cutoff < Nyquist = {rate_hz / 2:g} Hz)")
+                         f"got {shown(cutoff_hz)} Hz (expected 0 < cutoff < Nyquist = {rate_hz / 2:g} Hz)")

@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gaitcli.core.events import SIDES
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.signal.butterworth import finite_runs
 from gaitcli.signal.forceplates import PlateLoad
 
@@ -73,7 +73,7 @@ def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s:
     by plate, then time.
     """
     if not (np.isfinite(threshold_N) and threshold_N >= 0):
-        raise InputError(None, "threshold_N", f"got {threshold_N!r} (expected a force >= 0 N)")
+        raise InputError(None, "threshold_N", f"got {shown(threshold_N)} (expected a force >= 0 N)")
     contacts = []
     for p, load in enumerate(loads):
         if load.raw_vertical_force_N is not None:

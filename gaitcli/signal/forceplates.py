@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.core.recording import ForcePlate
 from gaitcli.signal.butterworth import lowpass
 
@@ -136,13 +136,13 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
         raise InputError(None, f"{plate.name}.force_N",
                          f"got force {force.shape} and moment {moment.shape} (expected two (samples, 3) arrays)")
     if not (np.isfinite(threshold_N) and threshold_N >= 0):
-        raise InputError(None, "threshold_N", f"got {threshold_N!r} (expected a force >= 0 N)")
+        raise InputError(None, "threshold_N", f"got {shown(threshold_N)} (expected a force >= 0 N)")
     out_rate = plate.rate_hz if rate_hz is None else float(rate_hz)
     if not (np.isfinite(out_rate) and out_rate > 0):
-        raise InputError(None, "rate_hz", f"got {rate_hz!r} (expected a marker rate > 0 Hz)")
+        raise InputError(None, "rate_hz", f"got {shown(rate_hz)} (expected a marker rate > 0 Hz)")
     if cutoff_hz and not cutoff_hz < out_rate / 2:
         raise InputError(None, "cutoff_hz",
-                         f"got {cutoff_hz!r} Hz (expected below the output Nyquist frequency {out_rate / 2:g} Hz)")
+                         f"got {shown(cutoff_hz)} Hz (expected below the output Nyquist frequency {out_rate / 2:g} Hz)")
     wrench = np.concatenate([force, moment], axis=1)
     if cutoff_hz:  # 0 or None: unfiltered (exact synthetic data)
         wrench = lowpass(wrench, rate_hz=plate.rate_hz, cutoff_hz=cutoff_hz)

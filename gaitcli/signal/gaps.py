@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.signal.butterworth import finite_runs
 
 __all__ = ["Gap", "find_gaps", "fill_gaps"]
@@ -58,7 +58,7 @@ def fill_gaps(positions, /, *, max_gap_frames: int) -> tuple[np.ndarray, list[Ga
     """
     if (isinstance(max_gap_frames, bool) or not isinstance(max_gap_frames, (int, np.integer))
             or max_gap_frames < 0):
-        raise InputError(None, "max_gap_frames", f"got {max_gap_frames!r} (expected an integer >= 0)")
+        raise InputError(None, "max_gap_frames", f"got {shown(max_gap_frames)} (expected an integer >= 0)")
     missing = _missing(positions)
     filled = np.array(positions, dtype=float, copy=True)
     n_frames = filled.shape[0]
