@@ -2,7 +2,8 @@
 
 Exit codes: 0 success; 2 bad usage or bad input (one line naming the file, the
 field and what was expected); 3 an optimization ended unconverged (results
-written, ``converged: false``); 1 an internal error. ``--debug`` shows tracebacks.
+written, ``converged: false``); 130 interrupted (Ctrl-C or SIGTERM; nothing written); 1 an internal
+error. ``--debug`` shows tracebacks.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import click
 
 from gaitcli import __version__
 from gaitcli.config import configure
+from gaitcli.core.interrupts import terminate_as_interrupt
 from gaitcli.core.validate import expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import GaitError, GaitWarning, NotConvergedError
@@ -259,7 +261,6 @@ def reference_command(console: Console, trials, out, pipeline):
     cfg = configure(pipeline)
     reference, right, left = reference_from_idyn([fresh_output(trial, "idyn", cfg, plots=False) for trial in trials],
                                                  sources=[Path(t).resolve().name for t in trials])
-    out.parent.mkdir(parents=True, exist_ok=True)
     write_table(out, reference.columns())
     console.info(f"reference: wrote {out} ({right} right and {left} left strides of {len(trials)} "
                  f"trial(s); forces from {int(reference.strides[6:].min())}–{int(reference.strides[6:].max())} "
@@ -281,6 +282,7 @@ def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in argv
     previous = warnings.showwarning
     warnings.showwarning = _show_warning
+    terminate_as_interrupt()
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("always", GaitWarning)
@@ -297,9 +299,9 @@ def main(argv: list[str] | None = None) -> int:
     except click.ClickException as exc:
         exc.show()
         return exc.exit_code
-    except click.exceptions.Abort:
-        click.echo("gait: aborted", err=True)
-        return 1
+    except (click.exceptions.Abort, KeyboardInterrupt):  # Ctrl-C or SIGTERM: nothing was written
+        click.echo("gait: interrupted", err=True)
+        return 130
     except GaitError as exc:
         if debug:
             traceback.print_exc()

@@ -1,14 +1,69 @@
-"""Atomic output: write to a temporary file beside the target, then rename.
+"""Atomic output: write to a temporary file or folder beside the target, then rename.
 
-An interrupted or failed run never leaves a half-written file that looks valid.
+An interrupted or failed run never leaves a half-written file that looks valid. Temporary names carry the
+writing process's id (``.<target>.<pid>.<random>.part``), so that the next run can remove what a killed run
+(SIGKILL, power cut) left behind without touching a concurrent run's work (:func:`remove_stale`).
 """
 
 from __future__ import annotations
 
 import os
+import re
+import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
+
+from gaitcli.errors import InputError
+
+
+def _prefix(target: Path) -> str:
+    return f".{target.name}.{os.getpid()}."
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def remove_stale(target: str | Path) -> None:
+    """Remove temporary files and folders of ``target`` left by runs whose process no longer exists."""
+    target = Path(target)
+    if not target.parent.is_dir():
+        return
+    pattern = re.compile(rf"^\.{re.escape(target.name)}\.(?:old-\.{re.escape(target.name)}\.)?(\d+)\..*\.part$")
+    for sibling in target.parent.iterdir():
+        match = pattern.match(sibling.name)
+        if match and not _alive(int(match.group(1))):
+            if sibling.is_dir() and not sibling.is_symlink():
+                shutil.rmtree(sibling, ignore_errors=True)
+            else:
+                sibling.unlink(missing_ok=True)
+
+
+def usual_permissions(path: Path, *, folder: bool) -> None:
+    """Mode 0666 (files) or 0777 (folders) less the umask: mkstemp and mkdtemp make 0600 and 0700."""
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(path, (0o777 if folder else 0o666) & ~umask)
+
+
+def make_parent(target: Path) -> None:
+    """Create ``target``'s folder; a file in the way or a folder that cannot be written is an InputError."""
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        blocking = next((p for p in reversed(target.parents) if p.is_file()), target.parent)
+        raise InputError(blocking, None, "is a file (expected an output folder)") from None
+    except PermissionError:
+        raise InputError(target.parent, None, "cannot be created (permission denied)") from None
+    if not os.access(target.parent, os.W_OK | os.X_OK):
+        raise InputError(target.parent, None, "is not writable (expected an output folder you can write)")
 
 
 @contextmanager
@@ -18,16 +73,43 @@ def atomic_path(target: str | Path):
     On an exception the temporary file is removed and ``target`` is untouched.
     """
     target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    make_parent(target)
+    remove_stale(target)
+    fd, tmp = tempfile.mkstemp(prefix=_prefix(target), suffix=".part", dir=target.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:
         yield tmp
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; outputs get the usual permissions
+        usual_permissions(tmp, folder=False)
         os.replace(tmp, target)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+@contextmanager
+def atomic_folder(target: str | Path):
+    """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole.
+
+    A file (not a folder) at ``target`` is the user's: an InputError, and nothing is moved. Leftovers of
+    killed runs are removed first (:func:`remove_stale`).
+    """
+    target = Path(target)
+    make_parent(target)
+    if target.exists() and not target.is_dir():
+        raise InputError(target, None, "is a file (expected the output folder; move or rename the file)")
+    remove_stale(target)
+    tmp = Path(tempfile.mkdtemp(prefix=_prefix(target), suffix=".part", dir=target.parent))
+    try:
+        yield tmp
+        usual_permissions(tmp, folder=True)
+        old = None
+        if target.exists():
+            old = target.with_name(f".{target.name}.old-{tmp.name}")
+            target.rename(old)
+        tmp.rename(target)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)

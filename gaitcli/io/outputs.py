@@ -9,35 +9,18 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
-import tempfile
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from gaitcli.io.atomic import atomic_path
+from gaitcli.io.atomic import atomic_folder, atomic_path
 
 
-@contextmanager
 def stage_folder(target: str | Path):
-    """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole."""
-    target = Path(target)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent))
-    try:
-        yield tmp
-        old = None
-        if target.exists():
-            old = target.with_name(f".{target.name}.old-{tmp.name}")
-            target.rename(old)
-        tmp.rename(target)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
+    """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole
+    (:func:`gaitcli.io.atomic.atomic_folder`)."""
+    return atomic_folder(target)
 
 
 def write_table(path: str | Path, columns: dict[str, np.ndarray], *, float_format: str = "%.6g") -> Path:

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.interrupts import interrupts_raised
+
 
 @dataclass(frozen=True)
 class SolverSettings:
@@ -55,7 +57,8 @@ def solve(solver: ca.Function, x0, lbx, ubx, lbg, ubg, p=None) -> Outcome:
     if p is not None:
         args["p"] = p
     start = time.perf_counter()
-    sol = solver(**args)
+    with interrupts_raised():  # an interrupted solve is no result (core/interrupts.py)
+        sol = solver(**args)
     elapsed = time.perf_counter() - start
     stats = solver.stats()
     return Outcome(x=np.array(sol["x"]).ravel(), objective=float(sol["f"]),

@@ -64,14 +64,12 @@ EID (reported costs use the exact model).
 
 from __future__ import annotations
 
-import signal
-import threading
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.interrupts import interrupts_raised
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.constraints import GAIT_SHAPE, clearance_phases, feet_in_contact, friction, smooth_max
 from gaitcli.predict.cost import DEFAULT_WEIGHTS, cost_of_transport, deviation, objective
@@ -583,29 +581,6 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
                                    -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
     return layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), np.sqrt(0.1)),
                         "durations": np.tile(phases, 2), "steps": [step, step]})
-
-
-@contextmanager
-def interrupts_raised():
-    """Ctrl-C during IPOPT raises KeyboardInterrupt after the solver returns. CasADi stops IPOPT on it but then
-    returns the iterate as an ordinary failure ("NonIpopt_Exception_Thrown"), which would be written as a
-    result; an interrupt must write nothing."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    interrupted = []
-
-    def on_interrupt(signum, frame):
-        interrupted.append(signum)
-        raise KeyboardInterrupt  # what stops IPOPT (CasADi checks for it between iterations)
-
-    previous = signal.signal(signal.SIGINT, on_interrupt)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    if interrupted:
-        raise KeyboardInterrupt
 
 
 class IterationReport(ca.Callback):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import stat
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -14,6 +16,7 @@ import pytest
 import yaml
 
 from gaitcli import __version__
+from gaitcli.errors import InputError
 from gaitcli.io.h5 import Dataset, provenance, write_h5
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 
@@ -89,6 +92,66 @@ def test_stage_folder_keyboard_interrupt_also_cleans_up(tmp_path):
             raise KeyboardInterrupt
     assert _tree(target) == old
     assert sorted(p.name for p in tmp_path.iterdir()) == ["filter"]
+
+
+def _dead_pid() -> int:
+    import subprocess
+    import sys
+
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
+def test_leftovers_of_killed_runs_are_removed_and_live_runs_kept(tmp_path):
+    """A SIGKILLed run leaves ``.filter.<pid>.<random>.part`` (and, between its renames, ``.filter.old-…``);
+    the next run removes those whose process is gone, not a concurrent run's, nor a user's hidden files."""
+    target = tmp_path / "filter"
+    dead, alive = _dead_pid(), os.getpid()
+    left = [tmp_path / f".filter.{dead}.abc123.part", tmp_path / f".filter.old-.filter.{dead}.x9.part"]
+    for folder in left:
+        folder.mkdir()
+        (folder / "markers.csv").write_text("half")
+    (tmp_path / f".filter.{dead}.f1.part").write_text("a half-written file")
+    live = tmp_path / f".filter.{alive}.zz.part"
+    live.mkdir()
+    mine = tmp_path / ".filter.notes"
+    mine.write_text("a user's file")
+    with stage_folder(target) as tmp:
+        (tmp / "summary.json").write_text("{}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([".filter.notes", live.name, "filter"])
+
+
+def test_a_file_at_the_output_folder_is_refused_and_kept(tmp_path):
+    target = tmp_path / "filter"
+    target.write_text("the user's own notes")
+    with pytest.raises(InputError, match="filter: is a file"):
+        with stage_folder(target):
+            raise AssertionError("not reached")
+    assert target.read_text() == "the user's own notes" and sorted(p.name for p in tmp_path.iterdir()) == ["filter"]
+    with pytest.raises(InputError, match="gait_out: is a file"):
+        (tmp_path / "gait_out").write_text("x")
+        with stage_folder(tmp_path / "gait_out" / "filter"):
+            raise AssertionError("not reached")
+
+
+def test_outputs_get_the_usual_permissions(tmp_path):
+    previous = os.umask(0o022)
+    try:
+        with stage_folder(tmp_path / "filter") as tmp:
+            write_json(tmp / "summary.json", {})
+    finally:
+        os.umask(previous)
+    assert stat.S_IMODE((tmp_path / "filter").stat().st_mode) == 0o755
+    assert stat.S_IMODE((tmp_path / "filter" / "summary.json").stat().st_mode) == 0o644
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
+def test_an_unwritable_output_folder_is_an_input_error(tmp_path):
+    (tmp_path / "locked").mkdir(mode=0o555)
+    with pytest.raises(InputError, match="locked: is not writable"):
+        with stage_folder(tmp_path / "locked" / "filter"):
+            raise AssertionError("not reached")
 
 
 # ------------------------------------------------------------------------------------ HDF5
