@@ -59,6 +59,10 @@ def design_sos(cutoff_hz: float, rate_hz: float, *, order: int = 2) -> np.ndarra
     return butter(int(order), f_d, btype="low", fs=rate_hz, output="sos")
 
 
+#: the longest impulse response :func:`pad_length` looks for (a cut-off of ~1e-5 of the rate)
+MAX_IMPULSE_SAMPLES = 1 << 22
+
+
 def pad_length(sos: np.ndarray) -> int:
     """Odd-extension padding (samples) for :func:`scipy.signal.sosfiltfilt`: the single-pass impulse response length.
 
@@ -71,7 +75,7 @@ def pad_length(sos: np.ndarray) -> int:
     from scipy.signal import sosfilt
 
     n = 64
-    while True:
+    while n <= MAX_IMPULSE_SAMPLES:
         impulse = np.zeros(n)
         impulse[0] = 1.0
         h = np.abs(sosfilt(sos, impulse))
@@ -79,6 +83,8 @@ def pad_length(sos: np.ndarray) -> int:
         if above[-1] < n // 2:
             return int(max(above[-1], 3 * (2 * len(sos) + 1)))
         n *= 2
+    raise InputError(None, "cutoff_hz", f"its impulse response is longer than {MAX_IMPULSE_SAMPLES // 2:,} samples "
+                                        "(expected a cut-off nearer the signal's rate)")
 
 
 def finite_runs(finite: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -143,8 +143,15 @@ def filter_markers(markers: Markers, cfg: FilterConfig) -> tuple[Markers, list[G
 
 
 def check_cutoffs(cfg: FilterConfig, recording: Recording, path=None) -> None:
-    """Cut-offs must lie below the Nyquist frequency of the signals they filter."""
+    """Cut-offs must lie below the Nyquist frequency of the signals they filter, and (unless 0: no filtering) at
+    or above 1/duration of the recording: a slower filter has nothing to separate and an impulse response
+    longer than the data (at 1e-9 Hz, 1e11 samples)."""
     rate = recording.markers.rate_hz
+    lowest = rate / max(recording.markers.n_frames - 1, 1)
+    for key, value in (("cutoff_hz", cfg.cutoff_hz), ("force_cutoff_hz", cfg.force_cutoff_hz)):
+        if 0 < value < lowest:
+            raise InputError(path, f"filter.{key}", f"got {value:g} Hz (expected at least 1/duration = {lowest:.3g} "
+                                                    "Hz of the recording, or 0 for no filtering)")
     if cfg.cutoff_hz >= rate / 2:
         raise InputError(path, "filter.cutoff_hz", f"got {cfg.cutoff_hz:g} Hz (expected below the Nyquist frequency "
                                                    f"{rate / 2:g} Hz of its {rate:g} Hz markers)")

@@ -89,6 +89,8 @@ CASES = {  # the ones that read the C3D first: they take longest
     "marker_map_unknown_labels": Case(_subject(lambda s: s + "marker_map:\n  RHEE: CAr\n  LHEE: CAl\n"),
                                       says=("marker_map", "RHEE", "LHEE")),
     "cutoff_above_nyquist": Case(_sample, args=("--cutoff", "60"), names="", says=("cutoff", "60", "Nyquist")),
+    "cutoff_below_the_recording": Case(_sample, args=("--cutoff", "1e-9"), names="",
+                                       says=("cutoff", "1e-09", "1/duration")),  # once minutes, then MemoryError
     "missing_trial_c3d": Case(_missing_c3d, names="trial.c3d", says=("not found",)),
     "missing_subject_yaml": Case(_missing_subject, names="subject.yaml", says=("not found",)),
     "mass_wrong_type": Case(_subject(lambda s: re.sub(r"mass_kg: .*", 'mass_kg: "heavy"', s)),

@@ -142,6 +142,14 @@ def test_cutoff_outside_zero_to_nyquist_is_an_input_error(cutoff):
     assert "Nyquist" in str(info.value)
 
 
+def test_a_cut_off_whose_impulse_response_is_unbounded_is_an_input_error():
+    """1e-9 of the rate: the response would be ~1e10 samples long; refused after at most 2²² (once it ran out of
+    memory)."""
+    with pytest.raises(InputError, match="impulse response is longer than") as info:
+        lowpass(np.zeros(100), rate_hz=100.0, cutoff_hz=1e-7)
+    assert info.value.field == "cutoff_hz"
+
+
 def test_bad_rate_is_an_input_error():
     with pytest.raises(InputError) as info:
         design_frequency_hz(6.0, 0.0)
