@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from gaitcli.errors import InputError
 from gaitcli.kinematics.model import COORDINATES, MOMENTS
 from gaitcli.synth.recording import SyntheticTrial, simulate_trial
 
@@ -66,14 +67,16 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
                 stature_m: float = 1.78, sex: str = "male", period_s: float | None = None) -> SyntheticTrial:
     """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/."""
-    from gaitcli.io.atomic import atomic_path
+    from gaitcli.io.atomic import atomic_path, make_parent
     from gaitcli.io.c3d_write import write_c3d
 
     trial = simulate_trial(condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                            plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
                            sex=sex, period_s=period_s)
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise InputError(out, None, "is a file (expected the trial folder to write)")
+    make_parent(out / "trial.c3d")
     write_c3d(out / "trial.c3d", trial.markers, trial.plates)
     write_c3d(out / "static.c3d", trial.static, [])
     with atomic_path(out / "subject.yaml") as tmp:

@@ -9,6 +9,11 @@ rotation comes from :mod:`gaitcli.io.axes`.
 
 from __future__ import annotations
 
+import faulthandler
+import multiprocessing
+import os
+import resource
+import warnings
 from pathlib import Path
 
 import ezc3d
@@ -21,11 +26,94 @@ from gaitcli.io.c3d.header import check_file, one_line, warn
 from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
 from gaitcli.io.c3d.plates import plate_axes, read_plates
 
-__all__ = ["read_c3d", "MODEL_OUTPUT_GROUPS", "plate_axes"]
+__all__ = ["read_c3d", "read_c3d_here", "MODEL_OUTPUT_GROUPS", "plate_axes"]
+
+
+#: limits of one C3D read in its child process: wall time (plus a second per 20 MB) and address space above
+#: the parent's (plus 20 bytes per byte of file)
+READ_TIME_S = 10.0
+READ_MEMORY_BYTES = 1 << 30
 
 
 def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
-    """Read a C3D trial into a :class:`Recording` (metres, newtons, N·m).
+    """Read a C3D trial into a :class:`Recording` (:func:`read_c3d_here`) in a child process with a time
+    limit and a memory cap (``READ_TIME_S``, ``READ_MEMORY_BYTES``): a damaged file that crashes, hangs or
+    floods the C3D library is an :class:`InputError` of one line, not a dead or stuck ``gait``. Warnings of
+    the read are given again here."""
+    path = Path(path)
+    check_file(path)  # the usual one-line errors without a child process
+    size = path.stat().st_size
+    context = multiprocessing.get_context("fork")
+    receive, send = context.Pipe(duplex=False)
+    child = context.Process(target=_child_read, args=(path, to_model_axes, send, READ_MEMORY_BYTES + 20 * size),
+                            daemon=True)
+    child.start()
+    send.close()
+    try:
+        if not receive.poll(READ_TIME_S + size / 20e6):
+            raise InputError(path, None, f"cannot read C3D: reading it took longer than "
+                                         f"{READ_TIME_S + size / 20e6:.0f} s (a damaged parameter section?)")
+        try:
+            kind, *payload = receive.recv()
+        except EOFError:
+            child.join(5.0)
+            raise InputError(path, None, f"cannot read C3D: the C3D library crashed on it (exit "
+                                         f"{child.exitcode}; a damaged parameter section?)") from None
+    finally:
+        if child.is_alive():
+            child.kill()
+        child.join(5.0)
+        receive.close()
+    if kind == "input":
+        raise InputError(*payload)
+    if kind == "memory":
+        raise InputError(path, None, f"cannot read C3D: reading it needs more than {payload[0] / 2**30:.1f} GB "
+                                     "(a damaged parameter section?)")
+    if kind == "error":
+        raise RuntimeError(f"reading {path}: {payload[0]}")
+    recording, caught = payload
+    for message, category in caught:
+        warnings.warn(message, category, stacklevel=2)
+    return recording
+
+
+def _child_read(path: Path, to_model_axes: bool, send, memory_bytes: int) -> None:
+    """In the child: cap the address space, read, send ("ok", recording, warnings) or what went wrong. The
+    library's own output and a crash report go nowhere: the parent says what happened, in one line."""
+    try:
+        faulthandler.disable()
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 1)
+        os.dup2(devnull, 2)
+        cap = _address_space() + memory_bytes
+        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            recording = read_c3d_here(path, to_model_axes=to_model_axes)
+        send.send(("ok", recording, [(str(w.message), w.category) for w in caught]))
+    except InputError as exc:
+        send.send(("input", exc.path, exc.field, exc.problem))
+    except MemoryError:
+        send.send(("memory", memory_bytes))
+    except Exception as exc:  # noqa: BLE001 - an internal error, passed on
+        send.send(("error", f"{type(exc).__name__}: {one_line(exc)}"))
+    finally:
+        send.close()
+
+
+def _address_space() -> int:
+    """This process's virtual memory size in bytes (Linux), 0 where unknown."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmSize:"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
+def read_c3d_here(path, *, to_model_axes: bool = True) -> Recording:
+    """Read a C3D trial into a :class:`Recording` (metres, newtons, N·m), in this process.
 
     With ``to_model_axes`` the lab → model rotation from
     :func:`gaitcli.io.axes.infer_lab_to_model` is applied and stored in
@@ -38,7 +126,10 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     try:
         c = ezc3d.c3d(str(path))
     except Exception as exc:  # ezc3d raises RuntimeError/OSError/ValueError with multi-line text
-        raise InputError(path, None, f"cannot read C3D: {one_line(exc)}") from None
+        text = one_line(exc)
+        if "ignoreBadFormatting" in text:  # the library's advice to its own callers, an option gait lacks
+            text = "its parameters break the C3D format (a damaged or non-standard file)"
+        raise InputError(path, None, f"cannot read C3D: {text}") from None
     n_frames = c["data"]["points"].shape[2]
     if header_frames is not None and n_frames < header_frames:
         raise InputError(path, "data", f"cannot read C3D: file is truncated ({n_frames} of {header_frames} frames)")

@@ -1,0 +1,73 @@
+"""Damaged C3D files (issue 9): seeded single-byte mutations of the header and the parameter section of a
+sample trial and of c3d.org's Eb015pi.c3d (integer storage, another writer), each read by ``read_c3d``. Every read must end in a recording or a
+one-line InputError, within its time limit: no crash (once a segfault of the C3D library killed gait), no
+hang, no runaway allocation (once 12.7 GB for a 0.5 MB file), no other exception."""
+
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitcli.core.recording import Recording
+from gaitcli.errors import InputError
+from gaitcli.io.c3d import READ_TIME_S, read_c3d
+from gaitcli.resources import sample_trial
+
+from ..conftest import SHARED_C3D
+
+MUTATIONS = 100  # per file: 200 in all
+CHUNKS = 4  # tests per file, so that pytest-xdist shares the reads out
+
+
+def _mutations(source: Path, seed: int) -> list[tuple[int, int]]:
+    """(byte offset, new value) pairs inside the header and the parameter section, seeded."""
+    data = source.read_bytes()
+    end = (data[0] - 1) * 512 + 512 * data[(data[0] - 1) * 512 + 2]
+    rng = np.random.default_rng(seed)
+    offsets = rng.integers(0, min(end, len(data)), MUTATIONS)
+    values = [(int(data[o]) + int(rng.integers(1, 256))) % 256 for o in offsets]
+    return list(zip(map(int, offsets), values))
+
+
+def _read_mutated(source: Path, tmp_path: Path, seed: int, chunk: int) -> dict:
+    data = bytearray(source.read_bytes())
+    outcomes = {"read": 0, "refused": 0}
+    for offset, value in _mutations(source, seed)[chunk::CHUNKS]:
+        mutated = bytearray(data)
+        mutated[offset] = value
+        path = tmp_path / f"mutated_{offset}_{value}.c3d"
+        path.write_bytes(bytes(mutated))
+        start = time.perf_counter()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                recording = read_c3d(path)
+            assert isinstance(recording, Recording)
+            outcomes["read"] += 1
+        except InputError as exc:
+            message = str(exc)
+            assert "\n" not in message and len(message) < 400 and str(path) in message, message
+            assert "ignoreBadFormatting" not in message, message  # the library's advice, not gait's
+            outcomes["refused"] += 1
+        # the child's limit, not a timing claim: a hang would run for minutes
+        assert time.perf_counter() - start < READ_TIME_S + 5.0, f"byte {offset} = {value}"
+        path.unlink()
+    return outcomes
+
+
+@pytest.mark.parametrize("chunk", range(CHUNKS))
+def test_mutated_sample_trial(tmp_path, chunk):
+    outcomes = _read_mutated(sample_trial("normal") / "trial.c3d", tmp_path, seed=9, chunk=chunk)
+    assert sum(outcomes.values()) == len(range(chunk, MUTATIONS, CHUNKS))
+
+
+@pytest.mark.parametrize("chunk", range(CHUNKS))
+def test_mutated_lab_file(tmp_path, chunk):
+    if not SHARED_C3D.is_dir():
+        pytest.skip("../shared/data/c3d is absent")
+    outcomes = _read_mutated(SHARED_C3D / "Eb015pi.c3d", tmp_path, seed=10, chunk=chunk)
+    assert sum(outcomes.values()) == len(range(chunk, MUTATIONS, CHUNKS))
