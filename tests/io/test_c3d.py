@@ -383,3 +383,78 @@ def test_file_name_is_in_every_refusal(tmp_path):
     with pytest.raises(InputError, match="not a file"):
         read_c3d(path)
     assert Path(path).is_dir()
+
+
+# ------------------------------------------------------- damaged files, read in a child process
+
+def test_a_latin1_label_is_read_as_text(tmp_path):
+    """A label byte that is not UTF-8 (Latin-1 'é' = 0xE9) reaches gait as 'é', not as a surrogate escape that no
+    CSV or HDF5 writer accepts (once exit 1, UnicodeEncodeError, an empty gait_out/)."""
+    path = _raw_c3d(tmp_path / "t.c3d", ["LHEEX", "RHEE"], _standing_markers()[:, :2])
+    data = bytearray(path.read_bytes())
+    at = data.find(b"LHEEX")
+    data[at + 4] = 0xE9
+    path.write_bytes(bytes(data))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GaitWarning)
+        labels = read_c3d(path).markers.labels
+    assert labels[0] == "LHEE\u00e9" and labels[0].encode("utf-8")
+
+
+def _misbehaving_reader(monkeypatch, behaviour):
+    """read_c3d's child runs ``behaviour`` instead of the C3D library (fork copies the patched module)."""
+    import gaitcli.io.c3d as c3d_module
+
+    monkeypatch.setattr(c3d_module, "read_c3d_here", lambda *args, **kwargs: behaviour())
+
+
+def _sample_path():
+    from gaitcli.resources import sample_trial
+
+    return sample_trial("normal") / "trial.c3d"
+
+
+def test_a_crash_in_the_c3d_library_is_an_input_error(monkeypatch):
+    import os
+    import signal
+
+    _misbehaving_reader(monkeypatch, lambda: os.kill(os.getpid(), signal.SIGSEGV))
+    with pytest.raises(InputError, match="the C3D library crashed on it") as info:
+        read_c3d(_sample_path())
+    assert "\n" not in str(info.value)
+
+
+def test_a_hang_is_stopped_at_the_time_limit(monkeypatch):
+    import time
+
+    import gaitcli.io.c3d as c3d_module
+
+    monkeypatch.setattr(c3d_module, "READ_TIME_S", 0.5)
+    _misbehaving_reader(monkeypatch, lambda: time.sleep(60))
+    start = time.perf_counter()
+    with pytest.raises(InputError, match="took longer than"):
+        read_c3d(_sample_path())
+    assert time.perf_counter() - start < 10.0  # not 60 s: the child was killed
+
+
+def test_a_runaway_allocation_is_capped(monkeypatch):
+    _misbehaving_reader(monkeypatch, lambda: np.ones((1 << 31,)))  # 16 GB
+    with pytest.raises(InputError, match="needs more than 1.0 GB"):
+        read_c3d(_sample_path())
+
+
+def test_warnings_of_the_read_reach_the_caller(tmp_path):
+    path = _raw_c3d(tmp_path / "t.c3d", ["A", "B"], _standing_markers()[:, :2])
+    with pytest.warns(GaitWarning, match="no usable force plates"):
+        read_c3d(path)
+
+
+@pytest.mark.parametrize("offset,value,says", [(512 + 2, 0x01, "at byte .*run past the section's end"),
+                                              (512 + 2, 0x00, "holds 0 blocks")])
+def test_parameter_records_past_the_section_are_refused_before_the_library(tmp_path, offset, value, says):
+    data = bytearray(_sample_path().read_bytes())
+    data[offset] = value
+    path = tmp_path / "damaged.c3d"
+    path.write_bytes(bytes(data))
+    with pytest.raises(InputError, match=says):
+        read_c3d(path)

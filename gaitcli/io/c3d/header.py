@@ -193,4 +193,19 @@ def strings(params, group: str, name: str) -> list[str]:
     while param(params, group, f"{name}{k}") is not None:
         out += list(param(params, group, f"{name}{k}"))
         k += 1
-    return [str(s) for s in out]
+    return [_text(s) for s in out]
+
+
+def _text(value) -> str:
+    """A C3D string as text: ezc3d hands bytes that are not UTF-8 over as surrogate escapes (e.g. a Latin-1
+    'é' as '\\udce9'), which no file can be written with; those strings are read as Latin-1."""
+    text = str(value)
+    try:
+        text.encode("utf-8")
+        return text
+    except UnicodeEncodeError:
+        raw = text.encode("utf-8", "surrogateescape")
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError:
+            return raw.decode("latin-1")
