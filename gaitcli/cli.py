@@ -78,11 +78,16 @@ class Console:
             raise NotConvergedError(f"{o.message}; results written to {o.folder} with converged: false")
 
 
+_SHOWN_WARNINGS: set[str] = set()
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None):
-    if issubclass(category, GaitWarning):
-        click.echo(f"gait: warning: {message}", err=True)
-    else:
-        click.echo(f"gait: warning: {category.__name__}: {message}", err=True)
+    """Each warning once per run (a trial read by two stages would say the same twice)."""
+    text = f"gait: warning: {message}" if issubclass(category, GaitWarning) else \
+        f"gait: warning: {category.__name__}: {message}"
+    if text not in _SHOWN_WARNINGS:
+        _SHOWN_WARNINGS.add(text)
+        click.echo(text, err=True)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -284,7 +289,10 @@ def main(argv: list[str] | None = None) -> int:
     warnings.showwarning = _show_warning
     terminate_as_interrupt()
     try:
+        _SHOWN_WARNINGS.clear()
         with warnings.catch_warnings():
+            if not debug:  # numpy's and matplotlib's own warnings are for developers
+                warnings.simplefilter("ignore")
             warnings.simplefilter("always", GaitWarning)
             warnings.showwarning = _show_warning
             gait.main(args=argv, prog_name="gait", standalone_mode=False)

@@ -125,6 +125,7 @@ def test_unknown_key_without_a_close_match_lists_the_allowed_keys():
     ("filter", "force_cutoff_hz", -0.5), ("filter", "order", 2.5), ("filter", "order", 0), ("filter", "order", True),
     ("filter", "max_gap_frames", -1), ("filter", "max_gap_frames", 10.0), ("filter", "force_threshold_N", 0),
     ("filter", "force_threshold_N", float("nan")), ("idyn", "frames", "segment"), ("idyn", "gravity_m_s2", 0),
+    ("idyn", "gravity_m_s2", 1e300), ("idyn", "gravity_m_s2", 1.62),
     ("idyn", "gravity_m_s2", float("nan")), ("muscles", "method", "cmc"), ("muscles", "side", "right"),
     ("muscles", "nodes", 0), ("muscles", "validate", "yes"), ("muscles", "validate", 1),
     ("muscles", "objective", "effort"),

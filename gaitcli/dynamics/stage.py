@@ -42,7 +42,8 @@ class IdynConfig:
 
     frames: str = parameter("reference", choices=FRAMES,
                             help="Frames the joint moments are expressed in (default: reference).")
-    gravity_m_s2: float = parameter(9.81, low=0.0, low_open=True, help="Gravitational acceleration, m/s².")
+    gravity_m_s2: float = parameter(9.81, low=9.7, high=9.9,
+                                    help="Gravitational acceleration, m/s² (Earth's surface: 9.78–9.83).")
 
 
 FOOT_BODY = {"r": BODIES.index("foot_r"), "l": BODIES.index("foot_l")}

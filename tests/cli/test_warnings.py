@@ -170,3 +170,31 @@ def test_csv_trial_events_and_feet_match_truth(runs):
     plates = pd.read_csv(sample_trial("normal") / "truth" / "plates.csv")
     for plate_name, foot in zip(plates["plate"], plates["foot"]):
         assert set(grf[f"{plate_name}_foot"].astype(str)) - {""} == {foot}
+
+
+def test_each_warning_is_printed_once_and_library_warnings_are_hidden(capsys):
+    """A warning said twice (a trial read by two stages) is printed once; numpy's RuntimeWarnings only with
+    --debug (in-process: the same main() the command runs)."""
+    import warnings as w
+
+    import click
+
+    from gaitcli import cli
+
+    @cli.gait.command("noisy-test", hidden=True)
+    def noisy():
+        from gaitcli.errors import GaitWarning
+
+        for _ in range(2):
+            w.warn("plate 2 never sees a load", GaitWarning)
+        w.warn("Mean of empty slice", RuntimeWarning)
+        click.echo("done")
+
+    try:
+        assert cli.main(["noisy-test"]) == 0
+        err = capsys.readouterr().err
+        assert err.count("plate 2 never sees a load") == 1 and "Mean of empty slice" not in err
+        assert cli.main(["--debug", "noisy-test"]) == 0
+        assert "RuntimeWarning: Mean of empty slice" in capsys.readouterr().err
+    finally:
+        cli.gait.commands.pop("noisy-test")
