@@ -113,6 +113,11 @@ class PredictSettings:
     max_iterations: int = 3000
     window_reach: int = 3  # segments either side of its own that an instant may move to within one solve
     tolerance: float = 1e-6
+    # IPOPT's "acceptable" stop: 10 iterations in a row within 1e-4 (scaled) whose cost changes by < 1e-6
+    # (relative); the full model's tail otherwise creeps on for hundreds of iterations at J changes of 1e-7
+    acceptable_tolerance: float = 1e-4
+    acceptable_objective_change: float = 1e-6
+    acceptable_iterations: int = 10
     print_level: int = 0
 
 
@@ -633,7 +638,9 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
     problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints}
     opts = {"print_time": False, "ipopt.print_level": s.print_level, "ipopt.sb": "yes",
             "ipopt.max_iter": s.max_iterations, "ipopt.tol": s.tolerance, "ipopt.mu_strategy": "adaptive",
-            "ipopt.mumps_pivot_order": 5}  # METIS: the fastest ordering measured on this KKT system
+            "ipopt.mumps_pivot_order": 5,  # METIS: the fastest ordering measured on this KKT system
+            "ipopt.acceptable_tol": s.acceptable_tolerance, "ipopt.acceptable_iter": s.acceptable_iterations,
+            "ipopt.acceptable_obj_change_tol": s.acceptable_objective_change}
     if multipliers:
         opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                      "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9})

@@ -10,6 +10,7 @@ its cost parts and every constraint group's largest violation. The CLI writes it
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import time
 from dataclasses import dataclass, field
@@ -191,6 +192,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
                        f"{first['iterations']} iterations")
         x0 = (full_from_symmetric(cfg.nodes, first["x"]) if first["success"]
               else initial_guess(transcriber, reference, settings, symmetric=False))
+        if first["success"]:  # near a solution: windows of ±1 segment (a third of the factorisation's cost)
+            settings = dataclasses.replace(settings, window_reach=1)
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report)
     solve_time = time.perf_counter() - start
     result, violations = describe(cfg, solved["nlp"], solved["w"], reference, model)
