@@ -79,7 +79,9 @@ def _read_numeric_csv(path: Path) -> tuple[list[str], np.ndarray]:
         with open(path, newline="") as f:
             rows = [row for row in csv.reader(f) if any(cell.strip() for cell in row)]
     except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(path, None, f"not a readable CSV file ({' '.join(str(exc).split())})") from None
+        raise InputError(path, None, f"not a readable CSV file ({' '.join(str(exc).split())[:80]})") from None
+    except PermissionError:
+        raise InputError(path, None, "cannot be read (permission denied)") from None
     if not rows:
         raise InputError(path, None, "file is empty (expected a header row starting with time_s)")
     names = [s.strip() for s in rows[0]]
@@ -246,6 +248,8 @@ def _text_lines(path: Path) -> list[str]:
         return path.read_text().splitlines()
     except UnicodeDecodeError:
         raise InputError(path, None, "not a text file") from None
+    except PermissionError:
+        raise InputError(path, None, "cannot be read (permission denied)") from None
 
 
 def _float(path: Path, line_no: int, cell: str, column: str) -> float:

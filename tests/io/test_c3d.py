@@ -458,3 +458,12 @@ def test_parameter_records_past_the_section_are_refused_before_the_library(tmp_p
     path.write_bytes(bytes(data))
     with pytest.raises(InputError, match=says):
         read_c3d(path)
+
+
+@pytest.mark.skipif(__import__("os").geteuid() == 0, reason="root reads any file")
+def test_an_unreadable_file_is_an_input_error(tmp_path):
+    path = tmp_path / "trial.c3d"
+    shutil.copy(_sample_path(), path)
+    path.chmod(0)
+    with pytest.raises(InputError, match="cannot be read \\(permission denied\\)"):
+        read_c3d(path)

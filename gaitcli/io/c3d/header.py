@@ -8,6 +8,7 @@ data sections are :class:`~gaitcli.errors.InputError`s of one line.
 
 from __future__ import annotations
 
+import os
 import struct
 import warnings
 from pathlib import Path
@@ -38,6 +39,8 @@ def check_file(path: Path) -> int | None:
     if not path.is_file():
         raise InputError(path, None, "not a file (expected a C3D file)")
     size = path.stat().st_size
+    if not os.access(path, os.R_OK):
+        raise InputError(path, None, "cannot be read (permission denied)")
     with open(path, "rb") as f:
         head = f.read(512)
         if size < 512:
