@@ -22,6 +22,8 @@ def _prefix(target: Path) -> str:
 
 
 def _alive(pid: int) -> bool:
+    if os.name == "nt":  # os.kill(pid, 0) would send Ctrl-C there: keep the leftovers
+        return True
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

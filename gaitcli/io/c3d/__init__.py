@@ -12,12 +12,16 @@ from __future__ import annotations
 import faulthandler
 import multiprocessing
 import os
-import resource
 import warnings
 from pathlib import Path
 
 import ezc3d
 import numpy as np
+
+try:
+    import resource
+except ImportError:  # Windows: no address-space cap
+    resource = None
 
 from gaitcli.core.recording import Recording
 from gaitcli.errors import InputError
@@ -42,6 +46,8 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     the read are given again here."""
     path = Path(path)
     check_file(path)  # the usual one-line errors without a child process
+    if "fork" not in multiprocessing.get_all_start_methods():  # Windows: the checks above, then in-process
+        return read_c3d_here(path, to_model_axes=to_model_axes)
     size = path.stat().st_size
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
@@ -85,8 +91,9 @@ def _child_read(path: Path, to_model_axes: bool, send, memory_bytes: int) -> Non
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, 1)
         os.dup2(devnull, 2)
-        cap = _address_space() + memory_bytes
-        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+        if resource is not None:
+            cap = _address_space() + memory_bytes
+            resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             recording = read_c3d_here(path, to_model_axes=to_model_axes)
