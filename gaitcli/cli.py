@@ -227,7 +227,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
               help="Low-frequency skin artefact: peak 3-D displacement of a marker, mm.")
 @click.option("--plate-noise-n", "plate_noise_N", type=click.FloatRange(min=0), default=1.0, show_default=True,
               help="White noise on the force-plate channels, N (N·mm/20 on moments).")
-@click.option("--strides", type=click.IntRange(min=1, max=500), default=3, show_default=True,
+@click.option("--strides", type=click.IntRange(min=1, max=1000), default=3, show_default=True,
               help="Gait cycles in the trial.")
 @click.option("--mass-kg", type=click.FloatRange(min=0, max=500, min_open=True), default=75.0, show_default=True,
               help="Body mass of the subject, kg.")

@@ -34,6 +34,7 @@ import numpy as np
 from gaitcli.errors import InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.c3d import plate_axes
+from gaitcli.io.c3d.long import write_frame_count
 from gaitcli.core.recording import ForcePlate, Markers
 
 __all__ = ["write_c3d", "DEFAULT_ORIGIN_MM"]
@@ -108,6 +109,7 @@ def write_c3d(
         params["ANALOG"]["RATE"]["value"] = np.array([point_rate])
         c["data"]["analogs"] = np.zeros((1, 0, n_frames))
 
+    write_frame_count(c, n_frames)  # more than 65 535 frames: the TRIAL fields hold the count
     with atomic_path(path) as tmp:
         staging = tmp.with_name(tmp.name + ".c3d")  # ezc3d appends .c3d to any other name
         try:

@@ -9,6 +9,7 @@ rotation comes from :mod:`gaitcli.io.axes`.
 
 from __future__ import annotations
 
+import dataclasses
 import faulthandler
 import multiprocessing
 import os
@@ -23,18 +24,20 @@ try:
 except ImportError:  # Windows: no address-space cap
     resource = None
 
-from gaitcli.core.recording import Recording
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.errors import InputError
 from gaitcli.io.axes import apply_rotation, infer_lab_to_model
 from gaitcli.io.c3d.header import check_file, one_line, warn
+from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, frame_count
 from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
 from gaitcli.io.c3d.plates import plate_axes, read_plates
 
 __all__ = ["read_c3d", "read_c3d_here", "MODEL_OUTPUT_GROUPS", "plate_axes"]
 
 
-#: limits of one C3D read in its child process: wall time (plus a second per 20 MB) and address space above
-#: the parent's (plus 20 bytes per byte of file)
+#: limits of one C3D read in its child process: wall time (plus a second per 2 MB: ezc3d's force-platform
+#: module takes ~17 µs per analog sample) and address space above the parent's (plus 40 bytes per byte of
+#: file: a 67 MB trial of 72 000 frames with two 1 kHz plates peaks at 2.2 GB)
 READ_TIME_S = 10.0
 READ_MEMORY_BYTES = 1 << 30
 
@@ -51,14 +54,14 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     size = path.stat().st_size
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
-    child = context.Process(target=_child_read, args=(path, to_model_axes, send, READ_MEMORY_BYTES + 20 * size),
+    child = context.Process(target=_child_read, args=(path, to_model_axes, send, READ_MEMORY_BYTES + 40 * size),
                             daemon=True)
     child.start()
     send.close()
     try:
-        if not receive.poll(READ_TIME_S + size / 20e6):
+        if not receive.poll(READ_TIME_S + size / 2e6):
             raise InputError(path, None, f"cannot read C3D: reading it took longer than "
-                                         f"{READ_TIME_S + size / 20e6:.0f} s (a damaged parameter section?)")
+                                         f"{READ_TIME_S + size / 2e6:.0f} s (a damaged parameter section?)")
         try:
             kind, *payload = receive.recv()
         except EOFError:
@@ -146,6 +149,10 @@ def read_c3d_here(path, *, to_model_axes: bool = True) -> Recording:
     length_m = point_length_m(path, params, c["data"]["points"], notes)
     markers = read_markers(path, c, length_m, notes)
     plates = read_plates(path, c, length_m, markers, notes)
+    total = frame_count(params, n_frames)
+    if total > n_frames:
+        markers, plates = _read_beyond_header(path, total, length_m, markers, plates)
+        notes.append(f"{total} frames (more than the header's {n_frames}), read in parts of {HEADER_FRAMES}")
     if not plates:
         warn(f"{path.name}: no usable force plates: markers only", notes)
 
@@ -158,3 +165,29 @@ def read_c3d_here(path, *, to_model_axes: bool = True) -> Recording:
     else:
         recording.notes.append(f"data kept in lab axes; inferred lab_to_model rows: [{rows}]")
     return recording
+
+
+def _read_beyond_header(path: Path, total: int, length_m: float, markers, plates) -> tuple:
+    """``markers`` and ``plates`` (the first 65 535 frames) with the rest of a long trial appended
+    (:mod:`.long`). The parts' own warnings are not repeated (the first part's were given)."""
+    positions = [markers.positions_m]
+    forces = {p.name: ([p.force_N], [p.moment_Nm]) for p in plates}
+    with chunk_files(path, total) as parts:
+        for part, count in parts:
+            c = ezc3d.c3d(str(part))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                more = read_markers(path, c, length_m, [])
+                more_plates = read_plates(path, c, length_m, more, [])
+            if more.labels != markers.labels or more.n_frames != count:
+                raise InputError(path, "data", f"cannot read C3D: frames beyond {HEADER_FRAMES} do not match "
+                                               "the first ones")
+            positions.append(more.positions_m)
+            for p in more_plates:
+                if p.name in forces:
+                    forces[p.name][0].append(p.force_N)
+                    forces[p.name][1].append(p.moment_Nm)
+    merged = Markers(markers.labels, np.concatenate(positions), markers.rate_hz, markers.first_frame)
+    merged_plates = [dataclasses.replace(p, force_N=np.concatenate(forces[p.name][0]),
+                                         moment_Nm=np.concatenate(forces[p.name][1])) for p in plates]
+    return merged, merged_plates

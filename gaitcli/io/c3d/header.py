@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import struct
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 from gaitcli.errors import GaitWarning, InputError
@@ -97,7 +98,7 @@ _TYPES = (-1, 1, 2, 4)
 _MAX_DIMENSIONS = 7
 
 
-def check_parameters(path: Path, offset: int, blocks: int, size: int) -> None:
+def check_parameters(path: Path, offset: int, blocks: int, size: int) -> dict:
     """Walk the parameter section's records the way a reader does and check each one lies inside it.
 
     A record: name length n (int8; < 0 locked, 0 ends the section), group/parameter id (int8; < 0 a group),
@@ -105,7 +106,8 @@ def check_parameters(path: Path, offset: int, blocks: int, size: int) -> None:
     description, for a parameter its type, dimensions, data and description. Refused before the C3D library
     reads them: a record or its data past the section's end, an offset that does not move forward, an unknown
     type, more than 7 dimensions, a parameter of a group that does not exist. One corrupted byte here once
-    made the library crash, hang, or allocate 12.7 GB for a 0.5 MB file.
+    made the library crash, hang, or allocate 12.7 GB for a 0.5 MB file. Returns (GROUP, NAME) →
+    :class:`ParameterRecord`.
     """
     end = offset + 512 * blocks
     if blocks == 0:
@@ -116,7 +118,7 @@ def check_parameters(path: Path, offset: int, blocks: int, size: int) -> None:
     if len(section) < 512 * blocks or end > size:
         raise InputError(path, "parameters", f"cannot read C3D: file is truncated ({size} bytes, the parameter "
                                              f"section needs {end})")
-    groups, members = set(), []
+    groups, members, names, records = set(), [], {}, {}
     at = 4
     while True:
         where = offset + at
@@ -134,8 +136,10 @@ def check_parameters(path: Path, offset: int, blocks: int, size: int) -> None:
             raise damaged("a record's name runs past the section's end")
         (next_offset,) = struct.unpack("<h", section[name_end:name_end + 2])
         body = name_end + 2
+        name = section[at + 2:name_end].decode("latin-1").upper()
         if ident < 0:
             groups.add(-ident)
+            names[-ident] = name
             fields_end = body + 1 + (section[body] if body < len(section) else 0)
         else:
             if body + 2 > len(section):
@@ -156,6 +160,7 @@ def check_parameters(path: Path, offset: int, blocks: int, size: int) -> None:
                 raise damaged(f"a parameter's {count * abs(kind)} bytes of data run past the section's end")
             fields_end = data_end + 1 + section[data_end]
             members.append((ident, where))
+            records[(ident, name)] = ParameterRecord(kind, tuple(dims), offset + body + 2 + n_dims)
         if fields_end > len(section):
             raise damaged("a description runs past the section's end")
         if next_offset == 0:
@@ -170,6 +175,16 @@ def check_parameters(path: Path, offset: int, blocks: int, size: int) -> None:
         if ident not in groups:
             raise InputError(path, "parameters", f"parameter section damaged at byte {where}: a parameter of "
                                                  f"group {ident}, which the section does not define")
+    return {(names[ident], name): record for (ident, name), record in records.items()}
+
+
+@dataclass(frozen=True)
+class ParameterRecord:
+    """Where one parameter's data lie in the file: type (−1, 1, 2, 4), dimensions, byte offset of the data."""
+
+    kind: int
+    dims: tuple[int, ...]
+    data_offset: int
 
 
 def warn(message: str, notes: list[str]) -> None:
