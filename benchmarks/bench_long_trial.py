@@ -1,0 +1,51 @@
+"""A trial longer than the C3D header's 65,535 frames through ``gait filter`` and ``gait idyn``.
+
+Run from the repository root: ``python benchmarks/bench_long_trial.py [--strides 832]`` (832 strides of the
+synthetic walker: about 100,000 frames at 100 Hz, two plates at 1 kHz). Prints, for ``gait synth``,
+``gait filter`` and ``gait idyn`` (each a new process, one core): wall time, peak resident memory of the
+process and of the C3D reader's child, the frame count the stage's summary.json reports against the file's,
+and the peak memory per byte of trial.c3d. Asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from timing import gait_argv, one_core
+
+
+def _run(*args) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of ``gait ARGS`` and its children (the largest one)."""
+    start = time.perf_counter()
+    subprocess.run(gait_argv(*args), check=True, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    return wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--strides", type=int, default=832)
+    args = parser.parse_args()
+    one_core()
+    with tempfile.TemporaryDirectory() as folder:
+        trial = Path(folder) / "long"
+        print(f"{'step':<8} {'wall s':>8} {'peak MB':>8}  frames")
+        wall, peak = _run("-q", "synth", trial, "--strides", args.strides)
+        size = (trial / "trial.c3d").stat().st_size
+        print(f"{'synth':<8} {wall:8.1f} {peak:8.0f}  trial.c3d {size / 1e6:.1f} MB")
+        for stage in ("filter", "idyn"):
+            wall, peak = _run("-q", stage, trial, "--no-plots")
+            summary = json.loads((trial / "gait_out" / stage / "summary.json").read_text())
+            frames = summary["frames"]
+            print(f"{stage:<8} {wall:8.1f} {peak:8.0f}  {frames} in summary.json; peak so far "
+                  f"{peak * 1e6 / size:.0f} bytes per byte of trial.c3d")
+
+
+if __name__ == "__main__":
+    main()
