@@ -82,6 +82,22 @@ def _pipeline(text):
     return build
 
 
+def _with_file(relative: str, text: str = "the user's own file\n"):
+    """The sample trial, and a file of the user's at ``relative`` (from the case folder)."""
+    def build(trial):
+        _sample(trial)
+        (trial.parent / relative).write_text(text)
+    return build
+
+
+def _outside_trial(trial):
+    _sample(trial, lambda s: s + "trial: ../other.c3d\n")
+    shutil.copy(SAMPLE / "trial.c3d", trial.parent / "other.c3d")
+
+
+ALIAS_BOMB = "".join([f"{chr(97 + k)}: &{chr(97 + k)} [" + ",".join([f"*{chr(96 + k)}"] * 9 if k else ['"x"'] * 9)
+                      + "]\n" for k in range(9)])
+
 CASES = {  # the ones that read the C3D first: they take longest
     "text_file_as_c3d": Case(_text_as_c3d, names="trial.c3d", says=("C3D",)),
     "truncated_c3d": Case(_truncated_c3d, names="trial.c3d", says=("truncated",)),
@@ -100,6 +116,11 @@ CASES = {  # the ones that read the C3D first: they take longest
                           says=("stature_m", "175")),
     "unknown_subject_key": Case(_subject(lambda s: s.replace("mass_kg:", "mass_kgs:")),
                                  says=("mass_kgs", "did you mean 'mass_kg'")),
+    "out_is_a_file": Case(_with_file("results"), args=("-o", "results"), names="results", says=("is a file",)),
+    "gait_out_is_a_file": Case(_with_file("trial/gait_out"), names="gait_out", says=("is a file",)),
+    "trial_outside_the_folder": Case(_outside_trial, says=("trial", "outside the trial folder")),
+    "subject_duplicate_key": Case(_subject(lambda s: s + "sex: female\n"), says=("line", "'sex' given twice")),
+    "subject_alias_bomb": Case(_subject(lambda s: s + ALIAS_BOMB), says=("aliases expand it",)),
     "pipeline_unknown_key": Case(_pipeline("filter:\n  cutof_hz: 8\n"), args=("--pipeline", "pipeline.yaml"),
                                  names="pipeline.yaml", says=("cutof_hz", "did you mean 'cutoff_hz'")),
 }
