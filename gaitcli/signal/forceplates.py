@@ -152,7 +152,8 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
     cop, free = centre_of_pressure(force_f, moment_f, plate.centre_m)
     return PlateLoad(
         name=plate.name,
-        force_N=np.where(loaded[:, None], force_f, 0.0),
+        # unloaded samples are 0 N; samples whose channels are not finite stay NaN (their load is unknown)
+        force_N=np.where(loaded[:, None], force_f, np.where(np.isfinite(force_f), 0.0, np.nan)),
         cop_m=np.where(loaded[:, None], cop, np.nan),
         free_moment_Nm=np.where(loaded, free, np.nan),
         loaded=loaded,
@@ -183,8 +184,8 @@ def combine_loads(loads: list[PlateLoad], owner) -> dict[str, PlateLoad]:
     rates = {load.rate_hz for load in loads}
     if len(rates) != 1 or any(load.n_frames != n for load in loads):
         raise InputError(None, "loads", "got plates with different rates or lengths (expected one common frame grid)")
-    force = np.stack([load.force_N for load in loads])  # (plates, n, 3)
-    moment = np.stack([load.moment_about_origin_Nm() for load in loads])
+    force = np.stack([np.nan_to_num(load.force_N) for load in loads])  # (plates, n, 3); NaN: unknown, not 0 N
+    moment = np.stack([np.nan_to_num(load.moment_about_origin_Nm()) for load in loads])
     cop_z = np.stack([np.nan_to_num(load.cop_m[:, 2]) for load in loads])
     loaded = np.stack([load.loaded for load in loads])
     result = {}

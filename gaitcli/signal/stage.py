@@ -227,7 +227,18 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                   f"(net cut-off {cfg.cutoff_hz:g} Hz)" if design else "not filtered"),
                f"plates: {len(plates)}, filtered at net {cfg.force_cutoff_hz:g} Hz, COP above "
                f"{cfg.force_threshold_N:g} N; events from plates and foot markers")
-    trial = Trial(markers=markers, feet=foot_loads(per_foot, detection.events, markers.time_s),
+    feet_loads = foot_loads(per_foot, detection.events, markers.time_s)
+    unknown = np.zeros(n, bool)
+    for plate in plates:
+        bad = ~np.isfinite(plate.force_N).all(axis=1)
+        if bad.any():
+            unknown |= bad
+            warnings.warn(f"{plate.name}: {int(bad.sum())} frames whose channels are not numbers (NaN): its force is "
+                          "NaN there, and both feet's loads count as unknown (their joint moments are flagged)",
+                          GaitWarning, stacklevel=2)
+    if unknown.any():
+        feet_loads = {side: dataclasses.replace(load, known=load.known & ~unknown) for side, load in feet_loads.items()}
+    trial = Trial(markers=markers, feet=feet_loads,
                   events=detection.events, history=history,
                   source="" if recording.source is None else str(recording.source),
                   lab_to_model=np.asarray(recording.lab_to_model, float))

@@ -233,3 +233,29 @@ def test_missing_foot_markers_warn_and_still_give_a_result(walk_factory):
         result = filter_trial(_recording(walk, feet=False), FilterConfig())
     assert result.plate_owner.shape == (1, walk.time_s.size)
     assert result.markers.n_frames == walk.time_s.size
+
+
+def test_nan_plate_samples_stay_nan_and_make_the_loads_unknown():
+    """Plate channels that are NaN (a float C3D can hold them) were written as 0 N in grf.csv. They stay NaN
+    there, are warned once, and both feet's loads count as unknown in those frames; other frames unchanged."""
+    import dataclasses
+
+    recording = load_recording(open_trial(sample_trial("normal")))
+    clean = filter_trial(recording, FilterConfig())
+    plate = recording.plates[0]
+    rate = plate.rate_hz / RATE_HZ
+    loaded_frames = np.flatnonzero(clean.plates[0].loaded)
+    frames = loaded_frames[len(loaded_frames) // 2:len(loaded_frames) // 2 + 5]  # mid-stance on plate 1
+    force = plate.force_N.copy()
+    force[int(frames[0] * rate):int((frames[-1] + 1) * rate)] = np.nan
+    damaged = dataclasses.replace(recording, plates=[dataclasses.replace(plate, force_N=force),
+                                                     *recording.plates[1:]])
+    with pytest.warns(GaitWarning, match="plate1: .* frames whose channels are not numbers"):
+        result = filter_trial(damaged, FilterConfig())
+    grf = pd.DataFrame(grf_columns(result))
+    column = next(c for c in grf.columns if c.startswith("plate1_") and "force_z" in c)
+    assert grf[column].iloc[frames].isna().all()
+    unknown = ~(result.trial.feet["r"].known & result.trial.feet["l"].known)
+    assert unknown[frames].all()
+    far = np.setdiff1d(np.arange(result.trial.markers.n_frames), np.arange(frames[0] - 30, frames[-1] + 31))
+    np.testing.assert_array_equal(unknown[far], ~(clean.trial.feet["r"].known & clean.trial.feet["l"].known)[far])
