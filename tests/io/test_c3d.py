@@ -204,6 +204,10 @@ def test_missing_and_non_c3d_files_are_refused(tmp_path):
     with pytest.raises(InputError, match="not a C3D file") as info:
         read_c3d(text)
     assert str(text) in str(info.value) and info.value.exit_code == 2
+    pdf = tmp_path / "report.c3d"
+    pdf.write_bytes(b"%PDF-1.7\n" + b"x" * 2000)  # byte 2 is 'P' = 0x50, C3D's key: once called "truncated"
+    with pytest.raises(InputError, match="not a C3D file: it is a PDF document"):
+        read_c3d(pdf)
     short = tmp_path / "short.c3d"
     short.write_text("hello")
     with pytest.raises(InputError, match="shorter than the 512-byte header"):
