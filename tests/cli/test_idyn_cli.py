@@ -84,6 +84,11 @@ def _build(root: Path) -> dict:
     jobs["dropout"] = [("idyn", root / "dropout")]
     _drop_static_marker(copy_sample("normal", root / "no_lefr"), "LEFr")
     jobs["no_lefr"] = [("idyn", root / "no_lefr")]
+    frames = copy_sample("normal", root / "static_frames")
+    (frames / "static.c3d").unlink()
+    with open(frames / "subject.yaml", "a") as f:
+        f.write("static_frames: [5000, 6000]\n")
+    jobs["static_frames"] = [("idyn", frames)]
 
     synth, run = jobs.pop("exact")
     made = gait(*synth, cwd=root)  # the exact trial first: its `gait run` joins the others
@@ -310,3 +315,13 @@ def test_static_trial_missing_a_model_marker_is_exit_2(runs):
     errors = [line for line in result.stderr_lines if line.startswith("gait: error:")]
     assert len(errors) == 1 and "static.c3d" in errors[0] and "LEFr" in errors[0], result.stderr
     assert not (root / "no_lefr" / "gait_out" / "idyn").exists()
+
+
+def test_static_frames_out_of_range_is_exit_2_before_anything_is_written(runs):
+    """Found once after the filter's outputs had been written (issue 9): now every stage is computed first."""
+    results, root = runs
+    (result,) = results["static_frames"]
+    assert result.returncode == 2, result.describe()
+    assert len(result.stderr_lines) == 1 and "static_frames" in result.stderr and "1–560" in result.stderr, \
+        result.stderr
+    assert not (root / "static_frames" / "gait_out").exists()
