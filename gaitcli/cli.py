@@ -287,10 +287,9 @@ def main(argv: list[str] | None = None) -> int:
     debug = "--debug" in argv
     previous = warnings.showwarning
     warnings.showwarning = _show_warning
-    terminate_as_interrupt()
     try:
         _SHOWN_WARNINGS.clear()
-        with warnings.catch_warnings():
+        with terminate_as_interrupt(), warnings.catch_warnings():
             if not debug:  # numpy's and matplotlib's own warnings are for developers
                 warnings.simplefilter("ignore")
             warnings.simplefilter("always", GaitWarning)

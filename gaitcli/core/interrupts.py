@@ -23,10 +23,18 @@ def _raise_interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
-def terminate_as_interrupt() -> None:
-    """SIGTERM raises KeyboardInterrupt, as Ctrl-C does (main thread only; elsewhere nothing changes)."""
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _raise_interrupt)
+@contextmanager
+def terminate_as_interrupt():
+    """Within it SIGTERM raises KeyboardInterrupt, as Ctrl-C does (main thread only; elsewhere nothing
+    changes); the previous handler is restored after."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 @contextmanager
