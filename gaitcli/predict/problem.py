@@ -185,3 +185,34 @@ class Transcriber:
                              muscle_lengths_m=l_m, muscle_velocities_m_s=v_m, muscle_state=states,
                              metabolic_rate_W=metabolic)
 
+
+
+def gait_at(layout: DesignLayout, x, times) -> tuple:
+    """(durations (8,), L_r, L_l, (y, ẏ, ÿ (n × 9), ŝ (n × 16))) of a numeric χ of either model at ``times``
+    (s since t_1): the splines of ``layout`` evaluated there (the symmetric model's left leg the right leg half
+    a cycle later, its hip and HAT T/2-periodic) — for :meth:`Transcriber.at` on any grid."""
+    blocks = layout.unpack(np.asarray(x, float))
+    t = np.asarray(times, float).ravel()
+    leg, forces = quartic(layout.nodes), cubic(layout.nodes)
+    if layout.symmetric:
+        durations = np.tile(blocks["durations"].ravel(), 2)
+        steps_r = steps_l = float(blocks["steps"][0, 0])
+        period = float(durations.sum())
+        half = quartic(blocks["trunk"].shape[0] + 1)
+        right, trunk = blocks["right_leg"], blocks["trunk"]
+        rows = []
+        for r in range(3):
+            hip = hip_x(half, trunk[:, 0], period / 2, (steps_r + steps_l) / 2, t, r)
+            rows.append(np.column_stack([hip, evaluate(half, trunk[:, 1:], period / 2, t, r),
+                                         evaluate(leg, right, period, t, r),
+                                         evaluate(leg, right, period, t + period / 2, r)]))
+        stretch = np.column_stack([evaluate(forces, blocks["right_stretch"], period, t),
+                                   evaluate(forces, blocks["right_stretch"], period, t + period / 2)])
+    else:
+        durations, (steps_r, steps_l) = blocks["durations"].ravel(), blocks["steps"].ravel()
+        period = float(durations.sum())
+        coordinates = blocks["coordinates"]
+        rows = [np.column_stack([hip_x(leg, coordinates[:, 0], period, steps_r + steps_l, t, r),
+                                 evaluate(leg, coordinates[:, 1:], period, t, r)]) for r in range(3)]
+        stretch = evaluate(forces, blocks["tendon_stretch"], period, t)
+    return durations, float(steps_r), float(steps_l), (*rows, stretch)

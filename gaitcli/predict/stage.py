@@ -26,7 +26,8 @@ from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, ob
 from gaitcli.predict.layout import DesignLayout, full_from_symmetric
 from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
 from gaitcli.predict.nlp import PredictSettings, build_nlp, initial_guess, instant_segments, solve_windowed
-from gaitcli.predict.problem import Transcriber
+from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
+from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
 
 #: phases with the right foot on the floor (HSr … TOr) and with both feet down (Fig. 5.3)
@@ -34,6 +35,8 @@ RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
 DOUBLE_SUPPORT_PHASES = (1, 2, 5, 6)
 #: how far a constraint group may leave its bounds at a converged solution (IPOPT's tolerance, scaled)
 FEASIBILITY_TOLERANCE = 1e-5
+#: how many times finer than the control points the reported fine-grid costs are evaluated
+FINE_GRID_REFINEMENT = 4
 JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
 
 
@@ -104,6 +107,7 @@ class PredictResult:
     deviation: float
     objective: float
     violations: dict = field(default_factory=dict)
+    fine_grid: dict = field(default_factory=dict)
     design: np.ndarray = field(default_factory=lambda: np.zeros(0))
     converged: bool = False
     status: str = ""
@@ -133,6 +137,7 @@ class PredictResult:
             "double_support_pct": 100 * float(sum(d[p - 1] for p in DOUBLE_SUPPORT_PHASES)) / T,
             "max_residual_norm_by_phase": [float(v) for v in self.residual_norm_by_phase],
             "violations": {k: float(v) for k, v in self.violations.items()},
+            "fine_grid": dict(self.fine_grid),
             "gait_checks": self.gait_checks(),
             "vertical_impulse_ratio": self.vertical_impulse_ratio(),
         }
@@ -200,6 +205,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     converged = solved["success"] and solved["windows_hold"] and not violated_groups(violations)
     history.append(f"predict: {'symmetric' if cfg.symmetric else 'full'} model, {label}: {solved['status']} after "
                    f"{solved['iterations']} iterations")
+    result["fine_grid"] = fine_grid(cfg, solved["x"], reference, model)
     return PredictResult(**result, design=np.asarray(solved["x"], float), converged=bool(converged),
                          status=solved["status"], iterations=iterations + solved["iterations"],
                          rounds=rounds + solved["rounds"], solve_time_s=solve_time, history=tuple(history))
@@ -229,28 +235,66 @@ def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Reference,
     nlp = build_nlp(transcriber, reference, settings, symmetric=cfg.symmetric,
                     segments=instant_segments(transcriber, layout, x))
     fields, violations = describe(cfg, nlp, nlp.start(x), reference, model)
+    fields["fine_grid"] = fine_grid(cfg, x, reference, model)
     return PredictResult(**fields, design=np.asarray(x, float), converged=not violated_groups(violations),
                          status="evaluated", history=("predict: a given design vector, evaluated",))
 
 
-def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Reference, violations) -> dict:
+def _ground_forces(tr: Transcriber, t) -> np.ndarray:
+    """(P, 4) right f_x, f_z, left f_x, f_z at the control points from the transcription's λ, N."""
     grid, contact = tr.grid, tr.contact
-    opening = grid.instant_points
-    period, stride = float(np.sum(durations)), float(sum(steps))
-    times = np.asarray(t.instant_times_s, float).ravel()
-    mass = tr.model.total_mass_kg
     grf = np.zeros((grid.points, 4))
     for j in range(grid.points):
         names = contact.reaction_names[int(grid.phase[j]) + 1]
         for k, suffix in enumerate(("_r_fx_N", "_r_fz_N", "_l_fx_N", "_l_fz_N")):
             grf[j, k] = sum(v for v, n in zip(t.reactions[j], names) if n.endswith(suffix))
-    angles = walker_to_clinical(t.y[opening])
+    return grf
+
+
+def _costs(tr: Transcriber, t, period: float, stride: float, reference: Reference) -> tuple[float, float]:
+    """Et (5.27, J/m) and Jdev (5.28) of a transcription on its grid's instants."""
+    opening = tr.grid.instant_points
+    times = np.asarray(t.instant_times_s, float).ravel()
     pct = 100 * times / period
-    values = np.column_stack([angles, grf[opening] / mass])
+    values = np.column_stack([walker_to_clinical(t.y[opening]), _ground_forces(tr, t)[opening]
+                              / tr.model.total_mass_kg])
     means = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[:, k]) for k in range(len(VARIABLES))])
     sds = np.column_stack([np.interp(pct, CYCLE_PCT, reference.sd[:, k]) for k in range(len(VARIABLES))])
-    jdev = deviation(values, means, sds, times, period)
-    et = cost_of_transport(t.metabolic_rate_W, times, period, stride)
+    return (float(cost_of_transport(t.metabolic_rate_W, times, period, stride)),
+            float(deviation(values, means, sds, times, period)))
+
+
+def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Reference, model: WalkingModel,
+              refinement: int = FINE_GRID_REFINEMENT) -> dict:
+    """The design χ ``x`` on a grid ``refinement`` times finer than the control points' (each phase's
+    intervals split alike; exact heat-rate model): Et, Jdev, J and the largest moment error, contact error and
+    excitation range there — how far the optimum, which sees the control points only, holds between them."""
+    counts = tuple(refinement * (c - 1) + 1 for c in DEFAULT_CONTROL_POINTS)
+    fine = Transcriber(cfg.nodes, model=model, grid=control_grid(counts), smoothing=0.0)
+    layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
+    durations, steps_r, steps_l, _ = gait_at(layout, x, [])
+    times = np.asarray(instant_times(fine.grid, durations), float).ravel()
+    t = fine.at(*gait_at(layout, x, times))
+    et, jdev = _costs(fine, t, float(np.sum(durations)), steps_r + steps_l, reference)
+    u = np.asarray(t.muscle_state["u"], float)
+    return {"refinement": refinement, "cost_of_transport_J_per_m": et, "deviation": jdev,
+            "objective": float(objective(et, jdev, cfg.weight_pair())),
+            "max_moment_error_Nm": float(max(np.abs(fine.joint_map_pinv @ np.asarray(e, float)).max()
+                                             for e in t.residual)),
+            "max_contact_error_m": float(max(np.abs(c).max() for c in t.contact_error_m)),
+            "min_excitation": float(np.nanmin(u)), "max_excitation": float(np.nanmax(u))}
+
+
+def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Reference, violations) -> dict:
+    grid = tr.grid
+    opening = grid.instant_points
+    period, stride = float(np.sum(durations)), float(sum(steps))
+    times = np.asarray(t.instant_times_s, float).ravel()
+    mass = tr.model.total_mass_kg
+    grf = _ground_forces(tr, t)
+    angles = walker_to_clinical(t.y[opening])
+    pct = 100 * times / period
+    et, jdev = _costs(tr, t, period, stride, reference)
     # joint moments: muscles (and passive structures) vs what the motion and λ require (5.49–5.51)
     B_pinv = tr.joint_map_pinv
     muscle, required, error = [], [], []

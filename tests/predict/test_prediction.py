@@ -49,3 +49,17 @@ def test_the_symmetric_gait_repeats_mirrored(prediction):
     half = len(prediction.time_s) // 2
     angles = prediction.clinical_angles_deg
     np.testing.assert_allclose(angles[half:, 3:], angles[:half, :3], atol=1e-9)  # left = right half a cycle on
+
+
+def test_fine_grid_at_refinement_1_is_the_control_points(prediction):
+    """The fine-grid evaluation (splines evaluated anew at any times, ``problem.gait_at``) reproduces the
+    control-point costs on the control grid itself; 4× finer it is reported in summary.json."""
+    from gaitcli.predict.model import WalkingModel
+    from gaitcli.predict.stage import fine_grid
+
+    same = fine_grid(PredictConfig(), np.loadtxt(STORED), read_reference(bundled_reference()), WalkingModel(), 1)
+    assert same["cost_of_transport_J_per_m"] == pytest.approx(prediction.cost_of_transport_J_per_m, rel=1e-6)
+    assert same["deviation"] == pytest.approx(prediction.deviation, rel=1e-6)
+    assert same["max_moment_error_Nm"] <= 2.0 + 1e-4 and same["max_contact_error_m"] <= 0.002 + 1e-6
+    fine = prediction.summary()["fine_grid"]
+    assert fine["refinement"] == 4 and np.isfinite(fine["objective"])
