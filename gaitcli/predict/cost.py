@@ -19,6 +19,8 @@ periodic cycle (the last interval closes the cycle back to t_1 + T):
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import casadi as ca
 import numpy as np
 
@@ -32,14 +34,16 @@ DEFAULT_WEIGHTS = (4.0 / 3.0, 2.0 / 3.0)
 
 
 def check_weights(weights) -> tuple[float, float]:
-    """(w1, w2) with w1 + w2 = 2 and both ≥ 0 (5.29), else an InputError naming ``--weights``."""
+    """(w1, w2) with w1 + w2 = 2 and both ≥ 0 (5.29), else an InputError naming ``--weights``. Each may be a
+    fraction ("4/3"): 4/3 and 2/3 written as decimals differ from DEFAULT_WEIGHTS in the last bit, and the
+    optimizer's path (and local optimum) is sensitive to that."""
     try:
-        w1, w2 = (float(w) for w in weights)
-    except (TypeError, ValueError):
+        w1, w2 = (float(Fraction(w.strip())) if isinstance(w, str) else float(w) for w in weights)
+    except (TypeError, ValueError, ZeroDivisionError):
         raise InputError(None, "--weights", f"got {shown(weights)} (expected two numbers W1,W2)") from None
     if not (np.isfinite(w1) and np.isfinite(w2) and w1 >= 0 and w2 >= 0 and abs(w1 + w2 - 2.0) < 1e-9):
         raise InputError(None, "--weights", f"got {w1:g},{w2:g} (expected two weights ≥ 0 that sum to 2, (5.29); "
-                                            "e.g. 1.3333,0.6667)")
+                                            "e.g. 4/3,2/3)")
     return w1, w2
 
 

@@ -46,7 +46,7 @@ class PredictConfig:
 
     speed_m_s: float = parameter(1.1275, low=0.0, high=3.0, low_open=True,
                                  help="Mean walking speed, m/s (5.43; default 1.1275, the dissertation's).")
-    weights: str = parameter("1.3333333333333333,0.6666666666666667",
+    weights: str = parameter("4/3,2/3",
                              help="W1,W2 of J = W1·Et/100 + W2·Jdev (5.29), ≥ 0 and summing to 2 (default 4/3,2/3).")
     nodes: int = parameter(18, low=6, high=40, help="Spline nodes over the cycle, even (5.2.4; default 18).")
     symmetric: bool = parameter(True, help="Left leg = right leg half a cycle later (5.3.1; default on).")

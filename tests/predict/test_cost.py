@@ -106,6 +106,9 @@ def test_casadi_evaluation_equals_numpy(muscle, grid_times):
 def test_objective_and_its_weights():
     assert objective(350.0, 12.0) == pytest.approx(4 / 3 * 3.5 + 2 / 3 * 12.0)
     assert check_weights((1, 1)) == (1.0, 1.0)
-    for bad in ((1, 2), (2.5, -0.5), ("a", 1), (1,)):
+    # fractions are exact: "4/3,2/3" is DEFAULT_WEIGHTS to the bit (the decimals 0.6666666666666667 are not)
+    assert check_weights(("4/3", "2/3")) == (4 / 3, 2 / 3) and check_weights((" 1.5", "0.5 ")) == (1.5, 0.5)
+    assert check_weights(("4/3", "0.6666666666666667"))[1] != 2 / 3
+    for bad in ((1, 2), (2.5, -0.5), ("a", 1), (1,), ("1/0", "2"), ("nan", "2")):
         with pytest.raises(InputError, match="--weights"):
             check_weights(bad)
