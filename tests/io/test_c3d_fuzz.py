@@ -14,13 +14,14 @@ import pytest
 
 from gaitcli.core.recording import Recording
 from gaitcli.errors import InputError
-from gaitcli.io.c3d import READ_TIME_S, read_c3d
+from gaitcli.io.c3d import read_c3d
 from gaitcli.resources import sample_trial
 
 from ..conftest import SHARED_C3D
 
 MUTATIONS = 100  # per file: 200 in all
 CHUNKS = 4  # tests per file, so that pytest-xdist shares the reads out
+LIMIT_S = 10.0
 
 
 def _mutations(source: Path, seed: int) -> list[tuple[int, int]]:
@@ -33,8 +34,13 @@ def _mutations(source: Path, seed: int) -> list[tuple[int, int]]:
     return list(zip(map(int, offsets), values))
 
 
-def _read_mutated(source: Path, tmp_path: Path, seed: int, chunk: int) -> dict:
+def _read_mutated(source: Path, tmp_path: Path, seed: int, chunk: int, monkeypatch) -> dict:
+    import gaitcli.io.c3d as c3d_module
+
     data = bytearray(source.read_bytes())
+    # the bounds exactly: 10 s and 1 GB per read (the reader's limits grow with the file's size)
+    monkeypatch.setattr(c3d_module, "READ_TIME_S", LIMIT_S - len(data) / 2e6)
+    monkeypatch.setattr(c3d_module, "READ_MEMORY_BYTES", (1 << 30) - 40 * len(data))
     outcomes = {"read": 0, "refused": 0}
     for offset, value in _mutations(source, seed)[chunk::CHUNKS]:
         mutated = bytearray(data)
@@ -54,20 +60,21 @@ def _read_mutated(source: Path, tmp_path: Path, seed: int, chunk: int) -> dict:
             assert "ignoreBadFormatting" not in message, message  # the library's advice, not gait's
             outcomes["refused"] += 1
         # the child's limit, not a timing claim: a hang would run for minutes
-        assert time.perf_counter() - start < READ_TIME_S + 5.0, f"byte {offset} = {value}"
+        assert time.perf_counter() - start < LIMIT_S + 5.0, f"byte {offset} = {value}"
         path.unlink()
     return outcomes
 
 
 @pytest.mark.parametrize("chunk", range(CHUNKS))
-def test_mutated_sample_trial(tmp_path, chunk):
-    outcomes = _read_mutated(sample_trial("normal") / "trial.c3d", tmp_path, seed=9, chunk=chunk)
+def test_mutated_sample_trial(tmp_path, chunk, monkeypatch):
+    outcomes = _read_mutated(sample_trial("normal") / "trial.c3d", tmp_path, seed=9, chunk=chunk,
+                             monkeypatch=monkeypatch)
     assert sum(outcomes.values()) == len(range(chunk, MUTATIONS, CHUNKS))
 
 
 @pytest.mark.parametrize("chunk", range(CHUNKS))
-def test_mutated_lab_file(tmp_path, chunk):
+def test_mutated_lab_file(tmp_path, chunk, monkeypatch):
     if not SHARED_C3D.is_dir():
         pytest.skip("../shared/data/c3d is absent")
-    outcomes = _read_mutated(SHARED_C3D / "Eb015pi.c3d", tmp_path, seed=10, chunk=chunk)
+    outcomes = _read_mutated(SHARED_C3D / "Eb015pi.c3d", tmp_path, seed=10, chunk=chunk, monkeypatch=monkeypatch)
     assert sum(outcomes.values()) == len(range(chunk, MUTATIONS, CHUNKS))
