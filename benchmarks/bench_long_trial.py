@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -20,12 +20,17 @@ from pathlib import Path
 from timing import gait_argv, one_core
 
 
+_PEAK = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, capture_output=True); "
+         "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+
+
 def _run(*args) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of ``gait ARGS`` and its children (the largest one)."""
+    """Wall time (s) and peak RSS (MB) of ``gait ARGS`` alone (the largest of it and its children, the C3D
+    reader's included), measured by a wrapper process of its own."""
     start = time.perf_counter()
-    subprocess.run(gait_argv(*args), check=True, capture_output=True, text=True)
-    wall = time.perf_counter() - start
-    return wall, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    out = subprocess.run([sys.executable, "-c", _PEAK, *gait_argv(*args)], check=True, capture_output=True,
+                         text=True)
+    return time.perf_counter() - start, int(out.stdout.split()[-1]) / 1024
 
 
 def main() -> None:
@@ -43,7 +48,7 @@ def main() -> None:
             wall, peak = _run("-q", stage, trial, "--no-plots")
             summary = json.loads((trial / "gait_out" / stage / "summary.json").read_text())
             frames = summary["frames"]
-            print(f"{stage:<8} {wall:8.1f} {peak:8.0f}  {frames} in summary.json; peak so far "
+            print(f"{stage:<8} {wall:8.1f} {peak:8.0f}  {frames} in summary.json; peak "
                   f"{peak * 1e6 / size:.0f} bytes per byte of trial.c3d")
 
 
