@@ -187,8 +187,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     elif cfg.symmetric:
         x0 = initial_guess(transcriber, reference, settings, symmetric=True)
     else:
-        # the full model starts from the symmetric model's solution (its default guess): a gait that already
-        # walks, which the full model's splines interpolate at their nodes
+        # the full model starts from the symmetric model's solution (from its default guess): a gait that
+        # already walks, to which the full model's splines are fitted (layout.full_from_symmetric)
         first = solve_windowed(transcriber, reference, initial_guess(transcriber, reference, settings,
                                                                      symmetric=True),
                                settings, symmetric=True, report=report)
