@@ -437,7 +437,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         u = muscles.muscle.excitation(a_m[:, c].T, adot[:, c].T)
         f_ce = force_m[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, n_i)
         # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
-        # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ~1e6 where g is small
+        # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small
         f_max = ca.repmat(ca.DM(f_max_n[c]), 1, n_i)
         add("activation", (muscles.muscle.fibre_force(a_m[:, c].T, l_ce, v_ce) - f_ce) / f_max, 0.0, 0.0)
         rate.append(transcriber.metabolic(u, a_m[:, c].T, l_ce, v_ce, f_ce).T)
