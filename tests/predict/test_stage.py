@@ -45,3 +45,27 @@ def test_the_result_parts_agree(stopped):
 def test_a_warm_start_of_another_layout_is_refused():
     with pytest.raises(InputError, match="--init"):
         run_predict(PredictConfig(nodes=6), reference=read_reference(bundled_reference()), init=np.zeros(10))
+
+
+def test_a_full_model_result_is_written_with_its_layout(tmp_path):
+    """The full model's result through the predict writer (the CLI test runs the symmetric one): its 435
+    design values and ``symmetric: false`` in predict.h5 and summary.json, every table with 72 instants."""
+    import json
+    from pathlib import Path
+
+    import h5py
+
+    from gaitcli.predict.layout import full_from_symmetric
+    from gaitcli.predict.stage import evaluate_design
+    from gaitcli.report.predict_outputs import write_predict_outputs
+
+    stored = Path(__file__).parent / "data" / "predicted_normal_symmetric_nn18.csv"
+    x = full_from_symmetric(18, np.loadtxt(stored))
+    result = evaluate_design(PredictConfig(symmetric=False), x, reference=read_reference(bundled_reference()))
+    summary = write_predict_outputs(tmp_path, result, {"converged": int(result.converged)})
+    assert summary["symmetric"] is False and len(summary["phase_durations_s"]) == 8
+    with h5py.File(tmp_path / "predict.h5", "r") as h5:
+        assert np.asarray(h5["result/design"][()]).size == 435
+    for name in ("motion.csv", "muscles.csv"):
+        assert sum(1 for _ in open(tmp_path / name)) == 73  # header + 72 instants
+    assert json.loads(json.dumps(summary, default=float))["fine_grid"]["refinement"] == 4
