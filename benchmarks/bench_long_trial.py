@@ -1,6 +1,6 @@
 """A trial longer than the C3D header's 65,535 frames through ``gait filter`` and ``gait idyn``.
 
-Run from the repository root: ``python benchmarks/bench_long_trial.py [--strides 832]`` (832 strides of the
+Run from the repository root: ``python benchmarks/bench_long_trial.py [--strides 833]`` (833 strides of the
 synthetic walker: about 100,000 frames at 100 Hz, two plates at 1 kHz). Prints, for ``gait synth``,
 ``gait filter`` and ``gait idyn`` (each a new process, one core): wall time, peak resident memory of the
 process and of the C3D reader's child, the frame count the stage's summary.json reports against the file's,
@@ -35,7 +35,7 @@ def _run(*args) -> tuple[float, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--strides", type=int, default=832)
+    parser.add_argument("--strides", type=int, default=833)
     args = parser.parse_args()
     one_core()
     with tempfile.TemporaryDirectory() as folder:

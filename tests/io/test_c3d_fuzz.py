@@ -19,7 +19,7 @@ from gaitcli.resources import sample_trial
 
 from ..conftest import SHARED_C3D
 
-MUTATIONS = 100  # per file: 200 in all
+MUTATIONS = 200  # per file
 CHUNKS = 4  # tests per file, so that pytest-xdist shares the reads out
 LIMIT_S = 10.0
 
