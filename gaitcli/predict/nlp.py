@@ -32,7 +32,7 @@ Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first
     splines     Q's y, ẏ, ÿ, ŝ = the splines at the instants              (5.10–5.12)
     dynamics    rhs = M ÿ + k − g − Q_p − R f_m                           (5.1)
     paths       l_m, v_m = the muscle paths at (y, ẏ)                     (A.9)
-    activation  a = the activation that produces F at (l_ce, v_ce)        (4.18)
+    activation  a·F_max·g(l_ce, v_ce) = f_ce: the activation that makes F  (2.18, 4.18)
     reactions   G_phᵀ (rhs − G_ph λ) = 0: λ = G_ph⁺ rhs                   (5.30)
     moment      |B⁺e| ≤ εm, e = rhs − G_ph λ, per joint and control point (5.49–5.51, 5.53)
     contact     |c_ph| ≤ εk per row and control point                    (5.57)
