@@ -1,0 +1,64 @@
+"""Passive transtibial prosthetic ankles (Diss. 5.3.3, Appendix A.7; CHAPTER5_NOTES §1.12, §2.4, §3 item 1).
+
+The ankle moment of a prosthetic foot is a function of the model's ankle angle y (y6 or y9, rad; y < 0 is
+dorsiflexion) and its rate:
+
+    τ_s(y) = a_p y³ + b_p y² + c0 y   (y > 0),    a_n y³ + b_n y² + c0 y   (y ≤ 0)        (5.58)
+    τ_prosth = τ_s(y) − d_prosth ẏ                                                    (5.59)
+
+in N·m, positive in the sense of y (plantarflexing), so a restoring spring decreases with y (c0 < 0). τ_s(0) = 0
+and its slope is c0 from both sides. The three commercial feet are Table A.7's fits of Klute et al.'s curves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from gaitcli.predict.splines import is_casadi
+
+
+@dataclass(frozen=True)
+class ProsthesisCurve:
+    """The coefficients of (5.58)–(5.59): N·m/rad³, N·m/rad², N·m/rad; damping N·m·s/rad."""
+
+    name: str
+    a_p: float
+    b_p: float
+    c0: float
+    a_n: float
+    b_n: float
+    damping_Nms_per_rad: float
+
+    def spring_moment_Nm(self, y):
+        """τ_s(y) (5.58) at ankle angles ``y`` (rad; numpy or CasADi)."""
+        plantar = (self.a_p * y + self.b_p) * y * y + self.c0 * y
+        dorsal = (self.a_n * y + self.b_n) * y * y + self.c0 * y
+        if is_casadi(y):
+            return ca.if_else(y > 0, plantar, dorsal)
+        return np.where(np.asarray(y) > 0, plantar, dorsal)
+
+    def moment_Nm(self, y, y_rate):
+        """τ_prosth = τ_s(y) − d_prosth·ẏ (5.59), N·m."""
+        return self.spring_moment_Nm(y) - self.damping_Nms_per_rad * y_rate
+
+    def plantarflexor_moment_Nm(self, dorsiflexion_rad):
+        """The spring's plantarflexor moment at a dorsiflexion angle in the product's convention
+        (dorsiflexion positive, y = −δ; τ_s is already positive plantarflexing): CHAPTER5_NOTES §3 item 1."""
+        return self.spring_moment_Nm(-np.asarray(dorsiflexion_rad, float))
+
+    def is_monotone(self, low_rad: float, high_rad: float, samples: int = 401) -> bool:
+        """Whether τ_s decreases (dτ_s/dy ≤ 0) over [low, high] in y, checked at ``samples`` angles."""
+        y = np.linspace(low_rad, high_rad, samples)
+        slope = np.where(y > 0, 3 * self.a_p * y ** 2 + 2 * self.b_p * y, 3 * self.a_n * y ** 2 + 2 * self.b_n * y)
+        return bool(np.all(slope + self.c0 <= 0.0))
+
+
+#: Table A.7: the commercial feet fitted with (5.58), d_prosth = 1.0 N·m·s/rad
+COMMERCIAL_FEET = {
+    "sach": ProsthesisCurve("SACH", 1534.0, -640.0, -174.2, 914.8, 6396.0, 1.0),
+    "seattle": ProsthesisCurve("Seattle", -34020.0, 2496.0, -354.3, -524.9, 1402.0, 1.0),
+    "flex": ProsthesisCurve("Flex", -17090.0, 1889.0, -281.5, 15.64, 274.2, 1.0),
+}

@@ -1,0 +1,62 @@
+"""Prosthetic ankle curves (gaitcli/predict/prosthesis.py, (5.58)–(5.59)) against the known-answer table of
+CHAPTER5_NOTES §2.4, computed there from Table A.7 independently of this code."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
+
+ANGLES_RAD = (-0.3, -0.2, -0.1, 0.1, 0.2)
+KNOWN_NM = {"sach": (603.2, 283.4, 80.5, -22.3, -48.2), "seattle": (246.6, 131.1, 50.0, -44.5, -243.2),
+            "flex": (108.7, 67.1, 30.9, -26.4, -117.5)}
+#: Table A.8's near-optimal feet at 1.00 m/s, weights a) and 1.33 m/s, weights b), with the same table's values
+OPTIMAL = {"1.00 a": (ProsthesisCurve("opt", -17360, 1375, -100.0, -5231, 1630, 0.372),
+                      (317.9, 127.0, 31.5, -13.6, -103.9)),
+           "1.33 b": (ProsthesisCurve("opt", -16870, 1015, -171.0, -5189, -280, 0.051),
+                      (166.2, 64.5, 19.5, -23.8, -128.6))}
+
+
+@pytest.mark.parametrize("name", list(KNOWN_NM))
+def test_commercial_feet_match_the_known_answers(name):
+    np.testing.assert_allclose(COMMERCIAL_FEET[name].spring_moment_Nm(np.array(ANGLES_RAD)), KNOWN_NM[name],
+                               atol=0.1)
+
+
+@pytest.mark.parametrize("case", list(OPTIMAL))
+def test_near_optimal_feet_match_the_known_answers(case):
+    curve, known = OPTIMAL[case]
+    np.testing.assert_allclose(curve.spring_moment_Nm(np.array(ANGLES_RAD)), known, atol=0.1)
+
+
+@pytest.mark.parametrize("name", list(KNOWN_NM))
+def test_zero_at_neutral_with_slope_c0_from_both_sides(name):
+    curve = COMMERCIAL_FEET[name]
+    h = 1e-6
+    assert curve.spring_moment_Nm(0.0) == 0.0
+    assert curve.spring_moment_Nm(h) / h == pytest.approx(curve.c0, rel=1e-3)
+    assert curve.spring_moment_Nm(-h) / -h == pytest.approx(curve.c0, rel=1e-3)
+    y = ca.SX.sym("y")
+    slope = ca.Function("s", [y], [ca.jacobian(curve.spring_moment_Nm(y), y)])
+    assert float(slope(1e-9)) == pytest.approx(curve.c0, rel=1e-6) and float(slope(-1e-9)) == pytest.approx(
+        curve.c0, rel=1e-6)
+
+
+def test_the_product_convention_gives_sach_a_plantarflexor_moment_at_dorsiflexion():
+    """0.2 rad of dorsiflexion (y = −0.2): SACH resists with a 283.4 N·m plantarflexor moment (§3 item 1)."""
+    assert COMMERCIAL_FEET["sach"].plantarflexor_moment_Nm(0.2) == pytest.approx(283.4, abs=0.1)
+    # dorsiflexion stiffness SACH > Seattle > Flex, as 5.3.3 says
+    moments = [COMMERCIAL_FEET[k].plantarflexor_moment_Nm(0.2) for k in ("sach", "seattle", "flex")]
+    assert moments == sorted(moments, reverse=True)
+
+
+def test_damping_and_monotonicity():
+    flex = COMMERCIAL_FEET["flex"]
+    assert flex.moment_Nm(-0.1, 2.0) == pytest.approx(30.9 - 2.0, abs=0.1)  # (5.59), d = 1 N·m·s/rad
+    limit = np.radians(28.6)
+    assert flex.is_monotone(-limit, limit) and COMMERCIAL_FEET["seattle"].is_monotone(-limit, limit)
+    # SACH's curve turns upward beyond +21.7° of plantarflexion (notes §2.4)
+    assert not COMMERCIAL_FEET["sach"].is_monotone(-limit, limit)
+    assert COMMERCIAL_FEET["sach"].is_monotone(-limit, np.radians(21.0))
