@@ -23,10 +23,8 @@ def _start(*args, cwd: Path) -> subprocess.Popen:
 def _interrupt_after(process: subprocess.Popen, delay_s: float, signum: int) -> str:
     time.sleep(delay_s)
     assert process.poll() is None, "the run ended before the signal"
-    sent = time.perf_counter()
     process.send_signal(signum)
-    _, stderr = process.communicate(timeout=60)
-    assert time.perf_counter() - sent < 5.0, "the run did not stop promptly"  # a hang, not a timing claim
+    _, stderr = process.communicate(timeout=60)  # a run that ignored the signal fails here (TimeoutExpired)
     return stderr
 
 

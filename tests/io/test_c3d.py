@@ -429,16 +429,16 @@ def test_a_crash_in_the_c3d_library_is_an_input_error(monkeypatch):
 
 
 def test_a_hang_is_stopped_at_the_time_limit(monkeypatch):
+    import multiprocessing
     import time
 
     import gaitcli.io.c3d as c3d_module
 
     monkeypatch.setattr(c3d_module, "READ_TIME_S", 0.5)
     _misbehaving_reader(monkeypatch, lambda: time.sleep(60))
-    start = time.perf_counter()
     with pytest.raises(InputError, match="took longer than"):
         read_c3d(_sample_path())
-    assert time.perf_counter() - start < 10.0  # not 60 s: the child was killed
+    assert not multiprocessing.active_children()  # the sleeping child was killed, not left behind
 
 
 def test_a_runaway_allocation_is_capped(monkeypatch):

@@ -5,7 +5,6 @@ hang, no runaway allocation (once 12.7 GB for a 0.5 MB file), no other exception
 
 from __future__ import annotations
 
-import time
 import warnings
 from pathlib import Path
 
@@ -47,7 +46,6 @@ def _read_mutated(source: Path, tmp_path: Path, seed: int, chunk: int, monkeypat
         mutated[offset] = value
         path = tmp_path / f"mutated_{offset}_{value}.c3d"
         path.write_bytes(bytes(mutated))
-        start = time.perf_counter()
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -59,8 +57,6 @@ def _read_mutated(source: Path, tmp_path: Path, seed: int, chunk: int, monkeypat
             assert "\n" not in message and len(message) < 400 and str(path) in message, message
             assert "ignoreBadFormatting" not in message, message  # the library's advice, not gait's
             outcomes["refused"] += 1
-        # the child's limit, not a timing claim: a hang would run for minutes
-        assert time.perf_counter() - start < LIMIT_S + 5.0, f"byte {offset} = {value}"
         path.unlink()
     return outcomes
 
