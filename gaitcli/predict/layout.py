@@ -76,6 +76,16 @@ class DesignLayout:
                 np.reshape(np.asarray(part, float), (rows, cols), order="F")
         return out
 
+    def phase_durations(self, x) -> np.ndarray:
+        """T_1 … T_8 (s) of a numeric χ (the symmetric model repeats its four)."""
+        d = self.unpack(np.asarray(x, float))["durations"].ravel()
+        return np.tile(d, 2) if self.symmetric else d
+
+    def step_lengths(self, x) -> tuple[float, float]:
+        """(L_r, L_l) in m of a numeric χ (the symmetric model's one step twice)."""
+        steps = self.unpack(np.asarray(x, float))["steps"].ravel()
+        return (float(steps[0]), float(steps[0])) if self.symmetric else (float(steps[0]), float(steps[1]))
+
     def pack(self, blocks: dict) -> np.ndarray:
         """χ (size,) from numpy blocks of the layout's shapes (the inverse of :meth:`unpack`)."""
         x = np.zeros(self.size)

@@ -134,12 +134,6 @@ def box_bounds(layout: DesignLayout) -> tuple[np.ndarray, np.ndarray]:
     return low, high
 
 
-def phase_durations(layout: DesignLayout, x) -> np.ndarray:
-    """T_1 … T_8 (s) of χ (the symmetric model repeats its four)."""
-    d = layout.unpack(np.asarray(x, float))["durations"].ravel()
-    return np.tile(d, 2) if layout.symmetric else d
-
-
 @dataclass
 class SplineBlock:
     """One spline family of w: its coefficients (``rows`` × ``columns`` SX), spline, the χ block it stands for."""
@@ -244,7 +238,7 @@ class NLP:
 def instant_segments(transcriber: Transcriber, layout: DesignLayout, x: np.ndarray) -> dict:
     """The spline segment of each instant of χ ``x``: "cycle" (I,) for the T-periodic splines and, in the
     symmetric model, "half" (I/2,) for the T/2-periodic trunk splines."""
-    durations = phase_durations(layout, x)
+    durations = layout.phase_durations(x)
     fractions = instant_times(transcriber.grid, durations) / durations.sum()
     out = {"cycle": segment_of(transcriber.quartic, fractions)}
     if layout.symmetric:

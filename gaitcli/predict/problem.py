@@ -194,10 +194,9 @@ def gait_at(layout: DesignLayout, x, times) -> tuple:
     blocks = layout.unpack(np.asarray(x, float))
     t = np.asarray(times, float).ravel()
     leg, forces = quartic(layout.nodes), cubic(layout.nodes)
+    durations, (steps_r, steps_l) = layout.phase_durations(x), layout.step_lengths(x)
+    period = float(durations.sum())
     if layout.symmetric:
-        durations = np.tile(blocks["durations"].ravel(), 2)
-        steps_r = steps_l = float(blocks["steps"][0, 0])
-        period = float(durations.sum())
         half = quartic(blocks["trunk"].shape[0] + 1)
         right, trunk = blocks["right_leg"], blocks["trunk"]
         rows = []
@@ -209,10 +208,8 @@ def gait_at(layout: DesignLayout, x, times) -> tuple:
         stretch = np.column_stack([evaluate(forces, blocks["right_stretch"], period, t),
                                    evaluate(forces, blocks["right_stretch"], period, t + period / 2)])
     else:
-        durations, (steps_r, steps_l) = blocks["durations"].ravel(), blocks["steps"].ravel()
-        period = float(durations.sum())
         coordinates = blocks["coordinates"]
         rows = [np.column_stack([hip_x(leg, coordinates[:, 0], period, steps_r + steps_l, t, r),
                                  evaluate(leg, coordinates[:, 1:], period, t, r)]) for r in range(3)]
         stretch = evaluate(forces, blocks["tendon_stretch"], period, t)
-    return durations, float(steps_r), float(steps_l), (*rows, stretch)
+    return durations, steps_r, steps_l, (*rows, stretch)

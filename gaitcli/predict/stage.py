@@ -251,13 +251,15 @@ def _ground_forces(tr: Transcriber, t) -> np.ndarray:
     return grf
 
 
-def _costs(tr: Transcriber, t, period: float, stride: float, reference: Reference) -> tuple[float, float]:
-    """Et (5.27, J/m) and Jdev (5.28) of a transcription on its grid's instants."""
+def _costs(tr: Transcriber, t, period: float, stride: float, reference: Reference,
+           grf: np.ndarray | None = None) -> tuple[float, float]:
+    """Et (5.27, J/m) and Jdev (5.28) of a transcription on its grid's instants (``grf``: its
+    :func:`_ground_forces`, where the caller has them)."""
     opening = tr.grid.instant_points
     times = np.asarray(t.instant_times_s, float).ravel()
     pct = 100 * times / period
-    values = np.column_stack([walker_to_clinical(t.y[opening]), _ground_forces(tr, t)[opening]
-                              / tr.model.total_mass_kg])
+    grf = _ground_forces(tr, t) if grf is None else grf
+    values = np.column_stack([walker_to_clinical(t.y[opening]), grf[opening] / tr.model.total_mass_kg])
     means = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[:, k]) for k in range(len(VARIABLES))])
     sds = np.column_stack([np.interp(pct, CYCLE_PCT, reference.sd[:, k]) for k in range(len(VARIABLES))])
     return (float(cost_of_transport(t.metabolic_rate_W, times, period, stride)),
@@ -272,10 +274,10 @@ def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Reference, model: Wa
     counts = tuple(refinement * (c - 1) + 1 for c in DEFAULT_CONTROL_POINTS)
     fine = Transcriber(cfg.nodes, model=model, grid=control_grid(counts), smoothing=0.0)
     layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
-    durations, steps_r, steps_l, _ = gait_at(layout, x, [])
+    durations = layout.phase_durations(x)
     times = np.asarray(instant_times(fine.grid, durations), float).ravel()
     t = fine.at(*gait_at(layout, x, times))
-    et, jdev = _costs(fine, t, float(np.sum(durations)), steps_r + steps_l, reference)
+    et, jdev = _costs(fine, t, float(np.sum(durations)), sum(layout.step_lengths(x)), reference)
     u = np.asarray(t.muscle_state["u"], float)
     return {"refinement": refinement, "cost_of_transport_J_per_m": et, "deviation": jdev,
             "objective": float(objective(et, jdev, cfg.weight_pair())),
@@ -294,7 +296,7 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
     grf = _ground_forces(tr, t)
     angles = walker_to_clinical(t.y[opening])
     pct = 100 * times / period
-    et, jdev = _costs(tr, t, period, stride, reference)
+    et, jdev = _costs(tr, t, period, stride, reference, grf)
     # joint moments: muscles (and passive structures) vs what the motion and λ require (5.49–5.51)
     B_pinv = tr.joint_map_pinv
     muscle, required, error = [], [], []

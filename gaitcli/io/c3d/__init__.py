@@ -48,13 +48,14 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     floods the C3D library is an :class:`InputError` of one line, not a dead or stuck ``gait``. Warnings of
     the read are given again here."""
     path = Path(path)
-    check_file(path)  # the usual one-line errors without a child process
+    header_frames = check_file(path)  # the usual one-line errors without a child process
     if "fork" not in multiprocessing.get_all_start_methods():  # Windows: the checks above, then in-process
-        return read_c3d_here(path, to_model_axes=to_model_axes)
+        return read_c3d_here(path, to_model_axes=to_model_axes, header_frames=header_frames)
     size = path.stat().st_size
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
-    child = context.Process(target=_child_read, args=(path, to_model_axes, send, READ_MEMORY_BYTES + 40 * size),
+    memory_bytes = READ_MEMORY_BYTES + 40 * size
+    child = context.Process(target=_child_read, args=(path, to_model_axes, header_frames, send, memory_bytes),
                             daemon=True)
     child.start()
     send.close()
@@ -86,7 +87,7 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     return recording
 
 
-def _child_read(path: Path, to_model_axes: bool, send, memory_bytes: int) -> None:
+def _child_read(path: Path, to_model_axes: bool, header_frames, send, memory_bytes: int) -> None:
     """In the child: cap the address space, read, send ("ok", recording, warnings) or what went wrong. The
     library's own output and a crash report go nowhere: the parent says what happened, in one line."""
     try:
@@ -99,7 +100,7 @@ def _child_read(path: Path, to_model_axes: bool, send, memory_bytes: int) -> Non
             resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            recording = read_c3d_here(path, to_model_axes=to_model_axes)
+            recording = read_c3d_here(path, to_model_axes=to_model_axes, header_frames=header_frames)
         send.send(("ok", recording, [(str(w.message), w.category) for w in caught]))
     except InputError as exc:
         send.send(("input", exc.path, exc.field, exc.problem))
@@ -122,17 +123,22 @@ def _address_space() -> int:
     return 0
 
 
-def read_c3d_here(path, *, to_model_axes: bool = True) -> Recording:
+_UNCHECKED = object()
+
+
+def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED) -> Recording:
     """Read a C3D trial into a :class:`Recording` (metres, newtons, N·m), in this process.
 
     With ``to_model_axes`` the lab → model rotation from
     :func:`gaitcli.io.axes.infer_lab_to_model` is applied and stored in
     ``lab_to_model``; without it the data stay in lab axes, ``lab_to_model`` is
     the identity and the inferred rotation is given in ``notes``.
-    Raises :class:`InputError` for a missing, non-C3D, truncated or MIPS file.
+    Raises :class:`InputError` for a missing, non-C3D, truncated or MIPS file. ``header_frames``: what
+    :func:`~.header.check_file` returned for this file, where the caller has already run it.
     """
     path = Path(path)
-    header_frames = check_file(path)
+    if header_frames is _UNCHECKED:
+        header_frames = check_file(path)
     try:
         c = ezc3d.c3d(str(path))
     except Exception as exc:  # ezc3d raises RuntimeError/OSError/ValueError with multi-line text
