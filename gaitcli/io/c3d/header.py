@@ -16,7 +16,7 @@ from pathlib import Path
 
 from gaitcli.errors import GaitWarning, InputError
 
-__all__ = ["check_file", "check_parameters", "one_line", "warn", "param", "strings"]
+__all__ = ["check_file", "check_parameters", "data_layout", "one_line", "warn", "param", "strings"]
 
 _MIPS_MESSAGE = (
     "cannot read C3D: MIPS/SGI processor format is not supported; expected Intel or DEC (re-export the file)"
@@ -73,18 +73,15 @@ def check_file(path: Path) -> int | None:
             f"{param_offset + 512 * n_param_blocks})",
         )
     check_parameters(path, param_offset, n_param_blocks, size)
-    n_points, n_analog, first, last = struct.unpack("<4H", head[2:10])
-    data_block = struct.unpack("<H", head[16:18])[0]
-    if data_block <= param_block:
-        raise InputError(path, "header", f"not a C3D file: data block {data_block} is not after the parameters")
-    if processor == 1:
-        is_float = struct.unpack("<f", head[12:16])[0] < 0
-    else:  # DEC F-float: the sign bit is the top bit of the first 16-bit word
-        is_float = bool(head[13] & 0x80)
+    first, last = struct.unpack("<2H", head[6:10])
+    data_start, frame_bytes = data_layout(head, processor)
+    if data_start < param_block * 512:
+        raise InputError(path, "header", f"not a C3D file: data block {data_start // 512 + 1} is not after the "
+                                         "parameters")
     if last < first:
         return None
     n_frames = last - first + 1
-    need = (data_block - 1) * 512 + n_frames * (4 * n_points + n_analog) * (4 if is_float else 2)
+    need = data_start + n_frames * frame_bytes
     if size < need:
         raise InputError(
             path, "data",
@@ -185,6 +182,18 @@ class ParameterRecord:
     kind: int
     dims: tuple[int, ...]
     data_offset: int
+
+
+def data_layout(head: bytes, processor: int) -> tuple[int, int]:
+    """(byte offset of the data section, bytes per frame) from the 512-byte header; ``processor`` 1 Intel,
+    2 DEC (the parameter section's processor byte − 83)."""
+    n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
+    data_block = struct.unpack("<H", head[16:18])[0]
+    if processor == 1:
+        is_float = struct.unpack("<f", head[12:16])[0] < 0
+    else:  # DEC F-float: the sign bit is the top bit of the first 16-bit word
+        is_float = bool(head[13] & 0x80)
+    return (data_block - 1) * 512, (4 * n_points + analog_per_frame) * (4 if is_float else 2)
 
 
 def warn(message: str, notes: list[str]) -> None:

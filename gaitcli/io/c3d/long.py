@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.errors import InputError
-from gaitcli.io.c3d.header import ParameterRecord, check_parameters, param
+from gaitcli.io.c3d.header import ParameterRecord, check_parameters, data_layout, param
 
 #: the most frames a C3D header (and ezc3d) counts
 HEADER_FRAMES = 65535
@@ -53,21 +53,23 @@ def frame_count(params, frames_read: int) -> int:
 def chunk_files(path: Path, total_frames: int) -> Iterator[list[tuple[Path, int]]]:
     """Temporary C3D files of frames 65 536 … ``total_frames`` of ``path``, at most 65 535 frames each; yields
     [(file, frames)] and removes them afterwards."""
-    data = path.read_bytes()
-    param_block = data[0]
-    offset, blocks = (param_block - 1) * 512, data[(param_block - 1) * 512 + 2]
-    records = check_parameters(path, offset, blocks, len(data))
-    n_points, analog_per_frame = struct.unpack("<2H", data[2:6])
-    data_block = struct.unpack("<H", data[16:18])[0]
-    is_float = struct.unpack("<f", data[12:16])[0] < 0 if data[offset + 3] == 84 else bool(data[13] & 0x80)
-    frame_bytes = (4 * n_points + analog_per_frame) * (4 if is_float else 2)
-    start = (data_block - 1) * 512
-    if start + total_frames * frame_bytes > len(data):
-        raise InputError(path, "data", f"cannot read C3D: file is truncated ({len(data)} bytes, its "
+    size = path.stat().st_size
+    with open(path, "rb") as f:
+        head = f.read(512)
+        param_block = head[0]
+        offset = (param_block - 1) * 512
+        f.seek(offset)
+        param_head = f.read(4)
+        blocks = param_head[2]
+        f.seek(0)
+        head = bytearray(f.read(offset + 512 * blocks))  # header and parameters, copied into every part
+    records = check_parameters(path, offset, blocks, size)
+    start, frame_bytes = data_layout(head, param_head[3] - 83)
+    if start + total_frames * frame_bytes > size:
+        raise InputError(path, "data", f"cannot read C3D: file is truncated ({size} bytes, its "
                                        f"{total_frames} frames need {start + total_frames * frame_bytes})")
     new_block = param_block + blocks  # the data right after the parameters
-    head = bytearray(data[:offset + 512 * blocks])
-    with tempfile.TemporaryDirectory(prefix="gait-c3d-") as folder:
+    with tempfile.TemporaryDirectory(prefix="gait-c3d-") as folder, open(path, "rb") as f:
         out = []
         for k, first in enumerate(range(HEADER_FRAMES, total_frames, HEADER_FRAMES)):
             count = min(HEADER_FRAMES, total_frames - first)
@@ -79,8 +81,9 @@ def chunk_files(path: Path, total_frames: int) -> Iterator[list[tuple[Path, int]
             _set(part, records.get(("POINT", "LONG_FRAMES")), count)
             _set(part, records.get(("TRIAL", "ACTUAL_START_FIELD")), 1)
             _set(part, records.get(("TRIAL", "ACTUAL_END_FIELD")), count)
+            f.seek(start + first * frame_bytes)
             chunk = Path(folder) / f"part{k + 1}.c3d"
-            chunk.write_bytes(bytes(part) + data[start + first * frame_bytes:start + (first + count) * frame_bytes])
+            chunk.write_bytes(bytes(part) + f.read(count * frame_bytes))  # one part's data at a time
             out.append((chunk, count))
         yield out
 
