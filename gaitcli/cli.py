@@ -196,19 +196,60 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
                    "subject 1, 73.0 kg, 1.792 m).")
 @click.option("--init", "init", type=click.Path(path_type=Path, dir_okay=False),
               help="Start from the solution in an earlier predict.h5 (same --nodes and --symmetric).")
+@_config_option(PredictConfig, "foot_mass_kg", "--foot-mass")
+@click.option("--foot-mass-at", "foot_mass_at", default=None, metavar="FORWARD,DOWN",
+              help="Put the added foot mass as a band FORWARD,DOWN m from the ankle in the foot frame, with Table "
+                   "A.2's inertia (default: at the foot's CoM, inertia unchanged).")
+@click.option("--prosthesis", "prosthesis", default=None, metavar="sach|seattle|flex|optimal|FILE",
+              help="Bilateral transtibial prostheses (5.3.3): a commercial foot of Table A.7, the optimal device, "
+                   "or a YAML file of a_p, b_p, c0, a_n, b_n, d_prosth (N·m/rad³, /rad², /rad, N·m·s/rad).")
+@_config_option(PredictConfig, "strength_scale", "--strength-scale")
+@click.option("--monotone-range", "monotone_range_deg", default=None, metavar="LOW,HIGH",
+              help="Ankle angles (deg, negative = dorsiflexion) over which a prosthesis's spring moment must "
+                   "decrease (default -25,10).")
+@click.option("--starts", "starts", type=click.IntRange(min=1, max=100), default=1, show_default=True,
+              help="Solve from this many starts (the default guess and seeded perturbations of it) in parallel "
+                   "processes and keep the best; every start in starts.csv.")
+@click.option("--seed", "seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Seed of the perturbed starts.")
+@click.option("--workers", "workers", type=click.IntRange(min=1, max=256), default=None,
+              help="Worker processes for --starts and --study (default: one per core).")
+@click.option("--study", "study", type=click.Path(path_type=Path, dir_okay=False),
+              help="Run a study file's grid (speeds × weight sets × conditions) into OUT/study/, reusing the cases "
+                   "already computed with the same inputs; see pipelines/study_*.yaml.")
+@click.option("--force", "force", is_flag=True, help="With --study: solve every case again.")
 @click.option("--no-plots", "no_plots", is_flag=True, help="Skip the figures (plots/).")
 @click.pass_obj
 def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, symmetric, max_iterations, reference,
-                    subject, init, no_plots):
+                    subject, init, foot_mass_kg, foot_mass_at, prosthesis, strength_scale, monotone_range_deg,
+                    starts, seed, workers, study, force, no_plots):
     """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
     from gaitcli.pipeline import predict_trial
 
     cfg = dataclasses.replace(PredictConfig(), **{k: v for k, v in {
         "speed_m_s": speed_m_s, "weights": weights, "nodes": nodes, "symmetric": symmetric,
-        "max_iterations": max_iterations}.items() if v is not None})
+        "max_iterations": max_iterations, "foot_mass_kg": foot_mass_kg, "foot_mass_at": foot_mass_at,
+        "prosthesis": prosthesis.lower() if prosthesis and not prosthesis.lower().endswith((".yaml", ".yml"))
+        else prosthesis, "strength_scale": strength_scale,
+        "monotone_range_deg": monotone_range_deg}.items() if v is not None})
+    if study is not None:
+        from gaitcli.pipeline import predict_study
+        from gaitcli.report.study_plots import study_text
+
+        with console.progress() as progress:
+            rows, folder = predict_study(trial, study, out=out, reference_path=reference, subject_path=subject,
+                                         workers=workers, force=force, progress=progress)
+        console.info(study_text(rows))
+        console.info(f"predict: wrote {folder} ({len(rows)} cases, study.csv)")
+        bad = [r["case"] for r in rows if not r["converged"]]
+        if bad:
+            raise NotConvergedError(f"{len(bad)} of {len(rows)} study cases did not converge ({', '.join(bad)}); "
+                                    f"marked in {folder / 'study.csv'}")
+        return
     with console.progress() as progress:
         outcome = predict_trial(trial, cfg, out=out, reference_path=reference, subject_path=subject,
-                                init_path=init, progress=progress, plots=not no_plots)
+                                init_path=init, progress=progress, plots=not no_plots, starts=starts, seed=seed,
+                                workers=workers)
     console.summaries["predict"] = outcome.summary
     console.info(f"predict: wrote {outcome.folder}")
     console.print_json("predict")

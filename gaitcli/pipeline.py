@@ -24,7 +24,7 @@ from gaitcli.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.container import Trial
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
-from gaitcli.errors import GaitWarning
+from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.h5 import provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
@@ -258,42 +258,46 @@ def _read_init(path: Path):
                                          "gait predict)") from None
 
 
-def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference_path: Path | None = None,
-                  subject_path: Path | None = None, init_path: Path | None = None,
-                  progress: ProgressCallback = no_progress, pipeline: PipelineConfig | None = None,
-                  plots: bool = True) -> PredictOutcome:
-    """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`), write
-    ``OUT/predict/`` whole (``report.predict_outputs``) with its ``summary.json``.
-
-    The subject is ``subject_path``'s, else the trial's, else the dissertation's subject 1; the reference is
-    ``reference_path``'s, else one built from the trial's idyn output (made if missing or stale), else the
-    bundled one.
-    """
-    from gaitcli.config import configure
-    from gaitcli.core.registry import Progress
+def prosthesis_of(cfg):
+    """The prostheses' curve of ``cfg.prosthesis``: a commercial foot (Table A.7), a YAML file's (validated:
+    :func:`gaitcli.predict.prosthesis.curve_from_mapping`), or None (none, optimal)."""
     from gaitcli.errors import InputError
-    from gaitcli.predict.layout import DesignLayout
+    from gaitcli.io.yamlfile import read_yaml
+    from gaitcli.predict.prosthesis import CHOICES, curve_for, curve_from_mapping
+
+    if cfg.prosthesis in CHOICES:
+        return curve_for(cfg.prosthesis)
+    path = Path(cfg.prosthesis)
+    if path.suffix.lower() not in (".yaml", ".yml"):
+        raise InputError(None, "--prosthesis", f"got {cfg.prosthesis!r} (expected {', '.join(CHOICES)} or a .yaml "
+                                               "file of a_p, b_p, c0, a_n, b_n, d_prosth)")
+    if not path.is_file():
+        raise InputError(path, "--prosthesis", "file not found (expected a YAML file of a_p, b_p, c0, a_n, b_n, "
+                                               "d_prosth)")
+    return curve_from_mapping(read_yaml(path), path, cfg.monotone_range_rad())
+
+
+def predict_inputs(trial: Path | None, *, out: Path | None = None, reference_path: Path | None = None,
+                   subject_path: Path | None = None, progress: ProgressCallback = no_progress,
+                   pipeline: PipelineConfig | None = None):
+    """The subject's model parameters, the reference, the inputs' SHA-256 and the trial folder of a prediction:
+    the subject is ``subject_path``'s, else the trial's, else the dissertation's subject 1; the reference is
+    ``reference_path``'s, else one built from the trial's idyn output (made if missing or stale), else the
+    bundled one."""
+    from gaitcli.config import configure
+    from gaitcli.errors import InputError
     from gaitcli.predict.model import WalkerParameters
     from gaitcli.predict.reference import read_reference, reference_from_idyn
-    from gaitcli.predict.stage import run_predict, violated_groups
-    from gaitcli.report.predict_outputs import write_predict_outputs
     from gaitcli.resources import bundled_reference
     from gaitcli.trial import load_subject
 
-    # everything is validated before anything runs or is written
-    cfg.weight_pair()
-    try:
-        DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
-    except InputError as exc:
-        raise InputError(None, "--nodes", exc.problem) from None
     folder = open_trial(trial) if trial is not None else None
     reference = read_reference(reference_path) if reference_path is not None else None
     subject = load_subject(subject_path) if subject_path is not None else (folder.subject if folder else None)
     if subject is not None and subject_path is not None and subject.mass_kg is None:
         raise InputError(subject_path, "mass_kg", "got 'auto' (expected the body mass in kg: gait predict has no "
                                                   "force plates to weigh the subject)")
-    init = _read_init(Path(init_path)) if init_path is not None else None
-    inputs = {str(p): sha256(p) for p in (reference_path, subject_path, init_path) if p is not None}
+    inputs = {str(p): sha256(p) for p in (reference_path, subject_path) if p is not None}
     mass = subject.mass_kg if subject is not None else None
     if folder is not None and (reference is None or mass is None):
         idyn = fresh_output(trial, "idyn", pipeline or configure(None), out=out, progress=progress, plots=False)
@@ -310,18 +314,94 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
                                             thigh_length_m=subject.thigh_length_m,
                                             shank_length_m=subject.shank_length_m)
               if subject is not None else WalkerParameters.subject_1())
+    return params, reference, inputs, folder
+
+
+def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = None,
+                  reference_path: Path | None = None, subject_path: Path | None = None, workers: int | None = None,
+                  force: bool = False, progress: ProgressCallback = no_progress,
+                  pipeline: PipelineConfig | None = None):
+    """``gait predict --study FILE``: validate the study file and the inputs, run every case
+    (:func:`gaitcli.studies.run_study`) into ``OUT/study/``. Returns (rows, the study folder)."""
+    from gaitcli.config import configure
+    from gaitcli.io.yamlfile import read_yaml
+    from gaitcli.predict.study import StudySpec
+    from gaitcli.studies import run_study
+
+    if not Path(study_path).is_file():
+        raise InputError(study_path, "--study", "file not found (expected a study YAML: name, speeds_m_s, weights, "
+                                                "conditions)")
+    spec = StudySpec.from_mapping(read_yaml(study_path), study_path)
+    params, reference, inputs, _ = predict_inputs(trial, out=out, reference_path=reference_path,
+                                                  subject_path=subject_path, progress=progress, pipeline=pipeline)
+    inputs[str(study_path)] = sha256(study_path)
+    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
+    attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs)
+    return run_study(spec, root, params=params, reference=reference, subject=repr(params), attrs=attrs,
+                     workers=workers, force=force, progress=progress)
+
+
+def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference_path: Path | None = None,
+                  subject_path: Path | None = None, init_path: Path | None = None,
+                  progress: ProgressCallback = no_progress, pipeline: PipelineConfig | None = None,
+                  plots: bool = True, starts: int = 1, seed: int = 0, workers: int | None = None) -> PredictOutcome:
+    """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`; the optimal
+    prosthesis by :func:`gaitcli.predict.study.predict_optimal`; ``starts`` > 1: the best of that many starts,
+    :func:`gaitcli.studies.best_of_starts`), write ``OUT/predict/`` whole (``report.predict_outputs``) with its
+    ``summary.json`` (and ``starts.csv``). Subject and reference as :func:`predict_inputs`."""
+    from gaitcli.config import configure
+    from gaitcli.core.registry import Progress
+    from gaitcli.errors import InputError
+    from gaitcli.predict.layout import DesignLayout
+    from gaitcli.predict.prosthesis import CHOICES as PROSTHESIS_CHOICES
+    from gaitcli.predict.stage import run_predict, violated_groups
+    from gaitcli.report.predict_outputs import write_predict_outputs
+
+    # everything is validated before anything runs or is written
+    cfg.weight_pair()
+    cfg.foot_mass_position_m()
+    cfg.monotone_range_rad()
+    device = prosthesis_of(cfg)
+    try:
+        DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
+    except InputError as exc:
+        raise InputError(None, "--nodes", exc.problem) from None
+    init = _read_init(Path(init_path)) if init_path is not None else None
+    params, reference, inputs, folder = predict_inputs(trial, out=out, reference_path=reference_path,
+                                                       subject_path=subject_path, progress=progress,
+                                                       pipeline=pipeline)
+    for p in (init_path, None if cfg.prosthesis in PROSTHESIS_CHOICES else Path(cfg.prosthesis)):
+        if p is not None:
+            inputs[str(p)] = sha256(p)
 
     def iteration(k, objective, violation):
         progress(Progress("predict", "IPOPT iterations", k + 1, cfg.max_iterations,
                           detail=f"J {objective:.4g}, max violation {violation:.2g}"))
 
-    result = run_predict(cfg, params=params, reference=reference, init=init, report=iteration)
+    starts_table = None
+    if starts > 1:
+        from gaitcli.studies import best_of_starts
+
+        result, starts_table, agreed = best_of_starts(cfg, starts, params=params, reference=reference, device=device,
+                                                 seed=seed, workers=workers, progress=progress)
+    elif cfg.prosthesis == "optimal":
+        from gaitcli.predict.study import predict_optimal
+
+        result = predict_optimal(cfg, params=params, reference=reference, init=init, report=iteration)
+    else:
+        result = run_predict(cfg, params=params, reference=reference, init=init, report=iteration, device=device)
     root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
     target = root / "predict"
     attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs, result.history)
     attrs["predict_config"] = json.dumps(dataclasses.asdict(cfg))
     with stage_folder(target) as tmp:
         summary = write_predict_outputs(tmp, result, attrs)
+        if starts_table is not None:
+            from gaitcli.io.outputs import write_table
+
+            write_table(tmp / "starts.csv", starts_table)
+            summary.update({"starts": starts, "starts_converged": int(sum(starts_table["converged"])),
+                            "starts_agreeing": agreed})
         write_json(tmp / "summary.json", summary)
         if plots:
             from gaitcli.report.predict_plots import predict_figures

@@ -11,7 +11,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "gaitcli"
 #: the stage packages, each allowed to import only the ones before it
 STAGE_ORDER = ("signal", "kinematics", "dynamics", "muscles", "predict")
 #: the edges: what no stage package may import
-EDGES = ("cli", "pipeline", "report", "config", "stages", "synth")
+EDGES = ("cli", "pipeline", "studies", "report", "config", "stages", "synth")
 
 
 def module_name(path: Path) -> str:

@@ -156,9 +156,12 @@ class JointParameters:
     values). The default 0.01 N·m·s/rad is the joint damping of the gait2d model
     family (``gait2dc_par.xls``, JointB), the only published value found for a
     comparable 2-D model; set the pendulum-test values here when they are known.
-    ``passive_moments`` switches the Riener & Edrich (1999) moments on or off.
+    ``passive_moments`` switches the Riener & Edrich (1999) moments on or off; ``prosthetic_ankle`` removes
+    what spans the intact ankle (5.3.3; CHAPTER5_NOTES §3 item 16): no ankle moment M_A, and the knee
+    moment M_K evaluated at a neutral ankle.
     """
 
     hip_damping_Nms_per_rad: float = 0.01
     knee_damping_Nms_per_rad: float = 0.01
     passive_moments: bool = True
+    prosthetic_ankle: bool = False

@@ -44,7 +44,9 @@ class JointModel:
         phi, q, qd = ca.SX.sym("phi", 3), ca.SX.sym("q", 3), ca.SX.sym("qd", 3)
         self.riener_edrich = ca.Function("riener_edrich", [phi], [ca.vertcat(*_riener_edrich(*ca.vertsplit(phi)))],
                                          ["phi_deg"], ["M_Nm"])
-        moments = riener_edrich_moments(*_riener_edrich(*riener_edrich_angles(q[0], q[1], q[2])))
+        phi_h, phi_k, phi_a = riener_edrich_angles(q[0], q[1], q[2])
+        m_h, m_k, m_a = _riener_edrich(phi_h, phi_k, 0.0 if p.prosthetic_ankle else phi_a)
+        moments = riener_edrich_moments(m_h, m_k, 0.0 if p.prosthetic_ankle else m_a)
         scale = 1.0 if p.passive_moments else 0.0
         passive = scale * ca.vertcat(*moments)
         damping = ca.vertcat(-p.hip_damping_Nms_per_rad * qd[0], -p.knee_damping_Nms_per_rad * qd[1], 0)

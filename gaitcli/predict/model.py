@@ -33,7 +33,7 @@ heel A 0.033·H behind and MTP B 0.091·H ahead of the ankle, both 0.039·H belo
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
@@ -50,6 +50,8 @@ SUBJECT_1 = {"mass_kg": 73.0, "stature_m": 1.792, "sex": "male", "thigh_length_m
 HEEL_BEHIND_ANKLE_PER_STATURE = 0.060 / 1.8
 MTP_AHEAD_OF_ANKLE_PER_STATURE = 0.1636 / 1.8
 CONTACT_BELOW_ANKLE_PER_STATURE = 0.039  # Winter's ankle height
+#: Table A.2's weight band: mass (kg) and sagittal moment of inertia about its own CoM (I_Y, kg·m²)
+WEIGHT_BAND = (1.719, 0.0043)
 #: q (the chain's coordinates) = SIGNS · y: only the HAT angle's sense differs
 SIGNS = np.array([1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0])
 
@@ -106,6 +108,32 @@ class WalkerParameters:
                                        "heel and MTP points: gait2dc's 0.033·H and 0.091·H from the ankle, "
                                        "0.039·H below it (MODEL_CONSTANTS H)"))
 
+    def with_foot_mass(self, mass_kg: float, at_m: tuple[float, float] | None = None) -> WalkerParameters:
+        """The same subject with ``mass_kg`` added to each foot (5.3.2; CHAPTER5_NOTES §3 item 17).
+
+        Default: a point mass at the foot's CoM, the foot's inertia unchanged. ``at_m`` = (forward of the
+        ankle, below the ankle) in the foot frame, m: a band there with Table A.2's weight-band inertia
+        scaled by mass (0.0043 kg·m² per 1.719 kg); the foot's CoM and inertia about it are recombined
+        (parallel axes). The body mass grows by 2·``mass_kg``; the HAT keeps its mass.
+        """
+        if mass_kg == 0:
+            return self
+        limb = self.limb
+        m0, m = limb.foot_mass_kg, float(mass_kg)
+        com0 = np.array([limb.foot_com_forward_m, limb.foot_com_down_m])
+        if at_m is None:
+            com, inertia = com0, limb.foot_inertia_kgm2
+        else:
+            band = np.asarray(at_m, float)
+            com = (m0 * com0 + m * band) / (m0 + m)
+            inertia = (limb.foot_inertia_kgm2 + m0 * float(np.sum((com0 - com) ** 2))
+                       + WEIGHT_BAND[1] * m / WEIGHT_BAND[0] + m * float(np.sum((band - com) ** 2)))
+        where = "at the foot's CoM" if at_m is None else f"as a band at {at_m[0]:g} m forward, {at_m[1]:g} m below the ankle"
+        limb = replace(limb, foot_mass_kg=m0 + m, foot_com_forward_m=float(com[0]), foot_com_down_m=float(com[1]),
+                       foot_inertia_kgm2=float(inertia), body_mass_kg=limb.body_mass_kg + 2 * m)
+        return replace(self, limb=limb, body_mass_kg=self.body_mass_kg + 2 * m,
+                       notes=self.notes + (f"{m:g} kg added to each foot {where}",))
+
     @classmethod
     def subject_1(cls) -> WalkerParameters:
         """The dissertation's subject 1 (73.0 kg, 1.792 m; thigh 0.475 m, shank 0.429 m)."""
@@ -148,6 +176,7 @@ class WalkingModel:
 
     def __init__(self, params: WalkerParameters | None = None, *, gravity_m_s2: float = GRAVITY_M_S2):
         self.params = params if params is not None else WalkerParameters.subject_1()
+        self.gravity_m_s2 = float(gravity_m_s2)
         self.chain = chain = _chain(self.params, gravity_m_s2)
         self.coordinates = COORDINATES
         self.total_mass_kg = chain.total_mass_kg

@@ -10,6 +10,14 @@ Variables w = [C…, T, L, Q…, Λ] (all O(1)); full model:
         y (9), ẏ (9), ÿ (9), ŝ (16), rhs (9), l_m (16), v_m (16), a (16), each divided by its
         :data:`LIFTED_SCALE`
     Λ   the ground reactions λ_j of every control point in grid order (the phase's reaction names), per 100 N
+    D   (prosthetic models only) the device's (a_p, b_p, c0, a_n, b_n, d_prosth) of (5.58)–(5.59), each
+        divided by its :data:`DEVICE_SCALE`: fixed by equal bounds for a given foot, free within
+        :data:`DEVICE_BOUNDS` for the optimal prosthesis (5.3.3)
+
+Parameters p = (v, w1, w2): the speed (5.43) and the weights (5.29), so that one built problem (and its
+compiled solver, :func:`solver_for`) serves every speed and weight set of a study. Muscles removed with a
+prosthetic ankle (``WalkerMuscles.present``) keep their places in w, fixed at zero by their bounds, and
+have no constraint rows and no cost.
 
 Symmetric model (``layout.py``; left = right half a cycle later): C_t (5N_h × 3) the trunk's T/2-periodic
 quartics, C_y (5N × 3) and C_s (4N × 8) the right leg's; T (4), L (1); Q (I × 41): the right leg's y, ẏ, ÿ
@@ -44,6 +52,7 @@ Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first
     speed       ΣT_ph − ΔS/v = 0                                          (5.43)
     shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5°  (5.45–5.48, §3 item 10)
     windows     each instant inside its window of segments
+    monotone    dτ_s/dy ≤ 0 at the sampled ankle angles of ``monotone_range_rad`` (prosthetic models; linear in D)
 
 Status (nn = 18, from :func:`initial_guess`, one core shared with a second solve): the symmetric
 model with windows of ±3 segments reaches IPOPT's optimum in one solve (``gait predict``: 468 iterations,
@@ -64,6 +73,9 @@ EID (reported costs use the exact model).
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -96,6 +108,11 @@ COORDINATE_RANGES = ((-0.5, 0.5), (0.5, 1.3), (-0.6, 0.6), (-1.2, 1.0), (0.0, 1.
 STRETCH_RANGE = (0.0, 1.3)  # F ≤ 1.69 F_max
 DURATION_RANGE_S = (0.01, 0.8)
 STEP_RANGE_M = (0.2, 1.2)
+#: scale of the device coefficients a_p, b_p, c0, a_n, b_n (N·m/rad³, /rad², /rad) and d_prosth (N·m·s/rad)
+DEVICE_SCALE = np.array([1e4, 1e3, 1e2, 1e3, 1e3, 1.0])
+#: bounds of the optimal prosthesis's coefficients: they contain Table A.7's feet and Table A.8's optima;
+#: c0 ≤ 0 (a restoring spring), 0 ≤ d_prosth ≤ 2 (CHAPTER5_NOTES §3 item 16)
+DEVICE_BOUNDS = (np.array([-6e4, -1.2e4, -500.0, -1e4, -2e3, 0.0]), np.array([6e4, 1.2e4, 0.0, 1e4, 8e3, 2.0]))
 
 
 @dataclass(frozen=True)
@@ -119,12 +136,18 @@ class PredictSettings:
     acceptable_objective_change: float = 1e-6
     acceptable_iterations: int = 10
     print_level: int = 0
+    #: the ankle angles y (rad; y < 0 dorsiflexion) over which the optimal prosthesis's τ_s must decrease,
+    #: sampled at ``monotone_samples`` angles: −25° … +10° (Table A.8's 1.68 m/s c, d turn beyond +10°)
+    monotone_range_rad: tuple[float, float] = (float(np.radians(-25.0)), float(np.radians(10.0)))
+    monotone_samples: int = 71
 
 
-def box_bounds(layout: DesignLayout) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on χ of ``layout`` (full or symmetric)."""
+def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on χ of ``layout`` (full or symmetric); the tendon stretch of muscles not ``present`` (16,) is 0."""
+    present = np.ones(16, bool) if present is None else np.asarray(present, bool)
+    stretch = tuple(STRETCH_RANGE if keep else (0.0, 0.0) for keep in present)
     ranges = {"coordinates": COORDINATE_RANGES, "trunk": COORDINATE_RANGES[:3], "right_leg": COORDINATE_RANGES[3:6],
-              "tendon_stretch": (STRETCH_RANGE,) * 16, "right_stretch": (STRETCH_RANGE,) * 8,
+              "tendon_stretch": stretch, "right_stretch": stretch[:8],
               "durations": (DURATION_RANGE_S,), "steps": (STEP_RANGE_M,)}
     low, high = np.empty(layout.size), np.empty(layout.size)
     for name, (start, rows, cols) in layout.blocks.items():
@@ -169,7 +192,44 @@ class NLP:
     reach: int
     values: ca.Function
     lifted: tuple
+    parameters: ca.SX = field(default_factory=lambda: ca.SX.sym("p", 0))
+    device_size: int = 0
     parts: dict = field(default_factory=dict)
+    solvers: dict = field(default_factory=dict)  # the compiled IPOPT solvers by their options (solver_for)
+
+    def parameter_values(self, settings: PredictSettings) -> np.ndarray:
+        """p = (v, w1, w2) of ``settings``."""
+        return np.array([settings.speed_m_s, *settings.weights], float)
+
+    def device_bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds on D: fixed at ``curve``'s coefficients (a ProsthesisCurve), or the optimal prosthesis's box."""
+        if curve is None:
+            return DEVICE_BOUNDS[0] / DEVICE_SCALE, DEVICE_BOUNDS[1] / DEVICE_SCALE
+        c = curve.coefficients() / DEVICE_SCALE
+        return c, c
+
+    def bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
+        """lbw, ubw with D fixed at ``curve`` (or free for the optimal prosthesis when ``curve`` is None)."""
+        if not self.device_size:
+            return self.lbw, self.ubw
+        low, high = self.device_bounds(curve)
+        return np.concatenate([self.lbw, low]), np.concatenate([self.ubw, high])
+
+    def constraint_values(self, w, settings: PredictSettings | None = None) -> np.ndarray:
+        """g(w) at the parameters of ``settings``."""
+        f = ca.Function("g", [self.w, self.parameters], [self.constraints])
+        return np.array(f(np.asarray(w, float), self.parameter_values(settings or PredictSettings()))).ravel()
+
+    def cost_parts(self, w, settings: PredictSettings | None = None) -> tuple[float, float, float]:
+        """(J, Et, Jdev) of w at the parameters of ``settings`` (the optimiser's smoothed heat rates)."""
+        f = ca.Function("f", [self.w, self.parameters], [self.cost, self.parts["Et"], self.parts["Jdev"]])
+        out = f(np.asarray(w, float), self.parameter_values(settings or PredictSettings()))
+        return tuple(float(v) for v in out)
+
+    def device(self, w) -> np.ndarray:
+        """The device coefficients (a_p, b_p, c0, a_n, b_n, d_prosth) of w (empty without a device)."""
+        w = np.asarray(w, float).ravel()
+        return w[w.size - self.device_size:] * DEVICE_SCALE if self.device_size else np.zeros(0)
 
     @property
     def spline_size(self) -> int:
@@ -189,10 +249,11 @@ class NLP:
         durations = np.array(out[0]).ravel()
         return durations, float(out[1]), float(out[2]), tuple(np.array(v) for v in out[3:])
 
-    def start(self, x: np.ndarray) -> np.ndarray:
+    def start(self, x: np.ndarray, device=None) -> np.ndarray:
         """w for the design vector χ ``x`` (clipped into its box): the coefficients of its splines, the lifted
-        values and λ from the transcription of that gait (``problem.py``, λ = G⁺ rhs)."""
-        low, high = box_bounds(self.layout)
+        values and λ from the transcription of that gait (``problem.py``, λ = G⁺ rhs); D from ``device``
+        (a ProsthesisCurve, that of the transcriber's muscles by default). The removed muscles' values are 0."""
+        low, high = box_bounds(self.layout, self.transcriber.muscles.present)
         head = self.coefficients_of(np.clip(x, low, high))
         t = self.transcriber.at(*self.gait(head))
         grid = self.transcriber.grid
@@ -213,7 +274,12 @@ class NLP:
             parts.append(np.nan_to_num(np.column_stack(block)).ravel(order="F"))
         points = grid.points // 2 if self.layout.symmetric else grid.points
         parts.append(np.concatenate(t.reactions[:points]) / REACTION_SCALE_N)
-        return np.concatenate(parts)
+        w = np.concatenate(parts)
+        w[:self.lbw.size] = np.where(self.lbw == self.ubw, self.lbw, w[:self.lbw.size])  # removed muscles: 0
+        if self.device_size:
+            curve = device if device is not None else self.transcriber.muscles.prosthesis
+            w = np.concatenate([w, curve.coefficients() / DEVICE_SCALE])
+        return w
 
     def design(self, w) -> np.ndarray:
         """χ of w: the nodal values p_{k,0} (5.13), durations and step lengths."""
@@ -233,6 +299,37 @@ class NLP:
         """Whether every instant of χ ``x`` lies in its windows (then the solution is the splines')."""
         now = instant_segments(self.transcriber, self.layout, x)
         return all(np.all(np.abs(now[k] - self.segments[k]) <= self.reach) for k in self.segments)
+
+
+#: the NLPs built in this process (with their compiled solvers), most recently used last (cached_nlp)
+_BUILT: OrderedDict = OrderedDict()
+#: how many NLPs stay built: a study alternates between at most two structures (intact, prosthetic)
+BUILT_NLPS_KEPT = 3
+
+
+def cached_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
+               symmetric: bool = False, segments: dict, reach: int | None = None) -> NLP:
+    """:func:`build_nlp`, built once per process for each structure: the subject's model and muscles, node
+    count, grid, reference, the settings that shape the problem (not speed, weights or IPOPT's stopping
+    rules: parameters and solver options), the windows. A study's cases at other speeds or weight sets, and
+    every commercial foot, reuse one problem and its compiled solvers (:func:`solver_for`)."""
+    s = settings or PredictSettings()
+    reach = s.window_reach if reach is None else reach
+    shape = dataclasses.replace(s, speed_m_s=PredictSettings.speed_m_s, weights=PredictSettings.weights,
+                                max_iterations=0, tolerance=0.0, acceptable_tolerance=0.0,
+                                acceptable_objective_change=0.0, acceptable_iterations=0, print_level=0)
+    key = (transcriber.key, hashlib.sha256(np.ascontiguousarray(reference.mean).tobytes()
+                                           + np.ascontiguousarray(reference.sd).tobytes()).hexdigest(),
+           repr(shape), symmetric, reach, tuple((k, tuple(int(i) for i in v)) for k, v in sorted(segments.items())))
+    if key in _BUILT:
+        _BUILT.move_to_end(key)
+    else:
+        _BUILT[key] = build_nlp(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach)
+        while len(_BUILT) > BUILT_NLPS_KEPT:
+            _BUILT.popitem(last=False)
+    nlp = _BUILT[key]
+    nlp.transcriber = transcriber  # the same structure; this transcriber's prosthesis is the device's start
+    return nlp
 
 
 def instant_segments(transcriber: Transcriber, layout: DesignLayout, x: np.ndarray) -> dict:
@@ -298,6 +395,12 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     period, stride = ca.sum1(durations), steps_r + steps_l
     times = instant_times(grid, durations)
     fractions = times / period
+    parameters = sym("p", 3)  # v, w1, w2
+    present = muscles.present[muscle_columns]
+    kept = [k for k in range(8) if present[k]]  # of each leg's 8 muscles, those the model has
+    columns = [k for k in range(muscle_columns.stop) if muscles.present[k]]  # of the modelled muscles
+    device = sym("D", 6) if muscles.prosthetic else None
+    coefficients = device * ca.DM(DEVICE_SCALE) if muscles.prosthetic else ca.DM.zeros(6)
 
     # lifted variables: block name → quantity → (rows × columns) values (variables × scale)
     lifted_symbols, lifted = [], {}
@@ -317,7 +420,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
 
     groups: dict[str, list] = {name: [] for name in (
         "continuity", "splines", "dynamics", "paths", "activation", "reactions", "moment", "contact", "unilateral",
-        "mtp", "friction", "clearance", "excitation", "speed", "shape", "windows")}
+        "mtp", "friction", "clearance", "excitation", "speed", "shape", "windows", "monotone")}
     bounds: dict[str, list] = {name: [] for name in groups}
 
     def add(name, expression, low, high):
@@ -336,8 +439,11 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
             add("windows", scale * fractions[:count] * intervals - ca.DM(k0), -float(reach), reach + 1.0)
 
     # the segment coefficients form periodic splines (5.14–5.23); the lifted y, ẏ, ÿ, ŝ are their values
+    # (a removed muscle's spline and values are fixed at 0 by their bounds: no rows)
+    kept_columns = {b.name: (columns if b.name == "stretch" else list(range(b.coefficients.shape[1])))
+                    for b in splines}
     for b in splines:
-        add("continuity", ca.DM(continuity_matrix(b.spline)) @ b.coefficients, 0.0, 0.0)
+        add("continuity", ca.DM(continuity_matrix(b.spline)) @ b.coefficients[:, kept_columns[b.name]], 0.0, 0.0)
     drift = stride / period  # hip x: y1 = periodic + (ΔS/T)·t (notes §3 item 4)
     spline_rows = {}  # (family, instant) → [y, ẏ, ÿ] or [ŝ] rows from the splines
 
@@ -365,7 +471,8 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
 
     def tie(block, i, rows, names):
         for row, name in zip(rows, names):
-            add("splines", (lifted[(block, name)][i, :] - row) / LIFTED_SCALE[name], 0.0, 0.0)
+            keep = columns if name == "stretch" else list(range(row.shape[1]))
+            add("splines", (lifted[(block, name)][i, keep] - row[:, keep]) / LIFTED_SCALE[name], 0.0, 0.0)
 
     for i in range(n_i):
         if symmetric:
@@ -401,13 +508,13 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     forces = [ca.DM(f_max) * value["stretch"][i] ** 2 for i in range(n_i)]  # F = F_max·ŝ² (2.19)
     for i in dynamics_instants:
         y, yd, ydd = value["y"][i], value["yd"][i], value["ydd"][i]
-        physics = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.passive(y, yd)
-                   - muscles.moment_arms(y) @ forces[i])
+        physics = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.tissue(y, yd)
+                   - muscles.device(y, yd, coefficients) - muscles.moment_arms(y) @ forces[i])
         add("dynamics", (rhs[i] - physics) / LIFTED_SCALE["rhs"], 0.0, 0.0)
     for i in range(n_i):
         y, yd = value["y"][i], value["yd"][i]
-        add("paths", value["l_m"][i][muscle_columns] - muscles.lengths(y)[muscle_columns], 0.0, 0.0)
-        add("paths", value["v_m"][i][muscle_columns] - muscles.velocities(y, yd)[muscle_columns], 0.0, 0.0)
+        add("paths", value["l_m"][i][columns] - muscles.lengths(y)[columns], 0.0, 0.0)
+        add("paths", value["v_m"][i][columns] - muscles.velocities(y, yd)[columns], 0.0, 0.0)
 
     # the muscles (one leg's 8 per evaluation): tendon from ŝ, rates by the unequal-step differences, the
     # activation that makes F, excitation bounds, metabolic rates
@@ -433,11 +540,12 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
         # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small
         f_max = ca.repmat(ca.DM(f_max_n[c]), 1, n_i)
-        add("activation", (muscles.muscle.fibre_force(a_m[:, c].T, l_ce, v_ce) - f_ce) / f_max, 0.0, 0.0)
-        rate.append(transcriber.metabolic(u, a_m[:, c].T, l_ce, v_ce, f_ce).T)
+        balance = (muscles.muscle.fibre_force(a_m[:, c].T, l_ce, v_ce) - f_ce) / f_max
+        add("activation", balance[kept, :], 0.0, 0.0)
+        rate.append(transcriber.metabolic(u, a_m[:, c].T, l_ce, v_ce, f_ce).T[:, kept])
         T1, T2 = ca.repmat(ca.DM(t1[c]).T, n_i, 1), ca.repmat(ca.DM(t2[c]).T, n_i, 1)
-        add("excitation", adot[:, c] + T2 * a_m[:, c], 0.0, np.inf)
-        add("excitation", (1 - a_m[:, c]) * (T1 + T2) - adot[:, c], 0.0, np.inf)
+        add("excitation", (adot[:, c] + T2 * a_m[:, c])[:, kept], 0.0, np.inf)
+        add("excitation", ((1 - a_m[:, c]) * (T1 + T2) - adot[:, c])[:, kept], 0.0, np.inf)
 
     # per control point: reactions, moment error, contact, ground forces, clearance
     foot_forces = {}  # point → side → (f_x, f_z), N
@@ -470,7 +578,12 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         for point in ("heel_r", "mtp_r", "heel_l", "mtp_l"):
             if phase in clearance_phases(point):
                 add("clearance", heights[point][1], s.clearance_m, np.inf)
-    add("speed", period - stride / s.speed_m_s, 0.0, 0.0)
+    add("speed", period - stride / parameters[0], 0.0, 0.0)
+    if muscles.prosthetic:  # τ_s decreasing over the declared range (5.3.3): linear in the coefficients
+        for angle in np.linspace(*s.monotone_range_rad, s.monotone_samples):
+            a3, a2, c0 = ((coefficients[0], coefficients[1]) if angle > 0 else (coefficients[3], coefficients[4])) \
+                + (coefficients[2],)
+            add("monotone", (3 * a3 * angle ** 2 + 2 * a2 * angle + c0) / DEVICE_SCALE[2], -np.inf, 0.0)
     for name, (index, shape_phases, minimum) in GAIT_SHAPE.items():
         chosen = sorted({int(grid.instant[j]) for j in range(grid.points) if phases[j] in shape_phases})
         add("shape", smooth_max(ca.vertcat(*[value["y"][i][index] for i in chosen])), minimum, np.inf)
@@ -493,7 +606,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     means = ca.horzcat(*[f(pct) for f in _interpolants(reference.mean)])
     sds = ca.horzcat(*[f(pct) for f in _interpolants(reference.sd)])
     jdev = deviation(ca.vertcat(*deviation_rows), means, sds, times, period)
-    cost = objective(et, jdev, s.weights)
+    cost = parameters[1] * et / 100.0 + parameters[2] * jdev  # (5.29), weights checked by check_weights
 
     exprs, lows, highs, slices, start = [], [], [], {}, 0
     for name in groups:
@@ -507,13 +620,15 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         start += block.size1()
 
     # bounds: nodal values p_{k,0}, durations and steps as box_bounds; ŝ ≥ 0, 0 ≤ a ≤ 1
-    low, high = box_bounds(layout)
+    low, high = box_bounds(layout, muscles.present)
     blocks_low, blocks_high = layout.unpack(low), layout.unpack(high)
     lbw, ubw = [], []
     for b in splines:
         width = b.spline.degree + 1
         lo, hi = np.full(b.coefficients.shape, -np.inf), np.full(b.coefficients.shape, np.inf)
         lo[0::width], hi[0::width] = blocks_low[b.design_block], blocks_high[b.design_block]
+        if b.name == "stretch":  # a removed muscle's spline is 0
+            lo[:, ~present], hi[:, ~present] = 0.0, 0.0
         lbw.append(lo.ravel(order="F"))
         ubw.append(hi.ravel(order="F"))
     lbw += [blocks_low["durations"].ravel() / DURATION_SCALE_S, blocks_low["steps"].ravel()]
@@ -523,6 +638,8 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         for name, cols in quantities:
             lo.append(np.full((q.size1(), cols), 0.0 if name in ("stretch", "a") else -np.inf))
             hi.append(np.full((q.size1(), cols), 1.0 if name == "a" else np.inf))
+            if name in ("stretch", "l_m", "v_m", "a"):  # a removed muscle's values are fixed at 0
+                lo[-1][:, ~muscles.present[:cols]] = hi[-1][:, ~muscles.present[:cols]] = 0.0
         lbw.append(np.hstack(lo).ravel(order="F"))
         ubw.append(np.hstack(hi).ravel(order="F"))
     lbw.append(np.full(lam_all.size1(), -np.inf))
@@ -547,11 +664,12 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     else:
         full_values.append(ca.vertcat(*[spline_rows[("coordinates", i)][3] for i in range(n_i)]))
     values = ca.Function("gait_values", [head], [durations, steps_r, steps_l, *full_values])
-    w = ca.vertcat(head, *[ca.vec(q) for q in lifted_symbols], lam_all)
+    w = ca.vertcat(head, *[ca.vec(q) for q in lifted_symbols], lam_all, *([device] if muscles.prosthetic else []))
     return NLP(w=w, cost=cost, constraints=ca.vertcat(*exprs), lbg=np.concatenate(lows), ubg=np.concatenate(highs),
                groups=slices, lbw=np.concatenate(lbw), ubw=np.concatenate(ubw), transcriber=transcriber,
                layout=layout, splines=splines, segments=segments, reach=reach, values=values,
-               lifted=lifted_blocks, parts={"Et": et, "Jdev": jdev})
+               lifted=lifted_blocks, parameters=parameters, device_size=6 if muscles.prosthetic else 0,
+               parts={"Et": et, "Jdev": jdev})
 
 
 def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
@@ -586,7 +704,7 @@ class IterationReport(ca.Callback):
     """IPOPT's iteration callback: ``report(iteration, objective, constraint_violation)`` after each iteration
     (the violation is the largest distance of g from its bounds)."""
 
-    def __init__(self, nlp: NLP, report):
+    def __init__(self, nlp: NLP, report=None):
         ca.Callback.__init__(self)
         self.report, self.lbg, self.ubg, self.iteration = report, nlp.lbg, nlp.ubg, 0
         self.sizes = {"x": nlp.w.size1(), "g": nlp.constraints.size1()}
@@ -614,7 +732,13 @@ class IterationReport(ca.Callback):
             return ca.Sparsity.dense(self.sizes["g"])
         return ca.Sparsity(0, 0)
 
+    def start(self, report) -> None:
+        """Report to ``report`` (or nobody) from iteration 0: the compiled solver keeps this callback."""
+        self.report, self.iteration = report, 0
+
     def eval(self, arg):
+        if self.report is None:
+            return [0]
         g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
         violation = float(np.max(np.maximum(self.lbg - g, 0) + np.maximum(g - self.ubg, 0))) if g.size else 0.0
         self.report(self.iteration, float(arg[ca.nlpsol_out().index("f")]), violation)
@@ -622,34 +746,57 @@ class IterationReport(ca.Callback):
         return [0]
 
 
-def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
-          multipliers: dict | None = None, options: dict | None = None, report=None) -> dict:
-    """IPOPT with exact derivatives (Hessian included) from χ ``x0`` (or the whole ``w0``, and IPOPT's
-    ``multipliers`` of an earlier solve for a warm start); returns χ, w, the multipliers, the status,
-    iterations and cost. ``options``: further IPOPT/CasADi options; ``report(iteration, objective, violation)``
-    is called after every IPOPT iteration."""
-    s = settings or PredictSettings()
-    problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints}
+def _ipopt_options(settings: PredictSettings, warm: bool) -> dict:
+    s = settings
     opts = {"print_time": False, "ipopt.print_level": s.print_level, "ipopt.sb": "yes",
             "ipopt.max_iter": s.max_iterations, "ipopt.tol": s.tolerance, "ipopt.mu_strategy": "adaptive",
             "ipopt.mumps_pivot_order": 5,  # METIS: the fastest ordering measured on this KKT system
             "ipopt.acceptable_tol": s.acceptable_tolerance, "ipopt.acceptable_iter": s.acceptable_iterations,
             "ipopt.acceptable_obj_change_tol": s.acceptable_objective_change}
-    if multipliers:
+    if warm:
         opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
                      "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9})
-    opts.update(options or {})
-    callback = IterationReport(nlp, report) if report is not None else None
-    if callback is not None:
-        opts["iteration_callback"] = callback
-    solver = ca.nlpsol("predict", "ipopt", problem, opts)
-    start = nlp.start(x0) if w0 is None else w0
+    return opts
+
+
+def solver_for(nlp: NLP, settings: PredictSettings, *, warm: bool = False, options: dict | None = None):
+    """IPOPT for ``nlp`` with the options of ``settings`` (a warm start's when ``warm``), compiled once per NLP
+    and option set and kept on it: the speed and the weights are parameters, so a study's cases reuse it.
+    Returns (solver, its iteration callback)."""
+    opts = {**_ipopt_options(settings, warm), **(options or {})}
+    key = repr(sorted(opts.items()))
+    cache = nlp.solvers
+    if key not in cache:
+        callback = IterationReport(nlp)
+        problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints, "p": nlp.parameters}
+        cache[key] = (ca.nlpsol("predict", "ipopt", problem, {**opts, "iteration_callback": callback}), callback)
+    return cache[key]
+
+
+def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
+          multipliers: dict | None = None, options: dict | None = None, report=None, device=None,
+          optimal_device: bool = False) -> dict:
+    """IPOPT with exact derivatives (Hessian included) from χ ``x0`` (or the whole ``w0``, and IPOPT's
+    ``multipliers`` of an earlier solve for a warm start); returns χ, w, the multipliers, the status,
+    iterations and cost. ``options``: further IPOPT/CasADi options; ``report(iteration, objective, violation)``
+    is called after every IPOPT iteration. Prosthetic models: D starts at (and, unless ``optimal_device``, is
+    fixed at) ``device`` (a ProsthesisCurve; default the transcriber's), free within DEVICE_BOUNDS when
+    ``optimal_device``; the result's ``device`` holds the coefficients."""
+    s = settings or PredictSettings()
+    solver, callback = solver_for(nlp, s, warm=bool(multipliers), options=options)
+    callback.start(report)
+    start = nlp.start(x0, device) if w0 is None else w0
+    if nlp.device_size and device is not None and w0 is not None:  # D starts at the given device
+        start = np.concatenate([start[:start.size - nlp.device_size], device.coefficients() / DEVICE_SCALE])
+    fixed = None if optimal_device else (device or nlp.transcriber.muscles.prosthesis)
+    lbw, ubw = nlp.bounds(fixed)
     extra = {"lam_g0": multipliers["lam_g"], "lam_x0": multipliers["lam_x"]} if multipliers else {}
     with interrupts_raised():
-        result = solver(x0=start, lbx=nlp.lbw, ubx=nlp.ubw, lbg=nlp.lbg, ubg=nlp.ubg, **extra)
+        result = solver(x0=np.clip(start, lbw, ubw), lbx=lbw, ubx=ubw, lbg=nlp.lbg, ubg=nlp.ubg,
+                        p=nlp.parameter_values(s), **extra)
     stats = solver.stats()
     w = np.array(result["x"]).ravel()
-    return {"x": nlp.design(w), "w": w, "status": stats.get("return_status", ""),
+    return {"x": nlp.design(w), "w": w, "status": stats.get("return_status", ""), "device": nlp.device(w),
             "multipliers": {"lam_g": np.array(result["lam_g"]).ravel(), "lam_x": np.array(result["lam_x"]).ravel()},
             "success": bool(stats.get("success")), "iterations": int(stats.get("iter_count", -1)),
             "cost": float(result["f"])}
@@ -676,17 +823,20 @@ def moved_windows(nlp: NLP, multipliers: dict, threshold: float = 1e-8) -> dict 
 
 def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarray,
                    settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
-                   options: dict | None = None, report=None) -> dict:
+                   options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
+                   optimal_device: bool = False) -> dict:
     """:func:`solve` with the spline windows placed where ``x0`` puts the instants; while a solution presses on
     a window's edge, that window moves on and the problem is solved again from the last solution (warm, with
     its multipliers; at most ``rounds`` solves). Adds ``rounds``, ``windows_hold`` (no window binds) and the last
-    ``nlp``."""
+    ``nlp``. ``w0``: the whole first start (an earlier solution of a problem of the same structure);
+    ``device``, ``optimal_device`` as :func:`solve`. The problems come from :func:`cached_nlp`."""
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
     segments = instant_segments(transcriber, layout, x0)
-    x, w, multipliers, total = x0, None, None, 0
+    x, w, multipliers, total = x0, w0, None, 0
     for k in range(1, rounds + 1):
-        nlp = build_nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
-        result = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report)
+        nlp = cached_nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
+        result = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report,
+                       device=device, optimal_device=optimal_device)
         total += result["iterations"]
         x, w, multipliers = result["x"], result["w"], result["multipliers"]
         segments = moved_windows(nlp, multipliers)

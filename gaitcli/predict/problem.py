@@ -78,6 +78,9 @@ class Transcriber:
         self.quartic, self.cubic = quartic(nodes), cubic(nodes)
         self.joint_map_pinv = np.linalg.pinv(joint_moment_map())
         self.metabolic = self.muscles.muscle.smoothed_metabolic_rate(smoothing)
+        #: what makes two transcribers' problems the same (the NLP cache's key): subject, muscles, grid
+        self.key = (nodes, repr(self.model.params), repr(self.muscles.muscle.params), self.muscles.prosthetic,
+                    tuple(self.grid.counts), smoothing, self.model.gravity_m_s2)
 
     def design(self, x) -> tuple:
         """(durations (8,), L_r, L_l, T, ΔS) of χ; CasADi expressions for a symbolic χ."""
@@ -177,7 +180,10 @@ class Transcriber:
             args = [states[n][:, cols] for n in ("u", "a", "l_ce", "v_ce", "f_ce")]
             rate.append(self.metabolic(*(a.T for a in args)).T if symbolic else
                         np.array(self.metabolic(*(a.T for a in args))).T)
-        metabolic = ca.horzcat(*rate) if symbolic else np.hstack(rate)
+        # the removed muscles (a prosthetic ankle's) carry no force and cost nothing
+        present = muscles.present.astype(float)
+        metabolic = (ca.horzcat(*rate) * ca.repmat(ca.DM(present).T, self.grid.instants, 1) if symbolic
+                     else np.where(muscles.present, np.hstack(rate), 0.0))
         return Transcription(y=y, yd=yd, ydd=ydd, forces_N=f_m, stretch=stretch, generalized_forces=generalized,
                              reactions=reactions, residual=residual,
                              moment_error_Nm=moment_error, contact_error_m=contact_error, period_s=period,

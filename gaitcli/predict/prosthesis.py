@@ -20,6 +20,10 @@ import numpy as np
 from gaitcli.predict.splines import is_casadi
 
 
+#: the curve's coefficients, in the order of Table A.7 (and of the optimal prosthesis's design variables)
+COEFFICIENTS = ("a_p", "b_p", "c0", "a_n", "b_n", "damping_Nms_per_rad")
+
+
 @dataclass(frozen=True)
 class ProsthesisCurve:
     """The coefficients of (5.58)–(5.59): N·m/rad³, N·m/rad², N·m/rad; damping N·m·s/rad."""
@@ -31,6 +35,10 @@ class ProsthesisCurve:
     a_n: float
     b_n: float
     damping_Nms_per_rad: float
+
+    def coefficients(self) -> np.ndarray:
+        """(a_p, b_p, c0, a_n, b_n, d_prosth) as an array (:data:`COEFFICIENTS`)."""
+        return np.array([getattr(self, k) for k in COEFFICIENTS], float)
 
     def spring_moment_Nm(self, y):
         """τ_s(y) (5.58) at ankle angles ``y`` (rad; numpy or CasADi)."""
@@ -62,3 +70,45 @@ COMMERCIAL_FEET = {
     "seattle": ProsthesisCurve("Seattle", -34020.0, 2496.0, -354.3, -524.9, 1402.0, 1.0),
     "flex": ProsthesisCurve("Flex", -17090.0, 1889.0, -281.5, 15.64, 274.2, 1.0),
 }
+
+#: the ``--prosthesis`` choices besides a YAML file: none, a commercial foot, the optimal device (5.3.3)
+CHOICES = ("none", *COMMERCIAL_FEET, "optimal")
+#: a prosthesis file's keys: Table A.7's column names
+FILE_KEYS = ("a_p", "b_p", "c0", "a_n", "b_n", "d_prosth")
+
+
+def curve_from_mapping(mapping, path, monotone_range_rad: tuple[float, float]) -> ProsthesisCurve:
+    """The curve of a prosthesis file's contents ({name?, a_p, b_p, c0, a_n, b_n, d_prosth}: N·m/rad³, /rad²,
+    /rad, N·m·s/rad); an InputError naming ``path`` and the field when a coefficient is missing or not a finite
+    number, d_prosth < 0, or τ_s does not decrease over ``monotone_range_rad`` (y, rad)."""
+    from gaitcli.errors import InputError, shown
+
+    if not isinstance(mapping, dict):
+        raise InputError(path, "prosthesis", f"got {shown(mapping)} (expected a mapping of {', '.join(FILE_KEYS)})")
+    unknown = sorted(set(mapping) - set(FILE_KEYS) - {"name"})
+    if unknown:
+        raise InputError(path, str(unknown[0]), f"unknown key (expected {', '.join(FILE_KEYS)} and an optional name)")
+    values = []
+    for key in FILE_KEYS:
+        value = mapping.get(key)
+        if value is None:
+            raise InputError(path, key, "missing (expected a number: the curve of (5.58)–(5.59), Table A.7's units)")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            raise InputError(path, key, f"got {shown(value)} (expected a finite number)")
+        values.append(float(value))
+    if values[5] < 0:
+        raise InputError(path, "d_prosth", f"got {values[5]:g} (expected a damping ≥ 0 N·m·s/rad)")
+    curve = ProsthesisCurve(str(mapping.get("name", "file")), *values)
+    low, high = monotone_range_rad
+    if not curve.is_monotone(low, high):
+        y = np.linspace(low, high, 401)
+        slope = np.gradient(curve.spring_moment_Nm(y), y)
+        worst = float(np.degrees(y[int(np.argmax(slope))]))
+        raise InputError(path, "prosthesis", f"τ_s rises at y = {worst:.1f}° (expected a spring moment that "
+                                             f"decreases over {np.degrees(low):g}° … {np.degrees(high):g}°, 5.3.3)")
+    return curve
+
+
+def curve_for(name: str) -> ProsthesisCurve | None:
+    """The commercial foot ``name`` (Table A.7), None for "none" and "optimal"."""
+    return COMMERCIAL_FEET.get(name)

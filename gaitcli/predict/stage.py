@@ -27,7 +27,9 @@ from gaitcli.predict.layout import DesignLayout, full_from_symmetric
 from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
 from gaitcli.predict.nlp import PredictSettings, build_nlp, initial_guess, instant_segments, solve_windowed
 from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
+from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.problem import Transcriber, gait_at
+from gaitcli.predict.prosthesis import FILE_KEYS, ProsthesisCurve, curve_for
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
 
 #: phases with the right foot on the floor (HSr … TOr) and with both feet down (Fig. 5.3)
@@ -51,6 +53,17 @@ class PredictConfig:
     nodes: int = parameter(18, low=6, high=40, help="Spline nodes over the cycle, even (5.2.4; default 18).")
     symmetric: bool = parameter(True, help="Left leg = right leg half a cycle later (5.3.1; default on).")
     max_iterations: int = parameter(3000, low=1, high=100000, help="IPOPT's iteration limit (default 3000).")
+    foot_mass_kg: float = parameter(0.0, low=0.0, high=20.0,
+                                    help="Mass added to each foot, kg (5.3.2: 2; default 0).")
+    foot_mass_at: str = parameter("", help="Where the added foot mass sits: FORWARD,DOWN of the ankle in the foot "
+                                           "frame, m, as a band with Table A.2's inertia (default: the foot's CoM).")
+    prosthesis: str = parameter("none", help="Bilateral transtibial prostheses (5.3.3): none, sach, seattle, "
+                                             "flex, optimal, or a YAML file of a_p, b_p, c0, a_n, b_n, d_prosth.")
+    strength_scale: float = parameter(0.0, low=0.0, high=5.0,
+                                      help="Every F_max times this (5.3.3: 1.5; default 0 = 1.5 with a "
+                                           "prosthesis, 1 without).")
+    monotone_range_deg: str = parameter("-25,10", help="Ankle angles y (deg; negative = dorsiflexion) over which "
+                                                       "the optimal prosthesis's spring moment decreases.")
 
     def weight_pair(self) -> tuple[float, float]:
         """(w1, w2) of ``weights`` "W1,W2" (an InputError naming ``--weights`` otherwise)."""
@@ -58,6 +71,43 @@ class PredictConfig:
         if len(parts) != 2:
             raise InputError(None, "--weights", f"got {shown(self.weights)} (expected two numbers W1,W2 that sum to 2)")
         return check_weights(parts)
+
+    @property
+    def prosthetic(self) -> bool:
+        return self.prosthesis != "none"
+
+    def strength(self) -> float:
+        """The F_max scale: ``strength_scale``, or 1.5 with a prosthesis and 1 without when it is 0."""
+        return float(self.strength_scale) if self.strength_scale else (1.5 if self.prosthetic else 1.0)
+
+    def monotone_range_rad(self) -> tuple[float, float]:
+        """``monotone_range_deg`` as (low, high) in rad (an InputError naming ``--monotone-range`` otherwise)."""
+        try:
+            low, high = (float(v) for v in str(self.monotone_range_deg).split(","))
+        except ValueError:
+            low = high = float("nan")
+        if not (np.isfinite(low) and np.isfinite(high) and -60 <= low < high <= 60):
+            raise InputError(None, "--monotone-range", f"got {shown(self.monotone_range_deg)} (expected LOW,HIGH in "
+                                                      "degrees, −60 ≤ LOW < HIGH ≤ 60)")
+        return float(np.radians(low)), float(np.radians(high))
+
+    def foot_mass_position_m(self) -> tuple[float, float] | None:
+        """``foot_mass_at`` as (forward, down) in m, None for the foot's CoM."""
+        if not str(self.foot_mass_at).strip():
+            return None
+        try:
+            forward, down = (float(v) for v in str(self.foot_mass_at).split(","))
+        except ValueError:
+            forward = down = float("nan")
+        if not (np.isfinite(forward) and np.isfinite(down) and abs(forward) <= 0.3 and abs(down) <= 0.3):
+            raise InputError(None, "--foot-mass-at", f"got {shown(self.foot_mass_at)} (expected FORWARD,DOWN in m "
+                                                     "from the ankle in the foot frame, each within ±0.3)")
+        return forward, down
+
+    def walker_parameters(self, params: WalkerParameters | None) -> WalkerParameters:
+        """The subject's model parameters with this case's added foot mass."""
+        params = params if params is not None else WalkerParameters.subject_1()
+        return params.with_foot_mass(self.foot_mass_kg, self.foot_mass_position_m()) if self.foot_mass_kg else params
 
 
 @dataclass(frozen=True)
@@ -103,6 +153,7 @@ class PredictResult:
     points_m: np.ndarray
     reference_mean: np.ndarray
     reference_sd: np.ndarray
+    ankle_moment_Nm: np.ndarray  # (I, 2) the prostheses' moments (5.59) right, left, in the sense of y6/y9
     cost_of_transport_J_per_m: float
     deviation: float
     objective: float
@@ -115,6 +166,9 @@ class PredictResult:
     rounds: int = 0
     solve_time_s: float = 0.0
     history: tuple[str, ...] = ()
+    prosthesis: ProsthesisCurve | None = None  # the curve of a prosthetic run (the optimal one when optimal)
+    foot_mass_kg: float = 0.0
+    strength_scale: float = 1.0
 
     @property
     def period_s(self) -> float:
@@ -138,6 +192,10 @@ class PredictResult:
             "max_residual_norm_by_phase": [float(v) for v in self.residual_norm_by_phase],
             "violations": {k: float(v) for k, v in self.violations.items()},
             "fine_grid": dict(self.fine_grid),
+            "foot_mass_kg": float(self.foot_mass_kg), "strength_scale": float(self.strength_scale),
+            "prosthesis": (None if self.prosthesis is None else
+                           {"name": self.prosthesis.name,
+                            **{k: float(v) for k, v in zip(FILE_KEYS, self.prosthesis.coefficients())}}),
             "gait_checks": self.gait_checks(),
             "vertical_impulse_ratio": self.vertical_impulse_ratio(),
         }
@@ -165,14 +223,34 @@ def violated_groups(violations: dict, tolerance: float = FEASIBILITY_TOLERANCE) 
     return {k: v for k, v in violations.items() if v > tolerance}
 
 
+def settings_of(cfg: PredictConfig) -> PredictSettings:
+    """The NLP's settings for ``cfg``."""
+    return PredictSettings(speed_m_s=cfg.speed_m_s, weights=cfg.weight_pair(), max_iterations=cfg.max_iterations,
+                           monotone_range_rad=cfg.monotone_range_rad())
+
+
+def walker_muscles(cfg: PredictConfig, device: ProsthesisCurve | None) -> WalkerMuscles:
+    """The muscles of ``cfg``: intact, or with prostheses of curve ``device`` (the optimal run's start), F_max
+    scaled by ``cfg.strength()``."""
+    if cfg.prosthetic and device is None:
+        raise InputError(None, "--prosthesis", f"{cfg.prosthesis}: no curve given (expected a foot, a file's "
+                                               "curve, or the optimal run's start)")
+    return WalkerMuscles(prosthesis=device if cfg.prosthetic else None, strength_scale=cfg.strength())
+
+
 def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Reference,
-                init: np.ndarray | None = None, report=None) -> PredictResult:
-    """Predict one gait cycle (module docstring). ``init``: a design vector χ of the same layout to start from;
-    ``report(iteration, objective, violation)`` after every IPOPT iteration."""
+                init: np.ndarray | None = None, report=None, device: ProsthesisCurve | None = None) -> PredictResult:
+    """Predict one gait cycle (module docstring). ``params``: the subject (``cfg``'s foot mass is added here);
+    ``init``: a design vector χ of the same layout to start from; ``device``: the prostheses' curve (a
+    commercial foot's or a file's; for ``prosthesis: optimal`` the start of the free coefficients; default the
+    commercial foot ``cfg.prosthesis`` names); ``report(iteration, objective, violation)`` after every IPOPT
+    iteration."""
     weights = cfg.weight_pair()
-    settings = PredictSettings(speed_m_s=cfg.speed_m_s, weights=weights, max_iterations=cfg.max_iterations)
-    model = WalkingModel(params)
-    transcriber = Transcriber(cfg.nodes, model=model)
+    settings = settings_of(cfg)
+    device = device if device is not None else curve_for(cfg.prosthesis)
+    optimal = cfg.prosthesis == "optimal"
+    model = WalkingModel(cfg.walker_parameters(params))
+    transcriber = Transcriber(cfg.nodes, model=model, muscles=walker_muscles(cfg, device))
     layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)  # the parity check, before anything runs
     if init is not None and np.size(init) != layout.size:
         raise InputError(None, "--init", f"holds {np.size(init)} design variables (expected {layout.size} for "
@@ -181,7 +259,11 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     if report is not None:  # one count over every solve (each IPOPT run counts from 0)
         calls, each = itertools.count(), report
         report = lambda k, objective, violation: each(next(calls), objective, violation)  # noqa: E731
-    label = (f"{cfg.nodes} nodes, {cfg.speed_m_s:g} m/s, weights {weights[0]:.4g},{weights[1]:.4g}")
+    label = (f"{cfg.nodes} nodes, {cfg.speed_m_s:g} m/s, weights {weights[0]:.4g},{weights[1]:.4g}"
+             + (f", prosthesis {cfg.prosthesis}" if cfg.prosthetic else "")
+             + (f", +{cfg.foot_mass_kg:g} kg per foot" if cfg.foot_mass_kg else "")
+             + (f", F_max ×{cfg.strength():g}" if cfg.strength() != 1 else ""))
+    solve_options = {"device": device, "optimal_device": optimal}
     if init is not None:
         x0 = init
     elif cfg.symmetric:
@@ -191,7 +273,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         # already walks, to which the full model's splines are fitted (layout.full_from_symmetric)
         first = solve_windowed(transcriber, reference, initial_guess(transcriber, reference, settings,
                                                                      symmetric=True),
-                               settings, symmetric=True, report=report)
+                               settings, symmetric=True, report=report, **solve_options)
         iterations, rounds = first["iterations"], first["rounds"]
         history.append(f"predict: symmetric model (the full model's start), {label}: {first['status']} after "
                        f"{first['iterations']} iterations")
@@ -199,45 +281,56 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
               else initial_guess(transcriber, reference, settings, symmetric=False))
         if first["success"]:  # near a solution: windows of ±1 segment (a third of the factorisation's cost)
             settings = dataclasses.replace(settings, window_reach=1)
-    solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report)
+        if optimal and first["success"]:
+            solve_options["device"] = ProsthesisCurve("optimal", *first["device"])
+    solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report,
+                            **solve_options)
     solve_time = time.perf_counter() - start
-    result, violations = describe(cfg, solved["nlp"], solved["w"], reference, model)
+    final = (ProsthesisCurve("optimal", *solved["device"]) if optimal else device) if cfg.prosthetic else None
+    muscles = walker_muscles(cfg, final)
+    result, violations = describe(cfg, solved["nlp"], solved["w"], reference, model, muscles)
     converged = solved["success"] and solved["windows_hold"] and not violated_groups(violations)
     history.append(f"predict: {'symmetric' if cfg.symmetric else 'full'} model, {label}: {solved['status']} after "
                    f"{solved['iterations']} iterations")
-    result["fine_grid"] = fine_grid(cfg, solved["x"], reference, model)
+    result["fine_grid"] = fine_grid(cfg, solved["x"], reference, model, muscles)
     return PredictResult(**result, design=np.asarray(solved["x"], float), converged=bool(converged),
                          status=solved["status"], iterations=iterations + solved["iterations"],
-                         rounds=rounds + solved["rounds"], solve_time_s=solve_time, history=tuple(history))
+                         rounds=rounds + solved["rounds"], solve_time_s=solve_time, history=tuple(history),
+                         prosthesis=final, foot_mass_kg=cfg.foot_mass_kg, strength_scale=cfg.strength())
 
 
-def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model: WalkingModel) -> tuple[dict, dict]:
+def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model: WalkingModel,
+             muscles: WalkerMuscles) -> tuple[dict, dict]:
     """The fields of a :class:`PredictResult` for the NLP's variables ``w`` (the gait transcribed anew with the
-    exact heat-rate model) and every constraint group's largest violation there."""
-    g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w)).ravel()
+    exact heat-rate model and ``muscles``, whose device is the solution's) and every constraint group's largest
+    violation there."""
+    g = nlp.constraint_values(w, settings_of(cfg))
     violations = {name: float(np.max(np.maximum(nlp.lbg[sl] - g[sl], 0) + np.maximum(g[sl] - nlp.ubg[sl], 0)))
                   for name, sl in nlp.groups.items()}
     durations, steps_r, steps_l, values = nlp.gait(w)
-    exact = Transcriber(cfg.nodes, model=model, smoothing=0.0)
+    exact = Transcriber(cfg.nodes, model=model, muscles=muscles, smoothing=0.0)
     t = exact.at(durations, steps_r, steps_l, values)
     fields = _result(cfg, cfg.weight_pair(), exact, t, durations, (steps_r, steps_l), reference, violations)
     return fields, violations
 
 
 def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Reference,
-                    params: WalkerParameters | None = None) -> PredictResult:
-    """The :class:`PredictResult` of a given design vector χ ``x`` (e.g. a stored solution), without solving;
-    ``converged`` says whether every constraint group holds there."""
-    model = WalkingModel(params)
-    transcriber = Transcriber(cfg.nodes, model=model)
-    settings = PredictSettings(speed_m_s=cfg.speed_m_s, weights=cfg.weight_pair())
+                    params: WalkerParameters | None = None, device: ProsthesisCurve | None = None) -> PredictResult:
+    """The :class:`PredictResult` of a given design vector χ ``x`` (e.g. a stored solution; ``device``: its
+    prostheses' curve), without solving; ``converged`` says whether every constraint group holds there."""
+    device = device if device is not None else curve_for(cfg.prosthesis)
+    model = WalkingModel(cfg.walker_parameters(params))
+    muscles = walker_muscles(cfg, device)
+    transcriber = Transcriber(cfg.nodes, model=model, muscles=muscles)
     layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
-    nlp = build_nlp(transcriber, reference, settings, symmetric=cfg.symmetric,
+    nlp = build_nlp(transcriber, reference, settings_of(cfg), symmetric=cfg.symmetric,
                     segments=instant_segments(transcriber, layout, x))
-    fields, violations = describe(cfg, nlp, nlp.start(x), reference, model)
-    fields["fine_grid"] = fine_grid(cfg, x, reference, model)
+    fields, violations = describe(cfg, nlp, nlp.start(x, device), reference, model, muscles)
+    fields["fine_grid"] = fine_grid(cfg, x, reference, model, muscles)
     return PredictResult(**fields, design=np.asarray(x, float), converged=not violated_groups(violations),
-                         status="evaluated", history=("predict: a given design vector, evaluated",))
+                         status="evaluated", history=("predict: a given design vector, evaluated",),
+                         prosthesis=device if cfg.prosthetic else None, foot_mass_kg=cfg.foot_mass_kg,
+                         strength_scale=cfg.strength())
 
 
 def _ground_forces(tr: Transcriber, t) -> np.ndarray:
@@ -267,18 +360,18 @@ def _costs(tr: Transcriber, t, period: float, stride: float, reference: Referenc
 
 
 def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Reference, model: WalkingModel,
-              refinement: int = FINE_GRID_REFINEMENT) -> dict:
+              muscles: WalkerMuscles | None = None, refinement: int = FINE_GRID_REFINEMENT) -> dict:
     """The design χ ``x`` on a grid ``refinement`` times finer than the control points' (each phase's
     intervals split alike; exact heat-rate model): Et, Jdev, J and the largest moment error, contact error and
     excitation range there — how far the optimum, which sees the control points only, holds between them."""
     counts = tuple(refinement * (c - 1) + 1 for c in DEFAULT_CONTROL_POINTS)
-    fine = Transcriber(cfg.nodes, model=model, grid=control_grid(counts), smoothing=0.0)
+    fine = Transcriber(cfg.nodes, model=model, muscles=muscles, grid=control_grid(counts), smoothing=0.0)
     layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
     durations = layout.phase_durations(x)
     times = np.asarray(instant_times(fine.grid, durations), float).ravel()
     t = fine.at(*gait_at(layout, x, times))
     et, jdev = _costs(fine, t, float(np.sum(durations)), sum(layout.step_lengths(x)), reference)
-    u = np.asarray(t.muscle_state["u"], float)
+    u = np.asarray(t.muscle_state["u"], float)[:, fine.muscles.present]
     return {"refinement": refinement, "cost_of_transport_J_per_m": et, "deviation": jdev,
             "objective": float(objective(et, jdev, cfg.weight_pair())),
             "max_moment_error_Nm": float(max(np.abs(fine.joint_map_pinv @ np.asarray(e, float)).max()
@@ -297,6 +390,12 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
     angles = walker_to_clinical(t.y[opening])
     pct = 100 * times / period
     et, jdev = _costs(tr, t, period, stride, reference, grf)
+    present = tr.muscles.present  # a prosthetic run's outputs leave out the removed muscles
+    ankle = np.zeros((len(opening), 2))
+    if tr.muscles.prosthetic:  # the prostheses' moments (5.59) on y6, y9
+        c = tr.muscles.prosthesis.coefficients()
+        ankle = np.array([np.ravel(np.array(tr.muscles.device(y, yd, c)))[[5, 8]]
+                          for y, yd in zip(t.y[opening], t.yd[opening])])
     # joint moments: muscles (and passive structures) vs what the motion and λ require (5.49–5.51)
     B_pinv = tr.joint_map_pinv
     muscle, required, error = [], [], []
@@ -312,9 +411,10 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
                                       if int(grid.phase[j]) == p) for p in range(8)])
     return dict(speed_m_s=cfg.speed_m_s, weights=weights, nodes=cfg.nodes, symmetric=cfg.symmetric,
                 time_s=times, cycle_pct=pct, coordinates=t.y[opening], clinical_angles_deg=angles,
-                muscle_names=tr.muscles.names, muscle_forces_N=np.asarray(t.forces_N)[opening],
-                activations=t.muscle_state["a"], excitations=t.muscle_state["u"],
-                metabolic_rate_W=t.metabolic_rate_W, point_time_s=np.asarray(t.point_times_s, float).ravel(),
+                muscle_names=tuple(np.array(tr.muscles.names)[present]),
+                muscle_forces_N=np.asarray(t.forces_N)[opening][:, present],
+                activations=t.muscle_state["a"][:, present], excitations=t.muscle_state["u"][:, present],
+                metabolic_rate_W=t.metabolic_rate_W[:, present], point_time_s=np.asarray(t.point_times_s, float).ravel(),
                 point_phase=grid.phase + 1, grf_N=grf, joint_moments_Nm=np.array(required),
                 muscle_moments_Nm=np.array(muscle), moment_error_Nm=np.array(error),
                 contact_error_m=np.array([np.abs(c).max() for c in t.contact_error_m]),
@@ -322,6 +422,7 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
                 step_lengths_m=np.asarray(steps, float), body_mass_kg=mass, point_names=tuple(tr.model.point_names),
                 points_m=np.array([np.column_stack([np.ravel(np.array(v)) for v in tr.model.points(y)]).T
                                    for y in t.y[opening]]),
-                reference_mean=reference.mean, reference_sd=reference.sd, cost_of_transport_J_per_m=float(et),
+                reference_mean=reference.mean, reference_sd=reference.sd, ankle_moment_Nm=ankle,
+                cost_of_transport_J_per_m=float(et),
                 deviation=float(jdev), objective=float(objective(et, jdev, weights)), violations=violations)
 

@@ -1,5 +1,6 @@
-"""Writes the predict stage's files: motion.csv, grf.csv, moments.csv, muscles.csv and predict.h5 (the whole
-:class:`~gaitcli.predict.stage.PredictResult` under ``result/``); the summary is the result's."""
+"""Writes the predict stage's files: motion.csv, grf.csv, moments.csv, muscles.csv, prosthesis.csv (prosthetic
+runs) and predict.h5 (the whole :class:`~gaitcli.predict.stage.PredictResult` under ``result/``); the summary
+is the result's."""
 
 from __future__ import annotations
 
@@ -41,6 +42,8 @@ def write_predict_outputs(folder: Path, result: PredictResult, attrs: dict) -> d
         muscles[f"{name}_excitation"] = result.excitations[:, k]
         muscles[f"{name}_metabolic_rate_W"] = result.metabolic_rate_W[:, k]
     write_table(folder / "muscles.csv", muscles)
+    if result.prosthesis is not None:
+        write_table(folder / "prosthesis.csv", prosthesis_table(result))
     data = record_datasets("result", result)
     root = dict(attrs)
     root.update({"converged": bool(result.converged), "solver_status": result.status,
@@ -48,3 +51,19 @@ def write_predict_outputs(folder: Path, result: PredictResult, attrs: dict) -> d
                                      "clinical_angles_deg: hip/knee flexion, ankle dorsiflexion positive"})
     write_h5(folder / "predict.h5", data, root)
     return result.summary()
+
+
+def prosthesis_table(result: PredictResult) -> dict:
+    """The prostheses over the cycle (5.58)–(5.59): per side the ankle angle (the model's y6/y9, rad, and
+    clinical dorsiflexion, deg) and the spring, damping and total moments, N·m, plantarflexing positive."""
+    curve = result.prosthesis
+    table = {"time_s": result.time_s, "cycle_pct": result.cycle_pct}
+    for k, (side, index) in enumerate((("r", 5), ("l", 8))):
+        y = result.coordinates[:, index]
+        spring = curve.spring_moment_Nm(y)
+        table[f"ankle_{side}_angle_rad"] = y
+        table[f"ankle_{side}_dorsiflexion_deg"] = result.clinical_angles_deg[:, 2 + 3 * k]
+        table[f"ankle_{side}_spring_moment_Nm"] = spring
+        table[f"ankle_{side}_damping_moment_Nm"] = result.ankle_moment_Nm[:, k] - spring
+        table[f"ankle_{side}_moment_Nm"] = result.ankle_moment_Nm[:, k]
+    return table

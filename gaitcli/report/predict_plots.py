@@ -98,7 +98,10 @@ def predict_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Pat
     written.append(save(fig, folder / "moments.png"))
 
     fig, axes = plt.subplots(2, 4, figsize=(13, 5.5), sharex=True, sharey=True)
-    for k, ax in enumerate(axes.ravel()):
+    right = [k for k, name in enumerate(r.muscle_names) if name.endswith("_r")]  # 6 with prostheses
+    for ax in axes.ravel()[len(right):]:
+        ax.set_visible(False)
+    for k, ax in zip(right, axes.ravel()):
         ax.axhspan(0, 1, color="0.93", zorder=0)
         ax.plot(pct_i, r.activations[:, k], color=SIDE_COLOUR["r"], lw=1.3, label="activation")
         ax.plot(pct_i, r.excitations[:, k], color="k", lw=0.9, ls="--", label="excitation")
@@ -128,7 +131,35 @@ def predict_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Pat
     fig.subplots_adjust(left=0.06, right=0.99, top=0.9, bottom=0.15)
     written.append(save(fig, folder / "stick.png"))
     written.append(_walk_gif(r, index, opening, folder / "walk.gif"))
+    if r.prosthesis is not None:
+        written.append(prosthesis_figure(r, folder / "prosthesis.png", caption))
     return written
+
+
+def prosthesis_figure(r, path: Path, caption: str) -> Path:
+    """The device's spring moment against ankle dorsiflexion beside Table A.7's feet (as Fig. 5.16), with the
+    moment the right prosthesis gave over the predicted cycle (spring and damping, 5.59)."""
+    from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+
+    dorsiflexion = np.linspace(-20.0, 30.0, 201)  # deg, clinical (y = −dorsiflexion)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for (name, foot), style in zip(COMMERCIAL_FEET.items(), (":", "--", "-.")):
+        ax.plot(dorsiflexion, foot.plantarflexor_moment_Nm(np.radians(dorsiflexion)), color="0.45", ls=style,
+                lw=1.1, label=f"{foot.name} (Table A.7)")
+    ax.plot(dorsiflexion, r.prosthesis.plantarflexor_moment_Nm(np.radians(dorsiflexion)), color="k", lw=1.8,
+            label=f"this run's device ({r.prosthesis.name})")
+    ax.plot(r.clinical_angles_deg[:, 2], r.ankle_moment_Nm[:, 0], color=SIDE_COLOUR["r"], lw=1.2,
+            label="right prosthesis over the cycle (with damping)")
+    ax.axhline(0, color="k", lw=0.5)
+    ax.axvline(0, color="k", lw=0.5)
+    ax.set_xlabel("ankle dorsiflexion (deg)")
+    ax.set_ylabel("plantarflexor moment (N·m)")
+    ax.set_xlim(dorsiflexion[0], dorsiflexion[-1])
+    ax.set_ylim(-150, 400)
+    ax.legend(fontsize=8, frameon=False, loc="upper left")
+    ax.set_title(f"Prosthetic ankle, moment against angle (5.58–5.59): {caption}", fontsize=8)
+    fig.subplots_adjust(left=0.11, right=0.98, top=0.9, bottom=0.12)
+    return save(fig, path)
 
 
 def _opening_points(r) -> np.ndarray:

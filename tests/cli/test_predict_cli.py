@@ -5,12 +5,14 @@ names the violated constraint groups; ``gait predict TRIAL`` takes that trial's 
 from __future__ import annotations
 
 import json
+import signal
 
 import h5py
 import numpy as np
 import pandas as pd
 
-from .conftest import copy_sample, gait_many
+from .conftest import copy_sample, gait_many, snapshot
+from .test_interrupts import interrupt_after, start_gait
 
 PREDICT_FILES = ("motion.csv", "grf.csv", "moments.csv", "muscles.csv", "predict.h5", "summary.json")
 #: DESIGN.md's summary.json keys of the predict stage
@@ -34,7 +36,7 @@ def test_bad_options_and_files_exit_2_naming_them(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
-def test_an_unconverged_prediction_writes_everything_and_exits_3(tmp_path):
+def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigterm(tmp_path):
     copy_sample("normal", tmp_path / "normal")
     runs = gait_many({"default": (("predict", "--nodes", "6", "--max-iterations", "2", "-o", "out"), tmp_path),
                       "trial": (("predict", "normal", "--nodes", "6", "--max-iterations", "1", "--no-plots"),
@@ -63,3 +65,14 @@ def test_an_unconverged_prediction_writes_everything_and_exits_3(tmp_path):
     assert (tmp_path / "normal" / "gait_out" / "idyn" / "idyn.h5").is_file()
     with h5py.File(tmp_path / "normal" / "gait_out" / "predict" / "predict.h5", "r") as h5:
         assert abs(float(h5["result/body_mass_kg"][()]) - 55.0) < 0.5
+
+    # SIGTERM inside the next run's IPOPT iterations (issue 9): "gait: interrupted", exit 130, the unconverged
+    # result above untouched and no half-written folder. The first run's solve time (construction and two
+    # iterations) plus the imports is when IPOPT iterates; at 6 nodes it would go on for minutes.
+    # (In CasADi's construction, C++ that does not return to Python, an interrupt waits until it returns.)
+    earlier = snapshot(tmp_path / "out")
+    first_solve_s = json.loads((tmp_path / "out" / "predict" / "summary.json").read_text())["solve_time_s"]
+    process = start_gait("predict", "--nodes", "6", "-o", "out", cwd=tmp_path)
+    stderr = interrupt_after(process, first_solve_s + 6.0, signal.SIGTERM)
+    assert process.returncode == 130 and "gait: interrupted" in stderr, stderr
+    assert snapshot(tmp_path / "out") == earlier

@@ -151,3 +151,40 @@ def test_clinical_angles_follow_the_geometry(model):
 def test_coordinates_are_named_in_order():
     assert COORDINATES == ("hip_x", "hip_z", "hat_angle", "thigh_r", "knee_r", "ankle_r", "thigh_l", "knee_l",
                            "ankle_l")
+
+
+def test_added_foot_mass_at_the_foot_centre_of_mass():
+    # 5.3.2's +2 kg per foot, at the foot's CoM (CHAPTER5_NOTES §3 item 17): mass, CoM and inertia by hand
+    p = WalkerParameters.subject_1()
+    heavy = p.with_foot_mass(2.0)
+    assert heavy.limb.foot_mass_kg == pytest.approx(p.limb.foot_mass_kg + 2.0)
+    assert heavy.body_mass_kg == pytest.approx(p.body_mass_kg + 4.0)
+    assert heavy.hat_mass_kg == p.hat_mass_kg
+    assert (heavy.limb.foot_com_forward_m, heavy.limb.foot_com_down_m) == (p.limb.foot_com_forward_m,
+                                                                         p.limb.foot_com_down_m)
+    assert heavy.limb.foot_inertia_kgm2 == p.limb.foot_inertia_kgm2
+    assert WalkingModel(heavy).total_mass_kg == pytest.approx(WalkingModel(p).total_mass_kg + 4.0)
+    assert p.with_foot_mass(0.0) is p
+
+
+def test_added_foot_mass_as_a_band_combines_by_parallel_axes():
+    # a 1.719 kg band (Table A.2: I_Y = 0.0043 kg·m²) 0.1 m ahead of and 0.02 m below the ankle
+    p = WalkerParameters.subject_1()
+    m0, m = p.limb.foot_mass_kg, 1.719
+    c0 = np.array([p.limb.foot_com_forward_m, p.limb.foot_com_down_m])
+    band = np.array([0.1, 0.02])
+    banded = p.with_foot_mass(m, (0.1, 0.02)).limb
+    com = np.array([banded.foot_com_forward_m, banded.foot_com_down_m])
+    np.testing.assert_allclose(com, (m0 * c0 + m * band) / (m0 + m), atol=1e-12)
+    # about the new CoM: the two bodies' own inertias plus m·d² each
+    d0, d1 = np.linalg.norm(c0 - com), np.linalg.norm(band - com)
+    expected = p.limb.foot_inertia_kgm2 + m0 * d0 ** 2 + 0.0043 + m * d1 ** 2
+    assert banded.foot_inertia_kgm2 == pytest.approx(expected, rel=1e-12)
+    # the model's whole-body centre of mass in the upright posture moves by 2·m·(band − foot CoM)/M_total
+    y = np.array([0.0, 1.0, 0, 0, 0, 0, 0, 0, 0])
+    light, heavy = WalkingModel(p), WalkingModel(p.with_foot_mass(m, (0.1, 0.02)))
+    moment_light = np.array(light.centre_of_mass(y)).ravel() * light.total_mass_kg
+    moment_heavy = np.array(heavy.centre_of_mass(y)).ravel() * heavy.total_mass_kg
+    ankle_z = y[1] - p.limb.thigh_length_m - p.limb.shank_length_m
+    band_world = np.array([0.1, ankle_z - 0.02])
+    np.testing.assert_allclose(moment_heavy - moment_light, 2 * m * band_world, atol=1e-9)

@@ -80,3 +80,46 @@ def test_hip_angle_is_relative_to_the_hat(muscles):
     thigh_forward[3] = -0.2
     np.testing.assert_allclose(np.array(muscles.lengths(leaning)).ravel()[:8],
                                np.array(muscles.lengths(thigh_forward)).ravel()[:8], atol=1e-12)
+
+
+def test_a_prosthetic_ankle_removes_soleus_tibialis_and_the_ankle_structures():
+    # 5.3.3 (CHAPTER5_NOTES §1.12, §3 item 16): Sol and TA gone, Gas at the knee only with its length at a
+    # neutral ankle, no Riener–Edrich ankle moment and their knee moment at a neutral ankle; the device's
+    # moment (5.59) on y6 and y9
+    from gaitcli.muscles.parameters import JointParameters
+    from gaitcli.muscles.passive import JointModel
+    from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+
+    foot = COMMERCIAL_FEET["seattle"]
+    intact, prosthetic = WalkerMuscles(), WalkerMuscles(prosthesis=foot)
+    removed = [n for n, keep in zip(prosthetic.names, prosthetic.present) if not keep]
+    assert removed == ["tibialis_anterior_r", "soleus_r", "tibialis_anterior_l", "soleus_l"]
+    y = RNG.uniform(-0.3, 0.3, 9)
+    y[4], y[7] = 0.6, 0.3  # knees flexed
+    yd = RNG.uniform(-2, 2, 9)
+    R, R0 = np.array(prosthetic.moment_arms(y)), np.array(intact.moment_arms(y))
+    gas = prosthetic.names.index("gastrocnemius_r")
+    assert R[5, gas] == 0 and R[4, gas] == pytest.approx(R0[4, gas], abs=1e-12)  # r_k is constant (A.9)
+    neutral = y.copy()
+    neutral[5] = neutral[8] = 0.0
+    np.testing.assert_allclose(np.array(prosthetic.lengths(y)), np.array(intact.lengths(neutral)), atol=1e-12)
+    # passive: the intact tissue evaluated with the ankle at neutral, minus its ankle moment, plus the device
+    tissue = np.array(prosthetic.tissue(y, yd)).ravel()
+    joints = JointModel(JointParameters(prosthetic_ankle=True))
+    expected = np.zeros(9)
+    for ankle, psi_rows in ((5, (2, 3, 4, 5)), (8, (2, 6, 7, 8))):
+        psi = np.array(prosthetic.joint_angles(y)[0 if ankle == 5 else 1]).ravel()
+        assert np.array(joints.passive(psi)).ravel()[2] == 0.0  # M_A removed
+        knee_neutral = np.array(JointModel().passive(np.array([psi[0], psi[1], 0.0]))).ravel()[1]
+        assert np.array(joints.passive(psi)).ravel()[1] == pytest.approx(knee_neutral, abs=1e-12)
+    assert tissue[5] == 0.0 and tissue[8] == 0.0  # nothing else spans the ankle
+    device = np.array(prosthetic.passive(y, yd)).ravel() - tissue
+    expected[5], expected[8] = foot.moment_Nm(y[5], yd[5]), foot.moment_Nm(y[8], yd[8])
+    np.testing.assert_allclose(device, expected, atol=1e-10)
+
+
+def test_strength_scale_scales_every_fmax_and_with_it_the_muscle_mass():
+    # 5.3.3's F_max +50 %; muscle mass ∝ F_max (A.13), CHAPTER5_NOTES §3 item 13
+    base, strong = WalkerMuscles(), WalkerMuscles(strength_scale=1.5)
+    np.testing.assert_allclose(strong.muscle.params.max_isometric_force_N, 1.5 * base.muscle.params.max_isometric_force_N)
+    np.testing.assert_allclose(strong.muscle.params.muscle_mass_kg, 1.5 * base.muscle.params.muscle_mass_kg)

@@ -64,15 +64,14 @@ def test_lifted_start_solves_the_defining_equations(transcriber, reference, buil
     x0 = initial_guess(transcriber, reference, symmetric=symmetric)
     w0 = nlp.start(x0)
     np.testing.assert_allclose(nlp.design(w0), x0, atol=1e-12)  # χ → w → χ
-    g = np.array(ca.Function("g", [nlp.w], [nlp.constraints])(w0)).ravel()
+    g = nlp.constraint_values(w0)
     for name in DEFINING:
         assert np.abs(g[nlp.groups[name]]).max() < 1e-9, name
     t = transcriber.at(*nlp.gait(w0))
     half = transcriber.grid.points // 2 if symmetric else transcriber.grid.points
     np.testing.assert_allclose(g[nlp.groups["moment"]], np.concatenate(t.moment_error_Nm[:half]), atol=1e-9)
     assert np.all(w0 >= nlp.lbw) and np.all(w0 <= nlp.ubw)
-    f = ca.Function("f", [nlp.w], [nlp.cost, nlp.parts["Et"], nlp.parts["Jdev"]])
-    cost, et, jdev = (float(v) for v in f(w0))
+    cost, et, jdev = nlp.cost_parts(w0)
     assert np.isfinite(cost) and 100 < et < 2000 and jdev > 0  # J/m: a walking order of magnitude at 10 % F_max
     assert abs(g[nlp.groups["speed"]][0]) < 1e-12  # the guess walks at the set speed: T = (L_r + L_l)/v
 
@@ -104,3 +103,74 @@ def test_windows_move_only_where_a_solution_presses_on_them(built):
     before = nlp.segments["cycle"]
     assert moved["cycle"][3] == before[3] + 1 and moved["cycle"][5] == max(before[5] - 1, 0)
     assert np.array_equal(np.delete(moved["cycle"], [3, 5]), np.delete(before, [3, 5]))
+
+
+@pytest.fixture(scope="module")
+def prosthetic(reference):
+    """The symmetric NLP with SACH prostheses (5.3.3): the device's coefficients D are variables."""
+    from gaitcli.predict.muscles import WalkerMuscles
+    from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+
+    transcriber = Transcriber(18, muscles=WalkerMuscles(prosthesis=COMMERCIAL_FEET["sach"], strength_scale=1.5))
+    return transcriber, build_nlp(transcriber, reference, symmetric=True)
+
+
+def test_prosthetic_nlp_removes_two_muscles_and_its_start_solves_the_defining_equations(prosthetic, reference):
+    from gaitcli.predict.nlp import DEVICE_SCALE
+
+    transcriber, nlp = prosthetic
+    grid = transcriber.grid
+    sizes = {k: v.stop - v.start for k, v in nlp.groups.items()}
+    assert sizes["activation"] == 6 * grid.instants and sizes["paths"] == 12 * grid.instants
+    assert sizes["excitation"] == 12 * grid.instants
+    x0 = initial_guess(transcriber, reference, symmetric=True)
+    w0 = nlp.start(x0)
+    lbw, ubw = nlp.bounds()  # the optimal device: D free
+    assert w0.size == lbw.size == nlp.w.size1() and nlp.device_size == 6
+    np.testing.assert_allclose(nlp.device(w0), transcriber.muscles.prosthesis.coefficients())
+    np.testing.assert_allclose(w0[-6:] * DEVICE_SCALE, transcriber.muscles.prosthesis.coefficients())
+    g = nlp.constraint_values(w0)
+    for name in DEFINING:
+        assert np.abs(g[nlp.groups[name]]).max() < 1e-9, name
+    # Sol and TA: every variable of theirs fixed at 0 (spline coefficients and lifted ŝ, l_m, v_m, a)
+    fixed = (nlp.lbw == 0) & (nlp.ubw == 0)
+    per_instant = 4 * 2 * grid.instants  # ŝ, l_m, v_m, a of 2 muscles at every instant
+    coefficients = 2 * 4 * (transcriber.layout.nodes - 1)  # their cubic segments
+    assert fixed.sum() == per_instant + coefficients
+    # the moment error uses the prostheses' moment: the transcription (problem.py) with SACH's curve agrees
+    t = transcriber.at(*nlp.gait(w0))
+    np.testing.assert_allclose(g[nlp.groups["moment"]], np.concatenate(t.moment_error_Nm[:grid.points // 2]),
+                               atol=1e-9)
+
+
+def test_monotonicity_rows_accept_the_commercial_feet_and_refuse_a_rising_curve(prosthetic, reference):
+    from gaitcli.predict.nlp import DEVICE_SCALE
+    from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
+
+    transcriber, nlp = prosthetic
+    w0 = nlp.start(initial_guess(transcriber, reference, symmetric=True))
+    for foot in COMMERCIAL_FEET.values():  # Table A.7's feet decrease over −25° … +10°
+        w0[-6:] = foot.coefficients() / DEVICE_SCALE
+        assert nlp.constraint_values(w0)[nlp.groups["monotone"]].max() <= 0, foot.name
+    rising = ProsthesisCurve("rising", 0.0, 0.0, -50.0, 0.0, -2000.0, 1.0)  # slope −50 − 4000·y > 0 for y < −1.4°
+    w0[-6:] = rising.coefficients() / DEVICE_SCALE
+    monotone = nlp.constraint_values(w0)[nlp.groups["monotone"]]
+    angles = np.linspace(np.radians(-25), np.radians(10), monotone.size)
+    np.testing.assert_allclose(monotone * DEVICE_SCALE[2], -50.0 - 4000.0 * np.minimum(angles, 0.0) *
+                               (angles <= 0), atol=1e-9)
+    assert not rising.is_monotone(np.radians(-25), np.radians(10))
+
+
+def test_speed_and_weights_are_parameters(built, transcriber, reference):
+    # one built problem serves every speed and weight set: T − ΔS/v and J = w1·Et/100 + w2·Jdev at p
+    from gaitcli.predict.nlp import PredictSettings
+
+    symmetric, nlp = built
+    w0 = nlp.start(initial_guess(transcriber, reference, symmetric=symmetric))
+    durations, steps_r, steps_l, _ = nlp.gait(w0)
+    for speed, weights in ((1.0, (1.0, 1.0)), (1.33, (20 / 11, 2 / 11))):
+        settings = PredictSettings(speed_m_s=speed, weights=weights)
+        g = nlp.constraint_values(w0, settings)
+        assert g[nlp.groups["speed"]][0] == pytest.approx(durations.sum() - (steps_r + steps_l) / speed, abs=1e-12)
+        cost, et, jdev = nlp.cost_parts(w0, settings)
+        assert cost == pytest.approx(weights[0] * et / 100 + weights[1] * jdev, rel=1e-12)

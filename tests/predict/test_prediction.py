@@ -57,7 +57,8 @@ def test_fine_grid_at_refinement_1_is_the_control_points(prediction):
     from gaitcli.predict.model import WalkingModel
     from gaitcli.predict.stage import fine_grid
 
-    same = fine_grid(PredictConfig(), np.loadtxt(STORED), read_reference(bundled_reference()), WalkingModel(), 1)
+    same = fine_grid(PredictConfig(), np.loadtxt(STORED), read_reference(bundled_reference()), WalkingModel(),
+                     refinement=1)
     assert same["cost_of_transport_J_per_m"] == pytest.approx(prediction.cost_of_transport_J_per_m, rel=1e-6)
     assert same["deviation"] == pytest.approx(prediction.deviation, rel=1e-6)
     assert same["max_moment_error_Nm"] <= 2.0 + 1e-4 and same["max_contact_error_m"] <= 0.002 + 1e-6

@@ -1,0 +1,289 @@
+"""Prediction studies (Diss. 5.3.2, 5.3.3): the optimal prosthesis from its warm starts, multi-start, study grids.
+
+- :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``nlp.py``'s D), started
+  from the best commercial foot's solution and from the normal (intact) solution; the result is never worse
+  than the best start, which is itself a feasible point of the optimal problem (its coefficients lie inside
+  the bounds and its τ_s decreases over the declared range).
+- :func:`perturbed_guess`, :func:`run_starts` — ``--starts N``: seeded perturbations of the initial guess solved
+  in parallel processes; the best converged solution is kept and :func:`agreeing` counts the starts that
+  found it.
+- :class:`StudySpec`, :func:`study_cases` — ``--study FILE.yaml``: speeds × weight sets × conditions, ordered in
+  chains (one per speed and weight set: the normal case first, every other case warm started from it, the
+  optimal prosthesis last from the best foot and the normal solution).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing
+import os
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from gaitcli.core.validate import one_of
+from gaitcli.errors import InputError, shown
+from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.model import WalkerParameters, WalkingModel
+from gaitcli.predict.nlp import box_bounds, initial_guess
+from gaitcli.predict.problem import Transcriber
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
+from gaitcli.predict.reference import Reference
+from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of, walker_muscles
+
+#: two solutions "agree" when their objectives differ by less than this fraction of the better one
+AGREEMENT = 0.01
+#: the relative size of a start's perturbation: durations and step ×(1 ± 10 %), angles ± 0.1 rad, ŝ ± 0.1
+PERTURBATION = {"durations": 0.10, "steps": 0.05, "angles_rad": 0.10, "stretch": 0.10}
+
+
+def better(a: PredictResult | None, b: PredictResult | None) -> PredictResult | None:
+    """The better of two results: converged before unconverged, then the lower objective J."""
+    if a is None or b is None:
+        return a if b is None else b
+    return min((a, b), key=lambda r: (not r.converged, r.objective))
+
+
+def as_optimal(start: PredictResult, note: str) -> PredictResult:
+    """A commercial-foot (or other) solution as the optimal problem's result: its coefficients are a feasible
+    device, and the optimal run did not improve on it."""
+    curve = ProsthesisCurve(f"optimal (= {start.prosthesis.name})", *start.prosthesis.coefficients())
+    return dataclasses.replace(start, prosthesis=curve, history=start.history + (note,))
+
+
+def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Reference,
+                    init: np.ndarray | None = None, report=None, progress=None,
+                    feet: dict[str, PredictResult] | None = None,
+                    normal: PredictResult | None = None) -> PredictResult:
+    """``--prosthesis optimal`` (5.3.3): the free device warm started from the best commercial foot's solution
+    (its χ and its coefficients) and from the normal solution (with that foot's coefficients). ``feet``
+    (name → result) and ``normal`` are solved here (from ``init`` or the default guess) when not given. The
+    result is the best of the optimal runs and of the best foot, which is itself a point of the optimal
+    problem: an optimal run never reports a higher J than the foot it started from."""
+    foot_cfg = {name: dataclasses.replace(cfg, prosthesis=name) for name in COMMERCIAL_FEET}
+    if feet is None:
+        feet = {name: run_predict(c, params=params, reference=reference, init=init, report=report)
+                for name, c in foot_cfg.items()}
+    if normal is None:
+        normal = run_predict(dataclasses.replace(cfg, prosthesis="none", strength_scale=cfg.strength()),
+                             params=params, reference=reference, init=init, report=report)
+    best_foot = None
+    for result in feet.values():
+        best_foot = better(best_foot, result)
+    device = best_foot.prosthesis
+    optimal_device = ProsthesisCurve("optimal", *device.coefficients())
+    chosen, history = None, []
+    for label, start in ((f"the {device.name} solution", best_foot), ("the normal solution", normal)):
+        if start is None:
+            continue
+        run = run_predict(cfg, params=params, reference=reference, init=start.design, report=report,
+                          device=optimal_device)
+        history.append(f"predict: optimal prosthesis from {label}: J {run.objective:.4g}"
+                       f"{'' if run.converged else ' (not converged)'}")
+        chosen = better(chosen, run)
+    if best_foot.converged and (not chosen.converged or chosen.objective > best_foot.objective):
+        return as_optimal(best_foot, f"predict: the optimal runs ended above the {device.name} solution's J "
+                                     f"{best_foot.objective:.4g} (" + "; ".join(history) + "): kept that solution")
+    return dataclasses.replace(chosen, history=chosen.history + tuple(history))
+
+
+def perturbed_guess(cfg: PredictConfig, params: WalkerParameters | None, reference: Reference,
+                    seed: int) -> np.ndarray:
+    """The default initial guess χ with seeded perturbations of :data:`PERTURBATION` (normal noise, clipped
+    into the bounds; the durations rescaled so that the speed holds)."""
+    layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
+    transcriber = Transcriber(cfg.nodes, model=WalkingModel(cfg.walker_parameters(params)))
+    x = initial_guess(transcriber, reference, settings_of(cfg), symmetric=cfg.symmetric)
+    rng = np.random.default_rng(seed)
+    blocks = layout.unpack(x)
+    for name in ("coordinates", "right_leg", "trunk"):
+        if name in blocks:
+            v = blocks[name]
+            angle_columns = slice(2, None) if name == "coordinates" else (slice(0, None) if name == "right_leg"
+                                                                          else slice(2, 3))
+            v[:, angle_columns] += PERTURBATION["angles_rad"] * rng.standard_normal(v[:, angle_columns].shape)
+    for name in ("tendon_stretch", "right_stretch"):
+        if name in blocks:
+            blocks[name] += PERTURBATION["stretch"] * rng.standard_normal(blocks[name].shape)
+    steps = blocks["steps"] * (1 + PERTURBATION["steps"] * rng.standard_normal(blocks["steps"].shape))
+    durations = blocks["durations"] * (1 + PERTURBATION["durations"] * rng.standard_normal(blocks["durations"].shape))
+    period = (float(np.sum(steps)) * (2 if cfg.symmetric else 1)) / cfg.speed_m_s
+    blocks["durations"] = durations * period / (float(np.sum(durations)) * (2 if cfg.symmetric else 1))
+    blocks["steps"] = steps
+    low, high = box_bounds(layout, walker_muscles(cfg, COMMERCIAL_FEET["sach"]).present if cfg.prosthetic else None)
+    return np.clip(layout.pack(blocks), low, high)
+
+
+def _one_start(args) -> PredictResult:
+    cfg, params, reference, seed, device, init = args
+    init = init if seed is None else perturbed_guess(cfg, params, reference, seed)
+    if cfg.prosthesis == "optimal":
+        return predict_optimal(cfg, params=params, reference=reference, init=init)
+    return run_predict(cfg, params=params, reference=reference, init=init, device=device)
+
+
+def pool(workers: int) -> ProcessPoolExecutor:
+    """Worker processes (forked where the platform allows: no re-import, the parent's thread settings)."""
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    return ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context(method))
+
+
+def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | None, reference: Reference,
+               seed: int = 0, workers: int | None = None, device: ProsthesisCurve | None = None,
+               init: np.ndarray | None = None, on_done=None) -> list[PredictResult]:
+    """``starts`` solves of ``cfg`` in parallel processes: start 0 from ``init`` (default: the default guess),
+    start k from :func:`perturbed_guess` with seed ``seed + k``. ``on_done(k, result)`` as each finishes."""
+    jobs = [(cfg, params, reference, None if k == 0 else seed + k, device, init) for k in range(starts)]
+    workers = min(starts, workers or os.cpu_count() or 1)
+    if workers <= 1:
+        results = []
+        for k, job in enumerate(jobs):
+            results.append(_one_start(job))
+            if on_done:
+                on_done(k, results[-1])
+        return results
+    results: list = [None] * starts
+    with pool(workers) as executor:
+        futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
+        try:
+            from concurrent.futures import as_completed
+
+            for future in as_completed(futures):
+                k = futures[future]
+                results[k] = future.result()
+                if on_done:
+                    on_done(k, results[k])
+        except BaseException:
+            executor.shutdown(wait=False, cancel_futures=True)
+            raise
+    return results
+
+
+def agreeing(results: list[PredictResult], tolerance: float = AGREEMENT) -> tuple[int, PredictResult]:
+    """(how many converged starts reached the best converged J within ``tolerance`` of it, the best result)."""
+    best = None
+    for r in results:
+        best = better(best, r)
+    if not best.converged:
+        return 0, best
+    count = sum(1 for r in results if r.converged and r.objective <= best.objective * (1 + tolerance))
+    return count, best
+
+
+# ----------------------------------------------------------------------------------------------- study grids
+CONDITIONS = ("normal", "foot_mass", *COMMERCIAL_FEET, "optimal")
+#: Table 5.2/5.3's weight sets a)–d) (5.3.1)
+WEIGHT_SETS = {"a": "1,1", "b": "4/3,2/3", "c": "8/5,2/5", "d": "20/11,2/11"}
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A study file (``--study``): speeds (m/s) × weight sets × conditions, and what every case shares.
+
+    ``weights``: labels of :data:`WEIGHT_SETS` or "W1,W2" strings; ``conditions``: of :data:`CONDITIONS`;
+    ``strength_scale``: every case's F_max scale, the normal one's included (5.3.3: 1.5; 0: each condition's
+    default); ``foot_mass_kg``: the foot_mass condition's added mass (5.3.2: 2); ``starts``: solves per case.
+    """
+
+    name: str
+    speeds_m_s: tuple[float, ...]
+    weights: tuple[str, ...]
+    conditions: tuple[str, ...]
+    nodes: int = 18
+    strength_scale: float = 0.0
+    foot_mass_kg: float = 2.0
+    starts: int = 1
+    max_iterations: int = 3000
+
+    @classmethod
+    def from_mapping(cls, data, path) -> StudySpec:
+        """The spec of a study file's contents (an InputError naming ``path`` and the field otherwise)."""
+        if not isinstance(data, dict):
+            raise InputError(path, "study", f"got {shown(data)} (expected a mapping: name, speeds_m_s, weights, "
+                                            "conditions)")
+        known = {f.name for f in dataclasses.fields(cls)}
+        for key in data:
+            if key not in known:
+                raise InputError(path, str(key), f"unknown key (expected {', '.join(sorted(known))})")
+
+        def listed(key, kind):
+            value = data.get(key)
+            if not isinstance(value, list) or not value:
+                raise InputError(path, key, f"got {shown(value)} (expected a non-empty list)")
+            return tuple(kind(v) for v in value)
+
+        def speed(v):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 3:
+                raise InputError(path, "speeds_m_s", f"got {shown(v)} (expected speeds in m/s, 0 < v ≤ 3)")
+            return float(v)
+
+        def weight(v):
+            label = WEIGHT_SETS.get(str(v), str(v))
+            dataclasses.replace(PredictConfig(), weights=label).weight_pair()  # InputError naming --weights
+            return str(v)
+
+        def condition(v):
+            return one_of(str(v), CONDITIONS, where="conditions", path=path)
+
+        spec = {"name": str(data.get("name", "study")), "speeds_m_s": listed("speeds_m_s", speed),
+                "weights": listed("weights", weight), "conditions": listed("conditions", condition)}
+        for key, kind, low, high in (("nodes", int, 6, 40), ("strength_scale", float, 0.0, 5.0),
+                                     ("foot_mass_kg", float, 0.0, 20.0), ("starts", int, 1, 100),
+                                     ("max_iterations", int, 1, 100000)):
+            if key in data:
+                value = data[key]
+                if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high \
+                        or (kind is int and value != int(value)):
+                    raise InputError(path, key, f"got {shown(value)} (expected {kind.__name__} in [{low}, {high}])")
+                spec[key] = kind(value)
+        if "optimal" in spec["conditions"] and not set(COMMERCIAL_FEET) <= set(spec["conditions"]):
+            raise InputError(path, "conditions", "optimal needs sach, seattle and flex as well (its warm starts, "
+                                                 "5.3.3)")
+        return cls(**spec)
+
+
+@dataclass(frozen=True)
+class StudyCase:
+    """One case of a study: its folder name, labels and configuration; ``starts_from``: the cases (of its chain)
+    whose solutions start it."""
+
+    name: str
+    speed_m_s: float
+    weight_set: str
+    condition: str
+    cfg: PredictConfig
+    starts_from: tuple[str, ...] = field(default=())
+
+
+def weight_label(weights: str) -> str:
+    """A weight set's label: "a"–"d" for Table 5.2's sets, else the "W1,W2" string."""
+    return next((k for k, v in WEIGHT_SETS.items() if v == weights), weights)
+
+
+def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
+    """The study's cases in chains, one per speed and weight set (module docstring)."""
+    chains = []
+    for speed in spec.speeds_m_s:
+        for w in spec.weights:
+            weights = WEIGHT_SETS.get(w, w)
+            label = weight_label(weights)
+            base = dataclasses.replace(PredictConfig(), speed_m_s=speed, weights=weights, nodes=spec.nodes,
+                                       max_iterations=spec.max_iterations, strength_scale=spec.strength_scale)
+            chain, prefix = [], f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
+            normal = f"{prefix}_normal"
+            order = ["normal"] + [c for c in spec.conditions if c not in ("normal", "optimal")] + \
+                    (["optimal"] if "optimal" in spec.conditions else [])
+            for condition in order:
+                if condition == "normal":
+                    cfg, starts = base, ()
+                elif condition == "foot_mass":
+                    cfg, starts = dataclasses.replace(base, foot_mass_kg=spec.foot_mass_kg), (normal,)
+                elif condition == "optimal":
+                    cfg = dataclasses.replace(base, prosthesis="optimal")
+                    starts = tuple(f"{prefix}_{f}" for f in COMMERCIAL_FEET) + (normal,)
+                else:
+                    cfg, starts = dataclasses.replace(base, prosthesis=condition), (normal,)
+                chain.append(StudyCase(f"{prefix}_{condition}", speed, label, condition, cfg, starts))
+            chains.append(chain)
+    return chains

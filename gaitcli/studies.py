@@ -1,0 +1,188 @@
+"""``gait predict --study FILE.yaml`` and ``--starts N``: run the cases, write every case's folder, the study table
+and its figures (the edge of :mod:`gaitcli.predict.study`).
+
+A study's chains (one per speed and weight set, :func:`gaitcli.predict.study.study_cases`) run in parallel
+worker processes; within a chain each case starts from the solutions it names. Every case is written whole
+into ``OUT/study/<case>/`` (the files of ``gait predict``) with a ``case_key``: the SHA-256 of its resolved
+configuration, the subject, the reference and the keys of the cases it started from. A case whose folder
+holds the same key is read back instead of solved again, so a rerun (or a run after an interrupt) does
+only what is missing. ``study.csv`` has one row per case, unconverged ones included and marked.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from gaitcli.core.registry import Progress, ProgressCallback, no_progress
+from gaitcli.io.h5 import read_result
+from gaitcli.io.outputs import stage_folder, write_json, write_table
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+from gaitcli.predict.stage import PredictResult, run_predict
+from gaitcli.predict.study import StudyCase, StudySpec, agreeing, pool, predict_optimal, run_starts, study_cases
+
+#: study.csv's columns after the case's labels
+FIGURES = ("objective", "cost_of_transport_J_per_m", "deviation")
+
+
+def case_key(case: StudyCase, subject: str, reference_sha: str, start_keys: tuple[str, ...]) -> str:
+    """The SHA-256 that says a case folder holds this case's result (module docstring)."""
+    text = json.dumps({"cfg": dataclasses.asdict(case.cfg), "subject": subject, "reference": reference_sha,
+                       "starts": list(start_keys)}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def reference_sha256(reference) -> str:
+    return hashlib.sha256(np.ascontiguousarray(reference.mean).tobytes()
+                          + np.ascontiguousarray(reference.sd).tobytes()).hexdigest()
+
+
+def write_case(folder: Path, result: PredictResult, attrs: dict, extra: dict) -> dict:
+    """Write one case's files whole (atomic) with its summary plus ``extra`` (the case key and labels)."""
+    from gaitcli.report.predict_outputs import write_predict_outputs
+
+    with stage_folder(folder) as tmp:
+        summary = write_predict_outputs(tmp, result, attrs)
+        summary.update(extra)
+        write_json(tmp / "summary.json", summary)
+    return summary
+
+
+def stored_case(folder: Path, key: str) -> PredictResult | None:
+    """The result in ``folder`` when its summary holds ``key``, else None."""
+    try:
+        summary = json.loads((folder / "summary.json").read_text())
+        if summary.get("case_key") != key:
+            return None
+        return read_result(folder / "predict.h5", PredictResult)
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _tau(result: PredictResult, y: float) -> float:
+    return float(result.prosthesis.spring_moment_Nm(y)) if result.prosthesis is not None else float("nan")
+
+
+def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: float, agreed: int = 1) -> dict:
+    """One study.csv row: labels, J, Et, Jdev (control points and fine grid), convergence and the device."""
+    fine = result.fine_grid or {}
+    row = {"case": case.name, "speed_m_s": case.speed_m_s, "weights": case.weight_set, "condition": case.condition,
+           "objective": result.objective, "cost_of_transport_J_per_m": result.cost_of_transport_J_per_m,
+           "deviation": result.deviation, "fine_cost_of_transport_J_per_m": fine.get("cost_of_transport_J_per_m"),
+           "fine_deviation": fine.get("deviation"), "converged": bool(result.converged),
+           "iterations": int(result.iterations), "solve_time_s": float(result.solve_time_s),
+           "wall_time_s": float(wall_s), "reused": bool(reused), "starts_agreeing": int(agreed),
+           "tau_s_at_minus_0.1_rad_Nm": _tau(result, -0.1), "tau_s_at_minus_0.2_rad_Nm": _tau(result, -0.2)}
+    if result.prosthesis is not None:
+        row.update({f"prosthesis_{k}": float(v) for k, v in
+                    zip(("a_p", "b_p", "c0", "a_n", "b_n", "d_prosth"), result.prosthesis.coefficients())})
+    return row
+
+
+def _solve_case(case: StudyCase, spec: StudySpec, solved: dict, params, reference) -> tuple[PredictResult, int]:
+    """Solve one case from the solutions it starts from (``solved``: name → result of its chain so far)."""
+    if case.condition == "optimal":
+        feet = {name: solved[f"{case.name.rsplit('_', 1)[0]}_{name}"] for name in COMMERCIAL_FEET}
+        normal = solved[case.starts_from[-1]]
+        return predict_optimal(case.cfg, params=params, reference=reference, feet=feet, normal=normal), 1
+    init = solved[case.starts_from[0]].design if case.starts_from else None
+    if spec.starts > 1:  # start 0 from the chain's solution, the others from perturbed guesses
+        results = run_starts(case.cfg, spec.starts, params=params, reference=reference, workers=1, init=init)
+        agreed, best = agreeing(results)
+        return best, agreed
+    return run_predict(case.cfg, params=params, reference=reference, init=init), 1
+
+
+def run_chain(chain: list[StudyCase], spec: StudySpec, root: str, params, reference, subject: str,
+              attrs: dict, force: bool) -> list[dict]:
+    """Run (or read back) one chain's cases in order; returns their study.csv rows. Runs in a worker process."""
+    solved, keys, rows = {}, {}, []
+    reference_sha = reference_sha256(reference)
+    for case in chain:
+        start = time.perf_counter()
+        key = case_key(case, subject, reference_sha, tuple(keys[name] for name in case.starts_from))
+        folder = Path(root) / case.name
+        result = None if force else stored_case(folder, key)
+        reused = result is not None
+        agreed = 1
+        if result is None:
+            result, agreed = _solve_case(case, spec, solved, params, reference)
+            write_case(folder, result, {**attrs, "predict_config": json.dumps(dataclasses.asdict(case.cfg))},
+                       {"case_key": key, "case": case.name, "condition": case.condition,
+                        "weight_set": case.weight_set, "starts": spec.starts, "starts_agreeing": agreed})
+        else:
+            agreed = int(json.loads((folder / "summary.json").read_text()).get("starts_agreeing", 1))
+        solved[case.name], keys[case.name] = result, key
+        rows.append(case_row(case, result, reused=reused, wall_s=time.perf_counter() - start, agreed=agreed))
+    return rows
+
+
+def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, attrs: dict,
+              workers: int | None = None, force: bool = False,
+              progress: ProgressCallback = no_progress) -> tuple[list[dict], Path]:
+    """Every case of ``spec`` into ``out``/study/: the case folders, study.csv, study.png, curves.png. Returns
+    (rows in study order, the study folder)."""
+    chains = study_cases(spec)
+    root = Path(out) / "study"
+    root.mkdir(parents=True, exist_ok=True)
+    total = sum(len(c) for c in chains)
+    workers = max(1, min(len(chains), workers or os.cpu_count() or 1))
+    rows_by_chain: dict[int, list[dict]] = {}
+    progress(Progress("study", "cases", 0, total))
+    args = [(chain, spec, str(root), params, reference, subject, attrs, force) for chain in chains]
+    if workers == 1:
+        for k, a in enumerate(args):
+            rows_by_chain[k] = run_chain(*a)
+            progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
+    else:
+        from concurrent.futures import as_completed
+
+        with pool(workers) as executor:
+            futures = {executor.submit(run_chain, *a): k for k, a in enumerate(args)}
+            try:
+                for future in as_completed(futures):
+                    rows_by_chain[futures[future]] = future.result()
+                    progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
+            except BaseException:
+                executor.shutdown(wait=False, cancel_futures=True)
+                raise
+    rows = [row for k in range(len(chains)) for row in rows_by_chain[k]]
+    write_table(root / "study.csv", {name: [r.get(name) for r in rows] for name in rows[0]})
+    from gaitcli.report.study_plots import study_figures
+
+    study_figures(rows, root, title=spec.name)
+    return rows, root
+
+
+def starts_table(results: list[PredictResult]) -> dict:
+    """starts.csv: every start's J, Et, Jdev, convergence, status, iterations and solve time."""
+    return {"start": np.arange(len(results)), "objective": [r.objective for r in results],
+            "cost_of_transport_J_per_m": [r.cost_of_transport_J_per_m for r in results],
+            "deviation": [r.deviation for r in results], "converged": [bool(r.converged) for r in results],
+            "status": [r.status for r in results], "iterations": [r.iterations for r in results],
+            "solve_time_s": [r.solve_time_s for r in results]}
+
+
+def best_of_starts(cfg, starts: int, *, params, reference, device, seed: int = 0, workers: int | None = None,
+                   progress: ProgressCallback = no_progress) -> tuple[PredictResult, dict, int]:
+    """``--starts N``: the best converged of N starts, starts.csv's table and how many starts agreed."""
+    done = []
+
+    def on_done(k, result):
+        done.append(k)
+        progress(Progress("predict", "starts", len(done), starts,
+                          detail=f"start {k}: J {result.objective:.4g}{'' if result.converged else ' (unconverged)'}"))
+
+    results = run_starts(cfg, starts, params=params, reference=reference, seed=seed, workers=workers,
+                         device=device, on_done=on_done)
+    agreed, best = agreeing(results)
+    best = dataclasses.replace(best, history=best.history + (
+        f"predict: best of {starts} starts (seed {seed}); {agreed} reached its J within 1 %",))
+    return best, starts_table(results), agreed
+
