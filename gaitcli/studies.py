@@ -1,7 +1,7 @@
 """``gait predict --study FILE.yaml`` and ``--starts N``: run the cases, write every case's folder, the study table
 and its figures (the edge of :mod:`gaitcli.predict.study`).
 
-A study's chains (one per speed and weight set, :func:`gaitcli.predict.study.study_cases`) run in parallel
+A study's chains (one per speed, :func:`gaitcli.predict.study.study_cases`) run in parallel
 worker processes; within a chain each case starts from the solutions it names. Every case is written whole
 into ``OUT/study/<case>/`` (the files of ``gait predict``) with a ``case_key``: the SHA-256 of its resolved
 configuration, the subject, the reference and the keys of the cases it started from. A case whose folder
@@ -25,7 +25,9 @@ from gaitcli.io.h5 import read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.stage import PredictResult, run_predict
-from gaitcli.predict.study import StudyCase, StudySpec, agreeing, pool, predict_optimal, run_starts, study_cases
+from gaitcli.predict.study import (StudyCase, StudySpec, agreeing, pool, predict_optimal, retimed, run_starts,
+                                   study_cases)
+from gaitcli.resources import stored_solution
 
 #: study.csv's columns after the case's labels
 FIGURES = ("objective", "cost_of_transport_J_per_m", "deviation")
@@ -85,13 +87,20 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
     return row
 
 
+def _shipped_start(case: StudyCase) -> np.ndarray | None:
+    """A chain's first start: the shipped normal solution (``resources.stored_solution``) retimed to the case's
+    speed where the layout has one, else None (the default guess)."""
+    path = stored_solution(case.cfg.nodes, symmetric=case.cfg.symmetric)
+    return None if path is None else retimed(case.cfg, np.loadtxt(path))
+
+
 def _solve_case(case: StudyCase, spec: StudySpec, solved: dict, params, reference) -> tuple[PredictResult, int]:
     """Solve one case from the solutions it starts from (``solved``: name → result of its chain so far)."""
     if case.condition == "optimal":
-        feet = {name: solved[f"{case.name.rsplit('_', 1)[0]}_{name}"] for name in COMMERCIAL_FEET}
+        feet = {name: solved[start] for name, start in zip(COMMERCIAL_FEET, case.starts_from)}
         normal = solved[case.starts_from[-1]]
         return predict_optimal(case.cfg, params=params, reference=reference, feet=feet, normal=normal), 1
-    init = solved[case.starts_from[0]].design if case.starts_from else None
+    init = solved[case.starts_from[0]].design if case.starts_from else _shipped_start(case)
     if spec.starts > 1:  # start 0 from the chain's solution, the others from perturbed guesses
         results = run_starts(case.cfg, spec.starts, params=params, reference=reference, workers=1, init=init)
         agreed, best = agreeing(results)
@@ -106,7 +115,10 @@ def run_chain(chain: list[StudyCase], spec: StudySpec, root: str, params, refere
     reference_sha = reference_sha256(reference)
     for case in chain:
         start = time.perf_counter()
-        key = case_key(case, subject, reference_sha, tuple(keys[name] for name in case.starts_from))
+        shipped = stored_solution(case.cfg.nodes, symmetric=case.cfg.symmetric)
+        first = (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
+        key = case_key(case, subject, reference_sha,
+                       tuple(keys[name] for name in case.starts_from) if case.starts_from else first)
         folder = Path(root) / case.name
         result = None if force else stored_case(folder, key)
         reused = result is not None

@@ -84,7 +84,7 @@ import numpy as np
 from gaitcli.core.interrupts import interrupts_raised
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.constraints import GAIT_SHAPE, clearance_phases, feet_in_contact, friction, smooth_max
-from gaitcli.predict.cost import DEFAULT_WEIGHTS, cost_of_transport, deviation, objective
+from gaitcli.predict.cost import DEFAULT_WEIGHTS, cost_of_transport, deviation
 from gaitcli.predict.grid import instant_times, periodic_derivative
 from gaitcli.predict.layout import DesignLayout, half_cycle_intervals
 from gaitcli.predict.problem import Transcriber

@@ -15,7 +15,6 @@ import itertools
 import time
 from dataclasses import dataclass, field
 
-import casadi as ca
 import numpy as np
 
 from gaitcli.core.validate import parameter
@@ -39,6 +38,8 @@ DOUBLE_SUPPORT_PHASES = (1, 2, 5, 6)
 FEASIBILITY_TOLERANCE = 1e-5
 #: how many times finer than the control points the reported fine-grid costs are evaluated
 FINE_GRID_REFINEMENT = 4
+#: the spline windows (segments either side) of a solve started from a solution
+WARM_WINDOW_REACH = 1
 JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
 
 
@@ -265,7 +266,9 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
              + (f", F_max ×{cfg.strength():g}" if cfg.strength() != 1 else ""))
     solve_options = {"device": device, "optimal_device": optimal}
     if init is not None:
-        x0 = init
+        # a start from a solution (of a neighbouring case): windows of ±1 segment, a third of the
+        # factorisation's cost; a window that binds is moved and the problem solved again (solve_windowed)
+        x0, settings = init, dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
     elif cfg.symmetric:
         x0 = initial_guess(transcriber, reference, settings, symmetric=True)
     else:
@@ -280,7 +283,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         x0 = (full_from_symmetric(cfg.nodes, first["x"]) if first["success"]
               else initial_guess(transcriber, reference, settings, symmetric=False))
         if first["success"]:  # near a solution: windows of ±1 segment (a third of the factorisation's cost)
-            settings = dataclasses.replace(settings, window_reach=1)
+            settings = dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
         if optimal and first["success"]:
             solve_options["device"] = ProsthesisCurve("optimal", *first["device"])
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report,

@@ -8,8 +8,9 @@
   in parallel processes; the best converged solution is kept and :func:`agreeing` counts the starts that
   found it.
 - :class:`StudySpec`, :func:`study_cases` — ``--study FILE.yaml``: speeds × weight sets × conditions, ordered in
-  chains (one per speed and weight set: the normal case first, every other case warm started from it, the
-  optimal prosthesis last from the best foot and the normal solution).
+  chains (one per speed, run in parallel): per weight set the normal case first (from the previous weight
+  set's normal solution), every other case warm started from it, the optimal prosthesis last from the best
+  foot and the normal solution.
 """
 
 from __future__ import annotations
@@ -113,6 +114,16 @@ def perturbed_guess(cfg: PredictConfig, params: WalkerParameters | None, referen
     blocks["steps"] = steps
     low, high = box_bounds(layout, walker_muscles(cfg, COMMERCIAL_FEET["sach"]).present if cfg.prosthetic else None)
     return np.clip(layout.pack(blocks), low, high)
+
+
+def retimed(cfg: PredictConfig, x: np.ndarray) -> np.ndarray:
+    """χ ``x`` (a solution at another speed) with its phase durations scaled so that it walks at
+    ``cfg.speed_m_s`` (5.43, ΣT = ΔS/v): a start for a neighbouring case."""
+    layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
+    blocks = layout.unpack(np.array(x, float))
+    period = float(layout.phase_durations(x).sum())
+    blocks["durations"] = blocks["durations"] * (sum(layout.step_lengths(x)) / cfg.speed_m_s) / period
+    return layout.pack(blocks)
 
 
 def _one_start(args) -> PredictResult:
@@ -262,21 +273,24 @@ def weight_label(weights: str) -> str:
 
 
 def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
-    """The study's cases in chains, one per speed and weight set (module docstring)."""
+    """The study's cases in chains, one per speed: for each weight set in turn, the normal case (started from
+    the previous weight set's normal solution; the chain's first from the default guess), every other condition
+    from that normal solution, and the optimal prosthesis last (from the feet and the normal solution)."""
     chains = []
     for speed in spec.speeds_m_s:
+        chain, previous = [], None
         for w in spec.weights:
             weights = WEIGHT_SETS.get(w, w)
             label = weight_label(weights)
             base = dataclasses.replace(PredictConfig(), speed_m_s=speed, weights=weights, nodes=spec.nodes,
                                        max_iterations=spec.max_iterations, strength_scale=spec.strength_scale)
-            chain, prefix = [], f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
+            prefix = f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
             normal = f"{prefix}_normal"
             order = ["normal"] + [c for c in spec.conditions if c not in ("normal", "optimal")] + \
                     (["optimal"] if "optimal" in spec.conditions else [])
             for condition in order:
                 if condition == "normal":
-                    cfg, starts = base, ()
+                    cfg, starts = base, (() if previous is None else (previous,))
                 elif condition == "foot_mass":
                     cfg, starts = dataclasses.replace(base, foot_mass_kg=spec.foot_mass_kg), (normal,)
                 elif condition == "optimal":
@@ -285,5 +299,6 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
                 else:
                     cfg, starts = dataclasses.replace(base, prosthesis=condition), (normal,)
                 chain.append(StudyCase(f"{prefix}_{condition}", speed, label, condition, cfg, starts))
-            chains.append(chain)
+            previous = normal
+        chains.append(chain)
     return chains

@@ -23,7 +23,20 @@ PREDICT_SUMMARY_KEYS = ("speed_m_s", "cost_of_transport_J_per_m", "deviation", "
 
 def test_bad_options_and_files_exit_2_naming_them(tmp_path):
     (tmp_path / "ref.csv").write_text("cycle_pct,hip_r_flexion_deg_mean\n0,1\n100,1\n")
+    # a foot whose spring stiffens the wrong way in dorsiflexion (b_n < 0): τ_s rises there (5.3.3)
+    (tmp_path / "rising.yaml").write_text("a_p: -17090\nb_p: 1889\nc0: -281.5\na_n: 15.64\nb_n: -3000\n"
+                                          "d_prosth: 1.0\n")
+    (tmp_path / "walking.yaml").write_text("speeds_m_s: [1.0]\nweights: [b]\nconditions: [normal, walking]\n")
+    (tmp_path / "fast.yaml").write_text("speeds_m_s: [9]\nweights: [b]\nconditions: [normal]\n")
     cases = {"odd nodes": (("--nodes", "17"), "--nodes: got 17"),
+             "rising prosthesis": (("--prosthesis", "rising.yaml"), "rising.yaml: prosthesis: τ_s rises at"),
+             "unknown prosthesis": (("--prosthesis", "carbon"), "--prosthesis: got 'carbon'"),
+             "missing prosthesis": (("--prosthesis", "none.yaml"), "none.yaml: --prosthesis: file not found"),
+             "monotone range": (("--monotone-range", "10,-5"), "--monotone-range: got '10,-5'"),
+             "foot mass at": (("--foot-mass", "2", "--foot-mass-at", "1,2"), "--foot-mass-at: got '1,2'"),
+             "missing study": (("--study", "none.yaml"), "none.yaml: --study: file not found"),
+             "study condition": (("--study", "walking.yaml"), "walking.yaml: conditions: got 'walking'"),
+             "study speed": (("--study", "fast.yaml"), "fast.yaml: speeds_m_s: got 9"),
              "weights": (("--weights", "1,2"), "--weights: got 1,2"),
              "speed": (("--speed", "0"), "--speed"),
              "reference": (("--reference", "ref.csv"), "ref.csv: hip_r_flexion_deg_sd: missing column"),

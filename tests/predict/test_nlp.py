@@ -5,7 +5,6 @@ where a solution presses on them."""
 
 from __future__ import annotations
 
-import casadi as ca
 import numpy as np
 import pytest
 

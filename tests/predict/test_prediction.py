@@ -1,19 +1,18 @@
-"""A converged prediction of normal walking (stored: tests/predict/data, how it was made in its header), checked
+"""A converged prediction of normal walking (shipped: gaitcli/predict/data, how it was made in its header), checked
 on its own outputs and not by eye: every constraint group holds, the excitations stay in [0, 1], Newton's second
 law holds over the cycle (∫ΣF_z dt = m·g·T within 1 %), and the gait is one a clinician recognises."""
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import PredictConfig, evaluate_design
-from gaitcli.resources import bundled_reference
+from gaitcli.resources import bundled_reference, stored_solution
 
-STORED = Path(__file__).parent / "data" / "predicted_normal_symmetric_nn18.csv"
+STORED = stored_solution(18, symmetric=True)
 
 
 @pytest.fixture(scope="module")

@@ -60,3 +60,44 @@ def test_damping_and_monotonicity():
     # SACH's curve turns upward beyond +21.7° of plantarflexion (notes §2.4)
     assert not COMMERCIAL_FEET["sach"].is_monotone(-limit, limit)
     assert COMMERCIAL_FEET["sach"].is_monotone(-limit, np.radians(21.0))
+
+
+RANGE = (float(np.radians(-25.0)), float(np.radians(10.0)))
+
+
+def test_a_prosthesis_file_gives_its_curve():
+    from gaitcli.predict.prosthesis import curve_from_mapping
+
+    flex = COMMERCIAL_FEET["flex"]
+    mapping = {"name": "my flex", "a_p": -17090, "b_p": 1889, "c0": -281.5, "a_n": 15.64, "b_n": 274.2,
+               "d_prosth": 1.0}
+    curve = curve_from_mapping(mapping, "foot.yaml", RANGE)
+    assert curve.name == "my flex"
+    np.testing.assert_array_equal(curve.coefficients(), flex.coefficients())
+
+
+@pytest.mark.parametrize("change, field, words", [
+    ({"c0": None}, "c0", "missing"),
+    ({"b_n": "stiff"}, "b_n", "expected a finite number"),
+    ({"b_n": float("nan")}, "b_n", "expected a finite number"),
+    ({"d_prosth": -0.5}, "d_prosth", "damping ≥ 0"),
+    ({"stiffness": 3}, "stiffness", "unknown key"),
+    ({"b_n": -3000.0}, "prosthesis", "τ_s rises at"),  # rising in dorsiflexion: not a spring
+])
+def test_a_bad_prosthesis_file_is_refused_naming_the_field(change, field, words):
+    from gaitcli.errors import InputError
+    from gaitcli.predict.prosthesis import curve_from_mapping
+
+    mapping = {"a_p": -17090, "b_p": 1889, "c0": -281.5, "a_n": 15.64, "b_n": 274.2, "d_prosth": 1.0}
+    mapping.update(change)
+    mapping = {k: v for k, v in mapping.items() if v is not None}
+    with pytest.raises(InputError) as caught:
+        curve_from_mapping(mapping, "foot.yaml", RANGE)
+    assert caught.value.field == field and words in caught.value.problem
+
+
+def test_sach_turns_beyond_the_declared_range_only():
+    # CHAPTER5_NOTES §2.4: SACH is monotone up to +21.7° of y and not beyond
+    sach = COMMERCIAL_FEET["sach"]
+    assert sach.is_monotone(np.radians(-28.6), np.radians(21.5))
+    assert not sach.is_monotone(np.radians(-28.6), np.radians(22.5))

@@ -11,7 +11,7 @@ from gaitcli.errors import InputError
 from gaitcli.predict.cost import objective
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import PredictConfig, run_predict
-from gaitcli.resources import bundled_reference
+from gaitcli.resources import bundled_reference, stored_solution
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +51,6 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     """The full model's result through the predict writer (the CLI test runs the symmetric one): its 435
     design values and ``symmetric: false`` in predict.h5 and summary.json, every table with 72 instants."""
     import json
-    from pathlib import Path
 
     import h5py
 
@@ -59,7 +58,7 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     from gaitcli.predict.stage import evaluate_design
     from gaitcli.report.predict_outputs import write_predict_outputs
 
-    stored = Path(__file__).parent / "data" / "predicted_normal_symmetric_nn18.csv"
+    stored = stored_solution(18, symmetric=True)
     x = full_from_symmetric(18, np.loadtxt(stored))
     result = evaluate_design(PredictConfig(symmetric=False), x, reference=read_reference(bundled_reference()))
     summary = write_predict_outputs(tmp_path, result, {"converged": int(result.converged)})

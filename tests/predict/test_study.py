@@ -1,0 +1,124 @@
+"""Prediction studies (gaitcli/predict/study.py): the bundled study files' grids, seeded perturbed starts, and the
+optimal prosthesis never reporting a higher J than the commercial foot it started from."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from gaitcli.errors import InputError
+from gaitcli.io.yamlfile import read_yaml
+from gaitcli.predict import study
+from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.nlp import box_bounds
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+from gaitcli.predict.reference import read_reference
+from gaitcli.predict.stage import PredictConfig
+from gaitcli.resources import bundled_reference, study_file
+
+
+def spec_of(name: str) -> study.StudySpec:
+    path = study_file(name)
+    return study.StudySpec.from_mapping(read_yaml(path), path)
+
+
+def test_the_prosthesis_study_is_table_5_3s_grid():
+    chains = study.study_cases(spec_of("prostheses"))
+    assert len(chains) == 2  # one per speed, 1.00 and 1.33 m/s
+    previous = None
+    for chain in chains:
+        assert len({c.speed_m_s for c in chain}) == 1 and len(chain) == 4 * 5
+        for k in range(0, 20, 5):  # per weight set a)–d)
+            group = chain[k:k + 5]
+            normal, optimal = group[0], group[-1]
+            assert [c.condition for c in group] == ["normal", "sach", "seattle", "flex", "optimal"]
+            assert len({c.cfg.weights for c in group}) == 1
+            assert all(c.cfg.strength() == 1.5 for c in group)  # F_max +50 %, the normal comparison run too
+            assert normal.starts_from == (() if k == 0 else (previous,))
+            assert all(c.starts_from == (normal.name,) for c in group[1:4])
+            assert optimal.starts_from == tuple(c.name for c in group[1:4]) + (normal.name,)
+            previous = normal.name
+    assert {c.weight_set for chain in chains for c in chain} == {"a", "b", "c", "d"}
+    assert len({c.name for chain in chains for c in chain}) == 40  # one folder per case
+
+
+def test_the_foot_mass_study_is_table_5_2s_grid():
+    (chain,) = study.study_cases(spec_of("foot_mass"))
+    assert len(chain) == 8
+    for k in range(0, 8, 2):
+        normal, heavy = chain[k:k + 2]
+        assert (normal.cfg.foot_mass_kg, heavy.cfg.foot_mass_kg) == (0.0, 2.0)
+        assert normal.cfg.strength() == heavy.cfg.strength() == 1.0 and heavy.starts_from == (normal.name,)
+        assert normal.speed_m_s == 1.1275
+
+
+@pytest.mark.parametrize("change, field", [({"conditions": ["normal", "optimal"]}, "conditions"),
+                                           ({"weights": ["3,3"]}, "--weights"), ({"starts": 0}, "starts"),
+                                           ({"speeds": [1.0]}, "speeds")])
+def test_a_bad_study_file_is_refused_naming_the_field(change, field):
+    data = {"speeds_m_s": [1.0], "weights": ["b"], "conditions": ["normal"], **change}
+    with pytest.raises(InputError) as caught:
+        study.StudySpec.from_mapping(data, "study.yaml")
+    assert caught.value.field == field
+
+
+def test_perturbed_starts_are_seeded_inside_the_bounds_and_keep_the_speed():
+    cfg = PredictConfig(speed_m_s=1.2)
+    reference = read_reference(bundled_reference())
+    a, b, c = (study.perturbed_guess(cfg, None, reference, seed) for seed in (3, 3, 4))
+    np.testing.assert_array_equal(a, b)
+    assert np.abs(a - c).max() > 0.01
+    layout = DesignLayout.build(cfg.nodes, symmetric=True)
+    low, high = box_bounds(layout)
+    assert np.all(a >= low) and np.all(a <= high)
+    period = layout.phase_durations(a).sum()
+    assert period == pytest.approx(sum(layout.step_lengths(a)) / 1.2, rel=1e-12)
+
+
+@dataclass(frozen=True)
+class Solved:
+    """What predict_optimal reads of a result."""
+
+    objective: float
+    converged: bool
+    prosthesis: object = None
+    design: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    history: tuple = ()
+
+
+@pytest.mark.parametrize("optimal_objectives, expected", [((5.0, 6.0), 5.0), ((9.0, 8.5), 7.0)])
+def test_the_optimal_prosthesis_never_ends_above_the_foot_it_started_from(monkeypatch, optimal_objectives, expected):
+    # Seattle (J 7.0) is the best foot; the optimal runs from it and from the normal gait end at the given Js:
+    # the result is the best of them and of Seattle's solution, which is a point of the optimal problem
+    feet = {"sach": Solved(8.0, True, COMMERCIAL_FEET["sach"]), "seattle": Solved(7.0, True, COMMERCIAL_FEET["seattle"]),
+            "flex": Solved(9.0, True, COMMERCIAL_FEET["flex"])}
+    runs = iter(optimal_objectives)
+    started = []
+
+    def fake_run(cfg, *, params, reference, init, report=None, device=None):
+        started.append((cfg.prosthesis, device.coefficients().tolist()))
+        return Solved(next(runs), True, device)
+
+    monkeypatch.setattr(study, "run_predict", fake_run)
+    result = study.predict_optimal(PredictConfig(prosthesis="optimal"), params=None, reference=None, feet=feet,
+                                   normal=Solved(4.0, True))
+    assert result.objective == expected
+    assert started == [("optimal", COMMERCIAL_FEET["seattle"].coefficients().tolist())] * 2
+    if expected == 7.0:
+        assert result.prosthesis.name == "optimal (= Seattle)"
+        np.testing.assert_array_equal(result.prosthesis.coefficients(), COMMERCIAL_FEET["seattle"].coefficients())
+
+
+def test_a_retimed_solution_walks_at_the_new_speed():
+    from gaitcli.resources import stored_solution
+
+    x = np.loadtxt(stored_solution(18, symmetric=True))
+    layout = DesignLayout.build(18, symmetric=True)
+    fast = study.retimed(PredictConfig(speed_m_s=1.33), x)
+    assert sum(layout.step_lengths(fast)) / layout.phase_durations(fast).sum() == pytest.approx(1.33, rel=1e-12)
+    shares = layout.phase_durations(fast) / layout.phase_durations(x)
+    np.testing.assert_allclose(shares, shares[0])  # every phase alike: the same stance and double support
+    np.testing.assert_array_equal(layout.unpack(fast)["right_leg"], layout.unpack(x)["right_leg"])
