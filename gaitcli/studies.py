@@ -26,7 +26,7 @@ from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.stage import PredictResult, run_predict
 from gaitcli.predict.study import (StudyCase, StudySpec, agreeing, pool, predict_optimal, retimed, run_starts,
-                                   study_cases)
+                                   stop, study_cases)
 from gaitcli.resources import stored_solution
 
 #: study.csv's columns after the case's labels
@@ -162,7 +162,7 @@ def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, at
                     rows_by_chain[futures[future]] = future.result()
                     progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
             except BaseException:
-                executor.shutdown(wait=False, cancel_futures=True)
+                stop(executor)
                 raise
     rows = [row for k in range(len(chains)) for row in rows_by_chain[k]]
     write_table(root / "study.csv", {name: [r.get(name) for r in rows] for name in rows[0]})

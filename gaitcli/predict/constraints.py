@@ -15,7 +15,7 @@ which are typos (CHAPTER5_NOTES §3 item 8):
   θ_hip = 5° — the absolute thigh angle y4/y7, as the equations say (§3 item 2). The
   non-smooth max over control points becomes the log-sum-exp surrogate
   LSE_β(x) = max x + log Σ exp(β(x − max x))/β, an upper bound within ln(n)/β of the max
-  (§3 item 10; β = 500 rad⁻¹: ≤ 0.45° for 72 points); the true max is reported.
+  (§3 item 10; β = 500 rad⁻¹: ≤ 0.50° for 80 points); the true max is reported.
 
 All functions take numpy arrays or CasADi expressions.
 """

@@ -22,7 +22,7 @@ have no constraint rows and no cost.
 Symmetric model (``layout.py``; left = right half a cycle later): C_t (5N_h × 3) the trunk's T/2-periodic
 quartics, C_y (5N × 3) and C_s (4N × 8) the right leg's; T (4), L (1); Q (I × 41): the right leg's y, ẏ, ÿ
 (3 each), ŝ, l_m, v_m, a (8 each); P (I/2 × 18): the trunk's y, ẏ, ÿ (3 each) and rhs (9) over the first half
-cycle; Λ at the first half's 40 points. Only the first half cycle's physics and the right leg's muscles are
+cycle; Λ at the first half's 44 points. Only the first half cycle's physics and the right leg's muscles are
 stated; the rest is their mirror image.
 
 C, Q (P) and Λ are the transcription's intermediate quantities made variables ("lifted") and tied
@@ -85,7 +85,7 @@ from gaitcli.core.interrupts import interrupts_raised
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.constraints import GAIT_SHAPE, clearance_phases, feet_in_contact, friction, smooth_max
 from gaitcli.predict.cost import DEFAULT_WEIGHTS, cost_of_transport, deviation
-from gaitcli.predict.grid import instant_times, periodic_derivative
+from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, MAX_POINT_SPACING_S, instant_times, periodic_derivative
 from gaitcli.predict.layout import DesignLayout, half_cycle_intervals
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
@@ -154,6 +154,10 @@ def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple
         per_column = ranges[name] if len(ranges[name]) == cols else ranges[name] * cols
         for k, (lo, hi) in enumerate(per_column):
             low[start + k * rows:start + (k + 1) * rows], high[start + k * rows:start + (k + 1) * rows] = lo, hi
+    # no phase so long that its control points lie more than MAX_POINT_SPACING_S apart (grid.py says why)
+    start, rows, _ = layout.blocks["durations"]
+    longest = np.array([(c - 1) * MAX_POINT_SPACING_S for c in DEFAULT_CONTROL_POINTS[:rows]])
+    high[start:start + rows] = np.minimum(high[start:start + rows], longest)
     return low, high
 
 

@@ -54,21 +54,21 @@ def as_optimal(start: PredictResult, note: str) -> PredictResult:
 
 
 def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Reference,
-                    init: np.ndarray | None = None, report=None, progress=None,
+                    init: np.ndarray | None = None, report=None,
                     feet: dict[str, PredictResult] | None = None,
                     normal: PredictResult | None = None) -> PredictResult:
     """``--prosthesis optimal`` (5.3.3): the free device warm started from the best commercial foot's solution
     (its χ and its coefficients) and from the normal solution (with that foot's coefficients). ``feet``
-    (name → result) and ``normal`` are solved here (from ``init`` or the default guess) when not given. The
+    (name → result) and ``normal`` are solved here when not given: the normal gait (same F_max) from ``init``
+or the default guess, each foot from it. The
     result is the best of the optimal runs and of the best foot, which is itself a point of the optimal
     problem: an optimal run never reports a higher J than the foot it started from."""
-    foot_cfg = {name: dataclasses.replace(cfg, prosthesis=name) for name in COMMERCIAL_FEET}
-    if feet is None:
-        feet = {name: run_predict(c, params=params, reference=reference, init=init, report=report)
-                for name, c in foot_cfg.items()}
     if normal is None:
         normal = run_predict(dataclasses.replace(cfg, prosthesis="none", strength_scale=cfg.strength()),
                              params=params, reference=reference, init=init, report=report)
+    if feet is None:  # each foot from the normal solution, as a study does
+        feet = {name: run_predict(dataclasses.replace(cfg, prosthesis=name), params=params, reference=reference,
+                                  init=normal.design, report=report) for name in COMMERCIAL_FEET}
     best_foot = None
     for result in feet.values():
         best_foot = better(best_foot, result)
@@ -140,6 +140,14 @@ def pool(workers: int) -> ProcessPoolExecutor:
     return ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context(method))
 
 
+def stop(executor: ProcessPoolExecutor) -> None:
+    """Cancel what has not started and end the workers now (an interrupt of the parent: SIGTERM reaches the
+    parent alone). Their outputs are written atomically, so nothing half-written remains."""
+    executor.shutdown(wait=False, cancel_futures=True)
+    for process in list(getattr(executor, "_processes", {}).values()):  # no public API ends running workers
+        process.terminate()
+
+
 def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | None, reference: Reference,
                seed: int = 0, workers: int | None = None, device: ProsthesisCurve | None = None,
                init: np.ndarray | None = None, on_done=None) -> list[PredictResult]:
@@ -166,7 +174,7 @@ def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | No
                 if on_done:
                     on_done(k, results[k])
         except BaseException:
-            executor.shutdown(wait=False, cancel_futures=True)
+            stop(executor)
             raise
     return results
 

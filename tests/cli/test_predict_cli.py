@@ -64,7 +64,7 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
         assert set(PREDICT_SUMMARY_KEYS) <= set(summary) and summary["converged"] is False
         assert summary["violations"]["moment"] > 2.0  # the guess's moment error, far beyond εm = 2 N·m
         motion = pd.read_csv(folder / "motion.csv")
-        assert motion.columns[0] == "time_s" and len(motion) == 72
+        assert motion.columns[0] == "time_s" and len(motion) == 80
         with h5py.File(folder / "predict.h5", "r") as h5:
             assert h5.attrs["converged"] == 0 and "result/design" in h5
             design = np.asarray(h5["result/design"][()])
@@ -89,3 +89,39 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
     stderr = interrupt_after(process, first_solve_s + 6.0, signal.SIGTERM)
     assert process.returncode == 130 and "gait: interrupted" in stderr, stderr
     assert snapshot(tmp_path / "out") == earlier
+
+
+def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_path):
+    # two cases stopped after one IPOPT iteration (6 nodes): both in study.csv, marked, exit 3; the rerun reads
+    # both back (the same inputs and configuration); and --starts 2 writes starts.csv with both starts
+    (tmp_path / "tiny.yaml").write_text("name: tiny\nspeeds_m_s: [1.0]\nweights: [b]\nconditions: [normal, sach]\n"
+                                        "nodes: 6\nmax_iterations: 1\n")
+    jobs = {"study": (("predict", "--study", "tiny.yaml", "-o", "out", "--workers", "1"), tmp_path),
+            "starts": (("predict", "--nodes", "6", "--max-iterations", "1", "--starts", "2", "--workers", "1",
+                        "--no-plots", "-o", "starts"), tmp_path)}
+    runs = gait_many(jobs, workers=2)
+    run = runs["study"]
+    assert run.returncode == 3 and "2 of 2 study cases did not converge" in run.stderr, run.describe()
+    study = tmp_path / "out" / "study"
+    table = pd.read_csv(study / "study.csv")
+    assert list(table["condition"]) == ["normal", "sach"] and not table["converged"].any()
+    assert not table["reused"].any() and (table["iterations"] == 1).all()
+    first = table["objective"].to_numpy()
+    assert (study / "study.png").stat().st_size > 1000
+    sach = json.loads((study / "v1.00_b_sach" / "summary.json").read_text())
+    assert sach["prosthesis"]["name"] == "SACH" and sach["strength_scale"] == 1.5
+    assert (study / "v1.00_b_sach" / "prosthesis.csv").is_file()
+    before = snapshot(study / "v1.00_b_sach")
+    again = gait_many({"study": jobs["study"]}, workers=1)["study"]
+    assert again.returncode == 3, again.describe()
+    table = pd.read_csv(study / "study.csv")
+    assert table["reused"].all()
+    np.testing.assert_allclose(table["objective"], first, rtol=1e-6)  # CSV's 6 significant digits
+    assert snapshot(study / "v1.00_b_sach") == before  # read back, not written again
+    # --starts: every start in starts.csv, the best kept
+    run = runs["starts"]
+    assert run.returncode == 3, run.describe()
+    starts = pd.read_csv(tmp_path / "starts" / "predict" / "starts.csv")
+    assert len(starts) == 2 and list(starts["start"]) == [0, 1]
+    summary = json.loads((tmp_path / "starts" / "predict" / "summary.json").read_text())
+    assert summary["starts"] == 2 and summary["starts_converged"] == 0 and summary["starts_agreeing"] == 0

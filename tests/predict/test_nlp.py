@@ -46,7 +46,7 @@ def test_group_sizes(transcriber, built):
     assert sizes["dynamics"] == 9 * grid.instants // share
     assert sizes["paths"] == 2 * muscles * grid.instants and sizes["activation"] == muscles * grid.instants
     assert sizes["reactions"] == sum(widths)  # one normal equation per reaction and point
-    assert sizes["moment"] == 6 * len(points)  # 480 full
+    assert sizes["moment"] == 6 * len(points)  # 528 full
     assert sizes["contact"] == sum(rows)
     assert sizes["unilateral"] == sum(sum(1 for _, axis, _ in PHASE_TABLE[p - 1].rows if axis == "z") for p in phases)
     assert sizes["mtp"] == sum(1 for p in phases if PHASE_TABLE[p - 1].mtp_moment_side)
