@@ -58,7 +58,8 @@ def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, refe
                     feet: dict[str, PredictResult] | None = None,
                     normal: PredictResult | None = None) -> PredictResult:
     """``--prosthesis optimal`` (5.3.3): the free device warm started from the best commercial foot's solution
-    (its χ and its coefficients) and from the normal solution (with that foot's coefficients). ``feet``
+    (its χ and its coefficients) and, when that run does not improve on the foot, from the normal solution (with
+    that foot's coefficients). ``feet``
     (name → result) and ``normal`` are solved here when not given: the normal gait (same F_max) from ``init``
 or the default guess, each foot from it. The
     result is the best of the optimal runs and of the best foot, which is itself a point of the optimal
@@ -76,8 +77,8 @@ or the default guess, each foot from it. The
     optimal_device = ProsthesisCurve("optimal", *device.coefficients())
     chosen, history = None, []
     for label, start in ((f"the {device.name} solution", best_foot), ("the normal solution", normal)):
-        if start is None:
-            continue
+        if start is None or (chosen is not None and chosen.converged and chosen.objective < best_foot.objective):
+            continue  # the normal solution only when the start from the best foot did not improve on it
         run = run_predict(cfg, params=params, reference=reference, init=start.design, report=report,
                           device=optimal_device)
         history.append(f"predict: optimal prosthesis from {label}: J {run.objective:.4g}"

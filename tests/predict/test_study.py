@@ -106,7 +106,8 @@ def test_the_optimal_prosthesis_never_ends_above_the_foot_it_started_from(monkey
     result = study.predict_optimal(PredictConfig(prosthesis="optimal"), params=None, reference=None, feet=feet,
                                    normal=Solved(4.0, True))
     assert result.objective == expected
-    assert started == [("optimal", COMMERCIAL_FEET["seattle"].coefficients().tolist())] * 2
+    # from the normal solution too only when the start from Seattle's did not improve on it
+    assert started == [("optimal", COMMERCIAL_FEET["seattle"].coefficients().tolist())] * (1 if expected < 7 else 2)
     if expected == 7.0:
         assert result.prosthesis.name == "optimal (= Seattle)"
         np.testing.assert_array_equal(result.prosthesis.coefficients(), COMMERCIAL_FEET["seattle"].coefficients())
