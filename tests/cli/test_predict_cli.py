@@ -93,13 +93,11 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
 
 def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_path):
     # two cases stopped after one IPOPT iteration (6 nodes): both in study.csv, marked, exit 3; the rerun reads
-    # both back (the same inputs and configuration); and --starts 2 writes starts.csv with both starts
+    # both back (the same inputs and configuration). (--starts: tests/predict/test_study.py.)
     (tmp_path / "tiny.yaml").write_text("name: tiny\nspeeds_m_s: [1.0]\nweights: [b]\nconditions: [normal, sach]\n"
                                         "nodes: 6\nmax_iterations: 1\n")
-    jobs = {"study": (("predict", "--study", "tiny.yaml", "-o", "out", "--workers", "1"), tmp_path),
-            "starts": (("predict", "--nodes", "6", "--max-iterations", "1", "--starts", "2", "--workers", "1",
-                        "--no-plots", "-o", "starts"), tmp_path)}
-    runs = gait_many(jobs, workers=2)
+    jobs = {"study": (("predict", "--study", "tiny.yaml", "-o", "out", "--workers", "1"), tmp_path)}
+    runs = gait_many(jobs, workers=1)
     run = runs["study"]
     assert run.returncode == 3 and "2 of 2 study cases did not converge" in run.stderr, run.describe()
     study = tmp_path / "out" / "study"
@@ -118,10 +116,3 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     assert table["reused"].all()
     np.testing.assert_allclose(table["objective"], first, rtol=1e-6)  # CSV's 6 significant digits
     assert snapshot(study / "v1.00_b_sach") == before  # read back, not written again
-    # --starts: every start in starts.csv, the best kept
-    run = runs["starts"]
-    assert run.returncode == 3, run.describe()
-    starts = pd.read_csv(tmp_path / "starts" / "predict" / "starts.csv")
-    assert len(starts) == 2 and list(starts["start"]) == [0, 1]
-    summary = json.loads((tmp_path / "starts" / "predict" / "summary.json").read_text())
-    assert summary["starts"] == 2 and summary["starts_converged"] == 0 and summary["starts_agreeing"] == 0

@@ -123,3 +123,27 @@ def test_a_retimed_solution_walks_at_the_new_speed():
     shares = layout.phase_durations(fast) / layout.phase_durations(x)
     np.testing.assert_allclose(shares, shares[0])  # every phase alike: the same stance and double support
     np.testing.assert_array_equal(layout.unpack(fast)["right_leg"], layout.unpack(x)["right_leg"])
+
+
+def test_starts_run_the_guess_and_seeded_perturbations_and_count_the_agreeing(monkeypatch):
+    # --starts 4 (one process): start 0 from the given χ, starts 1–3 from perturbed_guess(seed + k); the best
+    # converged J is kept and the starts within 1 % of it are counted
+    reference = read_reference(bundled_reference())
+    cfg = PredictConfig()
+    given = np.full(219, 0.5)
+    objectives = {0: 10.0, 1: 10.05, 2: 9.0, 3: 8.0}
+    converged = {0: True, 1: True, 2: True, 3: False}
+    seen = []
+
+    def fake_run(cfg, *, params, reference, init, device=None, report=None):
+        k = next(k for k in range(4) if np.array_equal(init, given if k == 0 else
+                                                         study.perturbed_guess(cfg, None, reference, 7 + k)))
+        seen.append(k)
+        return Solved(objectives[k], converged[k])
+
+    monkeypatch.setattr(study, "run_predict", fake_run)
+    results = study.run_starts(cfg, 4, params=None, reference=reference, seed=7, workers=1, init=given)
+    assert seen == [0, 1, 2, 3] and [r.objective for r in results] == [10.0, 10.05, 9.0, 8.0]
+    agreed, best = study.agreeing(results)
+    assert best.objective == 9.0 and agreed == 1  # start 3 is lower but unconverged
+    assert study.agreeing([Solved(9.0, True), Solved(9.05, True), Solved(9.2, True)])[0] == 2
