@@ -16,6 +16,7 @@ import hashlib
 import json
 import os
 import time
+from concurrent.futures import as_completed
 from pathlib import Path
 
 import numpy as np
@@ -38,11 +39,6 @@ def case_key(case: StudyCase, subject: str, reference_sha: str, start_keys: tupl
     text = json.dumps({"cfg": dataclasses.asdict(case.cfg), "subject": subject, "reference": reference_sha,
                        "starts": list(start_keys)}, sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-def reference_sha256(reference) -> str:
-    return hashlib.sha256(np.ascontiguousarray(reference.mean).tobytes()
-                          + np.ascontiguousarray(reference.sd).tobytes()).hexdigest()
 
 
 def write_case(folder: Path, result: PredictResult, attrs: dict, extra: dict) -> dict:
@@ -112,11 +108,11 @@ def run_chain(chain: list[StudyCase], spec: StudySpec, root: str, params, refere
               attrs: dict, force: bool) -> list[dict]:
     """Run (or read back) one chain's cases in order; returns their study.csv rows. Runs in a worker process."""
     solved, keys, rows = {}, {}, []
-    reference_sha = reference_sha256(reference)
+    reference_sha = reference.digest()
+    shipped = stored_solution(spec.nodes, symmetric=True)  # a chain's first start (study cases are symmetric)
+    first = (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
     for case in chain:
         start = time.perf_counter()
-        shipped = stored_solution(case.cfg.nodes, symmetric=case.cfg.symmetric)
-        first = (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
         key = case_key(case, subject, reference_sha,
                        tuple(keys[name] for name in case.starts_from) if case.starts_from else first)
         folder = Path(root) / case.name
@@ -153,8 +149,6 @@ def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, at
             rows_by_chain[k] = run_chain(*a)
             progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
     else:
-        from concurrent.futures import as_completed
-
         with pool(workers) as executor:
             futures = {executor.submit(run_chain, *a): k for k, a in enumerate(args)}
             try:

@@ -22,7 +22,7 @@ import numpy as np
 
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.muscles.hill import MuscleModel
-from gaitcli.muscles.parameters import JointParameters, MuscleParameters, table_a1
+from gaitcli.muscles.parameters import MUSCLE_NAMES, JointParameters, MuscleParameters, table_a1
 from gaitcli.muscles.passive import JointModel
 from gaitcli.predict.prosthesis import COEFFICIENTS, ProsthesisCurve
 
@@ -30,6 +30,12 @@ from gaitcli.predict.prosthesis import COEFFICIENTS, ProsthesisCurve
 LEG_COORDINATES = {"r": (2, 3, 4, 5), "l": (2, 6, 7, 8)}
 #: the muscles a transtibial amputation removes (5.3.3)
 REMOVED_WITH_ANKLE = ("tibialis_anterior", "soleus")
+
+
+def present_muscles(prosthetic: bool, names=MUSCLE_NAMES) -> np.ndarray:
+    """(16,) which muscles the model has, right leg first (False: removed with a prosthetic ankle)."""
+    removed = REMOVED_WITH_ANKLE if prosthetic else ()
+    return np.array([name not in removed for _ in ("r", "l") for name in names])
 
 
 class WalkerMuscles:
@@ -59,9 +65,8 @@ class WalkerMuscles:
         self.muscle = MuscleModel(params)
         self.joints = JointModel(joints)
         self.names = tuple(f"{name}_{s}" for s in ("r", "l") for name in self.muscle.names)
-        removed = REMOVED_WITH_ANKLE if prosthesis is not None else ()
         #: (16,) which muscles the model has (False: removed with the ankle)
-        self.present = np.array([name not in removed for _ in ("r", "l") for name in self.muscle.names])
+        self.present = present_muscles(prosthesis is not None, self.muscle.names)
         y, yd, c = ca.SX.sym("y", 9), ca.SX.sym("yd", 9), ca.SX.sym("c", len(COEFFICIENTS))
         psi = {s: ca.vertcat(*walker_joint_angles(*(y[i] for i in LEG_COORDINATES[s]))) for s in ("r", "l")}
         psi_rate = {s: ca.jtimes(psi[s], y, yd) for s in psi}

@@ -74,7 +74,6 @@ EID (reported costs use the exact model).
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -322,9 +321,7 @@ def cached_nlp(transcriber: Transcriber, reference: Reference, settings: Predict
     shape = dataclasses.replace(s, speed_m_s=PredictSettings.speed_m_s, weights=PredictSettings.weights,
                                 max_iterations=0, tolerance=0.0, acceptable_tolerance=0.0,
                                 acceptable_objective_change=0.0, acceptable_iterations=0, print_level=0)
-    key = (transcriber.key, hashlib.sha256(np.ascontiguousarray(reference.mean).tobytes()
-                                           + np.ascontiguousarray(reference.sd).tobytes()).hexdigest(),
-           repr(shape), symmetric, reach, tuple((k, tuple(int(i) for i in v)) for k, v in sorted(segments.items())))
+    key = (transcriber.key, reference.digest(), repr(shape), symmetric, reach, tuple((k, tuple(int(i) for i in v)) for k, v in sorted(segments.items())))
     if key in _BUILT:
         _BUILT.move_to_end(key)
     else:

@@ -41,6 +41,13 @@ class Reference:
     strides: np.ndarray
     sources: tuple[str, ...] = ()
 
+    def digest(self) -> str:
+        """SHA-256 of the mean and SD: what a prediction sees of the reference (cache and study keys)."""
+        import hashlib
+
+        return hashlib.sha256(np.ascontiguousarray(self.mean).tobytes()
+                              + np.ascontiguousarray(self.sd).tobytes()).hexdigest()
+
     def columns(self) -> dict[str, np.ndarray]:
         """The table of ``ref.csv``: ``cycle_pct``, then ``<variable>_mean`` and ``<variable>_sd``."""
         out = {"cycle_pct": self.cycle_pct}

@@ -18,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,11 +27,12 @@ from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError, shown
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkerParameters, WalkingModel
+from gaitcli.predict.muscles import present_muscles
 from gaitcli.predict.nlp import box_bounds, initial_guess
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
 from gaitcli.predict.reference import Reference
-from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of, walker_muscles
+from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of
 
 #: two solutions "agree" when their objectives differ by less than this fraction of the better one
 AGREEMENT = 0.01
@@ -113,7 +114,7 @@ def perturbed_guess(cfg: PredictConfig, params: WalkerParameters | None, referen
     period = (float(np.sum(steps)) * (2 if cfg.symmetric else 1)) / cfg.speed_m_s
     blocks["durations"] = durations * period / (float(np.sum(durations)) * (2 if cfg.symmetric else 1))
     blocks["steps"] = steps
-    low, high = box_bounds(layout, walker_muscles(cfg, COMMERCIAL_FEET["sach"]).present if cfg.prosthetic else None)
+    low, high = box_bounds(layout, present_muscles(cfg.prosthetic))
     return np.clip(layout.pack(blocks), low, high)
 
 
@@ -167,8 +168,6 @@ def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | No
     with pool(workers) as executor:
         futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
         try:
-            from concurrent.futures import as_completed
-
             for future in as_completed(futures):
                 k = futures[future]
                 results[k] = future.result()
