@@ -249,25 +249,33 @@ def evaluate_window(spline: PeriodicSpline, coefficients, period, fraction: floa
                     derivative: int = 0):
     """d^r y/dt^r at one cycle fraction s = t/T ∈ [0, 1) from segment coefficients (rows as
     :attr:`PeriodicSpline.matrix`'s, one column per signal), looking only at the segments
-    ``window`` = (first, last) (indices taken modulo N).
+    ``window`` = (first, last) (indices taken modulo N): :func:`window_values` for one derivative."""
+    return window_values(spline, coefficients, period, fraction, window, (derivative,))[0]
+
+
+def window_values(spline: PeriodicSpline, coefficients, period, fraction: float | object, window: tuple[int, int],
+                  derivatives=(0,)) -> list:
+    """[d^r y/dt^r for r in ``derivatives``] at one cycle fraction s from the segments ``window`` only.
 
     The segment is ⌊N·s⌋ clamped into the window (beyond it the nearest window segment's polynomial is
     extrapolated), so the expression depends on the window's coefficients alone: what makes the NLP's
     Jacobian and Hessian sparse. A caller checks that ⌊N·s⌋ lies in the window at the solution
-    (:func:`segment_of`); then the value is the spline's.
+    (:func:`segment_of`); then the value is the spline's. The segment's coefficients are selected once and
+    its polynomial differentiated for every r (Σ_κ [k = κ]·Σ_p c_κp·τ^p = Σ_p (Σ_κ [k = κ]·c_κp)·τ^p: a
+    third of the expression of one polynomial per window segment and derivative).
     """
     n, width = spline.intervals, spline.degree + 1
     first, last = window
     x = fraction * n
     k = ca.fmin(ca.fmax(ca.floor(x), first), last)
     tau = x - k
-    scale = (period / n) ** derivative
-    out = 0
-    for kappa in range(first, last + 1):
-        rows = coefficients[width * (kappa % n):width * (kappa % n + 1), :]
-        value = sum(rate * tau ** (p - derivative) * rows[p, :] for p, rate in _terms(spline, derivative))
-        out += (k == kappa) * value if last > first else value
-    return out / scale
+    if last > first:
+        rows = sum((k == kappa) * coefficients[width * (kappa % n):width * (kappa % n + 1), :]
+                   for kappa in range(first, last + 1))
+    else:
+        rows = coefficients[width * (first % n):width * (first % n + 1), :]
+    return [sum(rate * tau ** (p - r) * rows[p, :] for p, rate in _terms(spline, r)) / (period / n) ** r
+            for r in derivatives]
 
 
 def segment_of(spline: PeriodicSpline, fractions) -> np.ndarray:

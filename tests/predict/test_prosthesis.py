@@ -7,7 +7,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
+from gaitcli.predict.prosthesis import BRANCH_BLEND_RAD, COMMERCIAL_FEET, ProsthesisCurve
 
 ANGLES_RAD = (-0.3, -0.2, -0.1, 0.1, 0.2)
 KNOWN_NM = {"sach": (603.2, 283.4, 80.5, -22.3, -48.2), "seattle": (246.6, 131.1, 50.0, -44.5, -243.2),
@@ -42,6 +42,23 @@ def test_zero_at_neutral_with_slope_c0_from_both_sides(name):
     slope = ca.Function("s", [y], [ca.jacobian(curve.spring_moment_Nm(y), y)])
     assert float(slope(1e-9)) == pytest.approx(curve.c0, rel=1e-6) and float(slope(-1e-9)) == pytest.approx(
         curve.c0, rel=1e-6)
+
+
+@pytest.mark.parametrize("name", list(KNOWN_NM))
+def test_the_nlps_blend_stays_within_its_bound_and_has_a_continuous_curvature(name):
+    # max over u of u²·(1 − tanh u)/2 = 0.1207 and of u³·(1 − tanh u)/2 = 0.1606 (the bound of the docstring)
+    curve, eps = COMMERCIAL_FEET[name], BRANCH_BLEND_RAD
+    y = np.linspace(-0.5, 0.5, 100001)
+    difference = np.abs(curve.spring_moment_Nm(y, eps) - curve.spring_moment_Nm(y))
+    bound = 0.1207 * abs(curve.b_p - curve.b_n) * eps ** 2 + 0.1606 * abs(curve.a_p - curve.a_n) * eps ** 3
+    assert difference.max() <= bound and difference[np.abs(y) >= 0.1].max() < 1e-6
+    np.testing.assert_allclose(curve.spring_moment_Nm(np.array(ANGLES_RAD), eps), KNOWN_NM[name], atol=0.1)
+    s = ca.SX.sym("y")
+    curvature = ca.Function("c", [s], [ca.hessian(curve.spring_moment_Nm(s, eps), s)[0]])
+    assert float(curvature(1e-7)) == pytest.approx(float(curvature(-1e-7)), rel=1e-3, abs=1.0)
+    exact = ca.Function("c", [s], [ca.hessian(curve.spring_moment_Nm(s), s)[0]])
+    assert float(exact(1e-7)) == pytest.approx(2 * curve.b_p, rel=1e-3)  # (5.58) itself: the jump the blend removes
+    assert float(exact(-1e-7)) == pytest.approx(2 * curve.b_n, rel=1e-3)
 
 
 def test_the_product_convention_gives_sach_a_plantarflexor_moment_at_dorsiflexion():

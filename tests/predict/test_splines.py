@@ -9,7 +9,15 @@ from numpy.polynomial import Polynomial
 
 from gaitcli.errors import InputError
 from gaitcli.predict import splines
-from gaitcli.predict.splines import continuity_matrix, cubic, evaluate_fractions, evaluate_window, quartic, segment_of
+from gaitcli.predict.splines import (
+    continuity_matrix,
+    cubic,
+    evaluate_fractions,
+    evaluate_window,
+    quartic,
+    segment_of,
+    window_values,
+)
 
 T = 1.13  # s
 SPLINES = {"quartic": splines.quartic, "cubic": splines.cubic}
@@ -187,6 +195,11 @@ def test_windowed_evaluation_equals_the_spline_inside_its_window(make):
             for r in range(spline.degree - 1):
                 value = np.array(evaluate_window(spline, coefficients, period, fraction, window, r)).ravel()
                 np.testing.assert_allclose(value, evaluate_fractions(spline, y, period, [fraction], r).ravel(),
+                                           rtol=1e-12, atol=1e-9)
+            rates = window_values(spline, coefficients, period, fraction, window, range(spline.degree - 1))
+            for r, rate in enumerate(rates):  # every derivative from one selection of the segment
+                np.testing.assert_allclose(np.array(rate).ravel(),
+                                           evaluate_fractions(spline, y, period, [fraction], r).ravel(),
                                            rtol=1e-12, atol=1e-9)
     # outside its window the nearest window segment's polynomial is extrapolated: a different, smooth value
     outside = np.array(evaluate_window(spline, coefficients, period, 0.5, (0, 1), 0)).ravel()
