@@ -44,12 +44,12 @@ from gaitcli.core.recording import Markers
 from gaitcli.core.registry import stage
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.dynamics.inverse import inverse_dynamics
-from gaitcli.dynamics.stage import (IdynConfig, body_mass, external_wrenches, inverse_dynamics_stage,
+from gaitcli.dynamics.stage import (IdynConfig, body_mass, external_wrenches, inverse_dynamics_stage, reference_frames,
                                     static_calibration)
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments
-from gaitcli.pipeline import load_static_markers, run_stage, run_stages
+from gaitcli.pipeline import load_static, run_stage, run_stages
 from gaitcli.synth import MARKER_RATE_HZ, simulate_trial
 from gaitcli.trial import open_trial
 
@@ -117,10 +117,10 @@ def whole_stage(tmp: Path, repeat: int, cli: bool) -> None:
     filtered = stage("filter").read(h5["filter"])
     trial = open_trial(folder)
     cfg = IdynConfig()
-    mass_kg, mass_source = body_mass(filtered, trial.subject, cfg, source=trial.subject_path)
-    calibration = static_calibration(filtered, load_static_markers(trial, filtered.lab_to_model), trial.subject,
-                                     mass_kg, subject_path=trial.subject_path, static_path=trial.static_path,
-                                     trial_path=trial.trial_path)
+    static = load_static(trial, filtered.lab_to_model)
+    mass_kg, mass_source, _ = body_mass(filtered, trial.subject, cfg, static=static, source=trial.subject_path)
+    markers, static_frames, _ = reference_frames(filtered, static, trial.subject, subject_path=trial.subject_path)
+    calibration = static_calibration(markers, static_frames, trial.subject, mass_kg, source=trial.static_path)
     frames = filtered.markers.n_frames
     pipeline_cfg = configure(None)
 

@@ -21,7 +21,7 @@ from pathlib import Path
 import h5py
 
 from gaitcli.config import PipelineConfig, section_dict, to_yaml
-from gaitcli.core.recording import Markers, Recording
+from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
 from gaitcli.errors import GaitWarning, InputError
@@ -53,36 +53,33 @@ class StageOutcome:
 
 
 def load_recording(trial: TrialFolder) -> Recording:
-    """Read the dynamic trial (C3D or CSV) in model axes, with the subject's marker map applied."""
+    """Read the dynamic trial (C3D or CSV) in model axes, lab labels renamed by the subject's marker set."""
     from gaitcli.io.c3d import read_c3d
     from gaitcli.io.tables import read_csv_trial
-    from gaitcli.kinematics.markerset import apply_marker_map
 
     if trial.trial_path.suffix.lower() == ".c3d":
         recording = read_c3d(trial.trial_path)
     else:
         recording = read_csv_trial(trial.trial_path, trial.forces_path)
-    if trial.subject.marker_map:
-        recording.markers = apply_marker_map(recording.markers, trial.subject.marker_map,
-                                             source=trial.subject_path)
+    recording.markers = trial.subject.markers.apply(recording.markers, source=trial.subject_path,
+                                                    explicit=trial.subject.marker_map)
     return recording
 
 
-def load_static_markers(trial: TrialFolder, lab_to_model) -> Markers | None:
-    """The standing trial's markers in the dynamic trial's model axes, mapped; None without static.c3d."""
+def load_static(trial: TrialFolder, lab_to_model) -> Recording | None:
+    """The standing trial in the dynamic trial's model axes, labels renamed by the marker set; None without
+    static.c3d."""
     from gaitcli.io.axes import apply_rotation
     from gaitcli.io.c3d import read_c3d
-    from gaitcli.kinematics.markerset import apply_marker_map
 
     if trial.static_path is None:
         return None
     with warnings.catch_warnings():  # a standing trial has no plates to speak of
         warnings.filterwarnings("ignore", message=".*force plate", category=GaitWarning)
-        static = read_c3d(trial.static_path, to_model_axes=False)
-    markers = apply_rotation(static, lab_to_model).markers
-    if trial.subject.marker_map:
-        markers = apply_marker_map(markers, trial.subject.marker_map, source=trial.subject_path)
-    return markers
+        static = apply_rotation(read_c3d(trial.static_path, to_model_axes=False), lab_to_model)
+    static.markers = trial.subject.markers.apply(static.markers, source=trial.subject_path,
+                                                 explicit=trial.subject.marker_map)
+    return static
 
 
 class TrialRun:
@@ -170,11 +167,11 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     needed = [n for n in stage_names() if n in wanted]  # every stage after the ones it depends on
     handoffs, sources, outcomes, computed = {}, {}, [], []
 
-    def static_markers():
+    def static_recording():
         # turned like the dynamic trial: by the axes its container recorded, else by reading the trial
         filtered = next((h for h in handoffs.values() if isinstance(h, Trial) and h.lab_to_model is not None), None)
         lab_to_model = run.recording().lab_to_model if filtered is None else filtered.lab_to_model
-        return load_static_markers(run.trial, lab_to_model)
+        return load_static(run.trial, lab_to_model)
 
     for name in needed:
         st = stage(name)
@@ -191,7 +188,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
         ctx = StageContext(subject=run.trial.subject, folder=run.trial.folder, subject_path=run.trial.subject_path,
                            trial_path=run.trial.trial_path, static_path=run.trial.static_path,
                            inputs={d: handoffs[d] for d in st.depends}, input_paths={d: sources[d] for d in st.depends},
-                           recording=run.recording, static_markers=static_markers, progress=progress, stage=name)
+                           recording=run.recording, static_recording=static_recording, progress=progress, stage=name)
         result = st.run(ctx, cfg.section(name))
         handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path
         computed.append((name, result, time.perf_counter() - started))

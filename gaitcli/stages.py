@@ -22,7 +22,7 @@ def _filter(ctx: StageContext, cfg: FilterConfig):
 
 
 def _idyn(ctx: StageContext, cfg: IdynConfig):
-    return run_idyn(ctx.inputs["filter"], ctx.static_markers(), ctx.subject, cfg, subject_path=ctx.subject_path,
+    return run_idyn(ctx.inputs["filter"], ctx.static_recording(), ctx.subject, cfg, subject_path=ctx.subject_path,
                     static_path=ctx.static_path, trial_path=ctx.trial_path)
 
 

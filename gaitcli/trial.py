@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,7 @@ from gaitcli.io.yamlfile import read_yaml
 from gaitcli.core.validate import known_keys, number, one_of
 from gaitcli.errors import InputError, shown
 from gaitcli.kinematics.disturbances import Disturbance
+from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
 
 SEXES = ("male", "female")
 SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")
@@ -34,13 +36,22 @@ class Subject:
     shank_length_m: float | None = None
     trial: str | None = None
     static: str | None = None
-    static_frames: tuple[int, int] | None = None
+    static_frames: tuple[int, int] | str | None = None  # [first, last] file frames, "auto", or None (static.c3d)
     marker_map: dict[str, str] = field(default_factory=dict)
     disturbances: tuple[Disturbance, ...] = ()  # added masses (Tables A.2–A.3), in segment axes
+    marker_set: str | None = None  # a bundled preset (markerset.marker_set_names()); None: Table A.6 labels
+    hip_joint_centre: str = "bell"
+
+    @cached_property
+    def markers(self) -> MarkerSet:
+        """The preset with ``marker_map`` merged over it: which lab label is which landmark or tracks which body."""
+        return marker_set(self.marker_set, self.marker_map)
 
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "trial", "static",
-        "static_frames", "marker_map", "disturbances")
+        "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances")
+#: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; the lab's own points
+HIP_JOINT_CENTRES = ("bell", "from_file")
 #: keys that older `gait synth` versions wrote and nothing reads; now a comment in subject.yaml
 RETIRED_KEYS = ("condition", "disturbed_side")
 DISTURBANCE_KEYS = ("segment", "mass_kg", "inertia_kgm2", "com_offset_m", "name")
@@ -87,16 +98,22 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
         if data.get(key) is not None and not isinstance(data[key], str):
             raise InputError(path, key, f"got {shown(data[key])} (expected a file name)")
     frames = data.get("static_frames")
-    if frames is not None:
+    if frames is not None and frames != "auto":
         ok = (isinstance(frames, (list, tuple)) and len(frames) == 2
               and all(isinstance(f, int) and not isinstance(f, bool) for f in frames) and 1 <= frames[0] <= frames[1])
         if not ok:
-            raise InputError(path, "static_frames", f"got {shown(frames)} (expected [first, last] frame numbers, 1-based)")
+            raise InputError(path, "static_frames", f"got {shown(frames)} (expected [first, last] frame numbers, "
+                                                    "1-based, or auto)")
         frames = (int(frames[0]), int(frames[1]))
     marker_map = data.get("marker_map") or {}
     if not isinstance(marker_map, dict) or not all(isinstance(k, str) and isinstance(v, str)
                                                    for k, v in marker_map.items()):
-        raise InputError(path, "marker_map", "expected a mapping of lab label → model landmark (text → text)")
+        raise InputError(path, "marker_map", "expected a mapping of lab label → model landmark or body (text → text)")
+    preset = data.get("marker_set")
+    if preset is not None:
+        preset = one_of(preset, marker_set_names(), where="marker_set", path=path)
+    marker_set(preset, marker_map, source=path)  # every landmark and body of the map named, or one error
+    hip = one_of(data.get("hip_joint_centre", "bell"), HIP_JOINT_CENTRES, where="hip_joint_centre", path=path)
     disturbances = []
     items = data.get("disturbances") or []
     if not isinstance(items, list):
@@ -119,7 +136,8 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
             name=str(item.get("name", "")),
         ))
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
-                   static_frames=frames, marker_map=dict(marker_map), disturbances=tuple(disturbances), **lengths)
+                   static_frames=frames, marker_map=dict(marker_map), disturbances=tuple(disturbances),
+                   marker_set=preset, hip_joint_centre=hip, **lengths)
 
 
 def load_subject(path: str | Path) -> Subject:

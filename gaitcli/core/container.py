@@ -50,7 +50,8 @@ class Trial:
     ``feet`` has both sides, ``"r"`` and ``"l"``. ``history``: one line per
     processing step, in order (written into every HDF5 file's attributes).
     ``lab_to_model`` (3, 3): the rotation from the lab's axes, ``v_model = R @ v_lab``
-    (a standing trial read later is turned the same way).
+    (a standing trial read later is turned the same way). ``subject_metadata``: what the
+    trial file records about the subject (:class:`~gaitcli.core.recording.Recording`).
     """
 
     markers: Markers
@@ -59,6 +60,7 @@ class Trial:
     history: tuple[str, ...] = ()
     source: str = ""
     lab_to_model: np.ndarray | None = None
+    subject_metadata: dict[str, float] = dataclasses.field(default_factory=dict)
 
     @property
     def time_s(self) -> np.ndarray:

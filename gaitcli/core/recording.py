@@ -71,10 +71,15 @@ class ForcePlate:
 
 @dataclass
 class Recording:
-    """One trial as read from disk: markers, plates, where it came from and what was noticed."""
+    """One trial as read from disk: markers, plates, where it came from and what was noticed.
+
+    ``subject_metadata``: numbers the file itself records about the subject, by their C3D
+    parameter (``{"PROCESSING:Bodymass": 73.4}``), in the file's units.
+    """
 
     markers: Markers
     plates: list[ForcePlate]
     source: Path | None = None
     lab_to_model: np.ndarray = field(default_factory=lambda: np.eye(3))
     notes: list[str] = field(default_factory=list)
+    subject_metadata: dict[str, float] = field(default_factory=dict)

@@ -65,8 +65,8 @@ class StageContext:
     messages); ``inputs[name]``: the hand-off of each stage it depends on, and
     ``input_paths[name]`` where it came from (the HDF5 it was read from, or the
     trial file when it was computed in this run);
-    ``recording()`` and ``static_markers()``: the dynamic trial as read and the
-    standing trial's markers (None without static.c3d), each read once per run;
+    ``recording()`` and ``static_recording()``: the dynamic trial as read and the
+    standing trial (None without static.c3d), labels renamed by the marker set;
     ``progress``: where to report progress.
     """
 
@@ -78,7 +78,7 @@ class StageContext:
     inputs: dict[str, Any]
     input_paths: dict[str, Path | None]
     recording: Callable[[], Any]
-    static_markers: Callable[[], Any]
+    static_recording: Callable[[], Any]
     progress: ProgressCallback = no_progress
     stage: str = ""
 

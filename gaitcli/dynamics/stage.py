@@ -17,14 +17,14 @@ import numpy as np
 
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDES, Events
-from gaitcli.core.recording import Markers
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.validate import parameter
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.dynamics.equations import ExternalWrench
 from gaitcli.dynamics.inverse import express_in, inverse_dynamics
 from gaitcli.dynamics.sagittal import SagittalExport, sagittal_export
 from gaitcli.errors import GaitWarning, InputError
-from gaitcli.kinematics.calibration import StaticCalibration, calibrate
+from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, BodyParameters
@@ -50,6 +50,19 @@ FOOT_BODY = {"r": BODIES.index("foot_r"), "l": BODIES.index("foot_l")}
 HEEL = {"r": "CAr", "l": "CAl"}
 
 
+@dataclass(frozen=True)
+class ReferencePosture:
+    """How the model was calibrated: ``static`` ("static.c3d", "subject.yaml" or "auto: …"), the file frames
+    used (None: all of static.c3d), the marker set, the hip-centre method, and the plates' stride estimate of the
+    body mass (kg, None without one)."""
+
+    static: str
+    static_frames: tuple[int, int] | None
+    marker_set: str
+    hip_joint_centre: str
+    mass_estimate_kg: float | None
+
+
 @dataclass
 class IdynResult:
     """Coordinates (m, rad; model signs), joint moments and residuals, and what they came from."""
@@ -73,6 +86,7 @@ class IdynResult:
     strides: list[Stride]
     sagittal: SagittalExport
     notes: list = field(default_factory=list)
+    reference_posture: ReferencePosture | None = None
 
     @property
     def time_s(self) -> np.ndarray:
@@ -130,33 +144,100 @@ def external_wrenches(trial: Trial) -> list[ExternalWrench]:
     return out
 
 
-def body_mass(trial: Trial, subject: Subject, cfg: IdynConfig, *, source: Path | None) -> tuple[float, str]:
-    """The body mass (kg) and where it came from: subject.yaml, else the force plates."""
+#: C3D parameters that give the body mass in kg, in order of preference (``Recording.subject_metadata``)
+MASS_PARAMETERS = ("PROCESSING:Bodymass", "PROCESSING:BodyMass", "SUBJECTS:MASS", "SUBJECTS:WEIGHT", "SUBJECT:MASS",
+                   "SUBJECT:WEIGHT")
+#: a body mass further than this from the plates' stride estimate is warned about
+MASS_CHECK_FRACTION = 0.05
+#: quiet standing on the static trial's plates: the middle half of the samples, steady within this fraction
+STANDING_STEADY_FRACTION = 0.05
+
+
+def standing_mass_kg(static: Recording | None, *, gravity_m_s2: float = 9.81) -> float | None:
+    """Body mass (kg) from quiet standing on the plates of the static trial: the median total vertical force
+    of the middle half of the recording over g, when it is steady (interquartile range within 5 %) and above
+    200 N; else None."""
+    if static is None or not static.plates or len({p.n_samples for p in static.plates}) != 1:
+        return None
+    total = np.sum([np.nan_to_num(p.force_N[:, 2]) for p in static.plates], axis=0)
+    n = total.size
+    middle = total[n // 4: max(3 * n // 4, n // 4 + 1)]
+    median = float(np.median(middle))
+    q1, q3 = np.percentile(middle, [25, 75])
+    if median < 200.0 or (q3 - q1) > STANDING_STEADY_FRACTION * median:
+        return None
+    return median / gravity_m_s2
+
+
+def body_mass(trial: Trial, subject: Subject, cfg: IdynConfig, *, static: Recording | None = None,
+              source: Path | None) -> tuple[float, str, float | None]:
+    """The body mass (kg), where it came from, and the plates' stride estimate (kg, None without one).
+
+    In order: subject.yaml; the C3D's own subject data (:data:`MASS_PARAMETERS`, the
+    trial's then the static trial's); quiet standing on the static trial's plates; the
+    stride estimate (:func:`estimate_mass_kg`). The estimate is always computed: a mass
+    from elsewhere that differs from it by more than 5 % is warned about with both values.
+    """
+    estimate = estimate_mass_kg(trial, gravity_m_s2=cfg.gravity_m_s2)
+    metadata = {**(static.subject_metadata if static is not None else {}), **trial.subject_metadata}
+    from_file = next(((metadata[k], k) for k in MASS_PARAMETERS if k in metadata), None)
+    standing = standing_mass_kg(static, gravity_m_s2=cfg.gravity_m_s2)
     if subject.mass_kg is not None:
-        return float(subject.mass_kg), "subject.yaml"
-    mass = check_mass(estimate_mass_kg(trial, gravity_m_s2=cfg.gravity_m_s2), source)
-    return mass, "estimated from the force plates (2·∫Fz dt / (g·stride period) per recorded stance)"
+        mass, where = float(subject.mass_kg), "subject.yaml"
+    elif from_file is not None and 0 < from_file[0] <= 500:
+        mass, where = float(from_file[0]), f"the C3D file's {from_file[1]}"
+    elif standing is not None:
+        mass, where = standing, "quiet standing on the plates of the static trial (median ΣFz / g)"
+    else:
+        return (check_mass(estimate, source), "estimated from the force plates (2·∫Fz dt / (g·stride period) "
+                                              "per recorded stance)", estimate)
+    if estimate is not None and abs(estimate - mass) > MASS_CHECK_FRACTION * mass:
+        warnings.warn(f"body mass {mass:.1f} kg ({where}) differs from the force plates' stride estimate "
+                      f"{estimate:.1f} kg by {100 * abs(estimate - mass) / mass:.0f} % (more than "
+                      f"{100 * MASS_CHECK_FRACTION:.0f} %): check the mass, or the plates' calibration",
+                      GaitWarning, stacklevel=2)
+    return mass, where, estimate
 
 
-def static_calibration(trial: Trial, static: Markers | None, subject: Subject, mass_kg: float, *,
-                       subject_path: Path | None, static_path: Path | None,
-                       trial_path: Path | None) -> StaticCalibration:
-    """Static calibration from the standing trial's markers, or from named frames of the filtered trial."""
-    common = dict(mass_kg=mass_kg, stature_m=subject.stature_m, sex=subject.sex,
-                  thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
-                  disturbances=subject.disturbances)
+def reference_frames(trial: Trial, static: Recording | None, subject: Subject, *,
+                     subject_path: Path | None) -> tuple[Markers, np.ndarray | None, str]:
+    """The markers of the reference posture (3.1.3), the frames of them to average (None: all), and how they
+    were chosen: static.c3d, the frames subject.yaml names, or ``static_frames: auto``."""
     if static is not None:
-        return calibrate(static, source=static_path, **common)
-    if subject.static_frames is None:
-        raise InputError(subject_path, "static_frames", "no static.c3d in the trial folder: name the standing "
-                                                        "frames of the trial as [first, last] (file frame numbers)")
-    first, last = subject.static_frames
+        return static.markers, None, "static.c3d"
     m = trial.markers
+    if subject.static_frames in (None, "auto"):
+        frames, how = least_flexed_frames(m, source=subject_path)
+        if subject.static_frames is None:
+            warnings.warn(f"no static.c3d and no static_frames in subject.yaml: the model is calibrated on file "
+                          f"frame{'s' if frames.size > 1 else ''} {_frame_span(frames + m.first_frame)} of the trial "
+                          f"({how.removeprefix('auto: ')}); joint angles are measured from that posture",
+                          GaitWarning, stacklevel=2)
+        return m, frames, how
+    first, last = subject.static_frames
     frames = np.arange(first, last + 1) - m.first_frame
     if frames[0] < 0 or frames[-1] >= m.n_frames:
         raise InputError(subject_path, "static_frames", f"got [{first}, {last}] (expected frames within "
                                                         f"{m.first_frame}–{m.first_frame + m.n_frames - 1})")
-    return calibrate(m, frames=frames, source=trial_path, **common)
+    return m, frames, "subject.yaml"
+
+
+def _frame_span(frames: np.ndarray) -> str:
+    return f"{frames[0]}" if frames.size == 1 else f"{frames[0]}–{frames[-1]}"
+
+
+def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Subject, mass_kg: float, *,
+                       source: Path | None) -> StaticCalibration:
+    """Static calibration (3.2, 3.3) on ``frames`` of ``markers`` with the subject's marker set and hip method."""
+    markers_set = subject.markers
+    return calibrate(markers, frames=frames, source=source, mass_kg=mass_kg, stature_m=subject.stature_m,
+                     sex=subject.sex, thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
+                     disturbances=subject.disturbances, extra_tracking_markers=markers_set.tracking,
+                     marker_set=markers_set, hip_method=HIP_METHOD[subject.hip_joint_centre])
+
+
+#: subject.yaml's ``hip_joint_centre`` → the calibration's method
+HIP_METHOD = {"bell": "bell1990", "from_file": "from_file"}
 
 
 def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: IdynConfig, *,
@@ -192,19 +273,26 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
                       sagittal=export, notes=list(calibration.notes))
 
 
-def run_idyn(trial: Trial, static: Markers | None, subject: Subject, cfg: IdynConfig, *,
+def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: IdynConfig, *,
              subject_path: Path | None = None, static_path: Path | None = None,
              trial_path: Path | None = None) -> IdynResult:
     """The whole idyn stage: body mass, static calibration (once), then :func:`inverse_dynamics_stage`."""
-    mass, source = body_mass(trial, subject, cfg, source=subject_path)
-    calibration = static_calibration(trial, static, subject, mass, subject_path=subject_path,
-                                     static_path=static_path, trial_path=trial_path)
-    return inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source)
+    mass, source, estimate = body_mass(trial, subject, cfg, static=static, source=subject_path)
+    markers, frames, how = reference_frames(trial, static, subject, subject_path=subject_path)
+    calibration = static_calibration(markers, frames, subject, mass,
+                                     source=static_path if static is not None else trial_path)
+    result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source)
+    first = markers.first_frame
+    result.reference_posture = ReferencePosture(
+        how, None if frames is None else (int(frames[0]) + first, int(frames[-1]) + first),
+        subject.markers.name, subject.hip_joint_centre, estimate)
+    return result
 
 
 def check_mass(mass_kg: float | None, source) -> float:
     """The body mass to use, or a clear error when neither subject.yaml nor the plates give one."""
     if mass_kg is None or not np.isfinite(mass_kg) or mass_kg <= 0:
-        raise InputError(source, "mass_kg", "is 'auto' but no stance was fully recorded on the force plates "
-                                            "(expected mass_kg in kg)")
+        raise InputError(source, "mass_kg", "is 'auto' (or not given) but the C3D records no body mass, static.c3d "
+                                            "has no quiet standing on its plates and no stance was fully recorded "
+                                            "on the force plates (expected mass_kg in kg)")
     return float(mass_kg)

@@ -40,11 +40,12 @@ from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
 from gaitcli.kinematics.anthropometry import SegmentInertia, normalise_sex, rotate_segment, segment_parameters
 from gaitcli.kinematics.disturbances import Disturbance, apply_disturbances, resolve_disturbances
-from gaitcli.kinematics.markerset import (LANDMARKS, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, required_landmarks,
+from gaitcli.kinematics.markerset import (LANDMARKS, MarkerSet, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, required_landmarks,
                                           tracking_landmarks)
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
 from gaitcli.kinematics.pose import MIN_MARKERS
 from gaitcli.core.recording import Markers
+from gaitcli.signal.butterworth import finite_runs
 
 _PURPOSE = {"ASIS": "the pelvis frame and hip joint centres", "PSIS": "the pelvis frame and hip joint centres",
             "LEF": "the knee joint centre", "MEF": "the knee joint centre", "LM": "the ankle joint centre",
@@ -107,12 +108,72 @@ def static_landmarks(markers: Markers, frames: Sequence[int] | slice | None = No
     return out
 
 
-def _check_required(P: Mapping[str, np.ndarray], source) -> None:
+def _check_required(P: Mapping[str, np.ndarray], source, marker_set: MarkerSet | None) -> None:
     virtual = tuple(v for v in VIRTUAL_JOINT_CENTRES if v in P)
     for name in required_landmarks(virtual_joint_centres=virtual):
         if name not in P:
             purpose = _PURPOSE[name[:-1]]
-            raise InputError(source, name, f"marker missing from the static trial (needed for {purpose})")
+            if marker_set is None:
+                raise InputError(source, name, f"marker missing from the static trial (needed for {purpose})")
+            raise InputError(source, marker_set.label_of(name) or name, marker_set.missing_message(name, purpose))
+
+
+HIP_METHODS = ("bell1990", "bell1989", "from_file")
+
+
+def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, quiet_speed_m_s: float = 0.05, quiet_s: float = 0.5,
+                        window_s: float = 1.0) -> tuple[np.ndarray, str]:
+    """Frames of a trial to stand in for a static trial (``static_frames: auto``), and how they were chosen.
+
+    Candidates are the frames in which every landmark the calibration needs is seen.
+    Each leg's flexion is the angle between the thigh (Bell hip centre → mid-epicondyles,
+    or the lab's KJC) and the shank (knee → mid-malleoli, or the lab's AJC). Where the
+    pelvis stays slower than ``quiet_speed_m_s`` for ``quiet_s`` or longer (the subject
+    stood), the quiet window of up to ``window_s`` with the least mean flexion of the more
+    flexed leg is used; in a walk without standing, the one frame where the more flexed
+    leg is straightest (both knees near extension: double support just before a heel
+    strike). Returns 0-based frame indices. Raises :class:`InputError` when no frame has
+    the landmarks.
+    """
+    P = {lab: markers.get(lab) for lab in markers.labels}
+    virtual = tuple(v for v in VIRTUAL_JOINT_CENTRES if v in P and v[:3] != "HJC")
+    needed = required_landmarks(virtual_joint_centres=virtual) + virtual
+    absent = [n for n in needed if n not in P]
+    if absent:
+        raise InputError(source, absent[0], "marker missing from the trial (static_frames: auto "
+                                                             "looks for frames in which the calibration's markers "
+                                                             "are seen)")
+    seen = np.logical_and.reduce([np.all(np.isfinite(P[n]), axis=-1) for n in needed])
+    if not seen.any():
+        raise InputError(source, "static_frames", f"auto: no frame in which all of {', '.join(needed)} are seen")
+    with np.errstate(invalid="ignore"):
+        hips = jcm.hip_joint_centres(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
+        flexion = []
+        for s, hip in zip("rl", hips):
+            knee = P[f"KJC{s}"] if f"KJC{s}" in virtual else jcm.knee_joint_centre(P[f"LEF{s}"], P[f"MEF{s}"])
+            ankle = P[f"AJC{s}"] if f"AJC{s}" in virtual else jcm.ankle_joint_centre(P[f"LM{s}"], P[f"MM{s}"],
+                                                                                     method="midpoint")
+            cos = np.sum(jcm.unit(hip - knee) * jcm.unit(knee - ankle), axis=-1)
+            flexion.append(np.arccos(np.clip(cos, -1.0, 1.0)))
+        worse = np.where(seen, np.maximum(*flexion), np.inf)
+        pelvis = np.mean([P[n] for n in ("ASISr", "ASISl", "PSISr", "PSISl")], axis=0)
+        speed = np.linalg.norm(np.gradient(pelvis, 1.0 / markers.rate_hz, axis=0), axis=-1)
+    quiet = seen & (speed < quiet_speed_m_s)
+    best = None
+    for a, b in zip(*finite_runs(quiet)):
+        if (b - a) / markers.rate_hz < quiet_s:
+            continue
+        length = min(b - a, max(int(round(window_s * markers.rate_hz)), 1))
+        means = np.convolve(worse[a:b], np.ones(length) / length, mode="valid")
+        k = int(np.argmin(means))
+        if best is None or means[k] < best[0]:
+            best = (means[k], np.arange(a + k, a + k + length))
+    if best is not None:
+        return best[1], (f"auto: {best[1].size} frames of quiet standing (pelvis slower than "
+                         f"{quiet_speed_m_s:g} m/s), knees flexed at most {np.degrees(best[0]):.1f}°")
+    k = int(np.argmin(worse))
+    return np.array([k]), (f"auto: no quiet standing; the frame where the more flexed knee is straightest "
+                           f"({np.degrees(worse[k]):.1f}°)")
 
 
 def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "male",
@@ -120,25 +181,38 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
               foot_length_m=None, shoulder_width_m: float | None = None,
               disturbances: Sequence[Disturbance | str] = (), hip_method: str = "bell1990",
               ankle_method: str = "de_leva", extra_tracking_markers: Mapping[str, Sequence[str]] | None = None,
-              source: str | Path | None = None) -> StaticCalibration:
+              marker_set: MarkerSet | None = None, source: str | Path | None = None) -> StaticCalibration:
     """Calibrate the 8-body model on the reference posture ``static`` (averaged over ``frames``).
 
     Thigh and shank lengths are measured (HJC–KJC, KJC–AJC) unless given; other
     lengths scale with stature (3.2.2). ``disturbances`` are :class:`Disturbance`
     objects (body axes, offsets from the body's de Leva CoM) or preset names
     (``"ankle_weight"``, ``"ski_boot:l"``). ``extra_tracking_markers`` adds lab
-    markers (by label) to a body's cluster. Raises :class:`InputError` naming a
-    marker the model's geometry needs.
+    markers (by label) to a body's cluster (a marker set's tracking markers).
+    ``hip_method``: ``"bell1990"`` (the dissertation's), ``"bell1989"``, or
+    ``"from_file"`` (the lab's ``HJCr``/``HJCl`` points; otherwise they are ignored).
+    Raises :class:`InputError` naming a marker the model's geometry needs (by the
+    lab label ``marker_set`` gives it).
     """
     sex = normalise_sex(sex)
+    one_of(hip_method, HIP_METHODS, where="hip_joint_centre", path=source)
     P = static_landmarks(static, frames)
-    _check_required(P, source)
+    if hip_method == "from_file":
+        for name in ("HJCr", "HJCl"):
+            if name not in P:
+                label = marker_set.label_of(name) if marker_set is not None else None
+                raise InputError(source, label or name, "hip_joint_centre is from_file but the static trial has no "
+                                                        "such point (expected the lab's virtual hip joint centre)")
+    else:  # the lab's hip centres are left out of the model and of the clusters
+        P = {k: v for k, v in P.items() if k not in ("HJCr", "HJCl")}
+    _check_required(P, source, marker_set)
     notes: list[str] = []
-    jc = jcm.joint_centres(P, hip_method=hip_method, ankle_method=ankle_method, sex=sex, source=source)
+    jc = jcm.joint_centres(P, hip_method="bell1990" if hip_method == "from_file" else hip_method,
+                           ankle_method=ankle_method, sex=sex, source=source)
     for name in VIRTUAL_JOINT_CENTRES:
         notes.append(f"{name}: {'virtual marker from the lab file' if name in P else 'estimated'}")
-    if "HJCr" not in P or "HJCl" not in P:
-        notes.append(f"hip joint centres: Bell regression ({hip_method})")
+    notes.append("hip joint centres: " + ("the lab's virtual points (from_file)" if hip_method == "from_file"
+                                          else f"Bell regression ({hip_method})"))
     if not all(f"AJC{s}" in P for s in "rl"):
         notes.append(f"ankle joint centres from the malleoli ({ankle_method})")
 

@@ -15,12 +15,14 @@ VM, FM; HAT C7, ST, ACr, ACl. 4 + 2×(4 + 3 + 3) + 4 = 28 markers.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from gaitcli.core.validate import one_of
+from gaitcli.core.validate import known_keys, one_of
 from gaitcli.errors import InputError
+from gaitcli.io.yamlfile import read_yaml
 from gaitcli.kinematics.model import BODIES
 from gaitcli.core.recording import Markers
 
@@ -93,29 +95,161 @@ def required_landmarks(*, virtual_joint_centres: tuple[str, ...] | frozenset = (
     return tuple(needed)
 
 
+#: what each Table A.6 designation (and virtual point) is, for messages naming a lab's marker
+LANDMARK_DESCRIPTIONS = {
+    "ASIS": "anterior superior iliac spine", "PSIS": "posterior superior iliac spine", "GT": "greater trochanter",
+    "MRF": "rectus femoris (mid-thigh)", "LEF": "lateral femoral epicondyle", "MEF": "medial femoral epicondyle",
+    "TT": "tibial tuberosity", "LM": "lateral malleolus", "MM": "medial malleolus", "CA": "posterior calcaneus",
+    "VM": "lateral (fifth) metatarsal head", "FM": "medial (first) metatarsal head", "AC": "acromioclavicular joint",
+    "C7": "seventh cervical vertebra", "ST": "manubrium of the sternum", "HJC": "hip joint centre",
+    "KJC": "knee joint centre", "AJC": "ankle joint centre",
+}
+MARKER_SETS_DIR = Path(__file__).resolve().parent / "marker_sets"
+_PRESET_SECTIONS = ("name", "description", "anatomical", "virtual_joint_centres", "tracking")
+
+
+def describe_landmark(landmark: str) -> str:
+    """``'ASISr'`` → ``'right anterior superior iliac spine'``."""
+    if landmark in MIDLINE:
+        return LANDMARK_DESCRIPTIONS[landmark]
+    side = {"r": "right", "l": "left"}[landmark[-1]]
+    return f"{side} {LANDMARK_DESCRIPTIONS[landmark[:-1]]}"
+
+
+@dataclass(frozen=True)
+class MarkerSet:
+    """Which lab labels are which model landmarks, and which lab markers only track a body.
+
+    ``landmarks[landmark]``: the lab labels that may carry that landmark (anatomical
+    or virtual joint centre), in order of preference: the first one a file has is
+    used. ``tracking[body]``: lab labels of markers fixed to ``body`` that are no
+    anatomical landmark (wands, clusters, plates); they join its SVD cluster.
+    ``name``: the preset (``cleveland``, ...) or ``"marker_map"``.
+    """
+
+    name: str
+    landmarks: Mapping[str, tuple[str, ...]]
+    tracking: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+
+    def merged(self, marker_map: Mapping[str, str], *, source=None) -> MarkerSet:
+        """This set with subject.yaml's ``marker_map`` {lab label: landmark or body} over it: a mapped label
+        becomes the only label of its landmark (or a tracking marker of its body) and leaves any other role."""
+        if not marker_map:
+            return self
+        landmarks = {k: tuple(lab for lab in v if lab not in marker_map) for k, v in self.landmarks.items()}
+        tracking = {k: tuple(lab for lab in v if lab not in marker_map) for k, v in self.tracking.items()}
+        for lab, target in marker_map.items():
+            one_of(target, LANDMARKS + BODIES, where=f"marker_map.{lab}", path=source)
+        targets = [t for t in marker_map.values() if t not in BODIES]
+        twice = sorted({t for t in targets if targets.count(t) > 1})
+        if twice:
+            labs = [lab for lab, t in marker_map.items() if t in twice]
+            raise InputError(source, "marker_map", f"labels {', '.join(labs)} map to the same landmark "
+                                                   f"{', '.join(twice)} (it occurs more than once after mapping)")
+        for lab, target in marker_map.items():
+            if target in BODIES:
+                tracking[target] = tracking.get(target, ()) + (lab,)
+            else:
+                landmarks[target] = (lab,)
+        name = self.name if self.name == "marker_map" else f"{self.name} with marker_map"
+        return MarkerSet(name, landmarks, tracking)
+
+    def label_of(self, landmark: str, labels=None) -> str | None:
+        """The lab label that carries ``landmark`` (the first of ``labels`` that is a candidate, when given)."""
+        candidates = self.landmarks.get(landmark, ())
+        if labels is None:
+            return candidates[0] if candidates else None
+        return next((lab for lab in candidates if lab in labels), None)
+
+    def missing_message(self, landmark: str, purpose: str) -> str:
+        """One line for a landmark a file lacks: which lab label(s) this set expects, what it is, what it is for."""
+        candidates = self.landmarks.get(landmark, ())
+        if self.name == "dissertation" or candidates == (landmark,):
+            label = landmark
+        else:
+            label = " or ".join(candidates) if candidates else f"no label for {landmark}"
+        return (f"marker missing from the static trial: {label} (marker_set {self.name}: the "
+                f"{describe_landmark(landmark)}, {landmark}; needed for {purpose})")
+
+    def apply(self, markers: Markers, *, source: str | Path | None = None,
+              explicit: Mapping[str, str] | None = None) -> Markers:
+        """Rename the file's lab labels to model landmarks (one column per landmark found; a lab label that
+        carries two landmarks, e.g. one sacral marker for both PSIS, is copied). Labels not used as
+        landmarks keep their names (tracking markers, unused ones). Raises :class:`InputError` naming every
+        label of ``explicit`` (subject.yaml's marker_map) the file does not have, or a label that would occur
+        twice."""
+        missing = [lab for lab in (explicit or {}) if lab not in markers.labels]
+        if missing:
+            raise InputError(source, "marker_map",
+                             f"labels not in the marker file: {', '.join(missing)} "
+                             f"(the file has: {', '.join(markers.labels)})")
+        chosen = {}
+        for landmark, candidates in self.landmarks.items():
+            label = next((lab for lab in candidates if lab in markers.labels), None)
+            if label is not None:
+                chosen[landmark] = label
+        used = set(chosen.values())
+        kept = [lab for lab in markers.labels if lab not in used]
+        new_labels = tuple(chosen) + tuple(kept)
+        duplicates = sorted({lab for lab in new_labels if new_labels.count(lab) > 1})
+        if duplicates:
+            raise InputError(source, "marker_map",
+                             f"labels {', '.join(duplicates)} occur more than once after mapping")
+        columns = [markers.index(lab) for lab in chosen.values()] + [markers.index(lab) for lab in kept]
+        return Markers(new_labels, markers.positions_m[:, columns, :], markers.rate_hz, markers.first_frame)
+
+
+def _label_lists(data, where: str, keys, path) -> dict[str, tuple[str, ...]]:
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise InputError(path, where, f"got {type(data).__name__} (expected a mapping of name → list of labels)")
+    out = {}
+    for key, labels in data.items():
+        one_of(key, keys, where=where, path=path)
+        labels = [labels] if isinstance(labels, str) else labels
+        if not isinstance(labels, list) or not labels or not all(isinstance(lab, str) and lab for lab in labels):
+            raise InputError(path, f"{where}.{key}", f"got {labels!r} (expected a list of lab labels)")
+        out[key] = tuple(labels)
+    return out
+
+
+def read_marker_set(path: str | Path) -> MarkerSet:
+    """A marker-set YAML file (``marker_sets/*.yaml``): ``anatomical`` and ``virtual_joint_centres``
+    {landmark: [lab labels]}, ``tracking`` {body: [lab labels]}."""
+    path = Path(path)
+    data = read_yaml(path)
+    if not isinstance(data, dict):
+        raise InputError(path, None, "expected a mapping with anatomical, virtual_joint_centres and tracking")
+    known_keys(data, _PRESET_SECTIONS, path=path)
+    landmarks = _label_lists(data.get("anatomical"), "anatomical", MARKERS, path)
+    landmarks.update(_label_lists(data.get("virtual_joint_centres"), "virtual_joint_centres",
+                                  VIRTUAL_JOINT_CENTRES, path))
+    tracking = _label_lists(data.get("tracking"), "tracking", BODIES, path)
+    return MarkerSet(str(data.get("name", path.stem)), landmarks, tracking)
+
+
+def marker_set_names() -> tuple[str, ...]:
+    """The bundled presets (``marker_set:`` in subject.yaml)."""
+    return tuple(sorted(p.stem for p in MARKER_SETS_DIR.glob("*.yaml")))
+
+
+def marker_set(name: str | None = None, marker_map: Mapping[str, str] | None = None, *,
+               source: str | Path | None = None) -> MarkerSet:
+    """The preset ``name`` (default: the dissertation's Table A.6 labels) with ``marker_map`` merged over it."""
+    one_of(name or "dissertation", marker_set_names(), where="marker_set", path=source)
+    return read_marker_set(MARKER_SETS_DIR / f"{name or 'dissertation'}.yaml").merged(marker_map or {},
+                                                                                    source=source)
+
+
 def apply_marker_map(markers: Markers, marker_map: Mapping[str, str], *,
                      source: str | Path | None = None) -> Markers:
-    """Rename lab marker labels to model landmark names.
-
-    ``marker_map`` maps lab label -> model landmark (e.g. ``{"RASI": "ASISr"}``).
-    Labels not in the map are kept unchanged (so a file already using the model's
-    names needs no map, and extra technical markers stay available). Raises
-    :class:`InputError` naming every mapped lab label the file does not have, an
-    unknown landmark name, or a resulting duplicate label.
-    """
-    missing = [lab for lab in marker_map if lab not in markers.labels]
-    if missing:
-        raise InputError(source, "marker_map",
-                         f"labels not in the marker file: {', '.join(missing)} "
-                         f"(the file has: {', '.join(markers.labels)})")
+    """Rename lab labels to model landmarks by ``marker_map`` alone {lab label: landmark}; other labels are kept
+    (so a file already using the model's names needs no map). See :meth:`MarkerSet.apply` for the errors."""
     for lab, landmark in marker_map.items():
         one_of(landmark, LANDMARKS, where=f"marker_map.{lab}", path=source)
-    new_labels = tuple(marker_map.get(lab, lab) for lab in markers.labels)
-    duplicates = sorted({lab for lab in new_labels if new_labels.count(lab) > 1})
-    if duplicates:
-        raise InputError(source, "marker_map",
-                         f"labels {', '.join(duplicates)} occur more than once after mapping")
-    return Markers(new_labels, markers.positions_m, markers.rate_hz, markers.first_frame)
+    return MarkerSet("marker_map", {}).merged(marker_map, source=source).apply(markers, source=source,
+                                                                              explicit=marker_map)
 
 
 def standing_template(stature_m: float, *, with_virtual_joint_centres: bool = False) -> dict[str, np.ndarray]:

@@ -87,6 +87,11 @@ def summary(result: IdynResult) -> dict:
         "locked_segments": list(result.calibration.locked),
         "notes": result.notes,
     }
+    posture = result.reference_posture
+    if posture is not None:
+        info.update({"mass_estimate_kg": posture.mass_estimate_kg, "marker_set": posture.marker_set,
+                     "hip_joint_centre": posture.hip_joint_centre, "static": posture.static,
+                     "static_frames": None if posture.static_frames is None else list(posture.static_frames)})
     return info
 
 

@@ -30,6 +30,7 @@ ends are least accurate. Pelvis residuals in the frames where every contact is m
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import pytest
@@ -38,16 +39,17 @@ from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.core.container import FootLoad, Trial, load_known_frames
-from gaitcli.dynamics.stage import estimate_mass_kg, inverse_dynamics_stage
+from gaitcli.dynamics.stage import body_mass, estimate_mass_kg, inverse_dynamics_stage
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import COORDINATES, JOINT_CHILD, MOMENTS
-from gaitcli.core.recording import Markers, Recording
+from gaitcli.core.recording import ForcePlate, Markers, Recording
 from gaitcli.core.events import Events
 from gaitcli.signal.stage import filter_trial
 from gaitcli.synth import simulate_trial
+from gaitcli.trial import Subject
 
 MASS_KG, STATURE_M = 75.0, 1.78
 EDGE = 2  # frames left out at each end (spline end conditions)
@@ -150,6 +152,51 @@ def test_body_mass_from_the_plates(exact):
     assert estimate_mass_kg(filtered) == pytest.approx(MASS_KG, rel=1e-3)
     no_plates = dataclasses.replace(filtered, events=filtered.events.of(source="kinematics"))
     assert estimate_mass_kg(no_plates) is None
+
+
+def _subject(mass_kg=None):
+    return Subject(mass_kg=mass_kg, stature_m=STATURE_M, sex="male")
+
+
+def _standing(weight_N: float, *, sway: float = 0.0, metadata=None) -> Recording:
+    """A static trial on two plates that share the weight equally (±``sway`` of it, slowly)."""
+    t = np.arange(2000) / 1000.0
+    plates = []
+    for k, sign in enumerate((1.0, -1.0)):
+        force = np.zeros((t.size, 3))
+        force[:, 2] = weight_N / 2 * (1 + sign * sway * np.sin(2 * np.pi * 0.5 * t))
+        plates.append(ForcePlate(f"plate{k + 1}", force, np.zeros((t.size, 3)), np.zeros(3), np.zeros((4, 3)), 1000.0))
+    return Recording(Markers(("x",), np.zeros((20, 1, 3)), 10.0), plates, subject_metadata=dict(metadata or {}))
+
+
+def test_body_mass_comes_from_subject_yaml_then_the_c3d_then_standing_then_the_strides(exact):
+    _, filtered, _, _ = exact  # the plates' stride estimate: MASS_KG (test above)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing to warn about: every source within 5 % of the estimate
+        assert body_mass(filtered, _subject(74.0), IdynConfig(), source=None)[:2] == (74.0, "subject.yaml")
+        in_file = dataclasses.replace(filtered, subject_metadata={"PROCESSING:Bodymass": 76.0, "SUBJECT:WEIGHT": 1.0})
+        mass, where, estimate = body_mass(in_file, _subject(), IdynConfig(), source=None)
+        assert (mass, where) == (76.0, "the C3D file's PROCESSING:Bodymass")
+        assert estimate == pytest.approx(MASS_KG, rel=1e-3)
+        mass, where, _ = body_mass(filtered, _subject(), IdynConfig(), static=_standing(74.5 * 9.81), source=None)
+        assert mass == pytest.approx(74.5) and where.startswith("quiet standing")
+        # a swaying subject (±20 % between the plates, the sum steady) still stands quietly; one plate alone does not
+        assert body_mass(filtered, _subject(), IdynConfig(), static=_standing(74.5 * 9.81, sway=0.2),
+                         source=None)[0] == pytest.approx(74.5)
+        one_plate = _standing(74.5 * 9.81, sway=0.2)
+        one_plate.plates = one_plate.plates[:1]
+        mass, where, _ = body_mass(filtered, _subject(), IdynConfig(), static=one_plate, source=None)
+        assert mass == pytest.approx(MASS_KG, rel=1e-3) and where.startswith("estimated from the force plates")
+
+
+def test_a_body_mass_far_from_the_stride_estimate_is_warned_with_both_values(exact):
+    _, filtered, _, _ = exact
+    in_file = dataclasses.replace(filtered, subject_metadata={"SUBJECT:WEIGHT": 82.7})
+    with pytest.warns(GaitWarning, match=r"body mass 82\.7 kg \(the C3D file's SUBJECT:WEIGHT\) differs from the "
+                                         r"force plates' stride estimate 75\.0 kg by 9 %"):
+        assert body_mass(in_file, _subject(), IdynConfig(), source=None)[0] == 82.7
+    with pytest.warns(GaitWarning, match=r"body mass 70\.0 kg \(subject\.yaml\) .* estimate 75\.0 kg by 7 %"):
+        body_mass(filtered, _subject(70.0), IdynConfig(), source=None)
 
 
 def test_foot_load_known_in_swing_and_on_the_plate_only():

@@ -99,6 +99,14 @@ def test_bts_has_six_plates_and_labels_with_spaces(shared_c3d_dir):
 
 
 @pytest.mark.shared
+@pytest.mark.shared
+def test_the_subject_data_a_file_records_are_read(shared_c3d_dir):
+    rec, _ = _read_quietly(shared_c3d_dir / "Eb015pr.c3d")  # c3d.org Sample01: SUBJECT:WEIGHT, HEIGHT
+    assert rec.subject_metadata == {"SUBJECT:WEIGHT": pytest.approx(82.7), "SUBJECT:HEIGHT": pytest.approx(1.63)}
+    rec, _ = _read_quietly(shared_c3d_dir / "Qualisys.c3d")  # a PROCESSING group with no subject data
+    assert rec.subject_metadata == {}
+
+
 def test_walking2_matches_opensim(shared_c3d_dir):
     """Lab axes, unfiltered: force within 1 N, COP within 1 mm, free moment within 1 N·mm where Fz > 20 N."""
     rec, _ = _read_quietly(shared_c3d_dir / "walking2.c3d", to_model_axes=False)

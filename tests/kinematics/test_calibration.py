@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from gaitcli.errors import GaitWarning, InputError
-from gaitcli.kinematics.calibration import calibrate, static_landmarks
-from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
+from gaitcli.kinematics import joint_centres as jcm
+from gaitcli.kinematics.calibration import calibrate, least_flexed_frames, static_landmarks
+from gaitcli.kinematics.markerset import landmarks_to_markers, marker_set, standing_template
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS
 from gaitcli.kinematics.rotations import cardan_xyz_to_matrix
 from gaitcli.core.recording import Markers
@@ -120,10 +123,22 @@ def test_virtual_joint_centres_are_used():
     t = standing_template(1.792, with_virtual_joint_centres=True)
     t["HJCr"] = t["HJCr"] + [0.01, 0.0, 0.0]
     t.pop("LEFl")  # not needed with KJCl
-    cal = calibrate(landmarks_to_markers(t), **SUBJECT)
+    cal = calibrate(landmarks_to_markers(t), **SUBJECT, hip_method="from_file")
     np.testing.assert_array_equal(cal.joint_centres_m["HJCr"], t["HJCr"])
     assert "KJCl" in cal.tracking_landmarks["thigh_l"] and "KJCl" in cal.tracking_landmarks["shank_l"]
     assert not cal.anatomical_from_landmarks[BODIES.index("thigh_l")]
+
+
+def test_the_labs_hip_centres_are_ignored_unless_asked_for():
+    t = standing_template(1.792, with_virtual_joint_centres=True)
+    bell = jcm.hip_joint_centres(t["ASISr"], t["ASISl"], t["PSISr"], t["PSISl"])
+    t["HJCr"] = t["HJCr"] + [0.01, 0.0, 0.0]
+    cal = calibrate(landmarks_to_markers(t), **SUBJECT)  # the default: Bell (1990), as the dissertation
+    np.testing.assert_allclose(cal.joint_centres_m["HJCr"], bell[0], atol=1e-15)
+    assert "HJCr" not in cal.tracking_landmarks["pelvis"] and "HJCr" not in cal.tracking_landmarks["thigh_r"]
+    t.pop("HJCl")
+    with pytest.raises(InputError, match=r"static\.c3d: HJCl: hip_joint_centre is from_file"):
+        calibrate(landmarks_to_markers(t), **SUBJECT, hip_method="from_file", source="static.c3d")
 
 
 def test_disturbance_preset_moves_mass_and_keeps_joints():
@@ -156,3 +171,63 @@ def test_subject_facing_backwards_warns():
     flip = np.diag([-1.0, -1.0, 1.0])
     with pytest.warns(GaitWarning, match="faces"):
         calibrate(landmarks_to_markers({k: flip @ v for k, v in t.items()}), **SUBJECT)
+
+
+# ------------------------------------------------------------------ static_frames: auto
+
+def _walk(flexion_r, flexion_l, pelvis_x):
+    """Frames of the standing template with each knee flexed by the given angles (rad; shank and foot turned
+    about the knee centre) and the whole body moved along x."""
+    t = standing_template(1.78)
+    frames = []
+    for k in range(len(pelvis_x)):
+        p = {}
+        for name, pos in t.items():
+            side = name[-1]
+            theta = {"r": flexion_r, "l": flexion_l}.get(side, np.zeros(len(pelvis_x)))[k]
+            if name[:-1] in ("TT", "LM", "MM", "CA", "VM", "FM"):
+                knee = (t[f"LEF{side}"] + t[f"MEF{side}"]) / 2
+                c, s = np.cos(theta), np.sin(theta)
+                pos = knee + np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]) @ (pos - knee)
+            p[name] = pos + [pelvis_x[k], 0.0, 0.0]
+        frames.append(p)
+    return landmarks_to_markers({n: np.array([f[n] for f in frames]) for n in t})
+
+
+def test_auto_static_frames_in_a_walk_are_the_frame_where_the_more_flexed_knee_is_straightest():
+    n = 60
+    rng = np.random.default_rng(4)
+    flexion_r, flexion_l = rng.uniform(0.1, 1.0, n), rng.uniform(0.1, 1.0, n)
+    flexion_r[17], flexion_l[17] = 0.02, 0.01  # the straightest …
+    flexion_r[41], flexion_l[41] = 0.03, 0.04  # … and the next
+    markers = _walk(flexion_r, flexion_l, np.arange(n) / 100.0)  # 1 m/s throughout: no standing
+    frames, how = least_flexed_frames(markers)
+    assert frames.tolist() == [17] and how.startswith("auto: no quiet standing")
+    markers.positions_m[17, markers.index("FMr")] = np.nan  # a marker the calibration needs, not seen there
+    assert least_flexed_frames(markers)[0].tolist() == [41]
+
+
+def test_auto_static_frames_prefer_quiet_standing_with_straight_knees():
+    x = np.concatenate([np.arange(100) / 100.0, np.full(150, 0.99)])  # walks 1 s, then stands 1.5 s
+    flexion = np.full(250, 0.3)
+    flexion[30] = 0.0  # a straight frame while walking does not count
+    flexion[100:150], flexion[150:] = 0.15, 0.05
+    frames, how = least_flexed_frames(_walk(flexion, flexion, x))
+    assert frames.tolist() == list(range(150, 250))  # 1 s, the straightest stretch of the standing
+    # 0.05 rad = 2.9°, plus the template's 0.6°: its mid-malleoli sit 4.5 mm behind the knee–hip line
+    assert how.startswith("auto: 100 frames of quiet standing") and "3.4°" in how
+
+
+@pytest.mark.shared
+def test_auto_static_frames_on_qualisys_pick_the_frame_the_worked_example_chose(shared_c3d_dir):
+    import yaml
+
+    from gaitcli.io.c3d import read_c3d
+    from gaitcli.signal.stage import FilterConfig, filter_markers
+
+    subject = yaml.safe_load((Path(__file__).resolve().parents[2] / "docs" / "examples" / "qualisys"
+                              / "subject.yaml").read_text())
+    markers, _ = filter_markers(marker_set("cast").apply(read_c3d(shared_c3d_dir / "Qualisys.c3d").markers),
+                                FilterConfig())  # as the idyn stage sees them
+    frames, _ = least_flexed_frames(markers)
+    assert [int(frames[0]) + markers.first_frame] * 2 == subject["static_frames"]  # chosen by hand: [992, 992]

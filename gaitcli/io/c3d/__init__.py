@@ -27,7 +27,7 @@ except ImportError:  # Windows: no address-space cap
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.errors import InputError
 from gaitcli.io.axes import apply_rotation, infer_lab_to_model
-from gaitcli.io.c3d.header import check_file, one_line, warn
+from gaitcli.io.c3d.header import check_file, one_line, param, warn
 from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, frame_count
 from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
 from gaitcli.io.c3d.plates import plate_axes, read_plates
@@ -162,7 +162,8 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
     if not plates:
         warn(f"{path.name}: no usable force plates: markers only", notes)
 
-    recording = Recording(markers=markers, plates=plates, source=path, lab_to_model=np.eye(3), notes=notes)
+    recording = Recording(markers=markers, plates=plates, source=path, lab_to_model=np.eye(3), notes=notes,
+                          subject_metadata=subject_metadata(params))
     R = infer_lab_to_model(markers.positions_m, plates)
     rows = "; ".join(" ".join(f"{v + 0.0:+.4f}" for v in row) for row in R)
     if to_model_axes:
@@ -171,6 +172,28 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
     else:
         recording.notes.append(f"data kept in lab axes; inferred lab_to_model rows: [{rows}]")
     return recording
+
+
+#: subject data some labs' C3D files carry (Vicon's PROCESSING group, the c3d.org SUBJECT(S) groups)
+SUBJECT_PARAMETERS = {"PROCESSING": ("Bodymass", "BodyMass", "Height", "LeftLegLength", "RightLegLength",
+                                     "InterAsisDistance", "LeftKneeWidth", "RightKneeWidth", "LeftAnkleWidth",
+                                     "RightAnkleWidth", "MarkerDiameter"),
+                      "SUBJECT": ("WEIGHT", "MASS", "HEIGHT"), "SUBJECTS": ("WEIGHT", "MASS", "HEIGHT")}
+
+
+def subject_metadata(params) -> dict[str, float]:
+    """``{"GROUP:NAME": value}`` of the :data:`SUBJECT_PARAMETERS` a file has, where finite and > 0 (first value)."""
+    out = {}
+    for group, names in SUBJECT_PARAMETERS.items():
+        for name in names:
+            value = param(params, group, name)
+            try:
+                number = float(np.asarray(value, dtype=float).ravel()[0])
+            except (TypeError, ValueError, IndexError):
+                continue
+            if np.isfinite(number) and number > 0:
+                out[f"{group}:{name}"] = number
+    return out
 
 
 def _read_beyond_header(path: Path, total: int, length_m: float, markers, plates) -> tuple:
