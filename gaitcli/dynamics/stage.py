@@ -27,7 +27,7 @@ from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
-from gaitcli.kinematics.model import BODIES, JOINT_CHILD, BodyParameters
+from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINTS, BodyParameters
 from gaitcli.signal.cycles import GaitFeatures, Stride, gait_features, strides
 
 if TYPE_CHECKING:
@@ -105,6 +105,23 @@ class IdynResult:
     def foot_measured(self) -> dict[str, np.ndarray]:
         """side → (n,) that foot's load is known (its leg's moments are meaningful)."""
         return {s: self.trial.load_known(s) for s in SIDES}
+
+    @property
+    def moment_known(self) -> np.ndarray:
+        """(n, 7) whether each joint's moment is meaningful: a leg's joints where its foot's load is known (a
+        joint's moment depends only on the bodies distal to it and their loads); the lumbar joint always (the
+        HAT carries no measured load; ``hat_tracked`` says whether its motion was measured)."""
+        known = np.ones((self.q.shape[0], len(JOINTS)), bool)
+        for k, joint in enumerate(JOINTS):
+            if joint != "lumbar":
+                known[:, k] = self.foot_measured[joint[-1]]
+        return known
+
+    @property
+    def hat_tracked(self) -> bool:
+        """Whether the HAT had markers of its own (else it is locked to the pelvis, and the lumbar moment and
+        the pelvis residuals are those of a HAT that moves with the pelvis)."""
+        return "hat" not in self.calibration.locked
 
 
 def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | None:

@@ -21,9 +21,15 @@ def kinematics_columns(result: IdynResult) -> dict:
     return {"time_s": result.time_s, **{name: table[:, k] for k, name in enumerate(COORDINATES)}}
 
 
+def known_moments_Nm(result: IdynResult) -> np.ndarray:
+    """The joint moments (n, 7, 3) with NaN where the load they depend on is unknown (``moment_known``)."""
+    return np.where(result.moment_known[..., None], result.joint_moments_Nm, np.nan)
+
+
 def moment_columns(result: IdynResult) -> dict:
-    """21 moments in N·m (``<name>_moment``) then in N·m/kg (``<name>_moment_per_kg``)."""
-    table = moments_to_clinical(result.joint_moments_Nm)
+    """21 moments in N·m (``<name>_moment``) then in N·m/kg (``<name>_moment_per_kg``), NaN where the foot load
+    they depend on is unknown."""
+    table = moments_to_clinical(known_moments_Nm(result))
     columns = {"time_s": result.time_s}
     columns.update({name: table[:, k] for k, name in enumerate(MOMENTS)})
     columns.update({f"{name}_per_kg": table[:, k] / result.mass_kg for k, name in enumerate(MOMENTS)})
@@ -33,7 +39,9 @@ def moment_columns(result: IdynResult) -> dict:
 
 
 def residual_columns(result: IdynResult) -> dict:
+    """The 6 pelvis residuals (3.22), NaN where a foot on the ground is off the plates."""
     values = np.column_stack([result.residual_force_N, result.residual_moment_Nm])
+    values[~result.measured] = np.nan
     units = ["N"] * 3 + ["Nm"] * 3
     columns = {"time_s": result.time_s}
     columns.update({f"{name}_{u}": values[:, k] for k, (name, u) in enumerate(zip(RESIDUALS, units))})
@@ -44,7 +52,7 @@ def residual_columns(result: IdynResult) -> dict:
 def cycle_columns(result: IdynResult) -> dict:
     """Every complete stride of each side normalised to 0–100 % (long format: one block per stride)."""
     kin = coordinates_to_clinical(result.q)
-    mom = moments_to_clinical(result.joint_moments_Nm) / result.mass_kg
+    mom = moments_to_clinical(known_moments_Nm(result)) / result.mass_kg
     values = np.column_stack([kin, mom])
     names = list(COORDINATES) + [f"{m}_per_kg" for m in MOMENTS]
     blocks = {"cycle_pct": [], "side": [], "stride": [], "start_s": []}
@@ -85,7 +93,10 @@ def summary(result: IdynResult) -> dict:
                                         if np.isfinite(result.segment_rms_m[:, i]).any() else None
                                         for i, b in enumerate(BODIES)},
         "locked_segments": list(result.calibration.locked),
-        "notes": result.notes,
+        "hat_tracked": result.hat_tracked,
+        "notes": result.notes + ([] if result.hat_tracked else [
+            "the HAT has no markers of its own: it is locked to the pelvis, so the lumbar moment and the pelvis "
+            "residuals are those of a trunk that moves with the pelvis"]),
     }
     posture = result.reference_posture
     if posture is not None:
@@ -126,6 +137,9 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
         "joint_moments_clinical": Dataset(moments_to_clinical(result.joint_moments_Nm), "N*m",
                                           {"columns": ",".join(MOMENTS), "convention": CONVENTION}),
         "joint_moments_global": Dataset(result.joint_moments_global_Nm, "N*m", {"frames": "global (model axes)"}),
+        "joint_moments_known": Dataset(result.moment_known.astype(np.int8), "1", {
+            "joints": ",".join(JOINTS), "meaning": "1 where the foot load the joint's moment depends on is known "
+                                                   "(the CSVs and plots are NaN elsewhere)"}),
         "residuals/force": Dataset(result.residual_force_N, "N", {"frames": "global"}),
         "residuals/moment": Dataset(result.residual_moment_Nm, "N*m", {"frames": "global, about the pelvis CoM"}),
         "residuals/all_contacts_measured": Dataset(result.measured.astype(np.int8), "1"),

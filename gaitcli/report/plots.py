@@ -6,6 +6,7 @@ Every figure is drawn from a stage's HDF5 output (``filter.h5``, ``idyn.h5``,
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import h5py
@@ -125,6 +126,8 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
         strides = read_records(h5["strides"], Stride)
         kin = h5["coordinates_clinical"][()]
         mom = h5["joint_moments_clinical"][()] / float(h5["segments/mass"].attrs["body_mass_kg"])
+        known = h5["joint_moments_known"][()].astype(bool)  # blank where the foot's load is unknown
+        mom = np.where(np.repeat(known, 3, axis=1), mom, np.nan)
         residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]
         time_s = h5["time"][()]
     events = export.events
@@ -137,16 +140,15 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     for col, (joint, label) in enumerate(joints):
         for side in ("r", "l"):
             ks = [s for s in strides if s.side == side]
-            known = export.load_known[side]
-            # moments only from strides whose stance was measured throughout (on a plate, or in swing)
-            kk = [s for s in ks if known[(time_s >= s.start_s) & (time_s <= s.end_s)].all()]
             a = [normalise(kin[:, COORDINATES.index(f"{joint}_{side}_flexion")], time_s, s) for s in ks]
-            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], time_s, s) for s in kk]
-            for row, values, count in ((0, a, len(ks)), (1, m, len(kk))):
+            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], time_s, s) for s in ks]
+            for row, values, count in ((0, a, len(ks)), (1, m, len(ks))):
                 if not values:
                     continue
                 values = np.array(values)
-                mean, sd = np.nanmean(values, axis=0), np.nanstd(values, axis=0)
+                with warnings.catch_warnings():  # a percentage no stride's load is known at stays blank
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    mean, sd = np.nanmean(values, axis=0), np.nanstd(values, axis=0)
                 ax = axes[row, col]
                 ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAME[side]} (n={count})")
                 ax.fill_between(pct, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
@@ -159,12 +161,14 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     for row in (0, 1):
         for ax in axes[row]:
             ax.legend(fontsize=7, loc="best")
-    fig.suptitle(f"Sagittal angles and moments over the gait cycle, mean ± SD (moments: strides with the stance "
-                 f"on a plate; + = flexion / dorsiflexion) — {title}", fontsize=9)
+    fig.suptitle(f"Sagittal angles and moments over the gait cycle, mean ± SD (moments blank where the foot's load "
+                 f"is unknown: a stance off the plates; + = flexion / dorsiflexion) — {title}", fontsize=9)
     fig.subplots_adjust(left=0.07, right=0.98, top=0.9, bottom=0.09, hspace=0.12, wspace=0.3)
     written.append(save(fig, folder / "cycle.png"))
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
+    residual_force, residual_moment = (np.where(measured[:, None], r, np.nan) for r in (residual_force,
+                                                                                        residual_moment))
     for k, axis in enumerate("xyz"):
         axes[0].plot(time_s, residual_force[:, k], label=axis)
         axes[1].plot(time_s, residual_moment[:, k], label=axis)

@@ -280,6 +280,32 @@ def test_exact_trial_residuals(exact):
     assert np.abs(residuals[[f"{r}_Nm" for r in RESIDUALS[3:]]].to_numpy()[measured]).max() < 1.0
 
 
+def test_unknown_loads_are_nan_in_the_tables_and_a_mask_in_the_hdf5(exact):
+    """A leg's moments are NaN exactly where its foot's load is unknown, the residuals where any foot's is; the
+    lumbar moment (no foot below it) stays; idyn.h5 keeps every value and the mask."""
+    _, trial = exact
+    out = trial / "gait_out" / "idyn"
+    moments, residuals = pd.read_csv(out / "joint_moments.csv"), pd.read_csv(out / "residuals.csv")
+    for side, column in (("r", "right_foot_load_known"), ("l", "left_foot_load_known")):
+        known = moments[column].to_numpy() == 1
+        assert 0 < known.sum() < known.size
+        leg = moments[[c for c in moments.columns if c.split("_")[1:2] == [side]]].to_numpy()
+        assert leg.shape[1] == 18  # hip, knee, ankle × 3 axes × N·m and N·m/kg
+        assert np.isfinite(leg[known]).all() and np.isnan(leg[~known]).all()
+    assert np.isfinite(moments[[c for c in moments.columns if c.startswith("lumbar")]].to_numpy()).all()
+    measured = residuals["all_contacts_measured"].to_numpy() == 1
+    values = residuals.drop(columns=["time_s", "all_contacts_measured"]).to_numpy()
+    assert np.isfinite(values[measured]).all() and np.isnan(values[~measured]).all()
+    with h5py.File(out / "idyn.h5", "r") as h5:
+        assert np.isfinite(h5["joint_moments_clinical"][()]).all()
+        mask = h5["joint_moments_known"][()]
+    np.testing.assert_array_equal(mask[:, 1], moments["right_foot_load_known"])
+    np.testing.assert_array_equal(mask[:, 6], moments["left_foot_load_known"])
+    assert (mask[:, 0] == 1).all()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["hat_tracked"] is True
+
+
 # --- bad input ------------------------------------------------------------------------------------
 def test_missing_thigh_markers_give_nan_frames_and_a_warning(runs):
     results, root = runs
@@ -299,7 +325,10 @@ def test_missing_thigh_markers_give_nan_frames_and_a_warning(runs):
     assert kin[thigh].to_numpy()[gap].size and np.isnan(kin[thigh].to_numpy()[gap]).all()
     assert np.isfinite(kin[list(COORDINATES)].to_numpy()[~gap]).all()
     assert np.isnan(moments[list(MOMENTS)].to_numpy()[gap]).all()
-    assert np.isfinite(moments[list(MOMENTS)].to_numpy()[~gap]).all()
+    for side, column in (("r", "right_foot_load_known"), ("l", "left_foot_load_known")):
+        leg = [m for m in MOMENTS if m.split("_")[1] == side]  # NaN elsewhere only where the foot's load is unknown
+        known = moments[column].to_numpy() == 1
+        assert np.isfinite(moments[leg].to_numpy()[~gap & known]).all()
     # frames outside the gap agree with the complete sample trial's
     complete = pd.read_csv(out_dir(root, "normal") / "kinematics.csv")
     away = ~gap
