@@ -46,6 +46,10 @@ class Contact:
     (``''``, ``'both_feet'``, ``'ambiguous'``, ``'no_markers'`` or ``'no_cop'``: the
     filtered load never passed the threshold), and whether the
     heel marker was over the plate at the onset and the toe marker at the offset.
+    A ``'both_feet'`` contact (one foot stepping off a plate the other foot steps on)
+    names in ``first_side`` the foot nearest its COP at the onset and in ``last_side``
+    the one nearest at the end: the plate's onset is the first's heel strike, its end
+    the last's toe off, and :func:`plate_owner` gives each its frames alone on the plate.
     """
 
     plate_index: int
@@ -61,6 +65,8 @@ class Contact:
     flag: str = ""
     heel_inside: bool = True
     toe_inside: bool = True
+    first_side: str = ""
+    last_side: str = ""
 
 
 def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s: float = 0.1,
@@ -147,20 +153,32 @@ def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe
             else:
                 side = best
         heel_inside = toe_inside = True
-        if side and load.corners_m is not None:
-            heel, toe = feet[side]
-            heel_inside = _inside(heel[c.first_frame, :2], load.corners_m, edge_tolerance_m)
-            toe_inside = _inside(toe[c.last_frame, :2], load.corners_m, edge_tolerance_m)
+        first_side = last_side = ""
+        if flag == "both_feet":  # who stood on it alone at its ends: the nearer foot over its first and last tenth
+            tenth = max(1, int(np.ceil(0.1 * cop.shape[0])))
+            nearer = {}
+            for end, rows in (("first", slice(0, tenth)), ("last", slice(-tenth, None))):
+                d = {s_: np.nanmean(_segment_distance(cop[rows], feet[s_][0][frames[use]][rows, :2],
+                                                      feet[s_][1][frames[use]][rows, :2])) for s_ in SIDES}
+                nearer[end] = min(SIDES, key=lambda s_: d[s_] if np.isfinite(d[s_]) else np.inf)
+            first_side, last_side = nearer["first"], nearer["last"]
+        if (side or first_side) and load.corners_m is not None:
+            heel_inside = _inside(feet[side or first_side][0][c.first_frame, :2], load.corners_m, edge_tolerance_m)
+            toe_inside = _inside(feet[side or last_side][1][c.last_frame, :2], load.corners_m, edge_tolerance_m)
         out.append(replace(c, side=side, distance_r_m=mean["r"], distance_l_m=mean["l"], margin_m=margin,
-                           flag=flag, heel_inside=heel_inside, toe_inside=toe_inside))
+                           flag=flag, heel_inside=heel_inside, toe_inside=toe_inside, first_side=first_side,
+                           last_side=last_side))
     return out
 
 
-def plate_owner(contacts: list[Contact], loads: list[PlateLoad]) -> np.ndarray:
+def plate_owner(contacts: list[Contact], loads: list[PlateLoad], events=None) -> np.ndarray:
     """Which foot (``'r'``, ``'l'``, ``''``) loads each plate in each frame, shape (n_plates, n_frames).
 
     Each assigned contact owns its frames, extended over the adjacent frames in which
-    the (filtered) plate is still loaded, up to the neighbouring contact.
+    the (filtered) plate is still loaded, up to the neighbouring contact. A ``'both_feet'``
+    contact is split by ``events`` (:class:`~gaitcli.core.events.Events`): its first foot
+    owns it until the other foot's heel strike, its last foot from the first foot's toe
+    off; in between both feet stand on it and no foot owns it (their loads are unknown).
     """
     n = loads[0].n_frames if loads else 0
     owner = np.full((len(loads), n), "", dtype="<U1")
@@ -168,7 +186,8 @@ def plate_owner(contacts: list[Contact], loads: list[PlateLoad]) -> np.ndarray:
         mine = sorted((c for c in contacts if c.plate_index == p), key=lambda c: c.first_frame)
         starts, stops = finite_runs(load.loaded)
         for i, c in enumerate(mine):
-            if not c.side:
+            shared = c.flag == "both_feet" and events is not None and bool(c.first_side and c.last_side)
+            if not (c.side or shared):
                 continue
             lo, hi = c.first_frame, c.last_frame + 1
             run = np.flatnonzero((starts <= c.last_frame) & (stops > c.first_frame))
@@ -178,8 +197,28 @@ def plate_owner(contacts: list[Contact], loads: list[PlateLoad]) -> np.ndarray:
                 lo = max(lo, mine[i - 1].last_frame + 1)
             if i + 1 < len(mine):
                 hi = min(hi, mine[i + 1].first_frame)
-            owner[p, lo:hi] = c.side
+            if not shared:
+                owner[p, lo:hi] = c.side
+                continue
+            start, stop = shared_frames(c, events, load.rate_hz)
+            owner[p, lo:start], owner[p, stop:hi] = c.first_side, c.last_side
     return owner
+
+
+def shared_frames(contact: Contact, events, rate_hz: float) -> tuple[int, int]:
+    """First and last+1 frame of a ``'both_feet'`` contact in which both feet stand on it: from the second foot's
+    heel strike to the first foot's toe off inside the contact (the whole contact where they are not found)."""
+    first, last = contact.first_side, contact.last_side
+    other = last if last != first else ("l" if first == "r" else "r")
+    lo_t, hi_t = contact.first_frame / rate_hz, contact.last_frame / rate_hz
+    strikes = events.times(other, "heel_strike")
+    offs = events.times(first, "toe_off")
+    strikes = strikes[(strikes > lo_t) & (strikes < hi_t)]
+    offs = offs[(offs > lo_t) & (offs < hi_t)]
+    start = int(np.ceil(strikes[0] * rate_hz - 1e-9)) if strikes.size else contact.first_frame
+    stop = int(np.floor(offs[-1] * rate_hz + 1e-9)) + 1 if offs.size else contact.last_frame + 1
+    return start, max(start, stop)
+
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -63,7 +63,9 @@ def detect_events(loads: list[PlateLoad], feet: dict, pelvis_centre, rate_hz: fl
                                max_distance_m=max_distance_m, min_margin_m=min_margin_m)
     parts = []
     for side in SIDES:
-        plate_ev = _plate_events([c for c in contacts if c.side == side and not c.flag], rate_hz, side)
+        plate_ev = Events.concatenate([
+            _plate_events([c for c in contacts if c.side == side and not c.flag], rate_hz, side),
+            _shared_plate_events([c for c in contacts if c.flag == "both_feet"], rate_hz, side)])
         kin = kinematic_events(feet[side][0], feet[side][1], pelvis_centre, rate_hz, side, refine=refine)
         keep = np.ones(len(kin), dtype=bool)
         for kind in KINDS:
@@ -73,7 +75,17 @@ def detect_events(loads: list[PlateLoad], feet: dict, pelvis_centre, rate_hz: fl
                 near = np.abs(kin.time_s[:, None] - plate_t[None, :]).min(axis=1) < duplicate_s
                 keep &= ~(is_kind & near)
         parts += [plate_ev, kin.select(keep)]
-    return EventDetection(Events.concatenate(parts), contacts, plate_owner(contacts, loads))
+    events = Events.concatenate(parts)
+    return EventDetection(events, contacts, plate_owner(contacts, loads, events))
+
+
+def _shared_plate_events(contacts: list[Contact], rate_hz: float, side: str) -> Events:
+    """A plate two feet stood on times only its ends: the first foot's heel strike and the last foot's toe off."""
+    strikes = [c.on_time_s for c in contacts if c.first_side == side and c.heel_inside and np.isfinite(c.on_time_s)]
+    offs = [c.off_time_s for c in contacts if c.last_side == side and c.toe_inside and np.isfinite(c.off_time_s)]
+    return Events.concatenate([
+        Events.from_times(strikes, rate_hz=rate_hz, side=side, kind="heel_strike", source="plate"),
+        Events.from_times(offs, rate_hz=rate_hz, side=side, kind="toe_off", source="plate")])
 
 
 def _plate_events(contacts: list[Contact], rate_hz: float, side: str) -> Events:

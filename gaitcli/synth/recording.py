@@ -108,23 +108,28 @@ def stance_contacts(stance, samples):
     return contacts
 
 
-def plate_recording(name, foot, first, end, rng, noise_N):
-    """A 0.6 m × 0.4 m plate centred ``o`` under the foot's mean COP ``c`` over samples ``first:end``.
+def plate_recording(name, stances, rng, noise_N):
+    """A plate under the stances ``[(foot, first, end), …]`` (a foot's loads over samples ``first:end``): 0.6 m ×
+    0.4 m centred ``o`` under a single stance's mean COP, or, under two feet's stances, 0.4 m longer and wider
+    than the span of their COPs.
 
-    Force ``F`` (N) and moment about its centre ``(c − o) × F + T e_z`` (N·m, ``T``
+    Force ``F`` (N) and moment about its centre ``Σ (c − o) × F + T e_z`` (N·m, ``T``
     the free moment), plus white noise of σ ``noise_N`` and ``0.05 noise_N``.
     """
-    centre = np.nanmean(foot["cop_m"][first:end], axis=0)
+    cops = np.concatenate([foot["cop_m"][first:end] for foot, first, end in stances])
+    low, high = np.nanmin(cops, axis=0), np.nanmax(cops, axis=0)
+    centre = np.nanmean(cops, axis=0) if len(stances) == 1 else (low + high) / 2
     centre[2] = 0.0
-    half = np.array([0.3, 0.2])
+    half = np.array([0.3, 0.2]) if len(stances) == 1 else (high - low)[:2] / 2 + 0.2
     corners = centre + np.array([[half[0], -half[1], 0], [-half[0], -half[1], 0],
                                  [-half[0], half[1], 0], [half[0], half[1], 0]])
-    force = np.zeros_like(foot["force_N"])
-    moment = np.zeros_like(foot["force_N"])
-    force[first:end] = foot["force_N"][first:end]
-    lever = np.nan_to_num(foot["cop_m"][first:end] - centre)
-    moment[first:end] = np.cross(lever, force[first:end])
-    moment[first:end, 2] += foot["free_moment_Nm"][first:end]
+    force = np.zeros_like(stances[0][0]["force_N"])
+    moment = np.zeros_like(force)
+    for foot, first, end in stances:
+        force[first:end] += foot["force_N"][first:end]
+        lever = np.nan_to_num(foot["cop_m"][first:end] - centre)
+        moment[first:end] += np.cross(lever, foot["force_N"][first:end])
+        moment[first:end, 2] += foot["free_moment_Nm"][first:end]
     force += rng.normal(0.0, noise_N, force.shape)
     moment += rng.normal(0.0, noise_N * 0.05, moment.shape)
     return ForcePlate(name=name, force_N=force, moment_Nm=moment, centre_m=centre, corners_m=corners,
@@ -159,8 +164,13 @@ def contact_moments(q, qd, qdd, params, feet):
 
 def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0, artefact_mm: float = 10.0,
                    strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78, sex: str = "male",
-                   plate_noise_N: float = 1.0, period_s: float | None = None) -> SyntheticTrial:
+                   plate_noise_N: float = 1.0, period_s: float | None = None,
+                   shared_plate: bool = False) -> SyntheticTrial:
     """Make a synthetic walking trial with known truth (nothing written).
+
+    Two plates measure one right and one left stance in the middle of the walk; with
+    ``shared_plate`` one plate measures both (the second foot steps on it before the
+    first steps off: both feet load it in that double support).
 
     ``noise_mm`` is the RMS of each marker's 3-D position error (white, σ = noise/√3
     per axis), as optical systems quote their accuracy; ``artefact_mm`` the peak
@@ -205,8 +215,11 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     complete = sorted([c for c in contacts if c[1] > 0 and c[2] < j.size], key=lambda c: c[1])
     middle = len(complete) // 2 - 1
     chosen = complete[middle:middle + 2]  # one right and one left stance in the middle of the walk
-    plates = [plate_recording(f"plate{k + 1}", feet[side], a, b, rng, plate_noise_N)
-              for k, (side, a, b) in enumerate(chosen)]
+    if shared_plate:
+        plates = [plate_recording("plate1", [(feet[side], a, b) for side, a, b in chosen], rng, plate_noise_N)]
+    else:
+        plates = [plate_recording(f"plate{k + 1}", [(feet[side], a, b)], rng, plate_noise_N)
+                  for k, (side, a, b) in enumerate(chosen)]
 
     frames = slice(0, None, step)
     qm, qd, qdd, tm = q[frames], qd_c[i][frames], qdd_c[i][frames], t[frames]
@@ -218,6 +231,7 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     sub_feet = {s: {k: v[frames] for k, v in feet[s].items()} for s in "rl"}
     return SyntheticTrial(markers=Markers(tuple(names), noisy, MARKER_RATE_HZ),
                           static=Markers(tuple(names), static_positions, MARKER_RATE_HZ), plates=plates, q=qm,
-                          qd=qd, qdd=qdd, feet=sub_feet, plate_feet=[c[0] for c in chosen],
+                          qd=qd, qdd=qdd, feet=sub_feet,
+                          plate_feet=["".join(c[0] for c in chosen)] if shared_plate else [c[0] for c in chosen],
                           events=contact_events(contacts, chosen, t), calibration=cal, design=design,
                           joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip)

@@ -16,7 +16,9 @@ import pytest
 
 from gaitcli.core.events import Events
 from gaitcli.errors import InputError
+from gaitcli.signal.contacts import plate_owner
 from gaitcli.signal.events import detect_events
+from gaitcli.signal.stage import calibrate_kinematic_events
 from tests.signal.conftest import (CENTRED_PLATE, EVENT_RATE_HZ, EVENT_THRESHOLD_N, event_errors_frames,
                                    true_event_times, walk_loads)
 
@@ -68,18 +70,32 @@ def test_walking_towards_minus_x(walk_factory):
     _assert_all_truth_found_once(detection.events, walk)
 
 
-def test_both_feet_on_one_plate_flagged_not_assigned(walk_factory):
-    # a 1.4 m plate under the right stance and the following left stance
+def test_a_plate_both_feet_stand_on_is_split_at_the_steps_between(walk_factory):
+    """A 1.4 m plate under the right stance and the following left stance: the right foot owns it alone until the
+    left heel strike, nobody while both stand on it, the left foot from the right toe off; the plate times the
+    right heel strike and the left toe off, the kinematics (calibrated on those) the two steps in between."""
     walk = walk_factory(plates=[("r", 1, 0.33, 1.4, 0.4)])
     assert walk.plate_stances == [{("r", 1), ("l", 1)}]
     loads = walk_loads(walk)
     detection = detect_events(loads, walk.feet, walk.pelvis, EVENT_RATE_HZ, EVENT_THRESHOLD_N)
-    assert len(detection.contacts) == 1
-    contact = detection.contacts[0]
+    (contact,) = detection.contacts
     assert contact.flag == "both_feet" and contact.side == ""
-    assert np.all(detection.owner == "")
-    assert set(detection.events.source) == {"kinematics"}
-    _assert_all_truth_found_once(detection.events, walk)
+    assert (contact.first_side, contact.last_side) == ("r", "l")
+    plate = detection.events.of(source="plate")
+    assert list(zip(plate.side, plate.kind)) == [("r", "heel_strike"), ("l", "toe_off")]
+    assert abs(event_errors_frames(plate, walk, "r", "heel_strike")[0]) < 1.0
+    assert abs(event_errors_frames(plate, walk, "l", "toe_off")[0]) < 1.0
+    events = calibrate_kinematic_events(detection.events, walk.feet, walk.pelvis, EVENT_RATE_HZ)
+    owner = plate_owner(detection.contacts, loads, events)[0]
+    left_strike = walk.heel_strikes["l"][(walk.heel_strikes["l"] > contact.on_time_s)][0]
+    right_off = walk.toe_offs["r"][(walk.toe_offs["r"] > contact.on_time_s)][0]
+    t = np.arange(owner.size) / EVENT_RATE_HZ
+    both = (t > left_strike) & (t < right_off)  # both feet load it (at the strike and the toe off one is at 0 N)
+    inside = (np.arange(owner.size) >= contact.first_frame) & (np.arange(owner.size) <= contact.last_frame)
+    np.testing.assert_array_equal(np.flatnonzero(inside & (owner == "")), np.flatnonzero(both))  # frames 196–205
+    loaded = np.arange(contact.first_frame, contact.last_frame + 1)
+    assert set(owner[loaded][:5]) == {"r"} and set(owner[loaded][-5:]) == {"l"}
+    _assert_all_truth_found_once(events, walk)
 
 
 def test_foot_straddling_two_plates(walk_factory):
