@@ -34,6 +34,7 @@ class Subject:
     sex: str
     thigh_length_m: float | None = None
     shank_length_m: float | None = None
+    leg_length_m: float | None = None  # ASIS to medial malleolus, for the Harrington and Hara hip centres
     trial: str | None = None
     static: str | None = None
     static_frames: tuple[int, int] | str | None = None  # [first, last] file frames, "auto", or None (static.c3d)
@@ -48,10 +49,11 @@ class Subject:
         return marker_set(self.marker_set, self.marker_map)
 
 
-KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "trial", "static",
+KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
         "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances")
-#: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; the lab's own points
-HIP_JOINT_CENTRES = ("bell", "from_file")
+#: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
+#: (2007); Hara et al. (2016); the lab's own points
+HIP_JOINT_CENTRES = ("bell", "harrington", "hara", "from_file")
 #: keys that older `gait synth` versions wrote and nothing reads; now a comment in subject.yaml
 RETIRED_KEYS = ("condition", "disturbed_side")
 DISTURBANCE_KEYS = ("segment", "mass_kg", "inertia_kgm2", "com_offset_m", "name")
@@ -94,6 +96,9 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     for key in ("thigh_length_m", "shank_length_m"):
         if data.get(key) is not None:
             lengths[key] = _number(path, key, data[key], low=0.1, high=0.8, expected="a length in metres, 0.1–0.8")
+    if data.get("leg_length_m") is not None:
+        lengths["leg_length_m"] = _number(path, "leg_length_m", data["leg_length_m"], low=0.3, high=1.5,
+                                          expected="a leg length in metres (ASIS to medial malleolus), 0.3–1.5")
     for key in ("trial", "static"):
         if data.get(key) is not None and not isinstance(data[key], str):
             raise InputError(path, key, f"got {shown(data[key])} (expected a file name)")

@@ -158,6 +158,23 @@ def test_segment_lengths(key, value):
     assert _error(_with(**{key: value})).field == key
 
 
+@pytest.mark.parametrize("key,value", [("leg_length_m", 90), ("leg_length_m", 0.1), ("hip_joint_centre", "davis"),
+                                       ("hip_joint_centre", "Bell"), ("marker_set", "plug_in_gait_v9"),
+                                       ("marker_map", {"RTHI": "thigh"})])
+def test_marker_set_and_hip_centre_keys(key, value):
+    assert _error(_with(**{key: value})).field.startswith(key)
+
+
+def test_marker_set_hip_centre_and_static_frames_are_read():
+    s = subject_from_dict(_with(marker_set="cleveland", hip_joint_centre="harrington", leg_length_m=0.92,
+                                static_frames="auto", marker_map={"RTHI": "thigh_r", "RKNX": "LEFr"}))
+    assert (s.marker_set, s.hip_joint_centre, s.leg_length_m, s.static_frames) == ("cleveland", "harrington", 0.92,
+                                                                                    "auto")
+    assert s.markers.landmarks["LEFr"] == ("RKNX",) and "RTHI" in s.markers.tracking["thigh_r"]
+    plain = subject_from_dict(_with())
+    assert (plain.marker_set, plain.hip_joint_centre, plain.markers.name) == (None, "bell", "dissertation")
+
+
 @pytest.mark.parametrize("frames", [[10, 5], [0, 5], [1], [1, 5.5], "1-10", [True, 5]])
 def test_static_frames(frames):
     assert _error(_with(static_frames=frames)).field == "static_frames"

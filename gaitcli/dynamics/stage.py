@@ -250,11 +250,12 @@ def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Sub
     return calibrate(markers, frames=frames, source=source, mass_kg=mass_kg, stature_m=subject.stature_m,
                      sex=subject.sex, thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
                      disturbances=subject.disturbances, extra_tracking_markers=markers_set.tracking,
-                     marker_set=markers_set, hip_method=HIP_METHOD[subject.hip_joint_centre])
+                     marker_set=markers_set, hip_method=HIP_METHOD[subject.hip_joint_centre],
+                     leg_length_m=subject.leg_length_m)
 
 
 #: subject.yaml's ``hip_joint_centre`` → the calibration's method
-HIP_METHOD = {"bell": "bell1990", "from_file": "from_file"}
+HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "from_file": "from_file"}
 
 
 def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: IdynConfig, *,

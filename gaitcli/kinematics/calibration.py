@@ -118,7 +118,7 @@ def _check_required(P: Mapping[str, np.ndarray], source, marker_set: MarkerSet |
             raise InputError(source, marker_set.label_of(name) or name, marker_set.missing_message(name, purpose))
 
 
-HIP_METHODS = ("bell1990", "bell1989", "from_file")
+HIP_METHODS = ("bell1990", "bell1989", "harrington", "hara", "from_file")
 
 
 def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, quiet_speed_m_s: float = 0.05, quiet_s: float = 0.5,
@@ -181,7 +181,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
               foot_length_m=None, shoulder_width_m: float | None = None,
               disturbances: Sequence[Disturbance | str] = (), hip_method: str = "bell1990",
               ankle_method: str = "de_leva", extra_tracking_markers: Mapping[str, Sequence[str]] | None = None,
-              marker_set: MarkerSet | None = None, source: str | Path | None = None) -> StaticCalibration:
+              marker_set: MarkerSet | None = None, leg_length_m: float | None = None,
+              source: str | Path | None = None) -> StaticCalibration:
     """Calibrate the 8-body model on the reference posture ``static`` (averaged over ``frames``).
 
     Thigh and shank lengths are measured (HJC–KJC, KJC–AJC) unless given; other
@@ -189,7 +190,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     objects (body axes, offsets from the body's de Leva CoM) or preset names
     (``"ankle_weight"``, ``"ski_boot:l"``). ``extra_tracking_markers`` adds lab
     markers (by label) to a body's cluster (a marker set's tracking markers).
-    ``hip_method``: ``"bell1990"`` (the dissertation's), ``"bell1989"``, or
+    ``hip_method``: ``"bell1990"`` (the dissertation's), ``"bell1989"``, ``"harrington"``,
+    ``"hara"`` (these two with ``leg_length_m``, default ASIS to medial malleolus), or
     ``"from_file"`` (the lab's ``HJCr``/``HJCl`` points; otherwise they are ignored).
     Raises :class:`InputError` naming a marker the model's geometry needs (by the
     lab label ``marker_set`` gives it).
@@ -208,11 +210,13 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     _check_required(P, source, marker_set)
     notes: list[str] = []
     jc = jcm.joint_centres(P, hip_method="bell1990" if hip_method == "from_file" else hip_method,
-                           ankle_method=ankle_method, sex=sex, source=source)
+                           ankle_method=ankle_method, sex=sex, leg_length=leg_length_m, source=source)
     for name in VIRTUAL_JOINT_CENTRES:
         notes.append(f"{name}: {'virtual marker from the lab file' if name in P else 'estimated'}")
-    notes.append("hip joint centres: " + ("the lab's virtual points (from_file)" if hip_method == "from_file"
-                                          else f"Bell regression ({hip_method})"))
+    notes.append("hip joint centres: " + {"from_file": "the lab's virtual points (from_file)",
+                                          "harrington": "Harrington et al. (2007) regression",
+                                          "hara": "Hara et al. (2016) regression"}.get(hip_method,
+                                                                                     f"Bell regression ({hip_method})"))
     if not all(f"AJC{s}" in P for s in "rl"):
         notes.append(f"ankle joint centres from the malleoli ({ankle_method})")
 

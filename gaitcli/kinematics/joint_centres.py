@@ -4,6 +4,8 @@
   ``"bell1990"``: from the mid-ASIS point, 0.19·PW posterior, 0.30·PW inferior,
   0.36·PW lateral (PW = inter-ASIS distance). ``"bell1989"``: from each ASIS,
   0.22·PW posterior, 0.30·PW distal, 0.14·PW medial (the same lateral position).
+  ``"harrington"`` (2007: pelvis width, depth and leg length) and ``"hara"`` (2016: leg
+  length), not the dissertation's, for labs that use them.
 * Knee: midpoint of the femoral epicondyle markers LEF and MEF (3.2.1).
 * Ankle: "from the malleoli using de Leva's tables" (3.2.1). Default ``"de_leva"``:
   the knee→mid-malleoli vector lengthened by de Leva's KJC→AJC / KJC→LMAL ratio
@@ -85,6 +87,37 @@ def hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str = "bell1990
             np.asarray(asis_l, dtype=float) + shift - pw * c["medial"] * y)
 
 
+#: Harrington et al. (2007), mm, in the ISB pelvis frame at the mid-ASIS (x anterior, y superior, z lateral):
+#: x = −0.24 PD − 9.9, y = −0.16 PW − 0.04 LL − 7.1, z = 0.28 PD + 0.16 PW + 7.9
+#: (PW inter-ASIS, PD mid-ASIS to mid-PSIS, LL leg length ASIS to medial malleolus)
+HARRINGTON_2007 = {"x": (-9.9e-3, {"PD": -0.24}), "y": (-7.1e-3, {"PW": -0.16, "LL": -0.04}),
+                   "z": (7.9e-3, {"PD": 0.28, "PW": 0.16})}
+#: Hara et al. (2016), mm, same frame: x = 11 − 0.063 LL, y = −9 − 0.078 LL, z = 8 + 0.086 LL
+HARA_2016 = {"x": (11e-3, {"LL": -0.063}), "y": (-9e-3, {"LL": -0.078}), "z": (8e-3, {"LL": 0.086})}
+REGRESSIONS = {"harrington": HARRINGTON_2007, "hara": HARA_2016}
+
+
+def regression_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str,
+                                 leg_length_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Right and left hip joint centres (m) by Harrington et al. (2007) or Hara et al. (2016) (``method``
+    ``"harrington"``/``"hara"``), from the pelvis markers and the leg length (m, ASIS to medial malleolus).
+
+    The regressions are given in the ISB pelvis frame (origin mid-ASIS; x anterior, y superior,
+    z lateral); here x is :func:`pelvis_frame`'s x, superior its z, lateral ∓ its y (right, left).
+    """
+    one_of(method, tuple(REGRESSIONS), where="hip_joint_centre")
+    origin, R = pelvis_frame(asis_r, asis_l, psis_r, psis_l)
+    mid_psis = (np.asarray(psis_r, dtype=float) + np.asarray(psis_l, dtype=float)) / 2
+    measures = {"PW": np.linalg.norm(np.asarray(asis_l, dtype=float) - np.asarray(asis_r, dtype=float), axis=-1),
+                "PD": np.linalg.norm(origin - mid_psis, axis=-1), "LL": np.asarray(leg_length_m, dtype=float)}
+    c = {axis: constant + sum(k * measures[name] for name, k in terms.items())
+         for axis, (constant, terms) in REGRESSIONS[method].items()}
+    anterior, superior, lateral = (np.asarray(c[a])[..., None] for a in "xyz")
+    x, y, z = R[..., 0], R[..., 1], R[..., 2]
+    base = origin + anterior * x + superior * z
+    return base - lateral * y, base + lateral * y
+
+
 def knee_joint_centre(lef, mef) -> np.ndarray:
     """Midpoint of the lateral and medial femoral epicondyle markers (3.2.1)."""
     return (np.asarray(lef, dtype=float) + np.asarray(mef, dtype=float)) / 2
@@ -119,8 +152,19 @@ def _need(landmarks: Mapping[str, np.ndarray], name: str, purpose: str, source) 
     return np.asarray(landmarks[name], dtype=float)
 
 
+def leg_length_m(landmarks: Mapping[str, np.ndarray], source=None) -> float:
+    """Mean leg length (m) of the two sides, ASIS to medial malleolus (as Harrington and Hara measured it)."""
+    sides = [np.linalg.norm(np.asarray(landmarks[f"ASIS{s}"], float) - np.asarray(landmarks[f"MM{s}"], float), axis=-1)
+             for s in ("r", "l") if present(landmarks, f"MM{s}") and present(landmarks, f"ASIS{s}")]
+    if not sides:
+        raise InputError(source, "leg_length_m", "the hip regression needs the leg length: no medial malleolus "
+                                                 "markers (MMr, MMl) in the static trial (expected leg_length_m "
+                                                 "in subject.yaml)")
+    return float(np.mean(sides))
+
+
 def joint_centres(landmarks: Mapping[str, np.ndarray], *, hip_method: str = "bell1990",
-                  ankle_method: str = "de_leva", sex: str = "male",
+                  ankle_method: str = "de_leva", sex: str = "male", leg_length: float | None = None,
                   source: str | Path | None = None) -> dict[str, np.ndarray]:
     """``HJCr, HJCl, KJCr, KJCl, AJCr, AJCl`` from landmark positions ``{name: (..., 3)}``.
 
@@ -131,7 +175,11 @@ def joint_centres(landmarks: Mapping[str, np.ndarray], *, hip_method: str = "bel
     out: dict[str, np.ndarray] = {}
     if not (present(landmarks, "HJCr") and present(landmarks, "HJCl")):
         pelvis = [_need(landmarks, n, "the hip joint centres", source) for n in ("ASISr", "ASISl", "PSISr", "PSISl")]
-        out["HJCr"], out["HJCl"] = hip_joint_centres(*pelvis, method=hip_method)
+        if hip_method in REGRESSIONS:
+            length = leg_length_m(landmarks, source) if leg_length is None else leg_length
+            out["HJCr"], out["HJCl"] = regression_hip_joint_centres(*pelvis, method=hip_method, leg_length_m=length)
+        else:
+            out["HJCr"], out["HJCl"] = hip_joint_centres(*pelvis, method=hip_method)
     for s in ("r", "l"):
         if present(landmarks, f"HJC{s}"):
             out[f"HJC{s}"] = np.asarray(landmarks[f"HJC{s}"], dtype=float)

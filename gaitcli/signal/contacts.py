@@ -221,6 +221,59 @@ def shared_frames(contact: Contact, events, rate_hz: float) -> tuple[int, int]:
 
 
 
+#: a foot marker counts as on the ground within this height above its lowest level in the trial, m
+GROUND_MARGIN_M = 0.02
+
+
+def partly_off(owner: np.ndarray, loads: list[PlateLoad], foot_points: dict, stance: dict, *,
+               edge_tolerance_m: float = 0.02) -> dict[str, np.ndarray]:
+    """side → (n,) frames in which that foot owns a plate but stands partly off the plates it owns: one of its
+    markers on the ground lies outside their outlines (widened by ``edge_tolerance_m``) during its ``stance``
+    (n,), so they carry only part of that foot's load (the rest is on the floor, or on a plate given to the other
+    foot).
+
+    ``foot_points[side]`` = (heel markers, toe markers), each a list of (frames, 3) arrays. A toe marker is on
+    the ground within :data:`GROUND_MARGIN_M` of its lowest height; a heel marker from the heel strike until it
+    rises above that level again (heel off), including the first frames of the stance in which the heel pad is
+    already down and the marker still comes down.
+    """
+    out = {}
+    n = owner.shape[1]
+    for side, (heels, toes) in foot_points.items():
+        owns = np.any(owner == side, axis=0) & stance[side]
+        off = np.zeros(n, bool)
+        for p, is_heel in [(h, True) for h in heels] + [(t, False) for t in toes]:
+            with np.errstate(invalid="ignore"):
+                low = p[:, 2] <= np.nanmin(p[:, 2], initial=np.inf) + GROUND_MARGIN_M
+            grounded = low & stance[side]
+            if is_heel:
+                for a, b in zip(*finite_runs(stance[side])):
+                    down = np.flatnonzero(low[a:b])
+                    if down.size:  # from the strike to the end of the first stretch on the ground
+                        ends = np.flatnonzero(np.diff(down) > 1)
+                        grounded[a:a + (down[ends[0]] if ends.size else down[-1]) + 1] = True
+            on_own = np.zeros(n, bool)  # over a plate this foot owns in that frame
+            for k, load in enumerate(loads):
+                if load.corners_m is not None:
+                    on_own |= (owner[k] == side) & _inside_each(p[:, :2], load.corners_m, edge_tolerance_m)
+            off |= grounded & ~on_own
+        out[side] = owns & off
+    return out
+
+
+def _inside_each(points: np.ndarray, corners: np.ndarray, tolerance_m: float) -> np.ndarray:
+    """Whether each 2-D point (n, 2) lies inside the convex outline ``corners`` (4, 2+) widened by
+    ``tolerance_m``; rows with NaN count as inside (the plate is trusted)."""
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    c = np.asarray(corners, dtype=float)[:, :2]
+    edges = np.roll(c, -1, axis=0) - c
+    area2 = np.sum(c[:, 0] * np.roll(c[:, 1], -1) - np.roll(c[:, 0], -1) * c[:, 1])
+    cross = edges[None, :, 0] * (points[:, None, 1] - c[None, :, 1]) - edges[None, :, 1] * (points[:, None, 0]
+                                                                                             - c[None, :, 0])
+    signed = np.sign(area2) * cross / np.linalg.norm(edges, axis=1)
+    return np.all(signed >= -tolerance_m, axis=1) | ~np.all(np.isfinite(points), axis=1)
+
+
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance of each 2-D point to the segment from ``a`` to ``b`` (row by row)."""
     ab = b - a
@@ -230,15 +283,5 @@ def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
 
 
 def _inside(point: np.ndarray, corners: np.ndarray, tolerance_m: float) -> bool:
-    """Whether a 2-D point lies inside the convex outline ``corners`` (4, 2+) widened by ``tolerance_m``.
-
-    A point with NaN coordinates counts as inside (the plate is trusted).
-    """
-    if not np.all(np.isfinite(point)):
-        return True
-    c = np.asarray(corners, dtype=float)[:, :2]
-    edges = np.roll(c, -1, axis=0) - c
-    area2 = np.sum(c[:, 0] * np.roll(c[:, 1], -1) - np.roll(c[:, 0], -1) * c[:, 1])
-    cross = edges[:, 0] * (point[1] - c[:, 1]) - edges[:, 1] * (point[0] - c[:, 0])
-    signed = np.sign(area2) * cross / np.linalg.norm(edges, axis=1)
-    return bool(np.all(signed >= -tolerance_m))
+    """Whether one 2-D point lies inside the outline (:func:`_inside_each`)."""
+    return bool(_inside_each(np.asarray(point, dtype=float)[None, :2], corners, tolerance_m)[0])

@@ -17,8 +17,8 @@ from gaitcli.core.events import SIDES, Events
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.validate import parameter
 from gaitcli.errors import GaitWarning, InputError
-from gaitcli.signal.butterworth import design_frequency_hz, lowpass
-from gaitcli.signal.contacts import plate_owner, shared_frames
+from gaitcli.signal.butterworth import design_frequency_hz, finite_runs, lowpass
+from gaitcli.signal.contacts import partly_off, plate_owner, shared_frames
 from gaitcli.signal.events import Contact, EventDetection, detect_events, kinematic_events
 from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
 from gaitcli.signal.gaps import Gap, fill_gaps
@@ -176,6 +176,37 @@ def foot_loads(plate_loads_per_foot: dict[str, PlateLoad], events: Events, time_
     return out
 
 
+def _spans(mask: np.ndarray, first_frame: int) -> str:
+    starts, stops = finite_runs(mask)
+    return ", ".join(f"{a + first_frame}" if b - a == 1 else f"{a + first_frame}–{b - 1 + first_frame}"
+                     for a, b in zip(starts, stops))
+
+
+def without_partial_feet(owner: np.ndarray, plates: list[PlateLoad], markers: Markers, events: Events) -> np.ndarray:
+    """``owner`` with no plate given to a foot in the frames in which it stands partly off the plates
+    (:func:`~gaitcli.signal.contacts.partly_off`: its load there is more than the plates measured), warned."""
+    if not plates:
+        return owner
+    time_s = markers.time_s
+    points = {side: ([markers.get(n) for n in HEEL[side] if n in markers],
+                     [markers.get(n) for n in TOE[side] if n in markers]) for side in SIDES}
+    stance = {}
+    for side in SIDES:
+        stance[side] = np.zeros(time_s.size, bool)
+        for a, b in events.stances(side, open_ends=True):
+            stance[side] |= (time_s >= a) & (time_s <= b)
+    off = partly_off(owner, plates, {s: p for s, p in points.items() if p[0] or p[1]}, stance)
+    owner = owner.copy()
+    for side, frames in off.items():
+        if frames.any():
+            names = [plates[k].name for k in range(len(plates)) if np.any((owner[k] == side) & frames)]
+            owner[:, frames] = np.where(owner[:, frames] == side, "", owner[:, frames])
+            warnings.warn(f"{', '.join(names)}: the {SIDE_NAMES[side]} foot stands partly off the plates in frames "
+                          f"{_spans(frames, markers.first_frame)} (a heel or toe marker on the ground outside them): "
+                          "its load there is unknown", GaitWarning, stacklevel=3)
+    return owner
+
+
 def separated_plates(recording: Recording, plates: list[PlateLoad], contacts: list[Contact], events: Events,
                      cfg: FilterConfig) -> list[PlateLoad]:
     """The plates as the feet are given them: a plate both feet stood on is filtered again with its double support
@@ -237,9 +268,9 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                                   duplicate_s=0.35)  # one foot cannot strike twice within 0.35 s
     events = calibrate_kinematic_events(detection.events, feet, pelvis_centre(markers), rate)
     # a plate two feet stood on is split at the (calibrated) events of the foot stepping on and the one stepping off
-    detection = dataclasses.replace(detection, events=events,
-                                    owner=plate_owner(detection.contacts, plates, events) if plates else
-                                    detection.owner)
+    owner = plate_owner(detection.contacts, plates, events) if plates else detection.owner
+    owner = without_partial_feet(owner, plates, markers, events)
+    detection = dataclasses.replace(detection, events=events, owner=owner)
     for c in detection.contacts:
         if c.flag == "both_feet" and c.first_side and c.last_side:
             start, stop = shared_frames(c, events, rate)

@@ -3,17 +3,12 @@ OpenSim's walking2.c3d with docs/examples/walking2/subject.yaml (marker set, mas
 no static trial, no static_frames).
 
 Measured (2026-12-02): speed 1.667 m/s (pelvis markers 1.64 m/s), stride 1.601 m, period 0.960 s, stance
-62.7 % right and 62.3 % left, double stance 25 %; calibrated on file frame 652 (auto). Right stance on plate 1
-(loaded from 2.674 s, 38 ms after the kinematic heel strike: the heel lands behind the plate), sagittal moments
-in N·m/kg at 0, 10, …, 100 % of the loaded part:
-
-| joint | values |
-| --- | --- |
-| hip | −1.16 −0.37 −0.59 0.34 0.26 0.21 0.60 0.92 1.42 1.19 0.23 |
-| knee | 0.33 −0.69 −1.46 −0.94 −0.19 0.06 0.15 0.30 0.01 −0.32 −0.05 |
-| ankle | 0.05 0.17 −0.15 −0.60 −0.65 −0.65 −0.95 −1.56 −1.86 −1.13 −0.14 |
-
-The left foot stands with its heel 16 cm behind plate 2 through its stance; its moments are not tested here.
+62.7 % right and 62.3 % left, double stance 25 %; calibrated on file frame 652 (auto). The right heel lands
+behind plate 1 and its marker stays more than 2 cm behind the plate's edge until file frame 693: the right foot's
+load is unknown (partly off the plate, warned) over the first 22 % of its stance. From there, sagittal moments
+(N·m/kg, % of stance): hip −0.98 at 22 % rising to +1.40 at 84 %, knee −1.35 at 26 %, ankle −1.73 at 80 % and
+−0.01 at 22 %. The left heel stands 16 cm behind plate 2 until heel off (file frames 561–594 unknown); after it
+the forefoot alone is on the plate.
 """
 
 from __future__ import annotations
@@ -106,19 +101,24 @@ def right_stance(walking2):
     t = moments.time_s.to_numpy()
     stance = (t >= strike) & (t <= off[0])
     known = moments["right_foot_load_known"].to_numpy() == 1
-    assert known[stance].mean() > 0.9  # the first 38 ms (heel behind the plate) are not
+    # the first 34 frames (136 ms, 22 % of the stance) are not: the heel lands behind plate 1 and its marker stays
+    # more than 2 cm behind the plate's edge while on the ground
+    assert 0.7 < known[stance].mean() < 0.85
+    assert known[stance][-int(0.75 * stance.sum()):].all()
     loaded = stance & known
-    pct = (t[loaded] - t[loaded][0]) / (t[loaded][-1] - t[loaded][0]) * 100
+    pct = (t[loaded] - strike) / (off[0] - strike) * 100  # percent of the whole stance
     return pct, {j: moments[f"{j}_r_flexion_moment_per_kg"].to_numpy()[loaded] for j in ("hip", "knee", "ankle")}
 
 
 def test_right_stance_moments_have_the_textbook_shapes(walking2):
+    """From 22 % of the stance on (the loading response is off the plate): a hip extension moment giving way to
+    a flexion moment before toe off, a knee extension moment at the start of mid-stance, the ankle
+    plantarflexion moment rising to its push-off peak and falling to zero at toe off."""
     pct, m = right_stance(walking2)
     hip, knee, ankle = m["hip"], m["knee"], m["ankle"]
-    assert hip[pct <= 25].min() < -0.3 and hip[pct >= 60].max() > 0.3  # extension at loading, flexion late
-    assert pct[np.argmin(hip)] < 30 and pct[np.argmax(hip)] > 60
-    assert knee[pct <= 5].max() > 0.0 and 10 < pct[np.argmin(knee)] < 40  # brief flexion, then extension
-    assert knee.min() < -0.3
+    assert hip[pct <= 30].min() < -0.2 and hip[pct >= 60].max() > 0.3
+    assert pct[np.argmin(hip)] < 35 and pct[np.argmax(hip)] > 60
+    assert knee[pct <= 35].min() < -0.3 and pct[np.argmin(knee)] < 40
     peak = int(np.argmin(ankle))
-    assert 50 < pct[peak] < 95 and -2.2 < ankle[peak] < -0.8  # push-off plantarflexion moment
-    assert np.all(ankle[pct <= 15] > -0.5) and abs(ankle[-1]) < 0.3
+    assert 60 < pct[peak] < 95 and -2.2 < ankle[peak] < -0.8  # push-off plantarflexion moment
+    assert ankle[pct <= 35].min() > ankle[peak] / 2 and abs(ankle[-1]) < 0.3

@@ -112,3 +112,44 @@ def test_frame_from_axes_is_right_handed(primary, secondary):
     np.testing.assert_allclose(np.linalg.det(R), 1.0)
     i = "xyz".index(primary)
     np.testing.assert_allclose(R[..., i], a / np.linalg.norm(a, axis=-1, keepdims=True))
+
+
+# ------------------------------------------------------------------ Harrington (2007) and Hara (2016)
+
+_PELVIS = {"ASISr": np.array([0.0, -0.125, 1.0]), "ASISl": np.array([0.0, 0.125, 1.0]),
+           "PSISr": np.array([-0.18, -0.05, 1.0]), "PSISl": np.array([-0.18, 0.05, 1.0])}  # PW 0.25, PD 0.18 m
+
+
+@pytest.mark.parametrize("method,right", [
+    # by hand, mm: Harrington x = −9.9 − 0.24·180 = −53.1, superior −7.1 − 0.16·250 − 0.04·900 = −83.1,
+    # lateral 7.9 + 0.28·180 + 0.16·250 = 98.3; Hara x = 11 − 0.063·900 = −45.7, superior −9 − 0.078·900 =
+    # −79.2, lateral 8 + 0.086·900 = 85.4
+    ("harrington", (-0.0531, -0.0983, 1.0 - 0.0831)),
+    ("hara", (-0.0457, -0.0854, 1.0 - 0.0792)),
+])
+def test_regression_hip_centres_equal_the_published_equations(method, right):
+    hjc_r, hjc_l = jcm.regression_hip_joint_centres(*(_PELVIS[n] for n in ("ASISr", "ASISl", "PSISr", "PSISl")),
+                                                    method=method, leg_length_m=0.9)
+    np.testing.assert_allclose(hjc_r, right, atol=1e-12)
+    np.testing.assert_allclose(hjc_l, np.array(right) * [1, -1, 1], atol=1e-12)
+    # the same pelvis turned 90° about the vertical and tilted 10° forward: the centres turn with it
+    turn = cardan_xyz_to_matrix(np.array([0.0, np.radians(10.0), np.radians(90.0)]))
+    moved = [turn @ _PELVIS[n] + [1.0, 2.0, 0.0] for n in ("ASISr", "ASISl", "PSISr", "PSISl")]
+    got = jcm.regression_hip_joint_centres(*moved, method=method, leg_length_m=0.9)
+    np.testing.assert_allclose(got[0], turn @ np.array(right) + [1.0, 2.0, 0.0], atol=1e-12)
+
+
+def test_the_regressions_take_the_leg_length_from_the_medial_malleoli_or_subject_yaml():
+    t = standing_template(1.8)
+    length = np.mean([np.linalg.norm(t[f"ASIS{s}"] - t[f"MM{s}"]) for s in "rl"])
+    pelvis = [t[n] for n in ("ASISr", "ASISl", "PSISr", "PSISl")]
+    out = jcm.joint_centres(t, hip_method="hara")
+    np.testing.assert_allclose(out["HJCr"], jcm.regression_hip_joint_centres(*pelvis, method="hara",
+                                                                               leg_length_m=length)[0])
+    given = jcm.joint_centres(t, hip_method="hara", leg_length=0.95)
+    np.testing.assert_allclose(given["HJCr"], jcm.regression_hip_joint_centres(*pelvis, method="hara",
+                                                                                 leg_length_m=0.95)[0])
+    del t["MMr"], t["MMl"]
+    t["AJCr"], t["AJCl"] = t["LMr"], t["LMl"]
+    with pytest.raises(InputError, match="leg_length_m"):
+        jcm.joint_centres(t, hip_method="harrington", source="static.c3d")

@@ -16,7 +16,7 @@ import pytest
 
 from gaitcli.core.events import Events
 from gaitcli.errors import InputError
-from gaitcli.signal.contacts import plate_owner
+from gaitcli.signal.contacts import partly_off, plate_owner
 from gaitcli.signal.events import detect_events
 from gaitcli.signal.stage import calibrate_kinematic_events
 from tests.signal.conftest import (CENTRED_PLATE, EVENT_RATE_HZ, EVENT_THRESHOLD_N, event_errors_frames,
@@ -124,6 +124,27 @@ def test_heel_off_the_plate_gives_a_kinematic_heel_strike(walk_factory):
     strike = right.of(kind="heel_strike").time_s
     assert np.min(np.abs(strike - walk.heel_strikes["r"][1])) < 0.04  # from kinematics instead
     _assert_all_truth_found_once(detection.events, walk)
+
+
+@pytest.mark.parametrize("dx,partly", [(0.0, False), (0.25, True)])
+def test_a_foot_partly_off_its_plate_is_found_in_every_frame_it_owns_the_plate(walk_factory, dx, partly):
+    """The walk's feet stand flat through stance (heel and toe markers on the ground): on a centred plate the
+    right foot is wholly on it; with the plate 0.25 m forward its heel marker is 0.2 m behind the plate, so in
+    every frame the plate is given to it, it stands partly off."""
+    walk = walk_factory(plates=[("r", 1, dx, 0.4, 0.4)])
+    loads = walk_loads(walk)
+    detection = detect_events(loads, walk.feet, walk.pelvis, EVENT_RATE_HZ, EVENT_THRESHOLD_N)
+    stance = {}
+    t = np.arange(loads[0].n_frames) / EVENT_RATE_HZ
+    for side in "rl":
+        stance[side] = np.zeros(t.size, bool)
+        for a, b in detection.events.stances(side, open_ends=True):
+            stance[side] |= (t >= a) & (t <= b)
+    points = {side: ([heel], [toe]) for side, (heel, toe) in walk.feet.items()}
+    off = partly_off(detection.owner, loads, points, stance)
+    owned = (detection.owner[0] == "r") & stance["r"]
+    assert owned.sum() > 20 and not off["l"].any()
+    np.testing.assert_array_equal(off["r"], owned if partly else np.zeros(t.size, bool))
 
 
 def test_events_container():
