@@ -52,8 +52,8 @@ class Subject:
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
         "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances")
 #: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
-#: (2007); Hara et al. (2016); the lab's own points
-HIP_JOINT_CENTRES = ("bell", "harrington", "hara", "from_file")
+#: (2007); Hara et al. (2016); functional (SCORE, Ehrig et al. 2006, from the trial's hip motion); the lab's points
+HIP_JOINT_CENTRES = ("bell", "harrington", "hara", "score", "from_file")
 #: keys that older `gait synth` versions wrote and nothing reads; now a comment in subject.yaml
 RETIRED_KEYS = ("condition", "disturbed_side")
 DISTURBANCE_KEYS = ("segment", "mass_kg", "inertia_kgm2", "com_offset_m", "name")

@@ -25,6 +25,7 @@ from gaitcli.dynamics.inverse import express_in, inverse_dynamics
 from gaitcli.dynamics.sagittal import SagittalExport, sagittal_export
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames
+from gaitcli.kinematics.joint_centres import functional_joint_centre
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINTS, BodyParameters
@@ -53,14 +54,15 @@ HEEL = {"r": "CAr", "l": "CAl"}
 @dataclass(frozen=True)
 class ReferencePosture:
     """How the model was calibrated: ``static`` ("static.c3d", "subject.yaml" or "auto: …"), the file frames
-    used (None: all of static.c3d), the marker set, the hip-centre method, and the plates' stride estimate of the
-    body mass (kg, None without one)."""
+    used (None: all of static.c3d), the marker set, the hip-centre method, the plates' stride estimate of the
+    body mass (kg, None without one), and SCORE's residual per side."""
 
     static: str
     static_frames: tuple[int, int] | None
     marker_set: str
     hip_joint_centre: str
     mass_estimate_kg: float | None
+    hip_score_residual_mm: dict = field(default_factory=dict)  # side → SCORE's RMS residual (hip_joint_centre: score)
 
 
 @dataclass
@@ -244,18 +246,23 @@ def _frame_span(frames: np.ndarray) -> str:
 
 
 def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Subject, mass_kg: float, *,
-                       source: Path | None) -> StaticCalibration:
-    """Static calibration (3.2, 3.3) on ``frames`` of ``markers`` with the subject's marker set and hip method."""
+                       source: Path | None, hip_method: str | None = None) -> StaticCalibration:
+    """Static calibration (3.2, 3.3) on ``frames`` of ``markers`` with the subject's marker set and hip method
+    (or ``hip_method``)."""
     markers_set = subject.markers
     return calibrate(markers, frames=frames, source=source, mass_kg=mass_kg, stature_m=subject.stature_m,
                      sex=subject.sex, thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
                      disturbances=subject.disturbances, extra_tracking_markers=markers_set.tracking,
-                     marker_set=markers_set, hip_method=HIP_METHOD[subject.hip_joint_centre],
+                     marker_set=markers_set, hip_method=hip_method or HIP_METHOD[subject.hip_joint_centre],
                      leg_length_m=subject.leg_length_m)
 
 
+#: SCORE's uncertainty along its weakest direction above which the result is warned about, m
+SCORE_SPREAD_M = 0.01
+SIDE_NAMES = {"r": "right", "l": "left"}
 #: subject.yaml's ``hip_joint_centre`` → the calibration's method
-HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "from_file": "from_file"}
+HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "from_file": "from_file",
+              "score": "bell1990"}  # score: Bell first, then functional_hip_centres
 
 
 def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: IdynConfig, *,
@@ -297,14 +304,52 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
     """The whole idyn stage: body mass, static calibration (once), then :func:`inverse_dynamics_stage`."""
     mass, source, estimate = body_mass(trial, subject, cfg, static=static, source=subject_path)
     markers, frames, how = reference_frames(trial, static, subject, subject_path=subject_path)
-    calibration = static_calibration(markers, frames, subject, mass,
-                                     source=static_path if static is not None else trial_path)
+    where = static_path if static is not None else trial_path
+    residuals = {}
+    if subject.hip_joint_centre == "score":
+        markers, residuals = functional_hip_centres(trial, markers, frames, subject, mass, source=where)
+    calibration = static_calibration(markers, frames, subject, mass, source=where,
+                                     hip_method="from_file" if residuals else None)
     result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source)
     first = markers.first_frame
     result.reference_posture = ReferencePosture(
         how, None if frames is None else (int(frames[0]) + first, int(frames[-1]) + first),
-        subject.markers.name, subject.hip_joint_centre, estimate)
+        subject.markers.name, subject.hip_joint_centre, estimate, residuals)
     return result
+
+
+def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subject, mass_kg: float, *,
+                           source) -> tuple[Markers, dict[str, float]]:
+    """``hip_joint_centre: score``: the reference posture's markers with ``HJCr``/``HJCl`` added where SCORE
+    (Ehrig et al. 2006) puts them from the trial's own hip motion, and each side's RMS residual (mm).
+
+    The segments are first tracked with Bell's hip centres; the hip centre is the point fixed in the pelvis and
+    in the thigh (:func:`~gaitcli.kinematics.joint_centres.functional_joint_centre`); the pelvis's reference
+    frame is parallel to the global axes in the reference posture, so there it lies at the pelvis CoM plus its
+    pelvis coordinates.
+    """
+    first = static_calibration(markers, frames, subject, mass_kg, source=source, hip_method="bell1990")
+    poses = track_segments(trial.markers, first)
+    pelvis = BODIES.index("pelvis")
+    added, residuals = {}, {}
+    for side in SIDES:
+        thigh = BODIES.index(f"thigh_{side}")
+        c_pelvis, _, rms, spread = functional_joint_centre(poses.rotation[:, pelvis], poses.com_m[:, pelvis],
+                                                           poses.rotation[:, thigh], poses.com_m[:, thigh])
+        added[f"HJC{side}"] = first.com_m[pelvis] + c_pelvis
+        residuals[side] = 1000.0 * rms
+        if spread > SCORE_SPREAD_M:
+            warnings.warn(f"hip_joint_centre score, {SIDE_NAMES[side]}: the trial's hip motion fixes the centre only to "
+                          f"about {1000 * spread:.0f} mm along its least determined direction (residual "
+                          f"{1000 * rms:.1f} mm): a trial that moves the hip about more than one axis (a star arc) "
+                          "determines it better", GaitWarning, stacklevel=3)
+    keep = [i for i, lab in enumerate(markers.labels) if lab not in added]
+    n = markers.n_frames
+    positions = np.concatenate([markers.positions_m[:, keep],
+                                np.stack([np.broadcast_to(v, (n, 3)) for v in added.values()], axis=1)], axis=1)
+    labelled = Markers(tuple(markers.labels[i] for i in keep) + tuple(added), positions, markers.rate_hz,
+                       markers.first_frame)
+    return labelled, residuals
 
 
 def check_mass(mass_kg: float | None, source) -> float:

@@ -118,6 +118,33 @@ def regression_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str,
     return base - lateral * y, base + lateral * y
 
 
+def functional_joint_centre(R_parent, d_parent, R_child, d_child) -> tuple[np.ndarray, np.ndarray, float, int]:
+    """SCORE (Ehrig et al. 2006): the point fixed in both bodies of a joint, from their poses over frames.
+
+    ``R_*`` (n, 3, 3) body → global rotations, ``d_*`` (n, 3) body origins (m). Minimises
+    Σ_k |R_p,k c_p + d_p,k − R_c,k c_c − d_c,k|² over the point's body coordinates c_p, c_c (linear least
+    squares over the frames where both poses are finite). Returns (c_p, c_c, RMS of the residual in m, and
+    ``spread``: RMS × √frames / the smallest singular value, m, how far the point is uncertain along its least
+    determined direction). The motion must turn the joint about more than one axis for every coordinate to
+    be determined: in walking the hip turns mostly about its flexion axis, and the centre's position along
+    that (mediolateral) axis is weakly determined.
+    """
+    R_parent, R_child = np.asarray(R_parent, float), np.asarray(R_child, float)
+    d_parent, d_child = np.asarray(d_parent, float), np.asarray(d_child, float)
+    ok = (np.all(np.isfinite(R_parent), axis=(1, 2)) & np.all(np.isfinite(R_child), axis=(1, 2))
+          & np.all(np.isfinite(d_parent), axis=1) & np.all(np.isfinite(d_child), axis=1))
+    A = np.concatenate([R_parent[ok], -R_child[ok]], axis=2).reshape(-1, 6)
+    b = (d_child[ok] - d_parent[ok]).reshape(-1)
+    if A.shape[0] < 6:
+        raise ValueError("a functional joint centre needs poses of both bodies in at least two frames")
+    solution, _, _, singular = np.linalg.lstsq(A, b, rcond=None)
+    residual = (A @ solution - b).reshape(-1, 3)
+    rms = float(np.sqrt(np.mean(np.sum(residual ** 2, axis=1))))
+    # how far the point may move along the least determined direction for a residual of this size
+    spread = float(rms * np.sqrt(A.shape[0] / 3) / singular[-1]) if singular[-1] > 0 else np.inf
+    return solution[:3], solution[3:], rms, spread
+
+
 def knee_joint_centre(lef, mef) -> np.ndarray:
     """Midpoint of the lateral and medial femoral epicondyle markers (3.2.1)."""
     return (np.asarray(lef, dtype=float) + np.asarray(mef, dtype=float)) / 2

@@ -103,6 +103,8 @@ def summary(result: IdynResult) -> dict:
         info.update({"mass_estimate_kg": posture.mass_estimate_kg, "marker_set": posture.marker_set,
                      "hip_joint_centre": posture.hip_joint_centre, "static": posture.static,
                      "static_frames": None if posture.static_frames is None else list(posture.static_frames)})
+        if posture.hip_score_residual_mm:
+            info["hip_score_residual_mm"] = dict(posture.hip_score_residual_mm)
     return info
 
 

@@ -153,3 +153,40 @@ def test_the_regressions_take_the_leg_length_from_the_medial_malleoli_or_subject
     t["AJCr"], t["AJCl"] = t["LMr"], t["LMl"]
     with pytest.raises(InputError, match="leg_length_m"):
         jcm.joint_centres(t, hip_method="harrington", source="static.c3d")
+
+
+# ------------------------------------------------------------------ SCORE (Ehrig et al. 2006)
+
+def _poses_about(point_parent, point_child, angles):
+    """Parent and child poses (n frames) with the child turned by ``angles`` (n, 3) Cardan x-y-z about a point
+    at ``point_parent`` in the parent and ``point_child`` in the child; the parent moves and turns too."""
+    n = len(angles)
+    R_p = np.array([cardan_xyz_to_matrix(np.array([0.1 * np.sin(k), 0.05 * k / n, 0.2])) for k in range(n)])
+    d_p = np.column_stack([np.linspace(0, 1.5, n), 0.02 * np.sin(np.arange(n)), np.full(n, 0.9)])
+    R_c = R_p @ np.array([cardan_xyz_to_matrix(a) for a in angles])
+    joint = d_p + np.einsum("nij,j->ni", R_p, point_parent)
+    d_c = joint - np.einsum("nij,j->ni", R_c, point_child)
+    return R_p, d_p, R_c, d_c
+
+
+def test_score_finds_the_point_fixed_in_both_bodies():
+    rng = np.random.default_rng(3)
+    c_p, c_c = np.array([-0.02, -0.09, -0.08]), np.array([0.01, 0.0, 0.2])
+    angles = rng.uniform(-0.5, 0.5, (60, 3))  # a star arc: all three axes
+    got_p, got_c, rms, spread = jcm.functional_joint_centre(*_poses_about(c_p, c_c, angles))
+    np.testing.assert_allclose(got_p, c_p, atol=1e-12)
+    np.testing.assert_allclose(got_c, c_c, atol=1e-12)
+    assert rms < 1e-12 and spread < 1e-10
+    R_p, d_p, R_c, d_c = _poses_about(c_p, c_c, angles)
+    d_c += rng.normal(0, 0.002, d_c.shape)  # 2 mm per axis on the child's position: 3.5 mm in 3-D
+    got_p, _, rms, spread = jcm.functional_joint_centre(R_p, d_p, R_c, d_c)
+    assert 2e-3 < rms < 5e-3 and np.linalg.norm(got_p - c_p) < spread < 0.03
+
+
+def test_score_says_when_one_axis_of_motion_leaves_the_centre_undetermined():
+    angles = np.zeros((60, 3))
+    angles[:, 1] = np.linspace(-0.5, 0.5, 60)  # flexion only: the centre may slide along the flexion axis
+    R_p, d_p, R_c, d_c = _poses_about(np.array([0.0, -0.09, -0.08]), np.array([0.0, 0.0, 0.2]), angles)
+    d_c += np.random.default_rng(5).normal(0, 0.001, d_c.shape)
+    _, _, rms, spread = jcm.functional_joint_centre(R_p, d_p, R_c, d_c)
+    assert rms < 2e-3 and spread > 0.1
