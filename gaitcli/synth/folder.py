@@ -21,12 +21,15 @@ from gaitcli.synth.recording import SyntheticTrial, simulate_trial
 DISTURBED_SIDE = "r"
 
 
-def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, stature_m: float, sex: str) -> str:
-    """The trial's ``subject.yaml``: the subject and the condition's added masses written out; the condition
-    and its disturbed side as a comment."""
+def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, stature_m: float, sex: str,
+                 marker_set: str = "dissertation") -> str:
+    """The trial's ``subject.yaml``: the subject, its marker set (unless the dissertation's) and the condition's
+    added masses written out; the condition and its disturbed side as a comment."""
     from gaitcli.kinematics.disturbances import preset_disturbances
 
     data = {"mass_kg": mass_kg, "stature_m": stature_m, "sex": sex}
+    if marker_set != "dissertation":
+        data["marker_set"] = marker_set
     comment = f"# condition: {condition}"
     if condition != "normal":
         comment += f" (disturbed side: {DISTURBED_SIDE})"
@@ -65,14 +68,15 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
 
 def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0,
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
-                stature_m: float = 1.78, sex: str = "male", period_s: float | None = None) -> SyntheticTrial:
+                stature_m: float = 1.78, sex: str = "male", period_s: float | None = None,
+                marker_set: str = "dissertation") -> SyntheticTrial:
     """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/."""
     from gaitcli.io.atomic import atomic_path, make_parent
     from gaitcli.io.c3d_write import write_c3d
 
     trial = simulate_trial(condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                            plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
-                           sex=sex, period_s=period_s)
+                           sex=sex, period_s=period_s, marker_set=marker_set)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(out, None, "is a file (expected the trial folder to write)")
@@ -80,6 +84,7 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
     write_c3d(out / "trial.c3d", trial.markers, trial.plates)
     write_c3d(out / "static.c3d", trial.static, [])
     with atomic_path(out / "subject.yaml") as tmp:
-        tmp.write_text(subject_yaml(trial, condition=condition, mass_kg=mass_kg, stature_m=stature_m, sex=sex))
+        tmp.write_text(subject_yaml(trial, condition=condition, mass_kg=mass_kg, stature_m=stature_m, sex=sex,
+                                    marker_set=marker_set))
     write_truth(out / "truth", trial)
     return trial

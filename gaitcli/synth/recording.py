@@ -78,14 +78,44 @@ def skin_artefact(rng, time_s, period_s, amplitude_m, bodies):
     return out
 
 
-def model_markers(q, calibration):
-    """The segment markers riding on the calibrated bodies over ``q``: names, positions (frames, markers, 3) in m,
-    and the body of each."""
+#: the marker sets ``gait synth`` can place: Table A.6 markers left out, and the tracking clusters added (body →
+#: how many markers of the preset's tracking list)
+SYNTH_MARKER_SETS = {"dissertation": ((), {}),
+                     "cleveland": (("GT", "MRF", "TT"), {"thigh_r": 3, "thigh_l": 3, "shank_r": 3, "shank_l": 3})}
+#: a cluster's markers about its centre, m (forward, down) in the sagittal plane of the segment's lateral side
+CLUSTER_PATTERN = ((0.03, -0.04), (0.03, 0.04), (-0.03, 0.0))
+#: how far lateral of the segment's axis a cluster's centre sits, m
+CLUSTER_LATERAL_M = {"thigh": 0.07, "shank": 0.06}
+
+
+def cluster_template(template: dict, joint_centres: dict, marker_set: str) -> dict[str, np.ndarray]:
+    """Standing positions (m) of the preset's tracking clusters: per thigh and shank a plate of markers centred
+    lateral of the segment's mid-point (between the joint centres), named by the preset's tracking labels."""
+    from gaitcli.kinematics.markerset import marker_set as preset
+
+    tracking = preset(marker_set).tracking
+    out = {}
+    for body, count in SYNTH_MARKER_SETS[marker_set][1].items():
+        segment, side = body.split("_")
+        top, bottom = (("HJC", "KJC") if segment == "thigh" else ("KJC", "AJC"))
+        mid = (joint_centres[f"{top}{side}"] + joint_centres[f"{bottom}{side}"]) / 2
+        lateral = -1.0 if side == "r" else 1.0
+        centre = mid + [0.0, lateral * CLUSTER_LATERAL_M[segment], 0.0]
+        for label, (forward, down) in zip(tracking[body][:count], CLUSTER_PATTERN):
+            out[label] = centre + [forward, 0.0, -down]
+    return out
+
+
+def model_markers(q, calibration, extra: dict[str, tuple[str, ...]] | None = None):
+    """The segment markers riding on the calibrated bodies over ``q`` (Table A.6's and ``extra`` {body: labels}):
+    names, positions (frames, markers, 3) in m, and the body of each."""
     from gaitcli.kinematics.forward import marker_positions
     from gaitcli.kinematics.markerset import SEGMENT_MARKERS
 
+    extra = extra or {}
     in_body, labels = calibration.markers_in_body()
-    wanted = {bi: [k for k, name in enumerate(labels[bi]) if name in SEGMENT_MARKERS[BODIES[bi]]]
+    wanted = {bi: [k for k, name in enumerate(labels[bi])
+                   if name in SEGMENT_MARKERS[BODIES[bi]] + tuple(extra.get(BODIES[bi], ()))]
               for bi in in_body}
     positions = marker_positions(q, calibration.body, {bi: in_body[bi][wanted[bi]] for bi in in_body})
     names, columns, bodies = [], [], []
@@ -165,12 +195,15 @@ def contact_moments(q, qd, qdd, params, feet):
 def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0, artefact_mm: float = 10.0,
                    strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78, sex: str = "male",
                    plate_noise_N: float = 1.0, period_s: float | None = None,
-                   shared_plate: bool = False) -> SyntheticTrial:
+                   shared_plate: bool = False, marker_set: str = "dissertation") -> SyntheticTrial:
     """Make a synthetic walking trial with known truth (nothing written).
 
     Two plates measure one right and one left stance in the middle of the walk; with
     ``shared_plate`` one plate measures both (the second foot steps on it before the
     first steps off: both feet load it in that double support).
+
+    ``marker_set`` (:data:`SYNTH_MARKER_SETS`): the markers are labelled as that preset labels them, without the
+    Table A.6 markers it lacks and with its thigh and shank clusters.
 
     ``noise_mm`` is the RMS of each marker's 3-D position error (white, σ = noise/√3
     per axis), as optical systems quote their accuracy; ``artefact_mm`` the peak
@@ -181,6 +214,7 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 
     one_of(condition, CONDITIONS, where="--condition")
+    one_of(marker_set, SYNTH_MARKER_SETS, where="--marker-set")
     if noise_mm < 0 or artefact_mm < 0:
         raise InputError(None, "--noise-mm", "expected noise and artefact amplitudes ≥ 0 mm")
     cond = CONDITIONS[condition]
@@ -223,11 +257,30 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
 
     frames = slice(0, None, step)
     qm, qd, qdd, tm = q[frames], qd_c[i][frames], qdd_c[i][frames], t[frames]
-    names, exact, bodies = model_markers(qm, cal)
+    placed = template
+    if marker_set != "dissertation":  # the same bodies, with the preset's clusters riding on them too
+        from gaitcli.kinematics.markerset import marker_set as preset
+
+        clusters = cluster_template(template, cal.joint_centres_m, marker_set)
+        extra = {body: tuple(lab for lab in clusters if lab in preset(marker_set).tracking[body])
+                 for body in SYNTH_MARKER_SETS[marker_set][1]}
+        placed = {**template, **clusters}
+        markers_cal = calibrate(landmarks_to_markers(placed, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg,
+                                stature_m=stature_m, sex=sex, extra_tracking_markers=extra,
+                                disturbances=() if condition == "normal" else (condition,))
+        names, exact, bodies = model_markers(qm, markers_cal, extra)
+        dropped = SYNTH_MARKER_SETS[marker_set][0]
+        keep = [k for k, nm in enumerate(names) if nm[:-1] not in dropped]
+        names, exact, bodies = [names[k] for k in keep], exact[:, keep], [bodies[k] for k in keep]
+    else:
+        names, exact, bodies = model_markers(qm, cal)
     noisy = exact + white_noise(rng, noise_mm, exact.shape) \
         + skin_artefact(rng, tm, design.period_s, artefact_mm / 1000.0, bodies)
-    static_positions = np.stack([template[nm] for nm in names])[None] \
+    static_positions = np.stack([placed[nm] for nm in names])[None] \
         + white_noise(rng, noise_mm, (int(MARKER_RATE_HZ), len(names), 3))
+    if marker_set != "dissertation":
+        landmarks = preset(marker_set).landmarks
+        names = [landmarks[nm][0] if nm in landmarks else nm for nm in names]
     sub_feet = {s: {k: v[frames] for k, v in feet[s].items()} for s in "rl"}
     return SyntheticTrial(markers=Markers(tuple(names), noisy, MARKER_RATE_HZ),
                           static=Markers(tuple(names), static_positions, MARKER_RATE_HZ), plates=plates, q=qm,
