@@ -155,10 +155,11 @@ def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz):
 @gait.command("idyn")
 @_trial_options
 @_config_option(IdynConfig, "frames", "--frames")
+@_config_option(IdynConfig, "pose", "--pose")
 @click.pass_obj
-def idyn_command(console: Console, trial, out, pipeline, no_plots, frames):
+def idyn_command(console: Console, trial, out, pipeline, no_plots, frames, pose):
     """Segment poses, 27 coordinates, 21 joint moments and the pelvis residuals."""
-    cfg = configure(pipeline, idyn={"frames": frames})
+    cfg = configure(pipeline, idyn={"frames": frames, "pose": pose})
     console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
 
 

@@ -25,6 +25,7 @@ from gaitcli.dynamics.inverse import express_in, inverse_dynamics
 from gaitcli.dynamics.sagittal import SagittalExport, sagittal_export
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames
+from gaitcli.kinematics.chain_fit import fit_chain
 from gaitcli.kinematics.joint_centres import functional_joint_centre
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
@@ -35,6 +36,8 @@ if TYPE_CHECKING:
     from gaitcli.trial import Subject
 
 FRAMES = ("reference", "anatomical")
+POSES = ("segment_svd", "chain_lsq")
+POSE_STEPS = {"segment_svd": "SVD poses", "chain_lsq": "SVD poses refined by a least-squares fit of the whole chain"}
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,10 @@ class IdynConfig:
                             help="Frames the joint moments are expressed in (default: reference).")
     gravity_m_s2: float = parameter(9.81, low=9.7, high=9.9,
                                     help="Gravitational acceleration, m/s² (Earth's surface: 9.78–9.83).")
+    pose: str = parameter("segment_svd", choices=POSES,
+                          help="segment_svd: each segment fitted to its markers by SVD, the chain hung from the "
+                               "pelvis (3.3, the dissertation's); chain_lsq: the 27 coordinates fitted to all "
+                               "markers at once (kinematics/chain_fit.py).")
 
 
 FOOT_BODY = {"r": BODIES.index("foot_r"), "l": BODIES.index("foot_l")}
@@ -273,6 +280,10 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
     for line in missing_frame_messages(poses):
         warnings.warn(f"{line}: the pose, coordinates and moments there are NaN", GaitWarning, stacklevel=2)
     q = poses_to_coordinates(poses)
+    segment_rms = poses.rms_m
+    if cfg.pose == "chain_lsq":  # the segment fit is the start
+        fit = fit_chain(q, markers, calibration)
+        q, segment_rms = fit.q, fit.segment_rms_m
     qd, qdd = coordinate_derivatives(q, markers.rate_hz)
     params = calibration.body
     n = q.shape[0]
@@ -286,14 +297,14 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
     heel_x = {s: markers.get(HEEL[s])[:, 0] for s in SIDES if HEEL[s] in markers}
     features = gait_features(trial.events, heel_x, markers.time_s)
     trial = trial.with_step(f"idyn: calibrated on the standing posture, body mass {mass_kg:.2f} kg "
-                            f"({mass_source}); SVD poses, 27 coordinates, inverse dynamics (3.21, 3.22), "
+                            f"({mass_source}); {POSE_STEPS[cfg.pose]}, 27 coordinates, inverse dynamics (3.21, 3.22), "
                             f"moments in {cfg.frames} frames")
     export = sagittal_export(trial, states.joint_centre_m, q, params, body_mass_kg=mass_kg)
     return IdynResult(trial=trial, q=q, qd=qd, qdd=qdd, joint_moments_Nm=moments,
                       joint_moments_global_Nm=result.joint_moments_global_Nm,
                       residual_force_N=result.residual_force_N, residual_moment_Nm=result.residual_moment_Nm,
                       frames=cfg.frames, mass_kg=mass_kg, mass_source=mass_source,
-                      parameters=params, calibration=calibration, segment_rms_m=poses.rms_m,
+                      parameters=params, calibration=calibration, segment_rms_m=segment_rms,
                       joint_centres_m=states.joint_centre_m, features=features, strides=strides(trial.events),
                       sagittal=export, notes=list(calibration.notes))
 
