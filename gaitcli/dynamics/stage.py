@@ -90,6 +90,8 @@ class IdynResult:
     parameters: BodyParameters
     calibration: StaticCalibration
     segment_rms_m: np.ndarray  # (n, 8) marker fit error per segment
+    joint_centre_gap_m: np.ndarray  # (n, 7) model joint centre to where the child segment's own markers put it
+    marker_rms_m: dict  # tracking marker label → RMS distance (m) of the model's marker from the measured one
     joint_centres_m: np.ndarray  # (n, 7, 3) of the model (forward kinematics of q)
     features: GaitFeatures
     strides: list[Stride]
@@ -131,6 +133,29 @@ class IdynResult:
         """Whether the HAT had markers of its own (else it is locked to the pelvis, and the lumbar moment and
         the pelvis residuals are those of a HAT that moves with the pelvis)."""
         return "hat" not in self.calibration.locked
+
+
+def joint_centre_gaps(states, poses, params: BodyParameters) -> np.ndarray:
+    """(n, 7) m: each model joint centre (the chain of the coordinates) to where the child segment's own SVD pose
+    puts that joint — the drift down the chain that a per-segment marker error does not show."""
+    own = np.stack([poses.com_m[:, c] + np.einsum("nij,j->ni", poses.rotation[:, c], params.joint_in_child_m[j])
+                    for j, c in enumerate(JOINT_CHILD)], axis=1)
+    return np.linalg.norm(states.joint_centre_m - own, axis=-1)
+
+
+def marker_residuals(states, markers: Markers, calibration: StaticCalibration) -> dict[str, float]:
+    """Tracking marker label → RMS (m, over the frames it is seen) of the model's marker position from the
+    measured one, the model placed by the coordinates."""
+    out = {}
+    for b, body in enumerate(BODIES):
+        for label, local in zip(calibration.tracking_landmarks[body], calibration.cluster(body)):
+            if label not in markers:
+                continue
+            model = states.com_m[:, b] + np.einsum("nij,j->ni", states.rotation[:, b], local)
+            d2 = np.sum((model - markers.get(label)) ** 2, axis=-1)
+            if np.isfinite(d2).any():
+                out[label] = float(np.sqrt(np.nanmean(d2)))
+    return out
 
 
 def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | None:
@@ -305,6 +330,8 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
                       residual_force_N=result.residual_force_N, residual_moment_Nm=result.residual_moment_Nm,
                       frames=cfg.frames, mass_kg=mass_kg, mass_source=mass_source,
                       parameters=params, calibration=calibration, segment_rms_m=segment_rms,
+                      joint_centre_gap_m=joint_centre_gaps(states, poses, params),
+                      marker_rms_m=marker_residuals(states, markers, calibration),
                       joint_centres_m=states.joint_centre_m, features=features, strides=strides(trial.events),
                       sagittal=export, notes=list(calibration.notes))
 

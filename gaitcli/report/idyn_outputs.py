@@ -75,6 +75,11 @@ def rms(values: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum(values[finite] ** 2, axis=1)))) if finite.any() else float("nan")
 
 
+def _rms_mm(values: np.ndarray) -> float | None:
+    finite = np.isfinite(values)
+    return float(1000.0 * np.sqrt(np.mean(values[finite] ** 2))) if finite.any() else None
+
+
 def summary(result: IdynResult) -> dict:
     """DESIGN.md's idyn keys (Table 3.1 features, residuals) plus fit quality and provenance notes."""
     m = result.measured
@@ -92,6 +97,8 @@ def summary(result: IdynResult) -> dict:
         "segment_rms_marker_error_mm": {b: float(np.nanmean(result.segment_rms_m[:, i]) * 1000)
                                         if np.isfinite(result.segment_rms_m[:, i]).any() else None
                                         for i, b in enumerate(BODIES)},
+        "joint_centre_gap_mm": {j: _rms_mm(result.joint_centre_gap_m[:, k]) for k, j in enumerate(JOINTS)},
+        "marker_rms_error_mm": {label: 1000.0 * v for label, v in result.marker_rms_m.items()},
         "locked_segments": list(result.calibration.locked),
         "hat_tracked": result.hat_tracked,
         "notes": result.notes + ([] if result.hat_tracked else [
@@ -154,6 +161,8 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
         "segments/reference_to_anatomical": Dataset(result.calibration.reference_to_anatomical, "1"),
         "segments/disturbances": Dataset(np.array([str(n) for n in p.notes] or [""]), "1"),
         "joint_centres": Dataset(result.joint_centres_m, "m", {"joints": ",".join(JOINTS)}),
+        "joint_centre_gap": Dataset(result.joint_centre_gap_m, "m", {
+            "joints": ",".join(JOINTS), "meaning": "model joint centre to where the child segment's own markers put it"}),
     })
     write_h5(folder / "idyn.h5", data, attrs)
     return summary(result)
