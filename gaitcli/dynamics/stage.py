@@ -377,8 +377,8 @@ def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subj
         added[f"HJC{side}"] = first.com_m[pelvis] + c_pelvis
         residuals[side] = 1000.0 * rms
         if spread > SCORE_SPREAD_M:
-            warnings.warn(f"hip_joint_centre score, {SIDE_NAMES[side]}: the trial's hip motion fixes the centre only to "
-                          f"about {1000 * spread:.0f} mm along its least determined direction (residual "
+            warnings.warn(f"hip_joint_centre score, {SIDE_NAMES[side]}: the trial's hip motion fixes the centre only "
+                          f"to about {1000 * spread:.0f} mm along its least determined direction (residual "
                           f"{1000 * rms:.1f} mm): a trial that moves the hip about more than one axis (a star arc) "
                           "determines it better", GaitWarning, stacklevel=3)
     keep = [i for i, lab in enumerate(markers.labels) if lab not in added]

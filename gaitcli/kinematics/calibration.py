@@ -40,7 +40,8 @@ from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
 from gaitcli.kinematics.anthropometry import SegmentInertia, normalise_sex, rotate_segment, segment_parameters
 from gaitcli.kinematics.disturbances import Disturbance, apply_disturbances, resolve_disturbances
-from gaitcli.kinematics.markerset import (LANDMARKS, MarkerSet, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, required_landmarks,
+from gaitcli.kinematics.markerset import (LANDMARKS, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, MarkerSet,
+                                          required_landmarks,
                                           tracking_landmarks)
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
 from gaitcli.kinematics.pose import MIN_MARKERS
@@ -121,8 +122,8 @@ def _check_required(P: Mapping[str, np.ndarray], source, marker_set: MarkerSet |
 HIP_METHODS = ("bell1990", "bell1989", "harrington", "hara", "from_file")
 
 
-def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, quiet_speed_m_s: float = 0.05, quiet_s: float = 0.5,
-                        window_s: float = 1.0) -> tuple[np.ndarray, str]:
+def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, quiet_speed_m_s: float = 0.05,
+                        quiet_s: float = 0.5, window_s: float = 1.0) -> tuple[np.ndarray, str]:
     """Frames of a trial to stand in for a static trial (``static_frames: auto``), and how they were chosen.
 
     Candidates are the frames in which every landmark the calibration needs is seen.
@@ -140,9 +141,8 @@ def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, q
     needed = required_landmarks(virtual_joint_centres=virtual) + virtual
     absent = [n for n in needed if n not in P]
     if absent:
-        raise InputError(source, absent[0], "marker missing from the trial (static_frames: auto "
-                                                             "looks for frames in which the calibration's markers "
-                                                             "are seen)")
+        raise InputError(source, absent[0], "marker missing from the trial (static_frames: auto looks for frames "
+                                            "in which the calibration's markers are seen)")
     seen = np.logical_and.reduce([np.all(np.isfinite(P[n]), axis=-1) for n in needed])
     if not seen.any():
         raise InputError(source, "static_frames", f"auto: no frame in which all of {', '.join(needed)} are seen")

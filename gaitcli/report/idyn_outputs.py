@@ -162,7 +162,8 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
         "segments/disturbances": Dataset(np.array([str(n) for n in p.notes] or [""]), "1"),
         "joint_centres": Dataset(result.joint_centres_m, "m", {"joints": ",".join(JOINTS)}),
         "joint_centre_gap": Dataset(result.joint_centre_gap_m, "m", {
-            "joints": ",".join(JOINTS), "meaning": "model joint centre to where the child segment's own markers put it"}),
+            "joints": ",".join(JOINTS),
+            "meaning": "model joint centre to where the child segment's own markers put it"}),
     })
     write_h5(folder / "idyn.h5", data, attrs)
     return summary(result)

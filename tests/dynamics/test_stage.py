@@ -332,7 +332,8 @@ def test_a_plate_both_feet_stand_on_leaves_both_loads_unknown_in_exactly_that_do
                  for name, r in (("two", separate), ("one", shared))}
         assert error["one"].max() <= error["two"].max() + 1e-9, side
     first, last = both[0] + 1, both[-1] + 1  # file frames
-    assert said == [f"plate1: both feet on it in frames {first}–{last} ({both[0] / 100:.2f}–{both[-1] / 100:.2f} s): no "
+    span = f"{both[0] / 100:.2f}–{both[-1] / 100:.2f} s"
+    assert said == [f"plate1: both feet on it in frames {first}–{last} ({span}): no "
                     "foot is given its load there (the loads of both are unknown); the plate times only the left "
                     "heel strike and the right toe off, the steps in between are timed from the foot markers"]
 
@@ -358,8 +359,8 @@ def test_a_functional_hip_centre_from_the_walk_itself(noisy):
     assert set(residual) == {"r", "l"} and result.reference_posture.hip_joint_centre == "score"
     if not noisy:
         for name in ("HJCr", "HJCl"):
-            np.testing.assert_allclose(result.calibration.joint_centres_m[name], trial.calibration.joint_centres_m[name],
-                                       atol=1e-8)
+            np.testing.assert_allclose(result.calibration.joint_centres_m[name],
+                                       trial.calibration.joint_centres_m[name], atol=1e-8)
         assert max(residual.values()) < 1e-9 and said == []
     else:
         assert 2.0 < min(residual.values()) and max(residual.values()) < 8.0
