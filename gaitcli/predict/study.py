@@ -136,10 +136,24 @@ def _one_start(args) -> PredictResult:
     return run_predict(cfg, params=params, reference=reference, init=init, device=device)
 
 
+def end_with_parent() -> None:
+    """A worker's initializer: on Linux, have the kernel kill the worker when its parent dies (PR_SET_PDEATHSIG),
+    so that a study whose parent was killed leaves no worker solving the rest of its queue. Elsewhere nothing."""
+    try:
+        import ctypes
+        import signal
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
 def pool(workers: int) -> ProcessPoolExecutor:
-    """Worker processes (forked where the platform allows: no re-import, the parent's thread settings)."""
+    """Worker processes (forked where the platform allows: no re-import, the parent's thread settings) that end
+    with their parent (:func:`end_with_parent`)."""
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    return ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context(method))
+    return ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context(method),
+                               initializer=end_with_parent)
 
 
 def stop(executor: ProcessPoolExecutor) -> None:

@@ -147,3 +147,42 @@ def test_starts_run_the_guess_and_seeded_perturbations_and_count_the_agreeing(mo
     agreed, best = study.agreeing(results)
     assert best.objective == 9.0 and agreed == 1  # start 3 is lower but unconverged
     assert study.agreeing([Solved(9.0, True), Solved(9.05, True), Solved(9.2, True)])[0] == 2
+
+
+def test_workers_end_when_their_parent_is_killed(tmp_path):
+    """A study's parent killed outright (SIGKILL: no chance to stop its workers) leaves no worker solving the rest
+    of the queue: the kernel ends them with it (Linux; elsewhere the test is skipped)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("PR_SET_PDEATHSIG is Linux's")
+    script = tmp_path / "parent.py"
+    script.write_text(
+        "import os, time\n"
+        "from gaitcli.predict.study import pool\n"
+        "executor = pool(2)\n"
+        "futures = [executor.submit(time.sleep, 60) for _ in range(4)]\n"
+        "time.sleep(1.0)\n"
+        "print(' '.join(str(p) for p in executor._processes), flush=True)\n"
+        "time.sleep(60)\n")
+    parent = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    workers = [int(p) for p in parent.stdout.readline().split()]
+    assert len(workers) == 2
+    os.kill(parent.pid, signal.SIGKILL)
+    parent.wait(10)
+
+    def alive(pid):
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        return not open(f"/proc/{pid}/stat").read().split()[2] == "Z"
+
+    deadline = time.monotonic() + 10
+    while any(alive(p) for p in workers) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not any(alive(p) for p in workers)
