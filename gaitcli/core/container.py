@@ -94,9 +94,5 @@ def load_known_frames(events: Events, time_s: np.ndarray, loaded: np.ndarray, si
     Stance runs from each heel strike to the next toe off (or the trial's end), and
     from the start to the first toe off when the trial begins in stance.
     """
-    known = np.ones(time_s.size, dtype=bool)
-    for a, b in events.stances(side, open_ends=True):
-        stance = (time_s >= a) & (time_s <= b)
-        known &= ~stance | loaded
-    return known
+    return ~events.stance_mask(side, time_s) | np.asarray(loaded, dtype=bool)
 

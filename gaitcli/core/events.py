@@ -14,6 +14,7 @@ from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 
 SIDES = ("r", "l")
+SIDE_NAMES = {"r": "right", "l": "left"}
 KINDS = ("heel_strike", "toe_off")
 SOURCES = ("plate", "kinematics")
 
@@ -111,6 +112,14 @@ class Events:
             elif open_ends and not later.size:
                 out.append((float(a), np.inf))
         return out
+
+    def stance_mask(self, side: str, time_s: np.ndarray) -> np.ndarray:
+        """(n,) the samples at ``time_s`` that lie in a stance of ``side`` (:meth:`stances` with open ends)."""
+        time_s = np.asarray(time_s, dtype=float)
+        mask = np.zeros(time_s.size, dtype=bool)
+        for a, b in self.stances(side, open_ends=True):
+            mask |= (time_s >= a) & (time_s <= b)
+        return mask
 
     def swings(self, side: str) -> list[tuple[float, float]]:
         """Swing intervals (toe off → the next heel strike, s) of ``side``."""

@@ -13,6 +13,23 @@ import numpy as np
 
 from gaitcli.core.validate import integer, one_of
 
+def frame_ranges(indices) -> list[tuple[int, int]]:
+    """Consecutive runs ``(first, last)`` of sorted integer ``indices``."""
+    idx = np.asarray(indices, dtype=int)
+    if idx.size == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(idx) != 1)
+    starts = np.concatenate([[idx[0]], idx[breaks + 1]])
+    ends = np.concatenate([idx[breaks], [idx[-1]]])
+    return list(zip(starts.tolist(), ends.tolist()))
+
+
+def frame_spans(indices, first_frame: int = 0) -> str:
+    """Sorted 0-based frame ``indices`` as file frame numbers for people: ``"5–9, 12"``."""
+    return ", ".join(f"{a + first_frame}" if a == e else f"{a + first_frame}–{e + first_frame}"
+                     for a, e in frame_ranges(indices))
+
+
 #: finite-difference schemes of :func:`finite_difference_matrix`
 FINITE_DIFFERENCE_SCHEMES = ("periodic", "central", "backward")
 #: moments are scaled by this (N·m) inside the NLPs so that all constraints are O(1)

@@ -16,8 +16,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gaitcli.core.container import Trial
-from gaitcli.core.events import SIDES, Events
+from gaitcli.core.events import SIDE_NAMES, SIDES, Events
 from gaitcli.core.recording import Markers, Recording
+from gaitcli.core.numerics import frame_spans
 from gaitcli.core.validate import parameter
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.dynamics.equations import ExternalWrench
@@ -29,6 +30,7 @@ from gaitcli.kinematics.chain_fit import fit_chain
 from gaitcli.kinematics.joint_centres import functional_joint_centre
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
+from gaitcli.kinematics.markerset import with_fixed_points
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINTS, BodyParameters
 from gaitcli.signal.cycles import GaitFeatures, Stride, gait_features, strides
 
@@ -261,7 +263,7 @@ def reference_frames(trial: Trial, static: Recording | None, subject: Subject, *
         frames, how = least_flexed_frames(m, source=subject_path)
         if subject.static_frames is None:
             warnings.warn(f"no static.c3d and no static_frames in subject.yaml: the model is calibrated on file "
-                          f"frame{'s' if frames.size > 1 else ''} {_frame_span(frames + m.first_frame)} of the trial "
+                          f"frame{'s' if frames.size > 1 else ''} {frame_spans(frames, m.first_frame)} of the trial "
                           f"({how.removeprefix('auto: ')}); joint angles are measured from that posture",
                           GaitWarning, stacklevel=2)
         return m, frames, how
@@ -271,10 +273,6 @@ def reference_frames(trial: Trial, static: Recording | None, subject: Subject, *
         raise InputError(subject_path, "static_frames", f"got [{first}, {last}] (expected frames within "
                                                         f"{m.first_frame}–{m.first_frame + m.n_frames - 1})")
     return m, frames, "subject.yaml"
-
-
-def _frame_span(frames: np.ndarray) -> str:
-    return f"{frames[0]}" if frames.size == 1 else f"{frames[0]}–{frames[-1]}"
 
 
 def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Subject, mass_kg: float, *,
@@ -291,7 +289,6 @@ def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Sub
 
 #: SCORE's uncertainty along its weakest direction above which the result is warned about, m
 SCORE_SPREAD_M = 0.01
-SIDE_NAMES = {"r": "right", "l": "left"}
 #: subject.yaml's ``hip_joint_centre`` → the calibration's method
 HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "from_file": "from_file",
               "score": "bell1990"}  # score: Bell first, then functional_hip_centres
@@ -381,13 +378,7 @@ def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subj
                           f"to about {1000 * spread:.0f} mm along its least determined direction (residual "
                           f"{1000 * rms:.1f} mm): a trial that moves the hip about more than one axis (a star arc) "
                           "determines it better", GaitWarning, stacklevel=3)
-    keep = [i for i, lab in enumerate(markers.labels) if lab not in added]
-    n = markers.n_frames
-    positions = np.concatenate([markers.positions_m[:, keep],
-                                np.stack([np.broadcast_to(v, (n, 3)) for v in added.values()], axis=1)], axis=1)
-    labelled = Markers(tuple(markers.labels[i] for i in keep) + tuple(added), positions, markers.rate_hz,
-                       markers.first_frame)
-    return labelled, residuals
+    return with_fixed_points(markers, added), residuals
 
 
 def check_mass(mass_kg: float | None, source) -> float:

@@ -62,10 +62,8 @@ def _residuals(states, sets):
         r.append(np.where(seen[..., None], p - np.nan_to_num(measured), 0.0))
         JT, JR = states.jacobian_translation[:, b], states.jacobian_rotation[:, b]  # (n, 3, 27)
         # ω × (S a) = −(S a) × ω: J = J_T − [S a]× J_R, column by column
-        cross = np.stack([arm[..., 1, None] * JR[:, None, 2] - arm[..., 2, None] * JR[:, None, 1],
-                          arm[..., 2, None] * JR[:, None, 0] - arm[..., 0, None] * JR[:, None, 2],
-                          arm[..., 0, None] * JR[:, None, 1] - arm[..., 1, None] * JR[:, None, 0]], axis=2)
-        J.append(JT[:, None] - cross)
+        cross = np.cross(arm[:, :, None, :], np.swapaxes(JR, 1, 2)[:, None])  # (n, k, 27, 3)
+        J.append(JT[:, None] - np.swapaxes(cross, 2, 3))
         w.append(seen.astype(float))
     return np.concatenate(r, axis=1), np.concatenate(J, axis=1), np.concatenate(w, axis=1)
 

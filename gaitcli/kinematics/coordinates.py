@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from gaitcli.core.numerics import frame_spans
 from gaitcli.core.validate import one_of
 from gaitcli.kinematics.calibration import StaticCalibration
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT
@@ -126,24 +127,11 @@ def poses_to_coordinates(poses: SegmentPoses, *, unwrap: bool = True) -> np.ndar
     return q
 
 
-def frame_ranges(indices) -> list[tuple[int, int]]:
-    """Consecutive runs ``(first, last)`` of sorted integer ``indices``."""
-    idx = np.asarray(indices, dtype=int)
-    if idx.size == 0:
-        return []
-    breaks = np.flatnonzero(np.diff(idx) != 1)
-    starts = np.concatenate([[idx[0]], idx[breaks + 1]])
-    ends = np.concatenate([idx[breaks], [idx[-1]]])
-    return list(zip(starts.tolist(), ends.tolist()))
-
-
 def missing_frame_messages(poses: SegmentPoses) -> list[str]:
     """One line per body with untracked frames, in file frame numbers (``first_frame`` based)."""
     lines = []
     for b, idx in poses.missing_frames.items():
-        runs = [f"{a + poses.first_frame}" if a == e else f"{a + poses.first_frame}–{e + poses.first_frame}"
-                for a, e in frame_ranges(idx)]
-        if runs:
-            lines.append(f"segment {b} has < 3 markers in frames {', '.join(runs)}")
+        if len(idx):
+            lines.append(f"segment {b} has < 3 markers in frames {frame_spans(idx, poses.first_frame)}")
     return lines
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.events import SIDE_NAMES
 from gaitcli.core.validate import known_keys, one_of
 from gaitcli.errors import InputError
 from gaitcli.io.yamlfile import read_yaml
@@ -112,7 +113,7 @@ def describe_landmark(landmark: str) -> str:
     """``'ASISr'`` → ``'right anterior superior iliac spine'``."""
     if landmark in MIDLINE:
         return LANDMARK_DESCRIPTIONS[landmark]
-    side = {"r": "right", "l": "left"}[landmark[-1]]
+    side = SIDE_NAMES[landmark[-1]]
     return f"{side} {LANDMARK_DESCRIPTIONS[landmark[:-1]]}"
 
 
@@ -293,6 +294,15 @@ def standing_template(stature_m: float, *, with_virtual_joint_centres: bool = Fa
     p["C7"] = np.array([-0.055 * H, 0.0, 0.86 * H])
     p["ST"] = np.array([0.05 * H, 0.0, 0.835 * H])
     return p
+
+
+def with_fixed_points(markers: Markers, points: Mapping[str, np.ndarray]) -> Markers:
+    """``markers`` with each of ``points`` ({label: (3,) m}) as a trajectory standing still in every frame (a label
+    already there is replaced)."""
+    keep = [i for i, lab in enumerate(markers.labels) if lab not in points]
+    fixed = np.stack([np.broadcast_to(np.asarray(v, float), (markers.n_frames, 3)) for v in points.values()], axis=1)
+    return Markers(tuple(markers.labels[i] for i in keep) + tuple(points),
+                   np.concatenate([markers.positions_m[:, keep], fixed], axis=1), markers.rate_hz, markers.first_frame)
 
 
 def landmarks_to_markers(landmarks: Mapping[str, np.ndarray], *, rate_hz: float = 100.0) -> Markers:

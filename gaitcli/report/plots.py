@@ -19,11 +19,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gaitcli.core.container import Trial  # noqa: E402
+from gaitcli.core.events import SIDE_NAMES  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
 from gaitcli.io.h5 import read_record, read_records  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
-SIDE_NAME = {"r": "right", "l": "left"}
 
 
 def save(fig, path: Path) -> Path:
@@ -94,7 +94,7 @@ def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
         t = trial.time_s
         for name, (force, cop) in loads.items():
             colour = SIDE_COLOUR.get(name, None)
-            label = SIDE_NAME.get(name, name)
+            label = SIDE_NAMES.get(name, name)
             axes[0].plot(t, force[:, 2], color=colour, label=label)
             axes[1].plot(t, force[:, 0], color=colour, label=label)
             axes[2].plot(t, cop[:, 0], color=colour, label=label)
@@ -150,7 +150,7 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
                     warnings.simplefilter("ignore", RuntimeWarning)
                     mean, sd = np.nanmean(values, axis=0), np.nanstd(values, axis=0)
                 ax = axes[row, col]
-                ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAME[side]} (n={count})")
+                ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAMES[side]} (n={count})")
                 ax.fill_between(pct, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
         axes[0, col].set_title(label, fontsize=10)
         axes[0, col].set_ylabel("angle (deg)")
@@ -221,7 +221,7 @@ def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
         for ax in axes[-1]:
             ax.set_xlabel("time (s)")
         infeasible = "; red: infeasible frames" if result.infeasible_frames else ""
-        fig.suptitle(f"{result.method.upper()}: muscle {label.split(' ')[0]}s, {SIDE_NAME.get(result.side, '')} leg "
+        fig.suptitle(f"{result.method.upper()}: muscle {label.split(' ')[0]}s, {SIDE_NAMES.get(result.side, '')} leg "
                      f"(solid: heel strike, dashed: toe off; grey band: the physiological range [0, 1]{infeasible}) "
                      f"— {title}", fontsize=9)
         fig.subplots_adjust(left=0.07, right=0.98, top=0.88, bottom=0.1, hspace=0.3, wspace=0.3)

@@ -68,6 +68,11 @@ class Contact:
     first_side: str = ""
     last_side: str = ""
 
+    @property
+    def shared(self) -> bool:
+        """Both feet stood on it and the feet at its ends are known: it is split (:func:`plate_owner`)."""
+        return self.flag == "both_feet" and bool(self.first_side and self.last_side)
+
 
 def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s: float = 0.1,
                    min_gap_s: float = 0.05) -> list[Contact]:
@@ -186,7 +191,7 @@ def plate_owner(contacts: list[Contact], loads: list[PlateLoad], events=None) ->
         mine = sorted((c for c in contacts if c.plate_index == p), key=lambda c: c.first_frame)
         starts, stops = finite_runs(load.loaded)
         for i, c in enumerate(mine):
-            shared = c.flag == "both_feet" and events is not None and bool(c.first_side and c.last_side)
+            shared = c.shared and events is not None
             if not (c.side or shared):
                 continue
             lo, hi = c.first_frame, c.last_frame + 1

@@ -65,7 +65,7 @@ def detect_events(loads: list[PlateLoad], feet: dict, pelvis_centre, rate_hz: fl
     for side in SIDES:
         plate_ev = Events.concatenate([
             _plate_events([c for c in contacts if c.side == side and not c.flag], rate_hz, side),
-            _shared_plate_events([c for c in contacts if c.flag == "both_feet"], rate_hz, side)])
+            _shared_plate_events([c for c in contacts if c.shared], rate_hz, side)])
         kin = kinematic_events(feet[side][0], feet[side][1], pelvis_centre, rate_hz, side, refine=refine)
         keep = np.ones(len(kin), dtype=bool)
         for kind in KINDS:

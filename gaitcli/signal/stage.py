@@ -13,11 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitcli.core.container import FootLoad, Trial, load_known_frames
-from gaitcli.core.events import SIDES, Events
+from gaitcli.core.events import SIDE_NAMES, SIDES, Events
 from gaitcli.core.recording import Markers, Recording
+from gaitcli.core.numerics import frame_spans
 from gaitcli.core.validate import parameter
 from gaitcli.errors import GaitWarning, InputError
-from gaitcli.signal.butterworth import design_frequency_hz, finite_runs, lowpass
+from gaitcli.signal.butterworth import design_frequency_hz, lowpass
 from gaitcli.signal.contacts import partly_off, plate_owner, shared_frames
 from gaitcli.signal.events import Contact, EventDetection, detect_events, kinematic_events
 from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
@@ -27,7 +28,6 @@ from gaitcli.signal.gaps import Gap, fill_gaps
 HEEL = {"r": ("CAr",), "l": ("CAl",)}
 TOE = {"r": ("FMr", "VMr"), "l": ("FMl", "VMl")}
 PELVIS = ("ASISr", "ASISl", "PSISr", "PSISl")
-SIDE_NAMES = {"r": "right", "l": "left"}
 
 
 @dataclass(frozen=True)
@@ -176,25 +176,14 @@ def foot_loads(plate_loads_per_foot: dict[str, PlateLoad], events: Events, time_
     return out
 
 
-def _spans(mask: np.ndarray, first_frame: int) -> str:
-    starts, stops = finite_runs(mask)
-    return ", ".join(f"{a + first_frame}" if b - a == 1 else f"{a + first_frame}–{b - 1 + first_frame}"
-                     for a, b in zip(starts, stops))
-
-
 def without_partial_feet(owner: np.ndarray, plates: list[PlateLoad], markers: Markers, events: Events) -> np.ndarray:
     """``owner`` with no plate given to a foot in the frames in which it stands partly off the plates
     (:func:`~gaitcli.signal.contacts.partly_off`: its load there is more than the plates measured), warned."""
     if not plates:
         return owner
-    time_s = markers.time_s
     points = {side: ([markers.get(n) for n in HEEL[side] if n in markers],
                      [markers.get(n) for n in TOE[side] if n in markers]) for side in SIDES}
-    stance = {}
-    for side in SIDES:
-        stance[side] = np.zeros(time_s.size, bool)
-        for a, b in events.stances(side, open_ends=True):
-            stance[side] |= (time_s >= a) & (time_s <= b)
+    stance = {side: events.stance_mask(side, markers.time_s) for side in SIDES}
     off = partly_off(owner, plates, {s: p for s, p in points.items() if p[0] or p[1]}, stance)
     owner = owner.copy()
     for side, frames in off.items():
@@ -202,7 +191,7 @@ def without_partial_feet(owner: np.ndarray, plates: list[PlateLoad], markers: Ma
             names = [plates[k].name for k in range(len(plates)) if np.any((owner[k] == side) & frames)]
             owner[:, frames] = np.where(owner[:, frames] == side, "", owner[:, frames])
             warnings.warn(f"{', '.join(names)}: the {SIDE_NAMES[side]} foot stands partly off the plates in frames "
-                          f"{_spans(frames, markers.first_frame)} (a heel or toe marker on the ground outside them): "
+                          f"{frame_spans(np.flatnonzero(frames), markers.first_frame)} (a heel or toe marker on the ground outside them): "
                           "its load there is unknown", GaitWarning, stacklevel=3)
     return owner
 
@@ -214,12 +203,12 @@ def separated_plates(recording: Recording, plates: list[PlateLoad], contacts: li
     (at 6 Hz the filter reaches about 110 ms: 24 N·m at the next frame on a synthetic walk)."""
     rate, n = recording.markers.rate_hz, recording.markers.n_frames
     out = list(plates)
-    for index in sorted({c.plate_index for c in contacts if c.flag == "both_feet" and c.first_side and c.last_side}):
+    for index in sorted({c.plate_index for c in contacts if c.shared}):
         raw = recording.plates[index]
         force, moment = np.array(raw.force_N, float), np.array(raw.moment_Nm, float)
         ratio = raw.rate_hz / rate
         for c in contacts:
-            if c.plate_index == index and c.flag == "both_feet" and c.first_side and c.last_side:
+            if c.plate_index == index and c.shared:
                 start, stop = shared_frames(c, events, rate)
                 # the analog samples strictly between the last frame of the first foot and the first of the last
                 lo, hi = int(np.floor((start - 1) * ratio)) + 1, int(np.ceil(stop * ratio))
@@ -272,7 +261,7 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
     owner = without_partial_feet(owner, plates, markers, events)
     detection = dataclasses.replace(detection, events=events, owner=owner)
     for c in detection.contacts:
-        if c.flag == "both_feet" and c.first_side and c.last_side:
+        if c.shared:
             start, stop = shared_frames(c, events, rate)
             first, last = (SIDE_NAMES[x] for x in (c.first_side, c.last_side))
             warnings.warn(f"{c.plate_name}: both feet on it in frames {start + markers.first_frame}–"

@@ -28,6 +28,7 @@ from gaitcli.kinematics.chain_fit import fit_chain
 from gaitcli.kinematics.conventions import moments_to_clinical
 from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
+from gaitcli.kinematics.markerset import with_fixed_points
 from gaitcli.kinematics.model import JOINTS, MOMENTS
 from gaitcli.signal.stage import FilterConfig, filter_trial
 from gaitcli.synth import simulate_trial
@@ -37,11 +38,8 @@ MASS_KG = 75.0
 
 def _with_hip_centres_moved(static: Markers, calibration, shift_m) -> Markers:
     """The static trial with the lab's virtual hip centres where Bell puts them, moved by ``shift_m``."""
-    centres = {k: calibration.joint_centres_m[k] + np.asarray(shift_m) for k in ("HJCr", "HJCl")}
-    n = static.n_frames
-    extra = np.stack([np.broadcast_to(v, (n, 3)) for v in centres.values()], axis=1)
-    return Markers(tuple(static.labels) + tuple(centres), np.concatenate([static.positions_m, extra], axis=1),
-                   static.rate_hz)
+    return with_fixed_points(static, {k: calibration.joint_centres_m[k] + np.asarray(shift_m)
+                                      for k in ("HJCr", "HJCl")})
 
 
 def test_an_exact_trial_is_a_fixed_point():

@@ -7,7 +7,8 @@ import pytest
 
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.calibration import calibrate
-from gaitcli.kinematics.coordinates import (convert_frames, frame_ranges, missing_frame_messages,
+from gaitcli.core.numerics import frame_ranges
+from gaitcli.kinematics.coordinates import (convert_frames, missing_frame_messages,
                                             poses_to_coordinates, track_segments, unwrap_angles)
 from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT

@@ -134,12 +134,8 @@ def test_a_foot_partly_off_its_plate_is_found_in_every_frame_it_owns_the_plate(w
     walk = walk_factory(plates=[("r", 1, dx, 0.4, 0.4)])
     loads = walk_loads(walk)
     detection = detect_events(loads, walk.feet, walk.pelvis, EVENT_RATE_HZ, EVENT_THRESHOLD_N)
-    stance = {}
     t = np.arange(loads[0].n_frames) / EVENT_RATE_HZ
-    for side in "rl":
-        stance[side] = np.zeros(t.size, bool)
-        for a, b in detection.events.stances(side, open_ends=True):
-            stance[side] |= (t >= a) & (t <= b)
+    stance = {side: detection.events.stance_mask(side, t) for side in "rl"}
     points = {side: ([heel], [toe]) for side, (heel, toe) in walk.feet.items()}
     off = partly_off(detection.owner, loads, points, stance)
     owned = (detection.owner[0] == "r") & stance["r"]
