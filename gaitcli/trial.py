@@ -42,6 +42,10 @@ class Subject:
     disturbances: tuple[Disturbance, ...] = ()  # added masses (Tables A.2–A.3), in segment axes
     marker_set: str | None = None  # a bundled preset (markerset.marker_set_names()); None: Table A.6 labels
     hip_joint_centre: str = "bell"
+    # Plug-in Gait's chord method, mm: {"r": ..., "l": ...} (None: from the C3D's PROCESSING group)
+    knee_width_mm: dict[str, float] | None = None
+    ankle_width_mm: dict[str, float] | None = None
+    marker_diameter_mm: float | None = None
 
     @cached_property
     def markers(self) -> MarkerSet:
@@ -50,10 +54,12 @@ class Subject:
 
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
-        "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances")
+        "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances", "knee_width_mm",
+        "ankle_width_mm", "marker_diameter_mm")
 #: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
-#: (2007); Hara et al. (2016); functional (SCORE, Ehrig et al. 2006, from the trial's hip motion); the lab's points
-HIP_JOINT_CENTRES = ("bell", "harrington", "hara", "score", "from_file")
+#: (2007); Hara et al. (2016); Davis et al. (1991, Plug-in Gait's); functional (SCORE, Ehrig et al. 2006, from the
+#: trial's hip motion); the lab's points
+HIP_JOINT_CENTRES = ("bell", "harrington", "hara", "davis", "score", "from_file")
 #: keys that older `gait synth` versions wrote and nothing reads; now a comment in subject.yaml
 RETIRED_KEYS = ("condition", "disturbed_side")
 DISTURBANCE_KEYS = ("segment", "mass_kg", "inertia_kgm2", "com_offset_m", "name")
@@ -67,6 +73,17 @@ def _vector3(path, where, value) -> tuple[float, float, float]:
     if not isinstance(value, (list, tuple)) or len(value) != 3:
         raise InputError(path, where, f"got {shown(value)} (expected a list of 3 numbers)")
     return tuple(_number(path, where, v, expected="a list of 3 numbers") for v in value)
+
+
+def _per_side_mm(path, key, value, *, low: float, high: float) -> dict[str, float] | None:
+    """A width in mm for both sides (one number) or ``[right, left]``."""
+    if value is None:
+        return None
+    values = value if isinstance(value, (list, tuple)) else [value, value]
+    if len(values) != 2:
+        raise InputError(path, key, f"got {shown(value)} (expected a width in mm, or [right, left])")
+    return {s: _number(path, key, v, low=low, high=high, expected=f"a width in mm, {low:g}–{high:g}, or [right, left]")
+            for s, v in zip("rl", values)}
 
 
 def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
@@ -140,9 +157,14 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
             com_offset_m=np.array(_vector3(path, f"{where}.com_offset_m", item.get("com_offset_m", [0, 0, 0]))),
             name=str(item.get("name", "")),
         ))
+    widths = {"knee_width_mm": _per_side_mm(path, "knee_width_mm", data.get("knee_width_mm"), low=40, high=200),
+              "ankle_width_mm": _per_side_mm(path, "ankle_width_mm", data.get("ankle_width_mm"), low=30, high=150)}
+    if data.get("marker_diameter_mm") is not None:
+        widths["marker_diameter_mm"] = _number(path, "marker_diameter_mm", data["marker_diameter_mm"], low=0,
+                                               high=40, expected="a marker diameter in mm, > 0 and ≤ 40")
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
                    static_frames=frames, marker_map=dict(marker_map), disturbances=tuple(disturbances),
-                   marker_set=preset, hip_joint_centre=hip, **lengths)
+                   marker_set=preset, hip_joint_centre=hip, **lengths, **widths)
 
 
 def load_subject(path: str | Path) -> Subject:

@@ -158,7 +158,7 @@ def test_segment_lengths(key, value):
     assert _error(_with(**{key: value})).field == key
 
 
-@pytest.mark.parametrize("key,value", [("leg_length_m", 90), ("leg_length_m", 0.1), ("hip_joint_centre", "davis"),
+@pytest.mark.parametrize("key,value", [("leg_length_m", 90), ("leg_length_m", 0.1), ("hip_joint_centre", "davies"),
                                        ("hip_joint_centre", "Bell"), ("marker_set", "plug_in_gait_v9"),
                                        ("marker_map", {"RTHI": "thigh"})])
 def test_marker_set_and_hip_centre_keys(key, value):

@@ -9,6 +9,7 @@ inverse dynamics, gait features and the sagittal export for the muscle stage.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -27,7 +28,7 @@ from gaitcli.dynamics.sagittal import SagittalExport, sagittal_export
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames
 from gaitcli.kinematics.chain_fit import fit_chain
-from gaitcli.kinematics.joint_centres import functional_joint_centre
+from gaitcli.kinematics.joint_centres import JointWidths, functional_joint_centre
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.markerset import with_fixed_points
@@ -275,22 +276,51 @@ def reference_frames(trial: Trial, static: Recording | None, subject: Subject, *
     return m, frames, "subject.yaml"
 
 
+#: Plug-in Gait's marker diameter when neither subject.yaml nor the C3D gives one, m (Vicon's 14 mm markers)
+DEFAULT_MARKER_DIAMETER_M = 0.014
+
+
+def subject_measurements(subject: Subject, metadata: Mapping[str, float]) -> tuple[JointWidths, float | None, str]:
+    """Knee/ankle widths, marker diameter and the preset's wands for the chord method, the leg length (m, None:
+    measured from the markers), and where the leg length came from: subject.yaml first, then the C3D's
+    ``PROCESSING`` group (Vicon's subject measurements, mm)."""
+    def per_side(given, name):
+        if given is not None:
+            return {s: v / 1000.0 for s, v in given.items()}
+        return {s: metadata[f"PROCESSING:{side}{name}"] / 1000.0
+                for s, side in (("r", "Right"), ("l", "Left")) if f"PROCESSING:{side}{name}" in metadata}
+
+    diameter = (subject.marker_diameter_mm / 1000.0 if subject.marker_diameter_mm is not None
+                else metadata.get("PROCESSING:MarkerDiameter", 1000.0 * DEFAULT_MARKER_DIAMETER_M) / 1000.0)
+    widths = JointWidths(knee_m=per_side(subject.knee_width_mm, "KneeWidth"),
+                         ankle_m=per_side(subject.ankle_width_mm, "AnkleWidth"),
+                         marker_diameter_m=diameter, wands=dict(subject.markers.wands))
+    if subject.leg_length_m is not None:
+        return widths, subject.leg_length_m, "subject.yaml"
+    legs = [metadata[k] / 1000.0 for k in ("PROCESSING:RightLegLength", "PROCESSING:LeftLegLength") if k in metadata]
+    if legs:
+        return widths, float(np.mean(legs)), "the C3D's PROCESSING group"
+    return widths, None, "the markers"
+
+
 def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Subject, mass_kg: float, *,
-                       source: Path | None, hip_method: str | None = None) -> StaticCalibration:
+                       source: Path | None, hip_method: str | None = None,
+                       metadata: Mapping[str, float] | None = None) -> StaticCalibration:
     """Static calibration (3.2, 3.3) on ``frames`` of ``markers`` with the subject's marker set and hip method
-    (or ``hip_method``)."""
+    (or ``hip_method``); ``metadata``: the C3D files' subject data (widths, leg length)."""
     markers_set = subject.markers
+    widths, leg_length, _ = subject_measurements(subject, metadata or {})
     return calibrate(markers, frames=frames, source=source, mass_kg=mass_kg, stature_m=subject.stature_m,
                      sex=subject.sex, thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
                      disturbances=subject.disturbances, extra_tracking_markers=markers_set.tracking,
                      marker_set=markers_set, hip_method=hip_method or HIP_METHOD[subject.hip_joint_centre],
-                     leg_length_m=subject.leg_length_m)
+                     leg_length_m=leg_length, widths=widths)
 
 
 #: SCORE's uncertainty along its weakest direction above which the result is warned about, m
 SCORE_SPREAD_M = 0.01
 #: subject.yaml's ``hip_joint_centre`` → the calibration's method
-HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "from_file": "from_file",
+HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "davis": "davis", "from_file": "from_file",
               "score": "bell1990"}  # score: Bell first, then functional_hip_centres
 
 
@@ -341,10 +371,12 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
     markers, frames, how = reference_frames(trial, static, subject, subject_path=subject_path)
     where = static_path if static is not None else trial_path
     residuals = {}
+    metadata = {**(static.subject_metadata if static is not None else {}), **trial.subject_metadata}
     if subject.hip_joint_centre == "score":
-        markers, residuals = functional_hip_centres(trial, markers, frames, subject, mass, source=where)
+        markers, residuals = functional_hip_centres(trial, markers, frames, subject, mass, source=where,
+                                                    metadata=metadata)
     calibration = static_calibration(markers, frames, subject, mass, source=where,
-                                     hip_method="from_file" if residuals else None)
+                                     hip_method="from_file" if residuals else None, metadata=metadata)
     result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source)
     first = markers.first_frame
     result.reference_posture = ReferencePosture(
@@ -354,7 +386,7 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
 
 
 def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subject, mass_kg: float, *,
-                           source) -> tuple[Markers, dict[str, float]]:
+                           source, metadata: Mapping[str, float] | None = None) -> tuple[Markers, dict[str, float]]:
     """``hip_joint_centre: score``: the reference posture's markers with ``HJCr``/``HJCl`` added where SCORE
     (Ehrig et al. 2006) puts them from the trial's own hip motion, and each side's RMS residual (mm).
 
@@ -363,7 +395,8 @@ def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subj
     frame is parallel to the global axes in the reference posture, so there it lies at the pelvis CoM plus its
     pelvis coordinates.
     """
-    first = static_calibration(markers, frames, subject, mass_kg, source=source, hip_method="bell1990")
+    first = static_calibration(markers, frames, subject, mass_kg, source=source, hip_method="bell1990",
+                               metadata=metadata)
     poses = track_segments(trial.markers, first)
     pelvis = BODIES.index("pelvis")
     added, residuals = {}, {}

@@ -26,6 +26,7 @@ OpenSim's plate extraction) return the input wrench exactly:
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 import ezc3d
@@ -57,11 +58,13 @@ def write_c3d(
     *,
     model_to_lab=None,
     origin_mm=DEFAULT_ORIGIN_MM,
+    metadata: Mapping[str, float] | None = None,
 ) -> Path:
     """Write markers (model axes, metres) and plates (model axes, SI) to a C3D file; return its path.
 
     ``origin_mm``: ORIGIN of every plate (surface centre → transducer origin in
-    plate axes, mm). The file appears atomically.
+    plate axes, mm). ``metadata``: subject parameters ``{"GROUP:NAME": number}`` (e.g.
+    ``PROCESSING:RightKneeWidth`` in mm, as Vicon writes them). The file appears atomically.
     """
     path = Path(path)
     R = _check_rotation(path, model_to_lab)
@@ -109,6 +112,9 @@ def write_c3d(
         params["ANALOG"]["RATE"]["value"] = np.array([point_rate])
         c["data"]["analogs"] = np.zeros((1, 0, n_frames))
 
+    for key, value in (metadata or {}).items():
+        group, name = key.split(":")
+        c.add_parameter(group, name, [float(value)])
     write_frame_count(c, n_frames)  # more than 65 535 frames: the TRIAL fields hold the count
     with atomic_path(path) as tmp:
         staging = tmp.with_name(tmp.name + ".c3d")  # ezc3d appends .c3d to any other name

@@ -21,9 +21,12 @@ from ``static.c3d`` or from named frames of the dynamic trial. In it:
 * every marker is expressed in the frame of the body it is fixed to: the reference
   cluster ``r^i_OMj`` of (3.2).
 
-A body other than the pelvis with fewer than 3 tracking markers is ``locked``:
-tracked as rigidly attached to its parent (zero joint angles), which is recorded
-and warned about.
+A thigh, shank or foot with only 2 markers of its own is tracked with its proximal joint
+centre as the third point (``chained``), placed in each frame by the parent's pose, as
+Plug-in Gait tracks its thigh (HJC, THI, KNE), shank (KJC, TIB, ANK) and foot (AJC, HEE,
+TOE). A body other than the pelvis with fewer points than 3 is ``locked``: tracked as
+rigidly attached to its parent (zero joint angles), which is recorded and warned about;
+with a marker set that names the leg markers (a preset) a locked leg segment is an error.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.events import SIDE_NAMES
 from gaitcli.core.validate import one_of
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
@@ -50,7 +54,10 @@ from gaitcli.signal.butterworth import finite_runs
 
 _PURPOSE = {"ASIS": "the pelvis frame and hip joint centres", "PSIS": "the pelvis frame and hip joint centres",
             "LEF": "the knee joint centre", "MEF": "the knee joint centre", "LM": "the ankle joint centre",
-            "MM": "the ankle joint centre", "CA": "the foot", "VM": "the foot", "FM": "the foot"}
+            "MM": "the ankle joint centre", "CA": "the foot", "VM": "the foot", "FM": "the foot", "MT2": "the foot"}
+#: the medial marker a chord needs in its place: the width subject.yaml or the C3D's PROCESSING group gives
+_CHORD_ALTERNATIVE = {"MEF": ("knee", "knee_width_mm", "RightKneeWidth"),
+                      "MM": ("ankle", "ankle_width_mm", "RightAnkleWidth")}
 
 
 @dataclass
@@ -68,6 +75,8 @@ class StaticCalibration:
     ``com_m`` (8, 3): static global CoM positions. ``segments``: mass geometry per body
     in body axes (CoM relative to the de Leva origin landmark).
     ``static_landmarks_m``: the averaged static marker positions used.
+    ``chained[body]``: the proximal joint centre (``HJCr``, ...) in that body's cluster that is no marker of the
+    trial but placed in each frame by the parent's pose.
     """
 
     body: BodyParameters
@@ -81,6 +90,7 @@ class StaticCalibration:
     segments: dict[str, SegmentInertia]
     static_landmarks_m: dict[str, np.ndarray]
     notes: list[str] = field(default_factory=list)
+    chained: dict[str, str] = field(default_factory=dict)
 
     def cluster(self, body: str) -> np.ndarray:
         """Reference cluster (k, 3) of ``body`` in its frame, rows in ``tracking_landmarks[body]`` order."""
@@ -109,17 +119,73 @@ def static_landmarks(markers: Markers, frames: Sequence[int] | slice | None = No
     return out
 
 
-def _check_required(P: Mapping[str, np.ndarray], source, marker_set: MarkerSet | None) -> None:
+def chord_and_toe_sides(P: Mapping[str, np.ndarray], widths: jcm.JointWidths | None,
+                        marker_set: MarkerSet | None = None) -> tuple[tuple, tuple]:
+    """The knee and ankle centres the chord method places (no medial marker; width and wand known), and the sides
+    whose foot is CA and MT2 alone (no fifth metatarsal in the file, or none in the marker set)."""
+    chord = []
+    for s in "rl":
+        for joint, jc, medial in (("knee", f"KJC{s}", f"MEF{s}"), ("ankle", f"AJC{s}", f"MM{s}")):
+            if medial not in P and widths is not None and widths.chord_inputs(joint, s, P) is not None:
+                chord.append(jc)
+    toe = tuple(s for s in "rl" if (f"MT2{s}" in P and not (f"VM{s}" in P and f"FM{s}" in P))
+                or (marker_set is not None and f"MT2{s}" in marker_set.landmarks
+                    and f"VM{s}" not in marker_set.landmarks))
+    return tuple(chord), toe
+
+
+def _check_wand(name: str, P: Mapping[str, np.ndarray], marker_set: MarkerSet | None, widths, source) -> None:
+    """A missing medial marker whose chord has its width but not its wand: the wand is what is missing."""
+    joint, _, _ = _CHORD_ALTERNATIVE.get(name[:-1], ("", "", ""))
+    segment = f"{'thigh' if joint == 'knee' else 'shank'}_{name[-1]}"
+    if not joint or marker_set is None or not marker_set.wands.get(segment) or widths is None:
+        return
+    if widths.offset_m(joint, name[-1]) is not None and widths.chord_inputs(joint, name[-1], P) is None:
+        labels = marker_set.wands[segment]
+        raise InputError(source, labels[0], f"marker missing from the static trial: {' or '.join(labels)} (marker_set "
+                                            f"{marker_set.name}: the {SIDE_NAMES[name[-1]]} {segment[:-2]} wand, "
+                                            f"tracking the {SIDE_NAMES[name[-1]]} {segment[:-2]}; needed for the "
+                                            f"{joint} joint centre by the chord method, as there is no medial "
+                                            f"marker {' or '.join(marker_set.landmarks.get(name, ()))})")
+
+
+def _check_required(P: Mapping[str, np.ndarray], source, marker_set: MarkerSet | None,
+                    widths: jcm.JointWidths | None) -> None:
     virtual = tuple(v for v in VIRTUAL_JOINT_CENTRES if v in P)
-    for name in required_landmarks(virtual_joint_centres=virtual):
+    chord, toe = chord_and_toe_sides(P, widths, marker_set)
+    for name in required_landmarks(virtual_joint_centres=virtual, chord_joint_centres=chord, toe_feet=toe):
         if name not in P:
+            _check_wand(name, P, marker_set, widths, source)
             purpose = _PURPOSE[name[:-1]]
+            joint, key, parameter = _CHORD_ALTERNATIVE.get(name[:-1], ("", "", ""))
+            segment = f"{'thigh' if joint == 'knee' else 'shank'}_{name[-1]}"
+            if joint and marker_set is not None and marker_set.wands.get(segment):
+                purpose += (f"; without it, the chord method needs {key} in subject.yaml or the C3D's "
+                            f"PROCESSING:{parameter.replace('Right', 'Right' if name[-1] == 'r' else 'Left')} "
+                            f"and the {'thigh' if joint == 'knee' else 'shank'} wand")
             if marker_set is None:
                 raise InputError(source, name, f"marker missing from the static trial (needed for {purpose})")
             raise InputError(source, marker_set.label_of(name) or name, marker_set.missing_message(name, purpose))
 
 
-HIP_METHODS = ("bell1990", "bell1989", "harrington", "hara", "from_file")
+#: a leg segment's proximal joint centre (the chained third tracking point)
+_PROXIMAL_CENTRE = {"thigh": "HJC", "shank": "KJC", "foot": "AJC"}
+def _locked_leg_message(body: str, found: list[str], P: Mapping[str, np.ndarray],
+                        marker_set: MarkerSet) -> tuple[str, str]:
+    """(label, message) for a leg segment with fewer than 2 markers of its own in the static trial."""
+    own = [(marker_set.label_of(n), n) for n in tracking_landmarks(body)
+           if n not in VIRTUAL_JOINT_CENTRES and marker_set.label_of(n)]
+    own += [(lab, None) for lab in marker_set.tracking.get(body, ())]
+    missing = [lab for lab, landmark in own if (landmark or lab) not in P]
+    segment, side = body.split("_")
+    role = f"tracking the {SIDE_NAMES[side]} {segment}"
+    return (missing[0] if missing else body,
+            f"marker missing from the static trial: {', '.join(missing) or 'no marker named'} (marker_set "
+            f"{marker_set.name}: {role}; with only {', '.join(found) or 'no marker'} the {segment} has fewer than 2 "
+            f"markers of its own and would be locked to its parent)")
+
+
+HIP_METHODS = ("bell1990", "bell1989", "harrington", "hara", "davis", "from_file")
 
 
 def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, quiet_speed_m_s: float = 0.05,
@@ -138,7 +204,12 @@ def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, q
     """
     P = {lab: markers.get(lab) for lab in markers.labels}
     virtual = tuple(v for v in VIRTUAL_JOINT_CENTRES if v in P and v[:3] != "HJC")
-    needed = required_landmarks(virtual_joint_centres=virtual) + virtual
+    # without a medial marker the lateral one stands in for the joint (the flexion angle barely differs)
+    lateral_only = tuple(jc for s in "rl" for jc, medial in ((f"KJC{s}", f"MEF{s}"), (f"AJC{s}", f"MM{s}"))
+                         if medial not in P)
+    toe = tuple(s for s in "rl" if f"MT2{s}" in P and f"VM{s}" not in P)
+    needed = required_landmarks(virtual_joint_centres=virtual, chord_joint_centres=lateral_only,
+                                toe_feet=toe) + virtual
     absent = [n for n in needed if n not in P]
     if absent:
         raise InputError(source, absent[0], "marker missing from the trial (static_frames: auto looks for frames "
@@ -150,8 +221,10 @@ def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, q
         hips = jcm.hip_joint_centres(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
         flexion = []
         for s, hip in zip("rl", hips):
-            knee = P[f"KJC{s}"] if f"KJC{s}" in virtual else jcm.knee_joint_centre(P[f"LEF{s}"], P[f"MEF{s}"])
-            ankle = P[f"AJC{s}"] if f"AJC{s}" in virtual else jcm.ankle_joint_centre(P[f"LM{s}"], P[f"MM{s}"],
+            knee = P[f"KJC{s}"] if f"KJC{s}" in virtual else jcm.knee_joint_centre(P[f"LEF{s}"],
+                                                                                   P.get(f"MEF{s}", P[f"LEF{s}"]))
+            ankle = P[f"AJC{s}"] if f"AJC{s}" in virtual else jcm.ankle_joint_centre(P[f"LM{s}"],
+                                                                                     P.get(f"MM{s}", P[f"LM{s}"]),
                                                                                      method="midpoint")
             cos = np.sum(jcm.unit(hip - knee) * jcm.unit(knee - ankle), axis=-1)
             flexion.append(np.arccos(np.clip(cos, -1.0, 1.0)))
@@ -182,7 +255,7 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
               disturbances: Sequence[Disturbance | str] = (), hip_method: str = "bell1990",
               ankle_method: str = "de_leva", extra_tracking_markers: Mapping[str, Sequence[str]] | None = None,
               marker_set: MarkerSet | None = None, leg_length_m: float | None = None,
-              source: str | Path | None = None) -> StaticCalibration:
+              widths: jcm.JointWidths | None = None, source: str | Path | None = None) -> StaticCalibration:
     """Calibrate the 8-body model on the reference posture ``static`` (averaged over ``frames``).
 
     Thigh and shank lengths are measured (HJC–KJC, KJC–AJC) unless given; other
@@ -191,8 +264,9 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     (``"ankle_weight"``, ``"ski_boot:l"``). ``extra_tracking_markers`` adds lab
     markers (by label) to a body's cluster (a marker set's tracking markers).
     ``hip_method``: ``"bell1990"`` (the dissertation's), ``"bell1989"``, ``"harrington"``,
-    ``"hara"`` (these two with ``leg_length_m``, default ASIS to medial malleolus), or
-    ``"from_file"`` (the lab's ``HJCr``/``HJCl`` points; otherwise they are ignored).
+    ``"hara"``, ``"davis"`` (these three with ``leg_length_m``, default ASIS to medial malleolus), or
+    ``"from_file"`` (the lab's ``HJCr``/``HJCl`` points; otherwise they are ignored). ``widths``:
+    knee/ankle widths, marker diameter and wands for Plug-in Gait's chord method.
     Raises :class:`InputError` naming a marker the model's geometry needs (by the
     lab label ``marker_set`` gives it).
     """
@@ -207,17 +281,20 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
                                                         "such point (expected the lab's virtual hip joint centre)")
     else:  # the lab's hip centres are left out of the model and of the clusters
         P = {k: v for k, v in P.items() if k not in ("HJCr", "HJCl")}
-    _check_required(P, source, marker_set)
+    _check_required(P, source, marker_set, widths)
     notes: list[str] = []
     jc = jcm.joint_centres(P, hip_method="bell1990" if hip_method == "from_file" else hip_method,
-                           ankle_method=ankle_method, sex=sex, leg_length=leg_length_m, source=source)
+                           ankle_method=ankle_method, sex=sex, leg_length=leg_length_m, widths=widths, source=source)
+    chord, toe = chord_and_toe_sides(P, widths, marker_set)
     for name in VIRTUAL_JOINT_CENTRES:
         notes.append(f"{name}: {'virtual marker from the lab file' if name in P else 'estimated'}")
     notes.append("hip joint centres: " + {"from_file": "the lab's virtual points (from_file)",
                                           "harrington": "Harrington et al. (2007) regression",
-                                          "hara": "Hara et al. (2016) regression"}.get(hip_method,
-                                                                                     f"Bell regression ({hip_method})"))
-    if not all(f"AJC{s}" in P for s in "rl"):
+                                          "hara": "Hara et al. (2016) regression",
+                                          "davis": "Davis et al. (1991) regression (Plug-in Gait)"}.get(
+        hip_method, f"Bell regression ({hip_method})"))
+    notes += [f"{name}: Plug-in Gait's chord method (no medial marker)" for name in chord]
+    if not all(f"AJC{s}" in P or f"AJC{s}" in chord for s in "rl"):
         notes.append(f"ankle joint centres from the malleoli ({ankle_method})")
 
     measured_thigh = tuple(float(np.linalg.norm(jc[f"HJC{s}"] - jc[f"KJC{s}"])) for s in "rl")
@@ -239,11 +316,13 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     _, anatomical["pelvis"] = jcm.pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
     from_landmarks["pelvis"] = True
     for s in "rl":
-        epicondyles = (P.get(f"LEF{s}"), P.get(f"MEF{s}"))
-        malleoli = (P.get(f"LM{s}"), P.get(f"MM{s}"))
+        # a chord's joint centre stands in for the medial marker: the frame's y lies in the plane of chord and axis
+        epicondyles = (P.get(f"LEF{s}"), jc[f"KJC{s}"] if f"KJC{s}" in chord else P.get(f"MEF{s}"))
+        malleoli = (P.get(f"LM{s}"), jc[f"AJC{s}"] if f"AJC{s}" in chord else P.get(f"MM{s}"))
         rotation[f"thigh_{s}"] = jcm.thigh_frame(jc[f"HJC{s}"], jc[f"KJC{s}"], *epicondyles, side=s)
         rotation[f"shank_{s}"] = jcm.shank_frame(jc[f"KJC{s}"], jc[f"AJC{s}"], *malleoli, side=s)
-        rotation[f"foot_{s}"] = jcm.foot_frame(P[f"CA{s}"], P[f"VM{s}"], P[f"FM{s}"], side=s)
+        rotation[f"foot_{s}"] = (jcm.toe_foot_frame(P[f"CA{s}"], P[f"MT2{s}"], rotation[f"shank_{s}"]) if s in toe
+                                 else jcm.foot_frame(P[f"CA{s}"], P[f"VM{s}"], P[f"FM{s}"], side=s))
         origin.update({f"thigh_{s}": jc[f"HJC{s}"], f"shank_{s}": jc[f"KJC{s}"], f"foot_{s}": P[f"CA{s}"]})
         from_landmarks.update({f"thigh_{s}": all(e is not None for e in epicondyles),
                                f"shank_{s}": all(m is not None for m in malleoli), f"foot_{s}": True})
@@ -287,14 +366,23 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
         one_of(b, BODIES, where="extra_tracking_markers", path=source)
     landmarks_in_body: dict[str, dict[str, np.ndarray]] = {}
     tracking: dict[str, tuple[str, ...]] = {}
+    chained: dict[str, str] = {}
     locked = []
     for i, b in enumerate(BODIES):
         candidates = tracking_landmarks(b) + tuple(extra.get(b, ()))
         names = [n for n in dict.fromkeys(candidates) if n in P]
         landmarks_in_body[b] = {n: P[n] - com[i] for n in names}
+        proximal = _PROXIMAL_CENTRE.get(b[:-2], "") + b[-1]
+        if len(names) == MIN_MARKERS - 1 and b not in ("pelvis", "hat") and proximal not in names:
+            chained[b] = proximal  # Plug-in Gait's tracking: two markers and the joint centre above
+            names.append(proximal)
+            landmarks_in_body[b][proximal] = jc[proximal] - com[i]
+            notes.append(f"{b}: tracked by {', '.join(names[:-1])} and the {proximal} placed by the parent's pose")
         if len(names) >= MIN_MARKERS:
             tracking[b] = tuple(names)
             continue
+        if marker_set is not None and b not in ("pelvis", "hat"):
+            raise InputError(source, *_locked_leg_message(b, names, P, marker_set))
         if b == "pelvis":
             raise InputError(source, "pelvis", f"fewer than {MIN_MARKERS} pelvis markers in the static trial "
                                                f"(found {', '.join(names) or 'none'} of "
@@ -313,4 +401,4 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
         anatomical_from_landmarks=tuple(from_landmarks[b] for b in BODIES),
         joint_centres_m={"lumbar": omph, **jc}, com_m=com, segments=body_segs,
         static_landmarks_m={k: v for k, v in P.items() if k in LANDMARKS or any(k in e for e in extra.values())},
-        notes=notes)
+        notes=notes, chained=chained)

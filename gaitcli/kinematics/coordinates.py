@@ -63,7 +63,8 @@ def _joint_positions(rotation, com_m, joint_in_parent_m, joint_in_child_m):
 
 
 def track_segments(markers: Markers, calibration: StaticCalibration) -> SegmentPoses:
-    """Fit every tracked body's static cluster to each frame by SVD (3.2–3.15); locked bodies follow their parent."""
+    """Fit every tracked body's static cluster to each frame by SVD (3.2–3.15); locked bodies follow their parent,
+    and a chained body's proximal joint centre is placed by its parent's fitted pose."""
     n = markers.n_frames
     nb = len(BODIES)
     R = np.full((n, nb, 3, 3), np.nan)
@@ -82,6 +83,10 @@ def track_segments(markers: Markers, calibration: StaticCalibration) -> SegmentP
         labels = calibration.tracking_landmarks[b]
         current = np.stack([markers.get(lab) if lab in markers else np.full((n, 3), np.nan) for lab in labels],
                            axis=1)
+        if b in calibration.chained:  # the proximal joint centre, where the parent's pose puts it
+            j = JOINT_CHILD.index(i)
+            p = JOINT_PARENT[j]
+            current[:, labels.index(calibration.chained[b])] = com[:, p] + R[:, p] @ jp[j]
         fit = fit_rigid_pose(calibration.cluster(b), current)
         R[:, i], com[:, i], rms[:, i], used[:, i] = fit.R, fit.d_m, fit.rms_m, fit.markers_used
         missing[b] = fit.invalid_frames

@@ -4,13 +4,18 @@
   ``"bell1990"``: from the mid-ASIS point, 0.19·PW posterior, 0.30·PW inferior,
   0.36·PW lateral (PW = inter-ASIS distance). ``"bell1989"``: from each ASIS,
   0.22·PW posterior, 0.30·PW distal, 0.14·PW medial (the same lateral position).
-  ``"harrington"`` (2007: pelvis width, depth and leg length) and ``"hara"`` (2016: leg
-  length), not the dissertation's, for labs that use them.
-* Knee: midpoint of the femoral epicondyle markers LEF and MEF (3.2.1).
+  ``"harrington"`` (2007: pelvis width, depth and leg length), ``"hara"`` (2016: leg
+  length) and ``"davis"`` (Davis et al. 1991, Plug-in Gait's: leg length, inter-ASIS
+  distance, marker radius), not the dissertation's, for labs that use them.
+* Knee: midpoint of the femoral epicondyle markers LEF and MEF (3.2.1). Without the
+  medial marker, Plug-in Gait's chord method (:func:`chord_joint_centre`) from the hip
+  centre, the thigh wand and LEF with the knee width and marker diameter.
 * Ankle: "from the malleoli using de Leva's tables" (3.2.1). Default ``"de_leva"``:
   the knee→mid-malleoli vector lengthened by de Leva's KJC→AJC / KJC→LMAL ratio
   (440.3/434.0 male), which puts the centre about 6 mm distal of the malleoli as in
-  de Leva's shank rows; ``"midpoint"``: the midpoint of LM and MM.
+  de Leva's shank rows; ``"midpoint"``: the midpoint of LM and MM. Without the medial
+  malleolus, the chord method from the knee centre, the shank wand and LM with the
+  ankle width.
 * Lab-exported virtual centres ``HJCr``, ``KJCr``, ``AJCr`` (and ``l``) replace these.
 
 Anatomical frames (model axes: x forward, y left, z up; columns of the returned
@@ -18,13 +23,15 @@ matrices are the frame's axes in global coordinates), following Cappozzo et al.
 (1995) as the dissertation does: pelvis from ASIS/PSIS; thigh z from KJC to HJC,
 y in the plane of HJC and the epicondyles; shank z from AJC to KJC, y in the plane
 of KJC and the malleoli; foot x from CA to the mid-metatarsal heads, z normal to
-the plane CA, VM, FM; HAT z from the lumbar joint to mid C7–ST, y along ACr→ACl.
+the plane CA, VM, FM (without VM, x from CA to the second metatarsal head MT2, y from
+the shank); HAT z from the lumbar joint to mid C7–ST, y along ACr→ACl.
 All functions are vectorised over leading dimensions ``(..., 3)``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -118,6 +125,78 @@ def regression_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str,
     return base - lateral * y, base + lateral * y
 
 
+#: Davis et al. (1991) as Plug-in Gait applies it: θ and β in rad, the ASIS–hip distance C = 0.115 LL − 15.3 mm and
+#: the ASIS–trochanter distance X_dis = 0.1288 LL − 48.56 mm (LL leg length, mm)
+DAVIS_1991 = {"theta_rad": 0.5, "beta_rad": 0.314, "C": (0.115, -15.3e-3), "X_dis": (0.1288, -48.56e-3)}
+
+
+def davis_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, leg_length_m: float,
+                            marker_radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Right and left hip joint centres (m) by Davis et al. (1991) (Plug-in Gait), from the pelvis markers, the
+    leg length (m) and the ASIS markers' radius (m), in :func:`pelvis_frame` (origin mid-ASIS, x anterior, y left,
+    z up): x = C cos θ sin β − (X_dis + r) cos β, lateral (aa − C sin θ) with aa half the inter-ASIS distance,
+    z = −C cos θ cos β − (X_dis + r) sin β."""
+    origin, R = pelvis_frame(asis_r, asis_l, psis_r, psis_l)
+    aa = np.linalg.norm(np.asarray(asis_l, float) - np.asarray(asis_r, float), axis=-1)[..., None] / 2
+    d = DAVIS_1991
+    C = d["C"][0] * leg_length_m + d["C"][1]
+    x_dis = d["X_dis"][0] * leg_length_m + d["X_dis"][1]
+    th, be = d["theta_rad"], d["beta_rad"]
+    anterior = C * np.cos(th) * np.sin(be) - (x_dis + marker_radius_m) * np.cos(be)
+    superior = -C * np.cos(th) * np.cos(be) - (x_dis + marker_radius_m) * np.sin(be)
+    lateral = aa - C * np.sin(th)
+    x, y, z = R[..., 0], R[..., 1], R[..., 2]
+    base = origin + anterior * x + superior * z
+    return base - lateral * y, base + lateral * y
+
+
+def chord_joint_centre(proximal, wand, lateral, offset_m) -> np.ndarray:
+    """Plug-in Gait's chord method: the joint centre J in the plane of ``proximal`` (the joint centre above),
+    ``wand`` (the segment's wand marker) and ``lateral`` (the marker on the joint's lateral side), at
+    ``offset_m`` from the lateral marker (half the joint width plus the marker radius), with the segment axis
+    proximal − J perpendicular to J − lateral, on the far side of the proximal–lateral line from the wand.
+
+    With u the unit vector lateral → proximal (length L) and v the in-plane unit normal to it away from the
+    wand: J = lateral + δ (δ/L · u + √(1 − δ²/L²) · v) (Thales: J lies on the circle over that line).
+    """
+    proximal, wand, lateral = (np.asarray(a, dtype=float) for a in (proximal, wand, lateral))
+    delta = np.asarray(offset_m, dtype=float)[..., None]
+    chord = proximal - lateral
+    length = np.linalg.norm(chord, axis=-1, keepdims=True)
+    u = chord / length
+    away = lateral - wand
+    v = unit(away - np.sum(away * u, axis=-1, keepdims=True) * u)
+    ratio = delta / length
+    return lateral + delta * (ratio * u + np.sqrt(np.clip(1 - ratio ** 2, 0.0, None)) * v)
+
+
+@dataclass(frozen=True)
+class JointWidths:
+    """Plug-in Gait's subject measurements for the chord method (m): knee and ankle widths per side
+    (``{"r": ..., "l": ...}``, a side missing when unknown), the marker diameter, and each segment's wand labels
+    (``{"thigh_r": ("RTHI",), ...}``: the tracking marker that, with the lateral marker, spans the chord plane;
+    the first one present is used)."""
+
+    knee_m: Mapping[str, float] = field(default_factory=dict)
+    ankle_m: Mapping[str, float] = field(default_factory=dict)
+    marker_diameter_m: float = 0.014
+    wands: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+
+    def offset_m(self, joint: str, side: str) -> float | None:
+        """δ = (width + marker diameter) / 2 of ``joint`` ``"knee"|"ankle"`` on ``side``, None when unknown."""
+        width = (self.knee_m if joint == "knee" else self.ankle_m).get(side)
+        return None if width is None else (width + self.marker_diameter_m) / 2
+
+    def chord_inputs(self, joint: str, side: str, landmarks: Mapping[str, np.ndarray]):
+        """(wand position, δ) for the chord of ``joint`` on ``side``, or None when the width or the wand is missing."""
+        labels = self.wands.get(f"{'thigh' if joint == 'knee' else 'shank'}_{side}", ())
+        wand = next((lab for lab in labels if present(landmarks, lab)), None)
+        offset = self.offset_m(joint, side)
+        if offset is None or wand is None:
+            return None
+        return np.asarray(landmarks[wand], dtype=float), offset
+
+
 def functional_joint_centre(R_parent, d_parent, R_child, d_child) -> tuple[np.ndarray, np.ndarray, float, int]:
     """SCORE (Ehrig et al. 2006): the point fixed in both bodies of a joint, from their poses over frames.
 
@@ -180,43 +259,62 @@ def _need(landmarks: Mapping[str, np.ndarray], name: str, purpose: str, source) 
 
 
 def leg_length_m(landmarks: Mapping[str, np.ndarray], source=None) -> float:
-    """Mean leg length (m) of the two sides, ASIS to medial malleolus (as Harrington and Hara measured it)."""
-    sides = [np.linalg.norm(np.asarray(landmarks[f"ASIS{s}"], float) - np.asarray(landmarks[f"MM{s}"], float), axis=-1)
-             for s in ("r", "l") if present(landmarks, f"MM{s}") and present(landmarks, f"ASIS{s}")]
+    """Mean leg length (m) of the two sides, ASIS to medial malleolus (as Harrington, Hara and Davis measured it);
+    to the lateral malleolus where a set has no medial marker (Plug-in Gait)."""
+    sides = []
+    for s in ("r", "l"):
+        malleolus = next((m for m in (f"MM{s}", f"LM{s}") if present(landmarks, m)), None)
+        if malleolus is not None and present(landmarks, f"ASIS{s}"):
+            sides.append(np.linalg.norm(np.asarray(landmarks[f"ASIS{s}"], float)
+                                        - np.asarray(landmarks[malleolus], float), axis=-1))
     if not sides:
-        raise InputError(source, "leg_length_m", "the hip regression needs the leg length: no medial malleolus "
-                                                 "markers (MMr, MMl) in the static trial (expected leg_length_m "
-                                                 "in subject.yaml)")
+        raise InputError(source, "leg_length_m", "the hip regression needs the leg length: no malleolus markers "
+                                                 "(MMr, MMl or LMr, LMl) in the static trial (expected leg_length_m "
+                                                 "in subject.yaml, or the C3D's PROCESSING:LeftLegLength)")
     return float(np.mean(sides))
 
 
 def joint_centres(landmarks: Mapping[str, np.ndarray], *, hip_method: str = "bell1990",
                   ankle_method: str = "de_leva", sex: str = "male", leg_length: float | None = None,
-                  source: str | Path | None = None) -> dict[str, np.ndarray]:
+                  widths: JointWidths | None = None, source: str | Path | None = None) -> dict[str, np.ndarray]:
     """``HJCr, HJCl, KJCr, KJCl, AJCr, AJCl`` from landmark positions ``{name: (..., 3)}``.
 
     A virtual joint centre present in ``landmarks`` is used as is; otherwise it is
-    estimated (Bell, epicondyle midpoint, malleoli). Raises :class:`InputError`
-    naming the first marker an estimate needs but ``landmarks`` lacks.
+    estimated (Bell or a regression; epicondyle midpoint and malleoli, or the chord method
+    where the medial marker is absent and ``widths`` gives the joint's width and wand).
+    Raises :class:`InputError` naming the first marker an estimate needs but ``landmarks`` lacks.
     """
+    widths = widths or JointWidths()
     out: dict[str, np.ndarray] = {}
     if not (present(landmarks, "HJCr") and present(landmarks, "HJCl")):
         pelvis = [_need(landmarks, n, "the hip joint centres", source) for n in ("ASISr", "ASISl", "PSISr", "PSISl")]
-        if hip_method in REGRESSIONS:
+        if hip_method in REGRESSIONS or hip_method == "davis":
             length = leg_length_m(landmarks, source) if leg_length is None else leg_length
+        if hip_method in REGRESSIONS:
             out["HJCr"], out["HJCl"] = regression_hip_joint_centres(*pelvis, method=hip_method, leg_length_m=length)
+        elif hip_method == "davis":
+            out["HJCr"], out["HJCl"] = davis_hip_joint_centres(*pelvis, leg_length_m=length,
+                                                               marker_radius_m=widths.marker_diameter_m / 2)
         else:
             out["HJCr"], out["HJCl"] = hip_joint_centres(*pelvis, method=hip_method)
     for s in ("r", "l"):
         if present(landmarks, f"HJC{s}"):
             out[f"HJC{s}"] = np.asarray(landmarks[f"HJC{s}"], dtype=float)
+        chord = widths.chord_inputs("knee", s, landmarks)
         if present(landmarks, f"KJC{s}"):
             out[f"KJC{s}"] = np.asarray(landmarks[f"KJC{s}"], dtype=float)
+        elif chord is not None and not present(landmarks, f"MEF{s}"):
+            out[f"KJC{s}"] = chord_joint_centre(out[f"HJC{s}"], chord[0],
+                                                _need(landmarks, f"LEF{s}", "the knee joint centre", source), chord[1])
         else:
             out[f"KJC{s}"] = knee_joint_centre(_need(landmarks, f"LEF{s}", "the knee joint centre", source),
                                                _need(landmarks, f"MEF{s}", "the knee joint centre", source))
+        chord = widths.chord_inputs("ankle", s, landmarks)
         if present(landmarks, f"AJC{s}"):
             out[f"AJC{s}"] = np.asarray(landmarks[f"AJC{s}"], dtype=float)
+        elif chord is not None and not present(landmarks, f"MM{s}"):
+            out[f"AJC{s}"] = chord_joint_centre(out[f"KJC{s}"], chord[0],
+                                                _need(landmarks, f"LM{s}", "the ankle joint centre", source), chord[1])
         else:
             out[f"AJC{s}"] = ankle_joint_centre(_need(landmarks, f"LM{s}", "the ankle joint centre", source),
                                                 _need(landmarks, f"MM{s}", "the ankle joint centre", source),
@@ -254,6 +352,13 @@ def foot_frame(ca, vm, fm, *, side: str) -> np.ndarray:
     CA, VM, FM, z = x × y (dorsal)."""
     ca, vm, fm = (np.asarray(a, dtype=float) for a in (ca, vm, fm))
     return frame_from_axes((vm + fm) / 2 - ca, _leftward(vm, fm, side), primary_axis="x", secondary_axis="y")
+
+
+def toe_foot_frame(ca, toe, shank_axes) -> np.ndarray:
+    """Foot anatomical axes without a fifth metatarsal marker (Plug-in Gait's HEE/TOE foot): x from CA to the toe
+    marker (second metatarsal head), y the shank's leftward axis made orthogonal to it, z = x × y (dorsal)."""
+    ca, toe = np.asarray(ca, dtype=float), np.asarray(toe, dtype=float)
+    return frame_from_axes(toe - ca, np.asarray(shank_axes, dtype=float)[..., 1], primary_axis="x", secondary_axis="y")
 
 
 def trunk_frame(lumbar, c7, st, ac_r, ac_l) -> np.ndarray:

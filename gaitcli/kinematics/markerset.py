@@ -34,8 +34,10 @@ MIDLINE = ("C7", "ST")
 
 #: the 28 markers of Table A.6 as model landmark names
 MARKERS = tuple(f"{d}{s}" for d in BILATERAL for s in SIDES) + MIDLINE
+#: landmarks beyond Table A.6 that clinical sets place: the second metatarsal head (Plug-in Gait's TOE), on the foot
+EXTRA_MARKERS = ("MT2r", "MT2l")
 VIRTUAL_JOINT_CENTRES = ("HJCr", "HJCl", "KJCr", "KJCl", "AJCr", "AJCl")
-LANDMARKS = MARKERS + VIRTUAL_JOINT_CENTRES
+LANDMARKS = MARKERS + EXTRA_MARKERS + VIRTUAL_JOINT_CENTRES
 
 _SEGMENT_DESIGNATIONS = {"thigh": ("GT", "MRF", "LEF", "MEF"), "shank": ("TT", "LM", "MM"), "foot": ("CA", "VM", "FM")}
 
@@ -57,42 +59,48 @@ JOINT_CENTRE_BODIES = {
 
 
 def tracking_landmarks(body: str) -> tuple[str, ...]:
-    """Landmarks that may track ``body``: its Table A.6 markers, then adjacent virtual joint centres.
+    """Landmarks that may track ``body``: its Table A.6 markers, the foot's MT2, then adjacent virtual joint centres.
 
     A virtual joint centre exported by the lab is fixed in both bodies it joins, so it
     takes part in both clusters when present (needed for marker sets like Plug-in Gait
     that have only two skin markers on the thigh).
     """
     extra = tuple(jc for jc, bodies in JOINT_CENTRE_BODIES.items() if body in bodies)
-    return SEGMENT_MARKERS[body] + extra
+    toe = tuple(m for m in EXTRA_MARKERS if body == f"foot_{m[-1]}")
+    return SEGMENT_MARKERS[body] + toe + extra
 
 
 def body_of_marker(landmark: str) -> str:
-    """The body a Table A.6 marker is fixed to."""
+    """The body a Table A.6 marker (or MT2) is fixed to."""
     for body, labels in SEGMENT_MARKERS.items():
         if landmark in labels:
             return body
+    if landmark in EXTRA_MARKERS:
+        return f"foot_{landmark[-1]}"
     raise KeyError(landmark)
 
 
-def required_landmarks(*, virtual_joint_centres: tuple[str, ...] | frozenset = ()) -> tuple[str, ...]:
+def required_landmarks(*, virtual_joint_centres: tuple[str, ...] | frozenset = (),
+                       chord_joint_centres: tuple[str, ...] | frozenset = (),
+                       toe_feet: tuple[str, ...] | frozenset = ()) -> tuple[str, ...]:
     """Landmarks a static trial must contain to define the model's geometry.
 
     Hip centres need ASIS and PSIS (Bell), knee centres LEF and MEF, ankle centres LM
     and MM, the foot CoM CA, VM and FM. A virtual joint centre in
     ``virtual_joint_centres`` removes the markers needed only for that centre (the
-    pelvis markers stay: they define the pelvis frame and track it). Markers needed
-    only for tracking (GT, MRF, TT, trunk) are not required: a body left with fewer
-    than three is locked to its parent.
+    pelvis markers stay: they define the pelvis frame and track it); a knee or ankle
+    centre in ``chord_joint_centres`` (Plug-in Gait's chord method) needs only the
+    lateral marker; a side in ``toe_feet`` has a foot of CA and MT2 (no VM, FM).
+    Markers needed only for tracking (GT, MRF, TT, trunk) are not required: a body
+    left with fewer than three is locked to its parent.
     """
-    virtual = set(virtual_joint_centres)
+    virtual, chord = set(virtual_joint_centres), set(chord_joint_centres)
     needed = ["ASISr", "ASISl", "PSISr", "PSISl"]
     for s in SIDES:
-        if f"KJC{s}" not in virtual:
-            needed += [f"LEF{s}", f"MEF{s}"]
-        if f"AJC{s}" not in virtual:
-            needed += [f"LM{s}", f"MM{s}"]
-        needed += [f"CA{s}", f"VM{s}", f"FM{s}"]
+        for jc, lateral, medial in ((f"KJC{s}", f"LEF{s}", f"MEF{s}"), (f"AJC{s}", f"LM{s}", f"MM{s}")):
+            if jc not in virtual:
+                needed += [lateral] if jc in chord else [lateral, medial]
+        needed += [f"CA{s}", f"MT2{s}"] if s in toe_feet else [f"CA{s}", f"VM{s}", f"FM{s}"]
     return tuple(needed)
 
 
@@ -102,11 +110,12 @@ LANDMARK_DESCRIPTIONS = {
     "MRF": "rectus femoris (mid-thigh)", "LEF": "lateral femoral epicondyle", "MEF": "medial femoral epicondyle",
     "TT": "tibial tuberosity", "LM": "lateral malleolus", "MM": "medial malleolus", "CA": "posterior calcaneus",
     "VM": "lateral (fifth) metatarsal head", "FM": "medial (first) metatarsal head", "AC": "acromioclavicular joint",
-    "C7": "seventh cervical vertebra", "ST": "manubrium of the sternum", "HJC": "hip joint centre",
+    "C7": "seventh cervical vertebra", "ST": "manubrium of the sternum", "MT2": "second metatarsal head (toe marker)",
+    "HJC": "hip joint centre",
     "KJC": "knee joint centre", "AJC": "ankle joint centre",
 }
 MARKER_SETS_DIR = Path(__file__).resolve().parent / "marker_sets"
-_PRESET_SECTIONS = ("name", "description", "anatomical", "virtual_joint_centres", "tracking")
+_PRESET_SECTIONS = ("name", "description", "anatomical", "virtual_joint_centres", "tracking", "wands")
 
 
 def describe_landmark(landmark: str) -> str:
@@ -125,12 +134,14 @@ class MarkerSet:
     or virtual joint centre), in order of preference: the first one a file has is
     used. ``tracking[body]``: lab labels of markers fixed to ``body`` that are no
     anatomical landmark (wands, clusters, plates); they join its SVD cluster.
-    ``name``: the preset (``cleveland``, ...) or ``"marker_map"``.
+    ``name``: the preset (``cleveland``, ...) or ``"marker_map"``. ``wands[body]``: those of its tracking
+    markers that are Plug-in Gait wands, which with the lateral marker span the plane of the chord method.
     """
 
     name: str
     landmarks: Mapping[str, tuple[str, ...]]
     tracking: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    wands: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     def merged(self, marker_map: Mapping[str, str], *, source=None) -> MarkerSet:
         """This set with subject.yaml's ``marker_map`` {lab label: landmark or body} over it: a mapped label
@@ -153,7 +164,7 @@ class MarkerSet:
             else:
                 landmarks[target] = (lab,)
         name = self.name if self.name == "marker_map" else f"{self.name} with marker_map"
-        return MarkerSet(name, landmarks, tracking)
+        return MarkerSet(name, landmarks, tracking, self.wands)
 
     def label_of(self, landmark: str, labels=None) -> str | None:
         """The lab label that carries ``landmark`` (the first of ``labels`` that is a candidate, when given)."""
@@ -217,17 +228,20 @@ def _label_lists(data, where: str, keys, path) -> dict[str, tuple[str, ...]]:
 
 def read_marker_set(path: str | Path) -> MarkerSet:
     """A marker-set YAML file (``marker_sets/*.yaml``): ``anatomical`` and ``virtual_joint_centres``
-    {landmark: [lab labels]}, ``tracking`` {body: [lab labels]}."""
+    {landmark: [lab labels]}, ``tracking`` and ``wands`` {body: [lab labels]} (wands also track)."""
     path = Path(path)
     data = read_yaml(path)
     if not isinstance(data, dict):
         raise InputError(path, None, "expected a mapping with anatomical, virtual_joint_centres and tracking")
     known_keys(data, _PRESET_SECTIONS, path=path)
-    landmarks = _label_lists(data.get("anatomical"), "anatomical", MARKERS, path)
+    landmarks = _label_lists(data.get("anatomical"), "anatomical", MARKERS + EXTRA_MARKERS, path)
     landmarks.update(_label_lists(data.get("virtual_joint_centres"), "virtual_joint_centres",
                                   VIRTUAL_JOINT_CENTRES, path))
     tracking = _label_lists(data.get("tracking"), "tracking", BODIES, path)
-    return MarkerSet(str(data.get("name", path.stem)), landmarks, tracking)
+    wands = _label_lists(data.get("wands"), "wands", BODIES, path)
+    for body, labels in wands.items():
+        tracking[body] = tuple(dict.fromkeys(labels + tracking.get(body, ())))
+    return MarkerSet(str(data.get("name", path.stem)), landmarks, tracking, wands)
 
 
 def marker_set_names() -> tuple[str, ...]:

@@ -26,7 +26,7 @@ from gaitcli.signal.gaps import Gap, fill_gaps
 
 #: foot landmarks used for events and plate-to-foot assignment: heel, toe (first choice, fallback)
 HEEL = {"r": ("CAr",), "l": ("CAl",)}
-TOE = {"r": ("FMr", "VMr"), "l": ("FMl", "VMl")}
+TOE = {"r": ("FMr", "VMr", "MT2r"), "l": ("FMl", "VMl", "MT2l")}
 PELVIS = ("ASISr", "ASISl", "PSISr", "PSISl")
 
 
@@ -248,7 +248,7 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
         if heel is not None and toe is not None:
             feet[side] = (heel, toe)
     if len(feet) < 2:
-        warnings.warn("no heel (CAr/CAl) and toe (FMr/FMl or VMr/VMl) landmarks for both feet: no gait events and "
+        warnings.warn("no heel (CAr/CAl) and toe (FMr/FMl, VMr/VMl or MT2r/MT2l) landmarks for both feet: no gait events and "
                       "no plate-to-foot assignment (add a marker_map naming them)", GaitWarning, stacklevel=2)
         detection = EventDetection(Events(), [], np.full((len(plates), n), "", dtype="<U1"))
     else:

@@ -81,8 +81,8 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
     if out.exists() and not out.is_dir():
         raise InputError(out, None, "is a file (expected the trial folder to write)")
     make_parent(out / "trial.c3d")
-    write_c3d(out / "trial.c3d", trial.markers, trial.plates)
-    write_c3d(out / "static.c3d", trial.static, [])
+    write_c3d(out / "trial.c3d", trial.markers, trial.plates, metadata=trial.metadata)
+    write_c3d(out / "static.c3d", trial.static, [], metadata=trial.metadata)
     with atomic_path(out / "subject.yaml") as tmp:
         tmp.write_text(subject_yaml(trial, condition=condition, mass_kg=mass_kg, stature_m=stature_m, sex=sex,
                                     marker_set=marker_set))

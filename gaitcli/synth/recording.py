@@ -9,7 +9,7 @@ stance. The truth joint moments carry every ground contact, not only the plates.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -52,6 +52,7 @@ class SyntheticTrial:
     design: GaitDesign
     joint_moments_Nm: np.ndarray  # (frames, 7, 3) in the distal segment frame
     split_clip: float
+    metadata: dict = field(default_factory=dict)  # C3D subject parameters {"PROCESSING:RightKneeWidth": mm, ...} (Plug-in Gait)
 
 
 def white_noise(rng, rms_mm, shape):
@@ -79,9 +80,17 @@ def skin_artefact(rng, time_s, period_s, amplitude_m, bodies):
 
 
 #: the marker sets ``gait synth`` can place: Table A.6 markers left out, and the tracking clusters added (body →
-#: how many markers of the preset's tracking list)
+#: how many markers of the preset's tracking list). Plug-in Gait's wands, ankle and toe markers are placed by
+#: :func:`plug_in_gait_points`.
 SYNTH_MARKER_SETS = {"dissertation": ((), {}),
-                     "cleveland": (("GT", "MRF", "TT"), {"thigh_r": 3, "thigh_l": 3, "shank_r": 3, "shank_l": 3})}
+                     "cleveland": (("GT", "MRF", "TT"), {"thigh_r": 3, "thigh_l": 3, "shank_r": 3, "shank_l": 3}),
+                     "cast": (("MRF",), {"thigh_r": 1, "thigh_l": 1, "shank_r": 2, "shank_l": 2}),
+                     "plug_in_gait": (("GT", "MRF", "MEF", "TT", "LM", "MM", "VM", "FM"), {})}
+#: Plug-in Gait's synthetic subject: marker diameter (m), how far lateral of the joint centre the ankle marker sits
+#: (× stature; the knee marker is the template's LEF, 0.025 × stature) and of the segment axis the wands sit (m)
+PIG_MARKER_DIAMETER_M = 0.014
+PIG_ANKLE_OFFSET = 0.02
+PIG_WAND_LATERAL_M = {"thigh": 0.08, "shank": 0.07}
 #: a cluster's markers about its centre, m (forward, down) in the sagittal plane of the segment's lateral side
 CLUSTER_PATTERN = ((0.03, -0.04), (0.03, 0.04), (-0.03, 0.0))
 #: how far lateral of the segment's axis a cluster's centre sits, m
@@ -104,6 +113,29 @@ def cluster_template(template: dict, joint_centres: dict, marker_set: str) -> di
         for label, (forward, down) in zip(tracking[body][:count], CLUSTER_PATTERN):
             out[label] = centre + [forward, 0.0, -down]
     return out
+
+
+def plug_in_gait_points(template: dict, joint_centres: dict, stature_m: float) -> tuple[dict, dict, dict]:
+    """Plug-in Gait's markers beyond Table A.6's as they stand (m): per side the wands THI and TIB lateral of the
+    thigh's and shank's mid-points in the leg's frontal plane, ANK at the ankle centre plus ``PIG_ANKLE_OFFSET`` ×
+    stature laterally (so that the chord method's right angle holds exactly), TOE at the mid-metatarsal heads.
+    Returns the points by lab label, the body each tracks, and the subject measurements the C3D's PROCESSING
+    group carries (widths from the marker offsets: width = 2 × offset − marker diameter, mm)."""
+    points, bodies, metadata = {}, {}, {"PROCESSING:MarkerDiameter": 1000.0 * PIG_MARKER_DIAMETER_M}
+    for s, side, lateral in (("r", "Right", -1.0), ("l", "Left", 1.0)):
+        prefix = s.upper()
+        hjc, kjc, ajc = (joint_centres[f"{j}{s}"] for j in ("HJC", "KJC", "AJC"))
+        out = np.array([0.0, lateral, 0.0])
+        points[f"{prefix}THI"] = (hjc + kjc) / 2 + PIG_WAND_LATERAL_M["thigh"] * out
+        points[f"{prefix}TIB"] = (kjc + ajc) / 2 + PIG_WAND_LATERAL_M["shank"] * out
+        points[f"{prefix}ANK"] = ajc + PIG_ANKLE_OFFSET * stature_m * out
+        points[f"{prefix}TOE"] = (template[f"FM{s}"] + template[f"VM{s}"]) / 2
+        bodies.update({f"{prefix}THI": f"thigh_{s}", f"{prefix}TIB": f"shank_{s}", f"{prefix}ANK": f"shank_{s}",
+                       f"{prefix}TOE": f"foot_{s}"})
+        knee_offset = float(np.linalg.norm(template[f"LEF{s}"] - kjc))
+        metadata[f"PROCESSING:{side}KneeWidth"] = 1000.0 * (2 * knee_offset - PIG_MARKER_DIAMETER_M)
+        metadata[f"PROCESSING:{side}AnkleWidth"] = 1000.0 * (2 * PIG_ANKLE_OFFSET * stature_m - PIG_MARKER_DIAMETER_M)
+    return points, bodies, metadata
 
 
 def model_markers(q, calibration, extra: dict[str, tuple[str, ...]] | None = None):
@@ -257,13 +289,17 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
 
     frames = slice(0, None, step)
     qm, qd, qdd, tm = q[frames], qd_c[i][frames], qdd_c[i][frames], t[frames]
-    placed = template
+    placed, metadata = template, {}
     if marker_set != "dissertation":  # the same bodies, with the preset's clusters riding on them too
         from gaitcli.kinematics.markerset import marker_set as preset
 
-        clusters = cluster_template(template, cal.joint_centres_m, marker_set)
-        extra = {body: tuple(lab for lab in clusters if lab in preset(marker_set).tracking[body])
-                 for body in SYNTH_MARKER_SETS[marker_set][1]}
+        if marker_set == "plug_in_gait":
+            clusters, owner, metadata = plug_in_gait_points(template, cal.joint_centres_m, stature_m)
+            extra = {body: tuple(lab for lab in clusters if owner[lab] == body) for body in set(owner.values())}
+        else:
+            clusters = cluster_template(template, cal.joint_centres_m, marker_set)
+            extra = {body: tuple(lab for lab in clusters if lab in preset(marker_set).tracking[body])
+                     for body in SYNTH_MARKER_SETS[marker_set][1]}
         placed = {**template, **clusters}
         markers_cal = calibrate(landmarks_to_markers(placed, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg,
                                 stature_m=stature_m, sex=sex, extra_tracking_markers=extra,
@@ -287,4 +323,5 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
                           qd=qd, qdd=qdd, feet=sub_feet,
                           plate_feet=["".join(c[0] for c in chosen)] if shared_plate else [c[0] for c in chosen],
                           events=contact_events(contacts, chosen, t), calibration=cal, design=design,
-                          joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip)
+                          joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip,
+                          metadata=metadata)

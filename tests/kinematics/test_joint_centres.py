@@ -139,7 +139,7 @@ def test_regression_hip_centres_equal_the_published_equations(method, right):
     np.testing.assert_allclose(got[0], turn @ np.array(right) + [1.0, 2.0, 0.0], atol=1e-12)
 
 
-def test_the_regressions_take_the_leg_length_from_the_medial_malleoli_or_subject_yaml():
+def test_the_regressions_take_the_leg_length_from_the_malleoli_or_subject_yaml():
     t = standing_template(1.8)
     length = np.mean([np.linalg.norm(t[f"ASIS{s}"] - t[f"MM{s}"]) for s in "rl"])
     pelvis = [t[n] for n in ("ASISr", "ASISl", "PSISr", "PSISl")]
@@ -151,6 +151,10 @@ def test_the_regressions_take_the_leg_length_from_the_medial_malleoli_or_subject
                                                                                  leg_length_m=0.95)[0])
     del t["MMr"], t["MMl"]
     t["AJCr"], t["AJCl"] = t["LMr"], t["LMl"]
+    lateral = np.mean([np.linalg.norm(t[f"ASIS{s}"] - t[f"LM{s}"]) for s in "rl"])  # Plug-in Gait: no medial marker
+    np.testing.assert_allclose(jcm.joint_centres(t, hip_method="hara")["HJCr"],
+                               jcm.regression_hip_joint_centres(*pelvis, method="hara", leg_length_m=lateral)[0])
+    del t["LMr"], t["LMl"]
     with pytest.raises(InputError, match="leg_length_m"):
         jcm.joint_centres(t, hip_method="harrington", source="static.c3d")
 
@@ -190,3 +194,65 @@ def test_score_says_when_one_axis_of_motion_leaves_the_centre_undetermined():
     d_c += np.random.default_rng(5).normal(0, 0.001, d_c.shape)
     _, _, rms, spread = jcm.functional_joint_centre(R_p, d_p, R_c, d_c)
     assert rms < 2e-3 and spread > 0.1
+
+
+# ------------------------------------------------------------------ Davis (1991) and the chord method (Plug-in Gait)
+
+def test_davis_hip_centres_equal_the_hand_evaluated_equations():
+    """Leg length 900 mm, marker radius 7 mm, inter-ASIS 250 mm: C = 0.115·900 − 15.3 = 88.2 mm, X_dis =
+    0.1288·900 − 48.56 = 67.36 mm; with θ = 0.5, β = 0.314 rad: x = 88.2·cos θ·sin β − 74.36·cos β = −46.817 mm,
+    lateral 125 − 88.2·sin θ = 82.715 mm, z = −88.2·cos θ·cos β − 74.36·sin β = −96.585 mm (pelvis frame)."""
+    asis_r, asis_l = np.array([0.0, -0.125, 0.0]), np.array([0.0, 0.125, 0.0])
+    psis_r, psis_l = np.array([-0.16, -0.04, 0.0]), np.array([-0.16, 0.04, 0.0])
+    right, left = jcm.davis_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, leg_length_m=0.9, marker_radius_m=0.007)
+    np.testing.assert_allclose(right, [-0.046817, -0.082715, -0.096585], atol=1e-6)
+    np.testing.assert_allclose(left, [-0.046817, 0.082715, -0.096585], atol=1e-6)
+    R, t = _random_poses(1)
+    moved = [R[0] @ p + t[0] for p in (asis_r, asis_l, psis_r, psis_l)]
+    got = jcm.davis_hip_joint_centres(*moved, leg_length_m=0.9, marker_radius_m=0.007)
+    np.testing.assert_allclose(got[0], R[0] @ right + t[0], atol=1e-12)
+    landmarks = dict(zip(("ASISr", "ASISl", "PSISr", "PSISl"), (asis_r, asis_l, psis_r, psis_l)))
+    landmarks.update({f"{n}{s}": np.zeros(3) for n in ("LEF", "MEF", "LM", "MM") for s in "rl"})
+    out = jcm.joint_centres(landmarks, hip_method="davis", leg_length=0.9, widths=jcm.JointWidths(marker_diameter_m=0.014))
+    np.testing.assert_allclose(out["HJCr"], right, atol=1e-12)
+
+
+def _chord_knee(R, t, delta=0.05, side=-1.0):
+    """A right knee: hip centre 0.4 m above the knee centre, the knee marker ``delta`` lateral of it, the wand
+    lateral of the mid-thigh (in the frontal plane), all turned by ``R`` and moved by ``t``."""
+    hjc, kjc = np.array([0.0, 0.0, 0.9]), np.array([0.0, 0.0, 0.5])
+    kne, thi = kjc + [0.0, side * delta, 0.0], np.array([0.0, side * 0.09, 0.7])
+    return [R @ p + t for p in (hjc, thi, kne, kjc)]
+
+
+def test_the_chord_method_recovers_a_knee_centre_of_known_geometry():
+    for R, t in zip(*_random_poses(5)):
+        hjc, thi, kne, kjc = _chord_knee(R, t)
+        np.testing.assert_allclose(jcm.chord_joint_centre(hjc, thi, kne, 0.05), kjc, atol=1e-12)
+    stacked = [np.stack(p) for p in zip(*(_chord_knee(R, t) for R, t in zip(*_random_poses(4))))]
+    np.testing.assert_allclose(jcm.chord_joint_centre(*stacked[:3], np.full(4, 0.05)), stacked[3], atol=1e-12)
+    # the defining properties, for an off-plane wand too: |J − KNE| = δ and (HJC − J) ⊥ (KNE − J)
+    hjc, kne, wand = np.array([0.1, 0.2, 0.9]), np.array([0.13, 0.11, 0.48]), np.array([0.2, 0.05, 0.7])
+    j = jcm.chord_joint_centre(hjc, wand, kne, 0.055)
+    assert abs(np.linalg.norm(j - kne) - 0.055) < 1e-12 and abs(np.dot(hjc - j, kne - j)) < 1e-12
+
+
+def test_knee_and_ankle_centres_by_the_chord_method_need_width_and_wand():
+    t = standing_template(1.8, with_virtual_joint_centres=True)
+    truth = {k: t.pop(k) for k in ("HJCr", "HJCl", "KJCr", "KJCl", "AJCr", "AJCl")}
+    t["HJCr"], t["HJCl"] = truth["HJCr"], truth["HJCl"]
+    for s, lateral in (("r", -1.0), ("l", 1.0)):
+        del t[f"MEF{s}"], t[f"MM{s}"]
+        t[f"{s.upper()}THI"] = (truth[f"HJC{s}"] + truth[f"KJC{s}"]) / 2 + [0.0, 0.08 * lateral, 0.0]
+        t[f"{s.upper()}TIB"] = (truth[f"KJC{s}"] + truth[f"AJC{s}"]) / 2 + [0.0, 0.07 * lateral, 0.0]
+        t[f"LM{s}"] = truth[f"AJC{s}"] + [0.0, 0.035 * lateral, 0.0]
+    knee = float(np.linalg.norm(t["LEFr"] - truth["KJCr"]))
+    widths = jcm.JointWidths(knee_m={"r": 2 * knee - 0.014, "l": 2 * knee - 0.014},
+                             ankle_m={"r": 0.07 - 0.014, "l": 0.07 - 0.014}, marker_diameter_m=0.014,
+                             wands={"thigh_r": ("RTHI",), "thigh_l": ("LTHI",), "shank_r": ("RTIB",),
+                                    "shank_l": ("LTIB",)})
+    out = jcm.joint_centres(t, widths=widths)
+    for name in ("KJCr", "KJCl", "AJCr", "AJCl"):
+        np.testing.assert_allclose(out[name], truth[name], atol=1e-12)
+    with pytest.raises(InputError, match="MEFr"):  # no width: the medial marker is needed after all
+        jcm.joint_centres(t, widths=jcm.JointWidths(wands=widths.wands))

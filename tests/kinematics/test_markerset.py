@@ -70,19 +70,19 @@ def test_apply_marker_map_rejects_unknown_landmarks_and_duplicates():
 
 def test_standing_template_is_complete_and_symmetric():
     t = standing_template(1.8, with_virtual_joint_centres=True)
-    assert set(t) == set(LANDMARKS)
+    assert set(t) == set(MARKERS + VIRTUAL_JOINT_CENTRES)  # Table A.6's, not the extra MT2
     mirror = np.array([1.0, -1.0, 1.0])
     for name in MARKERS[:-2]:
         if name.endswith("r"):
             np.testing.assert_allclose(t[name] * mirror, t[name[:-1] + "l"])
     m = landmarks_to_markers(t)
-    assert m.positions_m.shape == (1, len(LANDMARKS), 3)
+    assert m.positions_m.shape == (1, len(MARKERS + VIRTUAL_JOINT_CENTRES), 3)
 
 
 # ------------------------------------------------------------------ presets (marker_set: in subject.yaml)
 
 def test_every_bundled_preset_reads_and_names_only_model_landmarks_and_bodies():
-    assert set(marker_set_names()) == {"cast", "cleveland", "dissertation"}
+    assert set(marker_set_names()) == {"cast", "cleveland", "dissertation", "plug_in_gait"}
     for name in marker_set_names():
         preset = marker_set(name)
         assert preset.name == name
