@@ -326,6 +326,44 @@ def run_command(console: Console, trial, out, pipeline, no_plots):
     console.run(trial, cfg.stages, cfg, out=out, plots=not no_plots)
 
 
+@gait.command("batch")
+@click.argument("lab_dir", type=click.Path(path_type=Path))
+@click.option("--pipeline", "pipeline", type=click.Path(path_type=Path),
+              help="Pipeline YAML file, or a bundled pipeline by name; default: standard.")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes of the local Dask cluster (default: the number of CPUs).")
+@click.option("--scheduler", help="Address of an existing Dask scheduler (tcp://host:port) instead of a local cluster.")
+@click.option("--force", is_flag=True, help="Run every trial again, also those whose outputs are current.")
+@click.option("--no-plots", "no_plots", is_flag=True, help="Skip the figures (plots/).")
+@click.pass_obj
+def batch_command(console: Console, lab_dir, pipeline, workers, scheduler, force, no_plots):
+    """Run the pipeline on every trial folder below LAB_DIR as Dask tasks; batch_summary.csv in LAB_DIR."""
+    import os
+
+    from gaitcli.batch import BATCH_SUMMARY, run_batch, stages_of
+    from gaitcli.report.progress import BatchProgress
+
+    if workers is not None and scheduler is not None:
+        raise click.UsageError("--workers and --scheduler exclude each other (a scheduler has its own workers)")
+    cfg = configure(pipeline)
+
+    with BatchProgress(stages_of(cfg), enabled=not console.quiet) as progress:
+        def started(total, to_run, dashboard):
+            progress.start(total)
+            if to_run:
+                console.info(f"batch: {to_run} of {total} trials to run"
+                             + (f"; Dask dashboard {dashboard}" if dashboard else ""))
+
+        result = run_batch(lab_dir, cfg, workers=workers or os.cpu_count() or 1, scheduler=scheduler, force=force,
+                           plots=not no_plots, on_rows=progress, on_start=started)
+    for trial, status in result.trial_status().items():
+        if status == "failed":
+            reason = next(r.reason for r in result.rows if r.trial == trial and r.status == "failed")
+            console.info(f"batch: {trial}: failed: {reason}")
+    console.info(f"batch: wrote {Path(lab_dir) / BATCH_SUMMARY}")
+    click.echo(f"{result.line()} ({result.elapsed_s:.1f} s)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Console-script entry point; maps errors to exit codes."""
     argv = list(sys.argv[1:] if argv is None else argv)

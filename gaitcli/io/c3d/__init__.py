@@ -49,7 +49,9 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     the read are given again here."""
     path = Path(path)
     header_frames = check_file(path)  # the usual one-line errors without a child process
-    if "fork" not in multiprocessing.get_all_start_methods():  # Windows: the checks above, then in-process
+    # Windows (no fork), and a daemonic process such as a Dask worker, which may not have children: the checks
+    # above, then in-process
+    if "fork" not in multiprocessing.get_all_start_methods() or multiprocessing.current_process().daemon:
         return read_c3d_here(path, to_model_axes=to_model_axes, header_frames=header_frames)
     size = path.stat().st_size
     context = multiprocessing.get_context("fork")

@@ -1,0 +1,343 @@
+"""Many trials at once on a Dask cluster (``gait batch``).
+
+:func:`find_trials` finds every trial folder below a lab folder (a folder with ``subject.yaml``; ``gait_out``
+and hidden folders are not searched). :func:`plan` decides, in the client and without a cluster, what is
+current: a trial whose every stage's output was made from the same inputs and configuration is ``skipped``
+(its key figures read from the outputs' ``summary.json``), and a trial that failed on bad input (exit 2) in the
+previous batch with the same files and configuration (``batch_summary.csv``'s ``input_key``) keeps its failure
+without being run again. The rest become Dask tasks (:func:`run_trial`), each calling the pipeline's stage
+functions (:func:`gaitcli.pipeline.run_stages`), never the CLI; a trial's failure is its rows, never the
+batch's. A worker that dies mid-trial leaves only the hidden ``.part`` folder of the stage it was writing
+(outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); the scheduler runs that trial once more on
+another worker and marks it failed after a second death (``distributed.scheduler.allowed-failures: 1`` on
+the local cluster). Results stay on disk: the client holds one row per trial × stage and at most a few tasks
+per worker in flight, so its memory does not grow with the number of trials waiting.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import os
+import time
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+
+from gaitcli.config import PipelineConfig, to_yaml
+from gaitcli.core.registry import requirements, stage_names
+from gaitcli.errors import GaitError, InputError
+from gaitcli.io.atomic import atomic_path, remove_stale
+
+BATCH_SUMMARY = "batch_summary.csv"
+#: folders never searched for trials: outputs, and hidden or cache folders
+NOT_SEARCHED = ("gait_out", "__pycache__")
+#: summary.json figures copied into batch_summary.csv, per stage (DESIGN.md's keys)
+KEY_FIGURES = {
+    "filter": ("frames", "gaps_filled", "plates"),
+    "idyn": ("speed_m_s", "stride_length_m", "period_s", "stance_right_pct", "stance_left_pct",
+             "rms_residual_force_N", "rms_residual_moment_Nm", "mass_kg"),
+    "muscles": ("method", "converged", "metabolic_cost_J", "cost_of_transport_J_per_m", "max_moment_error_Nm"),
+}
+#: tasks in flight per worker: enough to keep every worker busy, few enough that the client stays small
+TASKS_PER_WORKER = 2
+#: how often a task may be on a worker that dies before it counts as failed (1: retried once)
+ALLOWED_WORKER_DEATHS = 1
+
+
+@dataclass(frozen=True)
+class BatchRow:
+    """One trial × stage of a batch: ``status`` ok | unconverged | failed | skipped, the exit code a single-trial
+    command would have given, the one-line ``reason`` of a failure, the stage's wall time (s; of the whole
+    trial's attempt for a failure), the
+    ``input_key`` of the trial's files and configuration, and the stage's key figures."""
+
+    trial: str
+    stage: str
+    status: str
+    exit_code: int = 0
+    reason: str = ""
+    wall_time_s: float = 0.0
+    input_key: str = ""
+    figures: dict = field(default_factory=dict)
+
+
+@dataclass
+class BatchResult:
+    """Every row, and the counts per trial: a trial is failed if a stage failed, unconverged if one did not
+    converge, skipped if every stage was current, else ok."""
+
+    rows: list[BatchRow]
+    elapsed_s: float = 0.0
+    dashboard: str | None = None
+
+    def trial_status(self) -> dict[str, str]:
+        by_trial: dict[str, set[str]] = {}
+        for row in self.rows:
+            by_trial.setdefault(row.trial, set()).add(row.status)
+        return {t: next(s for s in ("failed", "unconverged", "ok", "skipped") if s in states)
+                for t, states in by_trial.items()}
+
+    def counts(self) -> dict[str, int]:
+        status = list(self.trial_status().values())
+        return {s: status.count(s) for s in ("ok", "failed", "skipped", "unconverged")}
+
+    def line(self) -> str:
+        """``N ok, F failed, S skipped`` (and ``, U unconverged`` when there are any)."""
+        c = self.counts()
+        text = f"{c['ok']} ok, {c['failed']} failed, {c['skipped']} skipped"
+        return text + (f", {c['unconverged']} unconverged" if c["unconverged"] else "")
+
+
+def find_trials(lab_dir: str | Path) -> list[Path]:
+    """Every folder at or below ``lab_dir`` holding a ``subject.yaml``, sorted; outputs and hidden folders are
+    not searched."""
+    lab_dir = Path(lab_dir)
+    if not lab_dir.is_dir():
+        raise InputError(lab_dir, None, "lab folder not found (expected a folder of trial folders)")
+    found = []
+    for root, dirs, files in os.walk(lab_dir):
+        dirs[:] = sorted(d for d in dirs if d not in NOT_SEARCHED and not d.startswith("."))
+        if "subject.yaml" in files:
+            found.append(Path(root))
+    return sorted(found)
+
+
+def stages_of(cfg: PipelineConfig) -> tuple[str, ...]:
+    """The pipeline's stages with whatever they need, in run order."""
+    wanted = {n for name in cfg.stages for n in requirements(name)}
+    return tuple(n for n in stage_names() if n in wanted)
+
+
+def input_key(folder: Path, cfg: PipelineConfig) -> str:
+    """SHA-256 of the trial folder's files (names and contents; not its outputs) and the resolved configuration."""
+    digest = hashlib.sha256(to_yaml(cfg).encode())
+    for path in sorted(p for p in folder.iterdir() if p.is_file()):
+        digest.update(path.name.encode())
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+    return digest.hexdigest()
+
+
+def _figures(stage: str, summary: dict | None) -> dict:
+    summary = summary or {}
+    return {k: summary[k] for k in KEY_FIGURES.get(stage, ()) if k in summary}
+
+
+def stale_stages(folder: Path, name: str, cfg: PipelineConfig, key: str) -> tuple[tuple[str, ...], list[BatchRow]]:
+    """The stages of a trial whose outputs are missing or were made from other inputs or configuration, and
+    ``skipped`` rows for the others (their key figures from ``summary.json``). A trial that cannot be opened
+    (bad subject.yaml, no trial file) has every stage stale: running it gives the reason."""
+    from gaitcli.pipeline import TrialRun
+
+    try:
+        run = TrialRun(folder, None, cfg)
+    except GaitError:
+        return stages_of(cfg), []
+    stale, rows = [], []
+    for stage in stages_of(cfg):
+        path = run.fresh(stage)
+        try:
+            summary = None if path is None else json.loads((path.parent / "summary.json").read_text())
+        except (OSError, ValueError):
+            summary = None
+        if summary is None:
+            stale.append(stage)
+        else:
+            rows.append(BatchRow(name, stage, "skipped", input_key=key, figures=_figures(stage, summary)))
+    return tuple(stale), rows
+
+
+def run_trial(folder: str, name: str, cfg: PipelineConfig, key: str, stale: Sequence[str],
+              plots: bool = True) -> list[BatchRow]:
+    """The Dask task: run the ``stale`` stages on one trial (the fresh ones they need are read back); its rows
+    (a failure is rows, not an exception)."""
+    from gaitcli.errors import NotConvergedError
+    from gaitcli.pipeline import run_stages
+
+    started = time.perf_counter()
+    names = stages_of(cfg)
+
+    def failed(code: int, reason: str) -> list[BatchRow]:
+        remove_stale_parts(Path(folder), cfg)
+        return [BatchRow(name, s, "failed", code, reason, round(time.perf_counter() - started, 3), key)
+                for s in names]
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            outcomes = run_stages(Path(folder), stale, cfg, plots=plots)
+    except (InputError, NotConvergedError) as exc:
+        return failed(exc.exit_code, str(exc))
+    except GaitError as exc:
+        return failed(exc.exit_code, str(exc))
+    except Exception as exc:  # an internal error in one trial is that trial's failure
+        return failed(1, f"internal error: {type(exc).__name__}: {exc}")
+    rows = []
+    for o in outcomes:
+        status = {"written": "ok", "reused": "skipped", "unconverged": "unconverged"}[o.status]
+        summary = o.summary
+        if summary is None and (o.folder / "summary.json").is_file():
+            summary = json.loads((o.folder / "summary.json").read_text())
+        rows.append(BatchRow(name, o.stage, status, 3 if status == "unconverged" else 0, o.message,
+                             o.elapsed_s if status != "skipped" else 0.0, key, _figures(o.stage, summary)))
+    return rows
+
+
+def remove_stale_parts(folder: Path, cfg: PipelineConfig) -> None:
+    """Remove what killed runs left of this trial's stage folders (hidden ``.part`` folders)."""
+    from gaitcli.core.registry import stage
+
+    out = folder / "gait_out"
+    if out.is_dir():
+        for name in stages_of(cfg):
+            remove_stale(out / stage(name).output_folder(cfg.section(name)))
+
+
+def read_summary(path: Path) -> dict[str, list[BatchRow]]:
+    """The previous batch's rows by trial (empty when there is no readable ``batch_summary.csv``)."""
+    if not path.is_file():
+        return {}
+    rows: dict[str, list[BatchRow]] = {}
+    try:
+        with open(path, newline="") as f:
+            for r in csv.DictReader(f):
+                row = BatchRow(r["trial"], r["stage"], r["status"], int(r["exit_code"] or 0), r["reason"],
+                               float(r["wall_time_s"] or 0), r["input_key"])
+                rows.setdefault(row.trial, []).append(row)
+    except (KeyError, ValueError, csv.Error):
+        return {}
+    return rows
+
+
+def write_summary(path: Path, rows: Sequence[BatchRow]) -> Path:
+    """``batch_summary.csv``: one row per trial × stage, the key figures as columns (written atomically)."""
+    figure_columns = list(dict.fromkeys(k for r in rows for k in r.figures))
+    base = [f.name for f in fields(BatchRow) if f.name != "figures"]
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=base + figure_columns)
+    writer.writeheader()
+    for r in sorted(rows, key=lambda r: (r.trial, stage_names().index(r.stage) if r.stage in stage_names() else 99)):
+        data = {k: v for k, v in asdict(r).items() if k != "figures"}
+        writer.writerow({**data, **r.figures})
+    with atomic_path(path) as tmp:
+        tmp.write_text(buffer.getvalue())
+    return path
+
+
+def plan(lab_dir: Path, cfg: PipelineConfig, *, force: bool = False) -> tuple[list[BatchRow], list[tuple]]:
+    """What is current (rows) and what must run (``(folder, name, key, stale stages)`` per trial), decided in the
+    client."""
+    trials = find_trials(lab_dir)
+    previous = {} if force else read_summary(lab_dir / BATCH_SUMMARY)
+    rows, todo = [], []
+    for folder in trials:
+        name = folder.relative_to(lab_dir).as_posix() if folder != lab_dir else "."
+        key = input_key(folder, cfg)
+        if force:
+            todo.append((folder, name, key, tuple(cfg.stages)))
+            continue
+        before = previous.get(name, [])
+        if before and all(r.status == "failed" and r.exit_code == 2 and r.input_key == key for r in before):
+            rows += [replace(r, wall_time_s=0.0) for r in before]  # the same bad input fails the same way
+            continue
+        stale, current = stale_stages(folder, name, cfg, key)
+        if stale:
+            todo.append((folder, name, key, stale))
+        else:
+            rows += current
+    return rows, todo
+
+
+@contextmanager
+def dask_client(workers: int, scheduler: str | None) -> Iterator:
+    """A Dask client: on a local cluster of ``workers`` single-threaded worker processes, or on the cluster at
+    ``scheduler``."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError) as exc:
+            raise InputError(None, "--scheduler", f"cannot reach the Dask scheduler at {scheduler} ({exc})") from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_WORKER_DEATHS,
+                          "distributed.worker.daemon": False}):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # distributed's port and memory notices are not the lab's business
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address="127.0.0.1:0", silence_logs=40)
+        try:
+            with Client(cluster) as client:
+                yield client
+        finally:
+            cluster.close()
+
+
+def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int = 2, scheduler: str | None = None,
+              force: bool = False, plots: bool = True, on_rows: Callable[[list[BatchRow]], None] | None = None,
+              on_start: Callable[[int, int, str | None], None] | None = None) -> BatchResult:
+    """Run the pipeline over every trial below ``lab_dir`` (see the module docstring) and write
+    ``batch_summary.csv`` there. ``on_start(total trials, to run, dashboard address)`` and ``on_rows(rows of one
+    trial)`` report progress. An interrupt leaves the previous ``batch_summary.csv`` as it was."""
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    started = time.perf_counter()
+    lab_dir = Path(lab_dir)
+    rows, todo = plan(lab_dir, cfg, force=force)
+    dashboard = None
+    if on_rows is not None and rows:
+        for name in dict.fromkeys(r.trial for r in rows):
+            on_rows([r for r in rows if r.trial == name])
+    if not todo:
+        if on_start is not None:
+            on_start(len({r.trial for r in rows}), 0, None)
+    else:
+        with dask_client(workers, scheduler) as client:
+            services = client.scheduler_info().get("services", {})
+            dashboard = client.dashboard_link if "dashboard" in services else None
+            if on_start is not None:
+                on_start(len({r.trial for r in rows}) + len(todo), len(todo), dashboard)
+            width = max(1, TASKS_PER_WORKER * len(client.scheduler_info().get("workers", {})) or workers)
+            waiting = iter(todo)
+            keys = {}
+
+            def submit(item):
+                folder, name, key, stale = item
+                future = client.submit(run_trial, str(folder), name, cfg, key, stale, plots, pure=False,
+                                       key=f"trial-{hashlib.sha1(str(folder).encode()).hexdigest()[:12]}-{key[:8]}")
+                keys[future.key] = item
+                return future
+
+            pending = as_completed([submit(item) for _, item in zip(range(width), waiting)])
+            for future in pending:
+                folder, name, key, _ = keys.pop(future.key)
+                try:
+                    got = future.result()
+                except KilledWorker:
+                    remove_stale_parts(folder, cfg)
+                    got = [BatchRow(name, s, "failed", 1, "the worker running this trial died twice (killed or out "
+                                    "of memory)", 0.0, key) for s in stages_of(cfg)]
+                except Exception as exc:  # a task that could not run (e.g. a worker without gaitcli)
+                    got = [BatchRow(name, s, "failed", 1, f"internal error: {type(exc).__name__}: {exc}", 0.0, key)
+                           for s in stages_of(cfg)]
+                future.release()
+                rows += got
+                if on_rows is not None:
+                    on_rows(got)
+                following = next(waiting, None)
+                if following is not None:
+                    pending.add(submit(following))
+    write_summary(lab_dir / BATCH_SUMMARY, rows)
+    return BatchResult(rows, round(time.perf_counter() - started, 3), dashboard)

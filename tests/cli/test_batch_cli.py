@@ -1,0 +1,165 @@
+"""``gait batch LAB_DIR``: every trial folder below a lab folder on a Dask cluster, failures isolated, current
+outputs skipped; on a local cluster and on a real scheduler and worker started as separate processes on
+loopback, one of whose worker processes is killed in the middle of a trial."""
+
+from __future__ import annotations
+
+import csv
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from gaitcli.resources import sample_trials_dir
+
+from .conftest import ENV, SAMPLES, Result, build_once, gait, gait_many
+
+LINE = re.compile(r"^(\d+) ok, (\d+) failed, (\d+) skipped \(([\d.]+) s\)$", re.M)
+
+
+def _lab(root: Path, samples=SAMPLES) -> Path:
+    """Copies of the sample trials, a trial whose trial.c3d is not a C3D and one whose subject.yaml is invalid."""
+    lab = root / "lab"
+    for name in samples:
+        shutil.copytree(sample_trials_dir() / name, lab / "walks" / name, ignore=shutil.ignore_patterns("gait_out"))
+    (lab / "broken").mkdir(parents=True)
+    shutil.copy(sample_trials_dir() / "normal" / "subject.yaml", lab / "broken" / "subject.yaml")
+    (lab / "broken" / "trial.c3d").write_text("exported as text by mistake\n")
+    shutil.copytree(sample_trials_dir() / "normal", lab / "invalid", ignore=shutil.ignore_patterns("gait_out"))
+    (lab / "invalid" / "subject.yaml").write_text("mass_kg: 70\nstature_m: 170\nsex: male\n")
+    return lab
+
+
+def _build(root: Path) -> dict:
+    lab = _lab(root)
+    first = gait("batch", lab, "--workers", "2", "--no-plots", cwd=root, timeout_s=600)
+    rows_first = (lab / "batch_summary.csv").read_text()
+    second = gait("batch", lab, "--workers", "2", "--no-plots", cwd=root, timeout_s=600)
+    return {"first": first.to_json(), "second": second.to_json(), "rows_first": rows_first}
+
+
+@pytest.fixture(scope="module")
+def batch(tmp_path_factory):
+    root, record = build_once(tmp_path_factory, "cli_batch", _build)
+    return root / "lab", Result.from_json(record["first"]), Result.from_json(record["second"]), record["rows_first"]
+
+
+def _counts(result: Result) -> tuple[int, int, int, float]:
+    match = LINE.search(result.stdout)
+    assert match, result.describe()
+    return int(match[1]), int(match[2]), int(match[3]), float(match[4])
+
+
+def test_every_good_trial_runs_and_the_two_bad_ones_fail_with_their_reasons(batch):
+    lab, first, _, rows_text = batch
+    assert first.returncode == 0, first.describe()
+    assert _counts(first)[:3] == (len(SAMPLES), 2, 0)
+    rows = list(csv.DictReader(rows_text.splitlines()))
+    assert len(rows) == 2 * (len(SAMPLES) + 2)  # filter and idyn per trial
+    by = {(r["trial"], r["stage"]): r for r in rows}
+    assert all(by[(f"walks/{s}", st)]["status"] == "ok" for s in SAMPLES for st in ("filter", "idyn"))
+    assert by[("broken", "filter")]["status"] == "failed" and by[("broken", "filter")]["exit_code"] == "2"
+    assert "trial.c3d" in by[("broken", "filter")]["reason"] and "not a C3D file" in by[("broken", "filter")]["reason"]
+    assert "stature_m" in by[("invalid", "idyn")]["reason"] and "centimetres" in by[("invalid", "idyn")]["reason"]
+    assert float(by[("walks/normal", "idyn")]["speed_m_s"]) == pytest.approx(0.876, abs=0.01)
+    assert "broken: failed:" in first.stderr and "Traceback" not in first.stderr
+    for s in SAMPLES:  # the outputs are the stages' own
+        assert (lab / "walks" / s / "gait_out" / "idyn" / "joint_moments.csv").is_file()
+    assert not list(lab.rglob("*.part"))
+
+
+def test_a_second_run_skips_everything_current_in_a_tenth_of_the_time(batch):
+    _, first, second, _ = batch
+    assert second.returncode == 0, second.describe()
+    ok, failed, skipped, elapsed = _counts(second)
+    assert (ok, failed, skipped) == (0, 2, len(SAMPLES))
+    assert elapsed < _counts(first)[3] / 10, (first.stdout, second.stdout)
+    assert "Dask dashboard" not in second.stderr  # nothing to run: no cluster started
+
+
+def test_workers_and_scheduler_exclude_each_other_and_a_missing_lab_is_exit_2(tmp_path):
+    both = gait("batch", tmp_path, "--workers", "2", "--scheduler", "tcp://127.0.0.1:1", cwd=tmp_path)
+    assert both.returncode == 2 and "exclude each other" in both.stderr
+    missing = gait("batch", tmp_path / "nowhere", cwd=tmp_path)
+    assert missing.returncode == 2 and len(missing.stderr_lines) == 1 and "lab folder not found" in missing.stderr
+
+
+# ------------------------------------------------------------------ a real scheduler and workers on loopback
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """``dask scheduler`` and ``dask worker`` (two single-threaded worker processes under their nannies) as
+    separate processes on 127.0.0.1; the scheduler lets a task's worker die once (allowed-failures 1)."""
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    env = {**ENV, "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1"}
+    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    scheduler = subprocess.Popen(dask + ["--host", "127.0.0.1", "--port", str(port), "--no-dashboard"], env=env,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "2",
+                               "--nthreads", "1", "--no-dashboard"], env=env, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, start_new_session=True)
+    from distributed import Client
+
+    client = Client(address, timeout="30s")
+    client.wait_for_workers(2, timeout=60)
+    try:
+        yield address, client
+    finally:
+        client.close()
+        for proc in (worker, scheduler):
+            os.killpg(proc.pid, signal.SIGTERM)
+        for proc in (worker, scheduler):
+            try:
+                proc.wait(20)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+
+
+def test_a_batch_on_an_existing_scheduler(cluster, tmp_path):
+    address, _ = cluster
+    lab = _lab(tmp_path, samples=("normal", "ankle_weight"))
+    r = gait("batch", lab, "--scheduler", address, "--no-plots", cwd=tmp_path, timeout_s=300)
+    assert r.returncode == 0, r.describe()
+    assert _counts(r)[:3] == (2, 2, 0)
+
+
+def test_a_worker_killed_mid_trial_leaves_no_half_written_output(cluster, tmp_path):
+    """The worker process running the trial is killed (SIGKILL) while it computes; the scheduler reruns the trial
+    on the other worker, which finishes it, and no stage folder is left half-written."""
+    address, client = cluster
+    lab = tmp_path / "lab"
+    shutil.copytree(sample_trials_dir() / "normal", lab / "normal", ignore=shutil.ignore_patterns("gait_out"))
+    batch = subprocess.Popen([sys.executable, "-m", "gaitcli.cli", "batch", str(lab), "--scheduler", address],
+                             cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    victim, deadline = None, time.monotonic() + 120
+    while victim is None and time.monotonic() < deadline and batch.poll() is None:
+        busy = [w for w, tasks in client.processing().items() if tasks]
+        if busy:
+            time.sleep(0.5)  # into the trial's work
+            victim = client.run(os.getpid, workers=busy[:1])[busy[0]]
+            os.kill(victim, signal.SIGKILL)
+        time.sleep(0.05)
+    stdout, stderr = batch.communicate(timeout=300)
+    assert victim is not None, (stdout, stderr)
+    assert batch.returncode == 0, (stdout, stderr)
+    rows = list(csv.DictReader((lab / "batch_summary.csv").read_text().splitlines()))
+    assert {r["status"] for r in rows} <= {"ok", "failed"}
+    assert all(r["status"] == "ok" or r["reason"] for r in rows)
+    assert not list(lab.rglob("*.part")), "a half-written stage folder was left"
+    if rows[0]["status"] == "ok":
+        for stage in ("filter", "idyn"):
+            assert (lab / "normal" / "gait_out" / stage / "summary.json").is_file()
