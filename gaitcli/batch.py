@@ -23,13 +23,13 @@ import json
 import os
 import time
 import warnings
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 
 from gaitcli.config import PipelineConfig, to_yaml
 from gaitcli.core.registry import requirements, stage_names
+from gaitcli.cluster import dask_client
 from gaitcli.errors import GaitError, InputError
 from gaitcli.io.atomic import atomic_path, remove_stale
 
@@ -45,8 +45,6 @@ KEY_FIGURES = {
 }
 #: tasks in flight per worker: enough to keep every worker busy, few enough that the client stays small
 TASKS_PER_WORKER = 2
-#: how often a task may be on a worker that dies before it counts as failed (1: retried once)
-ALLOWED_WORKER_DEATHS = 1
 
 
 @dataclass(frozen=True)
@@ -254,36 +252,6 @@ def plan(lab_dir: Path, cfg: PipelineConfig, *, force: bool = False) -> tuple[li
     return rows, todo
 
 
-@contextmanager
-def dask_client(workers: int, scheduler: str | None) -> Iterator:
-    """A Dask client: on a local cluster of ``workers`` single-threaded worker processes, or on the cluster at
-    ``scheduler``."""
-    import dask
-    from distributed import Client, LocalCluster
-
-    if scheduler is not None:
-        try:
-            client = Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise InputError(None, "--scheduler", f"cannot reach the Dask scheduler at {scheduler} ({exc})") from None
-        try:
-            yield client
-        finally:
-            client.close()
-        return
-    with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_WORKER_DEATHS,
-                          "distributed.worker.daemon": False}):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # distributed's port and memory notices are not the lab's business
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address="127.0.0.1:0", silence_logs=40)
-        try:
-            with Client(cluster) as client:
-                yield client
-        finally:
-            cluster.close()
-
-
 def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int = 2, scheduler: str | None = None,
               force: bool = False, plots: bool = True, on_rows: Callable[[list[BatchRow]], None] | None = None,
               on_start: Callable[[int, int, str | None], None] | None = None) -> BatchResult:
@@ -294,7 +262,7 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int = 2, sch
     from distributed.scheduler import KilledWorker
 
     started = time.perf_counter()
-    lab_dir = Path(lab_dir)
+    lab_dir = Path(lab_dir).resolve()  # the workers may run in other folders
     rows, todo = plan(lab_dir, cfg, force=force)
     dashboard = None
     if on_rows is not None and rows:

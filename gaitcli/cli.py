@@ -216,6 +216,9 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
               help="Seed of the perturbed starts.")
 @click.option("--workers", "workers", type=click.IntRange(min=1, max=256), default=None,
               help="Worker processes for --starts and --study (default: one per core).")
+@click.option("--scheduler", "scheduler", default=None, metavar="ADDRESS",
+              help="Run --starts and --study as tasks on the Dask cluster at ADDRESS (tcp://host:port); a study's "
+                   "warm starts become task dependencies.")
 @click.option("--study", "study", type=click.Path(path_type=Path, dir_okay=False),
               help="Run a study file's grid (speeds × weight sets × conditions) into OUT/study/, reusing the cases "
                    "already computed with the same inputs; see pipelines/study_*.yaml.")
@@ -224,9 +227,12 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 @click.pass_obj
 def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, symmetric, max_iterations, reference,
                     subject, init, foot_mass_kg, foot_mass_at, prosthesis, strength_scale, monotone_range_deg,
-                    starts, seed, workers, study, force, no_plots):
+                    starts, seed, workers, scheduler, study, force, no_plots):
     """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
     from gaitcli.pipeline import predict_trial
+
+    if workers is not None and scheduler is not None:
+        raise click.UsageError("--workers and --scheduler exclude each other (a scheduler has its own workers)")
 
     cfg = dataclasses.replace(PredictConfig(), **{k: v for k, v in {
         "speed_m_s": speed_m_s, "weights": weights, "nodes": nodes, "symmetric": symmetric,
@@ -240,7 +246,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
 
         with console.progress() as progress:
             rows, folder = predict_study(trial, study, out=out, reference_path=reference, subject_path=subject,
-                                         workers=workers, force=force, progress=progress)
+                                         workers=workers, force=force, progress=progress, scheduler=scheduler)
         console.info(study_text(rows))
         console.info(f"predict: wrote {folder} ({len(rows)} cases, study.csv)")
         bad = [r["case"] for r in rows if not r["converged"]]
@@ -251,7 +257,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
     with console.progress() as progress:
         outcome = predict_trial(trial, cfg, out=out, reference_path=reference, subject_path=subject,
                                 init_path=init, progress=progress, plots=not no_plots, starts=starts, seed=seed,
-                                workers=workers)
+                                workers=workers, scheduler=scheduler)
     console.summaries["predict"] = outcome.summary
     console.info(f"predict: wrote {outcome.folder}")
     console.print_json("predict")

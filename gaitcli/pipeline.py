@@ -317,7 +317,7 @@ def predict_inputs(trial: Path | None, *, out: Path | None = None, reference_pat
 def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = None,
                   reference_path: Path | None = None, subject_path: Path | None = None, workers: int | None = None,
                   force: bool = False, progress: ProgressCallback = no_progress,
-                  pipeline: PipelineConfig | None = None):
+                  pipeline: PipelineConfig | None = None, scheduler: str | None = None):
     """``gait predict --study FILE``: validate the study file and the inputs, run every case
     (:func:`gaitcli.studies.run_study`) into ``OUT/study/``. Returns (rows, the study folder)."""
     from gaitcli.config import configure
@@ -335,13 +335,14 @@ def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = No
     root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
     attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs)
     return run_study(spec, root, params=params, reference=reference, subject=repr(params), attrs=attrs,
-                     workers=workers, force=force, progress=progress)
+                     workers=workers, force=force, scheduler=scheduler, progress=progress)
 
 
 def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference_path: Path | None = None,
                   subject_path: Path | None = None, init_path: Path | None = None,
                   progress: ProgressCallback = no_progress, pipeline: PipelineConfig | None = None,
-                  plots: bool = True, starts: int = 1, seed: int = 0, workers: int | None = None) -> PredictOutcome:
+                  plots: bool = True, starts: int = 1, seed: int = 0, workers: int | None = None,
+                  scheduler: str | None = None) -> PredictOutcome:
     """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`; the optimal
     prosthesis by :func:`gaitcli.predict.study.predict_optimal`; ``starts`` > 1: the best of that many starts,
     :func:`gaitcli.studies.best_of_starts`), write ``OUT/predict/`` whole (``report.predict_outputs``) with its
@@ -380,7 +381,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
         from gaitcli.studies import best_of_starts
 
         result, starts_table, agreed = best_of_starts(cfg, starts, params=params, reference=reference, device=device,
-                                                 seed=seed, workers=workers, progress=progress)
+                                                 seed=seed, workers=workers, scheduler=scheduler, progress=progress)
     elif cfg.prosthesis == "optimal":
         from gaitcli.predict.study import predict_optimal
 

@@ -104,38 +104,73 @@ def _solve_case(case: StudyCase, spec: StudySpec, solved: dict, params, referenc
     return run_predict(case.cfg, params=params, reference=reference, init=init), 1
 
 
+def first_start_keys(spec: StudySpec) -> tuple[str, ...]:
+    """The key of a chain's first start: the shipped normal solution's SHA-256 (study cases are symmetric)."""
+    shipped = stored_solution(spec.nodes, symmetric=True)
+    return (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
+
+
+def run_case(case: StudyCase, spec: StudySpec, root: str, params, reference, subject: str, attrs: dict,
+             force: bool, first: tuple[str, ...], *starts: tuple) -> tuple[PredictResult, str, dict]:
+    """Run (or read back) one case from its starts (what :func:`run_case` returned for each case it
+    ``starts_from``, in order): its result, its key and its study.csv row. A Dask task in a study on a cluster,
+    where the starts are the futures of the cases before it."""
+    start = time.perf_counter()
+    solved = {name: done[0] for name, done in zip(case.starts_from, starts)}
+    key = case_key(case, subject, reference.digest(), tuple(done[1] for done in starts) if case.starts_from else first)
+    folder = Path(root) / case.name
+    result = None if force else stored_case(folder, key)
+    reused = result is not None
+    if result is None:
+        result, agreed = _solve_case(case, spec, solved, params, reference)
+        write_case(folder, result, {**attrs, "predict_config": json.dumps(dataclasses.asdict(case.cfg))},
+                   {"case_key": key, "case": case.name, "condition": case.condition,
+                    "weight_set": case.weight_set, "starts": spec.starts, "starts_agreeing": agreed})
+    else:
+        agreed = int(json.loads((folder / "summary.json").read_text()).get("starts_agreeing", 1))
+    return result, key, case_row(case, result, reused=reused, wall_s=time.perf_counter() - start, agreed=agreed)
+
+
 def run_chain(chain: list[StudyCase], spec: StudySpec, root: str, params, reference, subject: str,
               attrs: dict, force: bool) -> list[dict]:
     """Run (or read back) one chain's cases in order; returns their study.csv rows. Runs in a worker process."""
-    solved, keys, rows = {}, {}, []
-    reference_sha = reference.digest()
-    shipped = stored_solution(spec.nodes, symmetric=True)  # a chain's first start (study cases are symmetric)
-    first = (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
+    done, rows = {}, []
+    first = first_start_keys(spec)
     for case in chain:
-        start = time.perf_counter()
-        key = case_key(case, subject, reference_sha,
-                       tuple(keys[name] for name in case.starts_from) if case.starts_from else first)
-        folder = Path(root) / case.name
-        result = None if force else stored_case(folder, key)
-        reused = result is not None
-        agreed = 1
-        if result is None:
-            result, agreed = _solve_case(case, spec, solved, params, reference)
-            write_case(folder, result, {**attrs, "predict_config": json.dumps(dataclasses.asdict(case.cfg))},
-                       {"case_key": key, "case": case.name, "condition": case.condition,
-                        "weight_set": case.weight_set, "starts": spec.starts, "starts_agreeing": agreed})
-        else:
-            agreed = int(json.loads((folder / "summary.json").read_text()).get("starts_agreeing", 1))
-        solved[case.name], keys[case.name] = result, key
-        rows.append(case_row(case, result, reused=reused, wall_s=time.perf_counter() - start, agreed=agreed))
+        done[case.name] = run_case(case, spec, root, params, reference, subject, attrs, force, first,
+                                   *(done[name] for name in case.starts_from))
+        rows.append(done[case.name][2])
+    return rows
+
+
+def run_study_on_cluster(client, chains: list[list[StudyCase]], spec: StudySpec, root: str, params, reference,
+                         subject: str, attrs: dict, force: bool, on_row=None) -> dict[str, dict]:
+    """Every case as a Dask task on ``client``'s cluster, the cases it starts from as its dependencies (so the
+    chains, and cases of one chain that do not depend on each other, run side by side). Rows by case name."""
+    from distributed import as_completed as completed
+
+    first = first_start_keys(spec)
+    futures = {}
+    for chain in chains:
+        for case in chain:
+            futures[case.name] = client.submit(run_case, case, spec, root, params, reference, subject, attrs, force,
+                                               first, *(futures[name] for name in case.starts_from), pure=False,
+                                               key=f"case-{case.name}-{hashlib.sha1(root.encode()).hexdigest()[:8]}")
+    names = {f.key: name for name, f in futures.items()}
+    rows = {}
+    for future in completed(list(futures.values())):
+        rows[names[future.key]] = future.result()[2]
+        if on_row is not None:
+            on_row(rows[names[future.key]])
     return rows
 
 
 def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, attrs: dict,
-              workers: int | None = None, force: bool = False,
+              workers: int | None = None, force: bool = False, scheduler: str | None = None,
               progress: ProgressCallback = no_progress) -> tuple[list[dict], Path]:
     """Every case of ``spec`` into ``out``/study/: the case folders, study.csv, study.png, curves.png. Returns
-    (rows in study order, the study folder)."""
+    (rows in study order, the study folder). With ``scheduler`` (a Dask scheduler's address) every case is a
+    task on that cluster (:func:`run_study_on_cluster`); else the chains run in ``workers`` processes."""
     chains = study_cases(spec)
     root = Path(out) / "study"
     root.mkdir(parents=True, exist_ok=True)
@@ -144,7 +179,18 @@ def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, at
     rows_by_chain: dict[int, list[dict]] = {}
     progress(Progress("study", "cases", 0, total))
     args = [(chain, spec, str(root), params, reference, subject, attrs, force) for chain in chains]
-    if workers == 1:
+    if scheduler is not None:  # the workers may run elsewhere, in other folders: absolute paths
+        from gaitcli.cluster import dask_client
+
+        root = root.resolve()
+
+        done = []
+        with dask_client(1, scheduler) as client:
+            by_name = run_study_on_cluster(client, chains, spec, str(root), params, reference, subject, attrs, force,
+                                           on_row=lambda row: (done.append(row),
+                                                               progress(Progress("study", "cases", len(done), total))))
+        rows_by_chain = {k: [by_name[case.name] for case in chain] for k, chain in enumerate(chains)}
+    elif workers == 1:
         for k, a in enumerate(args):
             rows_by_chain[k] = run_chain(*a)
             progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
@@ -176,8 +222,10 @@ def starts_table(results: list[PredictResult]) -> dict:
 
 
 def best_of_starts(cfg, starts: int, *, params, reference, device, seed: int = 0, workers: int | None = None,
+                   scheduler: str | None = None,
                    progress: ProgressCallback = no_progress) -> tuple[PredictResult, dict, int]:
-    """``--starts N``: the best converged of N starts, starts.csv's table and how many starts agreed."""
+    """``--starts N``: the best converged of N starts (in worker processes, or as tasks on the Dask cluster at
+    ``scheduler``), starts.csv's table and how many starts agreed."""
     done = []
 
     def on_done(k, result):
@@ -185,8 +233,15 @@ def best_of_starts(cfg, starts: int, *, params, reference, device, seed: int = 0
         progress(Progress("predict", "starts", len(done), starts,
                           detail=f"start {k}: J {result.objective:.4g}{'' if result.converged else ' (unconverged)'}"))
 
-    results = run_starts(cfg, starts, params=params, reference=reference, seed=seed, workers=workers,
-                         device=device, on_done=on_done)
+    if scheduler is not None:
+        from gaitcli.cluster import dask_client
+
+        with dask_client(1, scheduler) as client:
+            results = run_starts(cfg, starts, params=params, reference=reference, seed=seed, device=device,
+                                 on_done=on_done, executor=client.get_executor(pure=False))
+    else:
+        results = run_starts(cfg, starts, params=params, reference=reference, seed=seed, workers=workers,
+                             device=device, on_done=on_done)
     agreed, best = agreeing(results)
     best = dataclasses.replace(best, history=best.history + (
         f"predict: best of {starts} starts (seed {seed}); {agreed} reached its J within 1 %",))

@@ -166,11 +166,14 @@ def stop(executor: ProcessPoolExecutor) -> None:
 
 def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | None, reference: Reference,
                seed: int = 0, workers: int | None = None, device: ProsthesisCurve | None = None,
-               init: np.ndarray | None = None, on_done=None) -> list[PredictResult]:
-    """``starts`` solves of ``cfg`` in parallel processes: start 0 from ``init`` (default: the default guess),
-    start k from :func:`perturbed_guess` with seed ``seed + k``. ``on_done(k, result)`` as each finishes."""
+               init: np.ndarray | None = None, on_done=None, executor=None) -> list[PredictResult]:
+    """``starts`` solves of ``cfg`` in parallel processes (or on ``executor``, a ``concurrent.futures`` executor
+    such as a Dask client's): start 0 from ``init`` (default: the default guess), start k from
+    :func:`perturbed_guess` with seed ``seed + k``. ``on_done(k, result)`` as each finishes."""
     jobs = [(cfg, params, reference, None if k == 0 else seed + k, device, init) for k in range(starts)]
     workers = min(starts, workers or os.cpu_count() or 1)
+    if executor is not None:
+        return _run_on(executor, jobs, on_done)
     if workers <= 1:
         results = []
         for k, job in enumerate(jobs):
@@ -190,6 +193,22 @@ def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | No
         except BaseException:
             stop(executor)
             raise
+    return results
+
+
+def _run_on(executor, jobs, on_done) -> list[PredictResult]:
+    """The starts as tasks of ``executor``; on an interrupt what has not started is cancelled."""
+    results: list = [None] * len(jobs)
+    futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
+    try:
+        for future in as_completed(futures):
+            k = futures[future]
+            results[k] = future.result()
+            if on_done:
+                on_done(k, results[k])
+    except BaseException:
+        executor.shutdown(wait=False, cancel_futures=True)
+        raise
     return results
 
 

@@ -163,3 +163,31 @@ def test_a_worker_killed_mid_trial_leaves_no_half_written_output(cluster, tmp_pa
     if rows[0]["status"] == "ok":
         for stage in ("filter", "idyn"):
             assert (lab / "normal" / "gait_out" / stage / "summary.json").is_file()
+
+
+def test_a_study_grid_and_starts_on_an_existing_scheduler(cluster, tmp_path):
+    """Every case of a study a task on the cluster, each warm started from the futures of the cases it starts
+    from: the same case keys (which chain the start keys) and objectives as the chains in one process. Cases
+    stop after one IPOPT iteration (6 nodes), so exit 3 with all of them marked; ``--starts 2`` on the cluster
+    writes both starts."""
+    import json
+
+    import pandas as pd
+
+    address, _ = cluster
+    (tmp_path / "tiny.yaml").write_text("name: tiny\nspeeds_m_s: [1.0, 1.2]\nweights: [b]\nconditions: [normal, sach]\n"
+                                        "nodes: 6\nmax_iterations: 1\n")
+    runs = gait_many({"dask": (("predict", "--study", "tiny.yaml", "-o", "dask", "--scheduler", address), tmp_path),
+                      "local": (("predict", "--study", "tiny.yaml", "-o", "local", "--workers", "1"), tmp_path),
+                      "starts": (("predict", "--nodes", "6", "--max-iterations", "1", "--starts", "2", "-o", "starts",
+                                  "--scheduler", address), tmp_path)}, workers=2)
+    for name in ("dask", "local", "starts"):
+        assert runs[name].returncode == 3, runs[name].describe()
+    dask, local = (pd.read_csv(tmp_path / name / "study" / "study.csv") for name in ("dask", "local"))
+    assert list(dask["case"]) == list(local["case"]) and len(dask) == 4 and not dask["converged"].any()
+    for case in dask["case"]:
+        keys = [json.loads((tmp_path / name / "study" / case / "summary.json").read_text())["case_key"]
+                for name in ("dask", "local")]
+        assert keys[0] == keys[1], case
+    assert dask["objective"].to_numpy() == pytest.approx(local["objective"].to_numpy(), rel=1e-9)
+    assert len(pd.read_csv(tmp_path / "starts" / "predict" / "starts.csv")) == 2
