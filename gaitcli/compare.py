@@ -395,9 +395,11 @@ def _read_csv(path: Path) -> pd.DataFrame:
 
 def _numeric(cells: pd.Series) -> np.ndarray | None:
     """The column as floats (empty cells NaN), or None when a cell is not a number (a text column)."""
-    values = pd.to_numeric(cells.replace("", "NaN"), errors="coerce").to_numpy(dtype=float)
-    bad = np.isnan(values) & ~cells.str.strip().str.lower().isin(("", "nan")).to_numpy()
-    return None if bad.any() else values
+    text = cells.to_numpy(dtype=str)
+    try:
+        return np.where(text == "", "nan", text).astype(float)
+    except ValueError:
+        return None
 
 
 def _where(table: pd.DataFrame, row: int) -> str:
