@@ -234,3 +234,17 @@ def test_bad_roots_and_unreadable_files_are_input_errors(trees, tmp_path):
     b.write_text("a file")
     with pytest.raises(InputError, match="not a folder"):
         compare_trees(a, b)
+
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_the_readme_documents_the_default_tolerances_and_a_valid_file(tmp_path):
+    text = README.read_text(encoding="utf-8").split("### Comparing two output trees", 1)[1].split("\n## ", 1)[0]
+    rows = [line.split("|")[1:4] for line in text.splitlines() if line.startswith("| ") and "---" not in line]
+    documented = {name.strip(): (unit.strip(), float(default.split()[0])) for name, unit, default in rows[1:]}
+    assert documented == {n: (f.unit or "—", f.tolerance) for n, f in FAMILIES.items()}
+    example = text.split("```yaml\n", 1)[1].split("```", 1)[0]
+    (tmp_path / "tol.yaml").write_text(example)
+    tol = read_tolerances(tmp_path / "tol.yaml")
+    assert tol.families["angle"] == 0.5 and tol.columns[0] == ("knee_*_moment", 2.0) and tol.ignore == ("notes",)
