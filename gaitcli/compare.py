@@ -270,15 +270,18 @@ class Finding:
 
     ``path``: relative to the roots (POSIX; a folder ends in ``/``); ``column``: the CSV column or dotted summary
     key ("" for the file); ``problem``: a key of :data:`PROBLEMS`; ``difference``: the largest |A − B| beyond
-    tolerance (``value``, in ``unit``), NaN otherwise; ``tolerance``: the rule it broke; ``where``: the row of
-    that difference (``time_s=… (line …)``); ``detail``: the values or counts, for people.
+    tolerance (``value``, in ``unit``), NaN otherwise; ``family``, ``tolerance`` (in ``unit``) and ``relative``:
+    the rule it broke (``value``, ``nan``); ``where``: the row of that difference (``time_s=… (line …)``);
+    ``detail``: the values or counts, for people.
     """
 
     path: str
     column: str = ""
     problem: str = "value"
     difference: float = math.nan
-    tolerance: str = ""
+    family: str = ""
+    tolerance: float = math.nan
+    relative: bool = False
     unit: str = ""
     where: str = ""
     detail: str = ""
@@ -295,9 +298,17 @@ class Finding:
     def file(self) -> str:
         return split_path(self.path)[2]
 
+    @property
+    def tolerance_text(self) -> str:
+        """``0.5 N·m``, ``1e-05 rel``, or "" where no tolerance applies."""
+        if math.isnan(self.tolerance):
+            return ""
+        return Rule(self.family, self.unit, self.tolerance, self.relative).describe()
+
     def to_json(self) -> dict:
         data = {"trial": self.trial, "stage": self.stage, "file": self.file, **asdict(self)}
-        data["difference"] = None if not math.isfinite(self.difference) else self.difference
+        for key in ("difference", "tolerance"):
+            data[key] = None if not math.isfinite(data[key]) else data[key]
         return data
 
 
@@ -433,6 +444,10 @@ def _text_finding(rel: str, column: str, a: np.ndarray, b: np.ndarray, table: pd
     return [Finding(rel, column, "text", where=_where(table, k) if table is not None else "", detail=detail)]
 
 
+def _rule_fields(rule: Rule) -> dict:
+    return {"family": rule.family, "tolerance": rule.tolerance, "relative": rule.relative, "unit": rule.unit}
+
+
 def _number_findings(rel: str, column: str, a: np.ndarray, b: np.ndarray, rule: Rule,
                      table: pd.DataFrame | None) -> list[Finding]:
     """A ``nan`` finding for NaN on one side only, a ``value`` one for differences beyond ``rule``'s tolerance."""
@@ -442,7 +457,7 @@ def _number_findings(rel: str, column: str, a: np.ndarray, b: np.ndarray, rule: 
     if lonely.size:
         k = int(lonely[0])
         detail = f"{'NaN' if nan_a[k] else f'{a[k]:g}'} in A, {'NaN' if nan_b[k] else f'{b[k]:g}'} in B"
-        out.append(Finding(rel, column, "nan", difference=math.inf, tolerance=rule.describe(), unit=rule.unit,
+        out.append(Finding(rel, column, "nan", difference=math.inf, **_rule_fields(rule),
                            where=_where(table, k) if table is not None else "",
                            detail=detail + (f" ({lonely.size} rows)" if table is not None else "")))
     with np.errstate(invalid="ignore"):  # inf − inf: a difference of its own
@@ -457,8 +472,8 @@ def _number_findings(rel: str, column: str, a: np.ndarray, b: np.ndarray, rule: 
     if beyond.any():
         k = int(np.flatnonzero(beyond)[np.argmax(diff[beyond])])
         count = f" ({int(beyond.sum())} of {a.size} rows beyond tolerance)" if table is not None else ""
-        out.append(Finding(rel, column, "value", difference=float(diff[k]), tolerance=rule.describe(),
-                           unit=rule.unit, where=_where(table, k) if table is not None else "",
+        out.append(Finding(rel, column, "value", difference=float(diff[k]), **_rule_fields(rule),
+                           where=_where(table, k) if table is not None else "",
                            detail=f"{a[k]:.6g} in A, {b[k]:.6g} in B{count}"))
     return out
 
@@ -526,7 +541,7 @@ def finding_rows(comparison: Comparison) -> list[tuple[str, ...]]:
         if f.problem == "value" and f.detail:
             diff += f"  ({f.detail.split(' (')[0]})"
         rows.append((f.trial or ".", f.stage or ".", f.file or "(folder)", f.column or "—", diff,
-                     f.tolerance or "—", f.where or "—"))
+                     f.tolerance_text or "—", f.where or "—"))
     return rows
 
 

@@ -64,7 +64,7 @@ def test_a_moment_beyond_its_tolerance_is_named_with_difference_and_where(trees)
     (f,) = result.findings
     assert (f.trial, f.stage, f.file, f.column, f.problem) == ("normal", "idyn", "joint_moments.csv",
                                                               "hip_r_flexion_moment", "value")
-    assert f.difference == pytest.approx(0.8) and f.tolerance == "0.5 N·m"
+    assert f.difference == pytest.approx(0.8) and f.tolerance_text == "0.5 N·m"
     assert f.where == "time_s=0.01 side=r (line 3)"
     assert finding_rows(result)[0][:4] == ("normal", "idyn", "joint_moments.csv", "hip_r_flexion_moment")
     assert result.summary_line() == "2 files compared, 1 differ"
@@ -75,7 +75,7 @@ def test_a_per_kg_moment_has_its_own_tolerance(trees):
     edit_csv(b, "0.1867", "0.2067")  # 0.02 N·m/kg > 0.01
     (f,) = compare_trees(a, b).findings
     assert f.column == "hip_r_flexion_moment_per_kg" and f.difference == pytest.approx(0.02)
-    assert f.tolerance == "0.01 N·m/kg" and f.where.startswith("time_s=0.02 side=l")
+    assert f.tolerance_text == "0.01 N·m/kg" and f.where.startswith("time_s=0.02 side=l")
 
 
 def test_nan_equals_nan_but_nan_on_one_side_differs(trees):
@@ -134,12 +134,12 @@ def test_summary_values_keys_and_types(tmp_path):
     found = {f.column: f for f in compare_trees(a, b).findings}
     assert set(found) == {"frames", "converged", "metabolic_cost_J", "new_key", "interval_s",
                           "segment_rms_marker_error_mm.pelvis", "notes"}  # not elapsed_s, speed, events
-    assert found["frames"].problem == "value" and found["frames"].tolerance == "1e-05 rel"
+    assert found["frames"].problem == "value" and found["frames"].tolerance_text == "1e-05 rel"
     assert found["converged"].problem == "text" and "True in A, False in B" in found["converged"].detail
     assert found["metabolic_cost_J"].problem == "nan"
     assert found["new_key"].problem == "key_only_in_b"
     assert found["interval_s"].problem == "length" and found["interval_s"].detail == "2 items in A, 3 in B"
-    assert found["segment_rms_marker_error_mm.pelvis"].tolerance == "1 mm"
+    assert found["segment_rms_marker_error_mm.pelvis"].tolerance_text == "1 mm"
     assert found["notes"].problem == "type" and found["notes"].detail == "list in A, text in B"
 
 
@@ -248,3 +248,12 @@ def test_the_readme_documents_the_default_tolerances_and_a_valid_file(tmp_path):
     (tmp_path / "tol.yaml").write_text(example)
     tol = read_tolerances(tmp_path / "tol.yaml")
     assert tol.families["angle"] == 0.5 and tol.columns[0] == ("knee_*_moment", 2.0) and tol.ignore == ("notes",)
+
+
+def test_empty_cells_are_nan_and_a_number_against_text_differs(tmp_path):
+    a = write_tree(tmp_path / "a", moments="time_s,plate1_foot,grf_z_N\n0,,1.0\n0.01,r,\n")
+    same = write_tree(tmp_path / "b", moments="time_s,plate1_foot,grf_z_N\n0,,1.0\n0.01,r,NaN\n")
+    assert compare_trees(a, same).ok
+    other = write_tree(tmp_path / "c", moments="time_s,plate1_foot,grf_z_N\n0,,1.0\n0.01,r,heavy\n")
+    (f,) = compare_trees(a, other).findings
+    assert (f.column, f.problem, f.where) == ("grf_z_N", "text", "time_s=0.01 (line 3)")
