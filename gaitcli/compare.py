@@ -383,8 +383,8 @@ def _missing(paths: list[str], side: str, other: Path) -> list[Finding]:
     groups: dict[str, list[str]] = {}
     for rel in paths:
         parts = rel.split("/")
-        top = next(("/".join(parts[:k]) + "/" for k in range(1, len(parts)) if not (other / "/".join(parts[:k])).is_dir()),
-                   rel)
+        folders = ("/".join(parts[:k]) for k in range(1, len(parts)))
+        top = next((f"{folder}/" for folder in folders if not (other / folder).is_dir()), rel)
         groups.setdefault(top, []).append(rel)
     where = "A" if side == "a" else "B"
     return [Finding(top, problem=f"only_in_{side}",
