@@ -370,6 +370,54 @@ def batch_command(console: Console, lab_dir, pipeline, workers, scheduler, force
     click.echo(f"{result.line()} ({result.elapsed_s:.1f} s)")
 
 
+@gait.command("compare")
+@click.argument("a", type=click.Path(path_type=Path))
+@click.argument("b", type=click.Path(path_type=Path))
+@click.option("--tolerances", "tolerances", type=click.Path(path_type=Path, dir_okay=False),
+              help="YAML file of tolerances per unit family (families:), per column or summary key pattern "
+                   "(columns:) and patterns not compared (ignore:); default: the table in README.md.")
+@click.pass_context
+def compare_command(ctx, a, b, tolerances):
+    """Compare two output trees (e.g. a stored baseline and today's run): every summary.json value and CSV column.
+
+    Exit 0 when everything agrees within tolerance, 1 when something differs (the table says what, where and by
+    how much), 2 for bad input."""
+    from gaitcli.compare import DEFAULT_TOLERANCES, compare_trees, read_tolerances
+
+    console: Console = ctx.obj
+    result = compare_trees(a, b, tolerances=DEFAULT_TOLERANCES if tolerances is None else read_tolerances(tolerances))
+    if console.as_json:
+        click.echo(json.dumps(result.to_json(), indent=2))
+    elif not console.quiet and result.findings:
+        _print_findings(result)
+    console.info(f"compare: {result.summary_line()}")
+    if not result.ok:
+        ctx.exit(1)
+
+
+def _print_findings(result) -> None:
+    """The findings as a table on stderr: rich's on a terminal, aligned plain text in logs (never cut)."""
+    from gaitcli.compare import TABLE_HEADER, finding_rows
+
+    rows = finding_rows(result)
+    if sys.stderr.isatty():
+        from rich.console import Console as RichConsole
+        from rich.table import Table
+
+        from rich import box
+
+        table = Table(title=f"A {result.a}  ·  B {result.b}", title_justify="left", box=box.SIMPLE_HEAD)
+        for name in TABLE_HEADER:
+            table.add_column(name, overflow="fold")  # names are folded onto more lines, never cut
+        for row in rows:
+            table.add_row(*row)
+        RichConsole(stderr=True).print(table)
+        return
+    widths = [max(len(r[k]) for r in [TABLE_HEADER, *rows]) for k in range(len(TABLE_HEADER))]
+    for row in [TABLE_HEADER, tuple("-" * w for w in widths), *rows]:
+        click.echo("  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip(), err=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Console-script entry point; maps errors to exit codes."""
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -383,8 +431,8 @@ def main(argv: list[str] | None = None) -> int:
                 warnings.simplefilter("ignore")
             warnings.simplefilter("always", GaitWarning)
             warnings.showwarning = _show_warning
-            gait.main(args=argv, prog_name="gait", standalone_mode=False)
-        return 0
+            code = gait.main(args=argv, prog_name="gait", standalone_mode=False)
+        return code if isinstance(code, int) else 0  # ctx.exit(N) (compare: 1 when the trees differ)
     except click.exceptions.Exit as exc:
         return exc.exit_code
     except click.UsageError as exc:  # one line, as for bad input

@@ -25,6 +25,7 @@ HEAVY_FILES = {
     "tests/cli/test_predict_cli.py": 94, "tests/cli/test_muscles_cli.py": 38, "tests/cli/test_muscles_samples.py": 26,
     "tests/io/test_c3d_fuzz.py": 18, "tests/cli/test_idyn_cli.py": 12, "tests/predict/test_stage.py": 12,
     "tests/cli/test_interrupts.py": 12, "tests/muscles/test_methods.py": 10, "tests/cli/test_filter_command.py": 8,
+    "tests/cli/test_compare_cli.py": 8,
     "tests/cli/test_qualisys.py": 5,
 }
 

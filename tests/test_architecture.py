@@ -72,6 +72,13 @@ def test_core_imports_only_core_and_errors():
     assert not violations("core", everything - {"core", "errors", "__init__"})
 
 
+def test_compare_imports_only_io_core_and_errors():
+    everything = {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir()
+                  if (p.is_dir() and (p / "__init__.py").is_file()) or p.suffix == ".py"}
+    assert "compare" in everything
+    assert not violations("compare", everything - {"io", "core", "errors", "__init__"})
+
+
 def test_report_is_imported_by_no_stage_and_defines_no_container():
     from gaitcli.report import filter_outputs, idyn_outputs, muscles_outputs
 

@@ -10,7 +10,7 @@ COMMANDS = sorted(gait.commands)
 
 
 def test_the_commands_of_design_md_that_exist_so_far():
-    assert {"filter", "idyn", "muscles", "run", "synth"} <= set(COMMANDS)
+    assert {"filter", "idyn", "muscles", "run", "synth", "compare"} <= set(COMMANDS)
 
 
 @pytest.mark.parametrize("command", [None, *COMMANDS])
