@@ -22,7 +22,7 @@ from gaitcli.config import configure
 from gaitcli.core.interrupts import terminate_as_interrupt
 from gaitcli.core.validate import expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
-from gaitcli.errors import GaitError, GaitWarning, NotConvergedError
+from gaitcli.errors import GaitError, GaitWarning, InputError, NotConvergedError
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.signal.stage import FilterConfig
@@ -341,17 +341,27 @@ def run_command(console: Console, trial, out, pipeline, no_plots):
 @click.option("--scheduler", help="Address of an existing Dask scheduler (tcp://host:port) instead of a local cluster.")
 @click.option("--force", is_flag=True, help="Run every trial again, also those whose outputs are current.")
 @click.option("--no-plots", "no_plots", is_flag=True, help="Skip the figures (plots/).")
-@click.pass_obj
-def batch_command(console: Console, lab_dir, pipeline, workers, scheduler, force, no_plots):
+@click.option("--baseline", "baseline", type=click.Path(path_type=Path),
+              help="Then compare the trials' outputs with this stored tree (as gait compare; exit 1 when they differ).")
+@click.option("--tolerances", "tolerances", type=click.Path(path_type=Path, dir_okay=False),
+              help="With --baseline: a tolerance YAML as for gait compare.")
+@click.pass_context
+def batch_command(ctx, lab_dir, pipeline, workers, scheduler, force, no_plots, baseline, tolerances):
     """Run the pipeline on every trial folder below LAB_DIR as Dask tasks; batch_summary.csv in LAB_DIR."""
     import os
 
     from gaitcli.batch import BATCH_SUMMARY, run_batch, stages_of
+    from gaitcli.compare import DEFAULT_TOLERANCES, compare_trees, outputs_only, read_tolerances
     from gaitcli.report.progress import BatchProgress
 
+    console: Console = ctx.obj
     if workers is not None and scheduler is not None:
         raise click.UsageError("--workers and --scheduler exclude each other (a scheduler has its own workers)")
     cfg = configure(pipeline)
+    rules = DEFAULT_TOLERANCES if tolerances is None else read_tolerances(tolerances)  # bad input before any run
+    if baseline is not None and not baseline.is_dir():
+        raise InputError(baseline, "--baseline", "not found (expected a folder of stored outputs, as gait batch "
+                                                 "left them below a lab folder)")
 
     with BatchProgress(stages_of(cfg), enabled=not console.quiet) as progress:
         def started(total, to_run, dashboard):
@@ -368,6 +378,13 @@ def batch_command(console: Console, lab_dir, pipeline, workers, scheduler, force
             console.info(f"batch: {trial}: failed: {reason}")
     console.info(f"batch: wrote {Path(lab_dir) / BATCH_SUMMARY}")
     click.echo(f"{result.line()} ({result.elapsed_s:.1f} s)")
+    if baseline is not None:
+        comparison = compare_trees(baseline, lab_dir, tolerances=rules, select=outputs_only)
+        if comparison.findings and not console.quiet:
+            _print_findings(comparison)
+        click.echo(f"baseline {baseline}: {comparison.summary_line()}")
+        if not comparison.ok:
+            ctx.exit(1)
 
 
 @gait.command("compare")

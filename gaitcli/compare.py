@@ -356,11 +356,20 @@ def _check_root(root: Path, which: str) -> Path:
     return root
 
 
-def compare_trees(a: str | Path, b: str | Path, *, tolerances: Tolerances = DEFAULT_TOLERANCES) -> Comparison:
+def outputs_only(rel: str) -> bool:
+    """A relative path inside a ``gait_out`` folder (a stage's output, not a trial's input or truth)."""
+    return "gait_out" in rel.split("/")[:-1]
+
+
+def compare_trees(a: str | Path, b: str | Path, *, tolerances: Tolerances = DEFAULT_TOLERANCES,
+                  select=None) -> Comparison:
     """Compare every CSV and ``summary.json`` under ``a`` with the same relative path under ``b`` (module
-    docstring). Reads only; unreadable files and bad roots are :class:`InputError`."""
+    docstring); ``select(relative path) -> bool`` keeps only some (e.g. :func:`outputs_only`). Reads only;
+    unreadable files and bad roots are :class:`InputError`."""
     a, b = _check_root(Path(a), "A"), _check_root(Path(b), "B")
     in_a, in_b = tree_files(a), tree_files(b)
+    if select is not None:
+        in_a, in_b = [r for r in in_a if select(r)], [r for r in in_b if select(r)]
     if not in_a and not in_b:
         raise InputError(a, None, f"no CSV or summary.json files under it or under {b} (expected gait output trees)")
     both = sorted(set(in_a) & set(in_b))
