@@ -9,7 +9,6 @@ import os
 import re
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -19,7 +18,7 @@ import pytest
 
 from gaitcli.resources import sample_trials_dir
 
-from .conftest import ENV, SAMPLES, Result, build_once, gait, gait_many
+from .conftest import ENV, SAMPLES, Result, build_once, gait
 
 LINE = re.compile(r"^(\d+) ok, (\d+) failed, (\d+) skipped \(([\d.]+) s\)$", re.M)
 
@@ -93,54 +92,18 @@ def test_workers_and_scheduler_exclude_each_other_and_a_missing_lab_is_exit_2(tm
 
 # ------------------------------------------------------------------ a real scheduler and workers on loopback
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@pytest.fixture(scope="module")
-def cluster():
-    """``dask scheduler`` and ``dask worker`` (two single-threaded worker processes under their nannies) as
-    separate processes on 127.0.0.1; the scheduler lets a task's worker die once (allowed-failures 1)."""
-    port = _free_port()
-    address = f"tcp://127.0.0.1:{port}"
-    env = {**ENV, "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1"}
-    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
-    scheduler = subprocess.Popen(dask + ["--host", "127.0.0.1", "--port", str(port), "--no-dashboard"], env=env,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "2",
-                               "--nthreads", "1", "--no-dashboard"], env=env, stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL, start_new_session=True)
-    from distributed import Client
-
-    client = Client(address, timeout="30s")
-    client.wait_for_workers(2, timeout=60)
-    try:
-        yield address, client
-    finally:
-        client.close()
-        for proc in (worker, scheduler):
-            os.killpg(proc.pid, signal.SIGTERM)
-        for proc in (worker, scheduler):
-            try:
-                proc.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-
-
-def test_a_batch_on_an_existing_scheduler(cluster, tmp_path):
-    address, _ = cluster
+def test_a_batch_on_an_existing_scheduler(dask_cluster, tmp_path):
+    address, _ = dask_cluster
     lab = _lab(tmp_path, samples=("normal", "ankle_weight"))
     r = gait("batch", lab, "--scheduler", address, "--no-plots", cwd=tmp_path, timeout_s=300)
     assert r.returncode == 0, r.describe()
     assert _counts(r)[:3] == (2, 2, 0)
 
 
-def test_a_worker_killed_mid_trial_leaves_no_half_written_output(cluster, tmp_path):
+def test_a_worker_killed_mid_trial_leaves_no_half_written_output(dask_cluster, tmp_path):
     """The worker process running the trial is killed (SIGKILL) while it computes; the scheduler reruns the trial
     on the other worker, which finishes it, and no stage folder is left half-written."""
-    address, client = cluster
+    address, client = dask_cluster
     lab = tmp_path / "lab"
     shutil.copytree(sample_trials_dir() / "normal", lab / "normal", ignore=shutil.ignore_patterns("gait_out"))
     batch = subprocess.Popen([sys.executable, "-m", "gaitcli.cli", "batch", str(lab), "--scheduler", address],
@@ -164,30 +127,3 @@ def test_a_worker_killed_mid_trial_leaves_no_half_written_output(cluster, tmp_pa
         for stage in ("filter", "idyn"):
             assert (lab / "normal" / "gait_out" / stage / "summary.json").is_file()
 
-
-def test_a_study_grid_and_starts_on_an_existing_scheduler(cluster, tmp_path):
-    """Every case of a study a task on the cluster, each warm started from the futures of the cases it starts
-    from: the same case keys (which chain the start keys) and objectives as the chains in one process. Cases
-    stop after one IPOPT iteration (6 nodes), so exit 3 with all of them marked; ``--starts 2`` on the cluster
-    writes both starts."""
-    import json
-
-    import pandas as pd
-
-    address, _ = cluster
-    (tmp_path / "tiny.yaml").write_text("name: tiny\nspeeds_m_s: [1.0, 1.2]\nweights: [b]\nconditions: [normal, sach]\n"
-                                        "nodes: 6\nmax_iterations: 1\n")
-    runs = gait_many({"dask": (("predict", "--study", "tiny.yaml", "-o", "dask", "--scheduler", address), tmp_path),
-                      "local": (("predict", "--study", "tiny.yaml", "-o", "local", "--workers", "1"), tmp_path),
-                      "starts": (("predict", "--nodes", "6", "--max-iterations", "1", "--starts", "2", "-o", "starts",
-                                  "--scheduler", address), tmp_path)}, workers=2)
-    for name in ("dask", "local", "starts"):
-        assert runs[name].returncode == 3, runs[name].describe()
-    dask, local = (pd.read_csv(tmp_path / name / "study" / "study.csv") for name in ("dask", "local"))
-    assert list(dask["case"]) == list(local["case"]) and len(dask) == 4 and not dask["converged"].any()
-    for case in dask["case"]:
-        keys = [json.loads((tmp_path / name / "study" / case / "summary.json").read_text())["case_key"]
-                for name in ("dask", "local")]
-        assert keys[0] == keys[1], case
-    assert dask["objective"].to_numpy() == pytest.approx(local["objective"].to_numpy(), rel=1e-9)
-    assert len(pd.read_csv(tmp_path / "starts" / "predict" / "starts.csv")) == 2

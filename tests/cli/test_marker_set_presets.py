@@ -54,17 +54,14 @@ def _build(root: Path) -> dict:
     for case, (preset, label, metadata) in cases.items():
         shutil.copytree(root / preset, root / case)
         _without(root / case, label, metadata=metadata)
-    jobs = {f"{name}:filter": (("filter", root / name), root) for name in (*synth, *cases)}
-    filtered = gait_many(jobs)
-    idyn = gait_many({name: (("idyn", root / name), root) for name in (*synth, *cases)})
-    return {"filter": {k: r.to_json() for k, r in filtered.items()}, "idyn": {k: r.to_json() for k, r in idyn.items()}}
+    # idyn runs the filter stage itself (its outputs are missing); figures are not what is tested here
+    idyn = gait_many({name: (("idyn", root / name, "--no-plots"), root) for name in (*synth, *cases)})
+    return {"idyn": {k: r.to_json() for k, r in idyn.items()}}
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     root, record = build_once(tmp_path_factory, "cli_marker_set_presets", _build)
-    for r in record["filter"].values():
-        assert Result.from_json(r).returncode == 0, Result.from_json(r).describe()
     return root, {k: Result.from_json(v) for k, v in record["idyn"].items()}
 
 

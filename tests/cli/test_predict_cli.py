@@ -91,13 +91,27 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
     assert snapshot(tmp_path / "out") == earlier
 
 
-def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_path):
+def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_path, dask_cluster):
     # two cases stopped after one IPOPT iteration (6 nodes): both in study.csv, marked, exit 3; the rerun reads
-    # both back (the same inputs and configuration). (--starts: tests/predict/test_study.py.)
+    # both back (the same inputs and configuration). (--starts: tests/predict/test_study.py.) The same study on a
+    # Dask cluster (every case a task, the sach case depending on the normal one's future) gives the same case
+    # keys, which chain the start keys, and objectives; --starts 2 there writes both starts.
+    address, _ = dask_cluster
     (tmp_path / "tiny.yaml").write_text("name: tiny\nspeeds_m_s: [1.0]\nweights: [b]\nconditions: [normal, sach]\n"
                                         "nodes: 6\nmax_iterations: 1\n")
     jobs = {"study": (("predict", "--study", "tiny.yaml", "-o", "out", "--workers", "1"), tmp_path)}
-    runs = gait_many(jobs, workers=1)
+    runs = gait_many({**jobs, "dask": (("predict", "--study", "tiny.yaml", "-o", "dask", "--scheduler", address),
+                                       tmp_path),
+                      "starts": (("predict", "--nodes", "6", "--max-iterations", "1", "--starts", "2", "-o", "starts",
+                                  "--scheduler", address), tmp_path)}, workers=3)
+    for name in ("dask", "starts"):
+        assert runs[name].returncode == 3, runs[name].describe()
+    assert len(pd.read_csv(tmp_path / "starts" / "predict" / "starts.csv")) == 2
+    on_cluster = pd.read_csv(tmp_path / "dask" / "study" / "study.csv")
+    for case in ("v1.00_b_normal", "v1.00_b_sach"):
+        keys = [json.loads((tmp_path / name / "study" / case / "summary.json").read_text())["case_key"]
+                for name in ("out", "dask")]
+        assert keys[0] == keys[1], case
     run = runs["study"]
     assert run.returncode == 3 and "2 of 2 study cases did not converge" in run.stderr, run.describe()
     study = tmp_path / "out" / "study"
@@ -105,6 +119,7 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     assert list(table["condition"]) == ["normal", "sach"] and not table["converged"].any()
     assert not table["reused"].any() and (table["iterations"] == 1).all()
     first = table["objective"].to_numpy()
+    np.testing.assert_allclose(on_cluster["objective"], first, rtol=1e-9)
     assert (study / "study.png").stat().st_size > 1000
     sach = json.loads((study / "v1.00_b_sach" / "summary.json").read_text())
     assert sach["prosthesis"]["name"] == "SACH" and sach["strength_scale"] == 1.5
