@@ -307,17 +307,28 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
               help="The reference table to write (CSV: cycle_pct, <variable>_mean, <variable>_sd).")
 @click.option("--pipeline", "pipeline", type=click.Path(path_type=Path),
               help="Pipeline for the idyn stage where a trial's idyn output is missing or stale.")
+@click.option("--band", "band", type=click.Path(path_type=Path, dir_okay=False),
+              help="Also write a normal band for figures (mean, SD over the cycle of every angle and moment of "
+                   "hip, knee and ankle, both legs pooled): gait report --reference takes it.")
 @click.pass_obj
-def reference_command(console: Console, trials, out, pipeline):
+def reference_command(console: Console, trials, out, pipeline, band):
     """A reference gait (mean and SD over the cycle) from the idyn outputs of one or more trials."""
     from gaitcli.io.outputs import write_table
     from gaitcli.pipeline import fresh_output
     from gaitcli.predict.reference import reference_from_idyn
 
     cfg = configure(pipeline)
-    reference, right, left = reference_from_idyn([fresh_output(trial, "idyn", cfg, plots=False) for trial in trials],
-                                                 sources=[Path(t).resolve().name for t in trials])
+    outputs = [fresh_output(trial, "idyn", cfg, plots=False) for trial in trials]
+    names = [Path(t).resolve().name for t in trials]
+    reference, right, left = reference_from_idyn(outputs, sources=names)
     write_table(out, reference.columns())
+    if band is not None:
+        from gaitcli.report.bands import band_from_gait_cycles
+
+        normal = band_from_gait_cycles([p.parent / "gait_cycle.csv" for p in outputs], source=", ".join(names))
+        write_table(band, normal.columns())
+        console.info(f"reference: wrote {band} (band of {len(normal.mean)} variables, "
+                     f"{min(normal.strides.values())}–{max(normal.strides.values())} strides each)")
     console.info(f"reference: wrote {out} ({right} right and {left} left strides of {len(trials)} "
                  f"trial(s); forces from {int(reference.strides[6:].min())}–{int(reference.strides[6:].max())} "
                  "strides per variable)")
@@ -433,6 +444,23 @@ def _print_findings(result) -> None:
     widths = [max(len(r[k]) for r in [TABLE_HEADER, *rows]) for k in range(len(TABLE_HEADER))]
     for row in [TABLE_HEADER, tuple("-" * w for w in widths), *rows]:
         click.echo("  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip(), err=True)
+
+
+@gait.command("report")
+@click.argument("out_dir", type=click.Path(path_type=Path))
+@click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
+              help="Normal band for the cycle figures: a band CSV (gait reference --band) or a gait reference "
+                   "table (default: the package's band, from the bundled normal trial).")
+@click.pass_obj
+def report_command(console: Console, out_dir, reference):
+    """A self-contained HTML page per trial, prediction or study in OUT_DIR (and an index for a batch)."""
+    from gaitcli.report.bands import default_band, read_band
+    from gaitcli.report.html import write_report
+
+    band = default_band() if reference is None else read_band(reference)
+    pages = write_report(out_dir, band)
+    for page in pages:
+        console.info(f"report: wrote {page.path}")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -114,34 +114,38 @@ def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
     return written
 
 
-def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
-    """``cycle.png``: sagittal hip/knee/ankle angles and moments over the gait cycle (mean ± SD per side);
-    ``residuals.png``: the pelvis residual force and moment over time."""
-    from gaitcli.dynamics.sagittal import SagittalExport
+#: the joints and the axis of each plane's figure: (joint, coordinate axis, band variable prefix, title)
+PLANES = {"sagittal": (("hip", "flexion", "hip flexion"), ("knee", "flexion", "knee flexion"),
+                       ("ankle", "flexion", "ankle dorsiflexion")),
+          "frontal": (("hip", "adduction", "hip adduction"), ("knee", "adduction", "knee adduction (varus)"),
+                      ("ankle", "adduction", "ankle inversion"))}
+
+
+def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", band=None):
+    """Angles (deg) and moments (N·m/kg) of hip, knee and ankle in ``plane`` over the gait cycle, mean ± SD of
+    each side's strides (right red, left blue) over the grey normal ``band`` (:mod:`gaitcli.report.bands`);
+    moments blank where the foot's load is unknown. Returns the matplotlib figure."""
     from gaitcli.kinematics.model import COORDINATES, MOMENTS
+    from gaitcli.report.bands import draw_band
     from gaitcli.signal.cycles import Stride, normalise
 
     with h5py.File(h5_path, "r") as h5:
-        export = read_record(h5["sagittal"], SagittalExport)
         strides = read_records(h5["strides"], Stride)
         kin = h5["coordinates_clinical"][()]
         mom = h5["joint_moments_clinical"][()] / float(h5["segments/mass"].attrs["body_mass_kg"])
         known = h5["joint_moments_known"][()].astype(bool)  # blank where the foot's load is unknown
         mom = np.where(np.repeat(known, 3, axis=1), mom, np.nan)
-        residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]
         time_s = h5["time"][()]
-    events = export.events
-    measured = export.load_known["r"] & export.load_known["l"]
-    folder = Path(folder)
-    written = []
-    joints = (("hip", "hip flexion"), ("knee", "knee flexion"), ("ankle", "ankle dorsiflexion"))
     fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
     pct = np.arange(101)
-    for col, (joint, label) in enumerate(joints):
+    banded = False
+    for col, (joint, axis, label) in enumerate(PLANES[plane]):
+        banded |= draw_band(axes[0, col], band, f"{joint}_{axis}_deg")
+        banded |= draw_band(axes[1, col], band, f"{joint}_{axis}_moment_per_kg")
         for side in ("r", "l"):
             ks = [s for s in strides if s.side == side]
-            a = [normalise(kin[:, COORDINATES.index(f"{joint}_{side}_flexion")], time_s, s) for s in ks]
-            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_flexion_moment")], time_s, s) for s in ks]
+            a = [normalise(kin[:, COORDINATES.index(f"{joint}_{side}_{axis}")], time_s, s) for s in ks]
+            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_{axis}_moment")], time_s, s) for s in ks]
             for row, values, count in ((0, a, len(ks)), (1, m, len(ks))):
                 if not values:
                     continue
@@ -157,14 +161,35 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
         axes[1, col].set_ylabel("moment (N·m/kg)")
         axes[1, col].set_xlabel("gait cycle (%)")
         for row in (0, 1):
-            axes[row, col].axhline(0, color="0.8", lw=0.6)
+            axes[row, col].axhline(0, color="0.7", lw=0.6)
     for row in (0, 1):
         for ax in axes[row]:
             ax.legend(fontsize=7, loc="best")
-    fig.suptitle(f"Sagittal angles and moments over the gait cycle, mean ± SD (moments blank where the foot's load "
-                 f"is unknown: a stance off the plates; + = flexion / dorsiflexion) — {title}", fontsize=9)
-    fig.subplots_adjust(left=0.07, right=0.98, top=0.9, bottom=0.09, hspace=0.12, wspace=0.3)
-    written.append(save(fig, folder / "cycle.png"))
+    sign = "flexion / dorsiflexion" if plane == "sagittal" else "adduction / varus / inversion"
+    normal = "; grey: normal ± 1 SD" if banded else ""
+    fig.suptitle(f"{plane.capitalize()} angles and moments over the gait cycle — {title}\nmean ± SD of each side's "
+                 f"strides; moments blank where the foot's load is unknown; + = {sign}{normal}", fontsize=9)
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.88, bottom=0.09, hspace=0.12, wspace=0.3)
+    return fig
+
+
+def idyn_figures(h5_path: Path, folder: Path, *, title: str = "", band="default") -> list[Path]:
+    """``cycle.png`` and ``cycle_frontal.png``: hip/knee/ankle angles and moments over the gait cycle
+    (:func:`cycle_figure`, over the package's normal band unless ``band`` is given or None);
+    ``residuals.png``: the pelvis residual force and moment over time."""
+    from gaitcli.dynamics.sagittal import SagittalExport
+    from gaitcli.report.bands import default_band
+
+    band = default_band() if band == "default" else band
+    with h5py.File(h5_path, "r") as h5:
+        export = read_record(h5["sagittal"], SagittalExport)
+        residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]
+        time_s = h5["time"][()]
+    events = export.events
+    measured = export.load_known["r"] & export.load_known["l"]
+    folder = Path(folder)
+    written = [save(cycle_figure(h5_path, "sagittal", title=title, band=band), folder / "cycle.png"),
+               save(cycle_figure(h5_path, "frontal", title=title, band=band), folder / "cycle_frontal.png")]
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
     residual_force, residual_moment = (np.where(measured[:, None], r, np.nan) for r in (residual_force,

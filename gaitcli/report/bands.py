@@ -1,0 +1,150 @@
+"""Normal bands for figures: mean ± 1 SD over the gait cycle of a reference, drawn grey behind a trial's curves.
+
+A band holds side-free clinical variables over 0–100 % of a stride (both legs alike, clinical signs as in the
+tables): angles ``<joint>_<axis>_deg`` (``hip_flexion_deg``, ``knee_adduction_deg``, ``ankle_flexion_deg`` =
+dorsiflexion, ...), moments ``<joint>_<axis>_moment_per_kg`` (N·m/kg) and the ground reaction
+``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
+``<variable>_sd``; ``gait reference ... --band FILE`` writes one from idyn outputs) or from a ``gait reference``
+table, whose right-leg columns give the sagittal angles and forces. The package's band
+(``report/data/normal_band.csv``) comes from the bundled normal sample trial; one subject's strides vary far
+less than between subjects, so each SD is raised to a floor (3°, 0.1 N·m/kg, 0.3 N/kg, our choice as for the
+prediction's reference, :data:`gaitcli.predict.reference.SD_FLOOR`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gaitcli.errors import InputError
+
+CYCLE_PCT = np.arange(101, dtype=float)
+JOINTS = ("hip", "knee", "ankle")
+AXES = ("flexion", "adduction", "rotation")
+#: SD floors by the variable's unit suffix
+SD_FLOOR = {"_deg": 3.0, "_moment_per_kg": 0.1, "_N_per_kg": 0.3}
+BAND_FILE = Path(__file__).resolve().parent / "data" / "normal_band.csv"
+#: a gait reference table's right-leg columns → band variables
+REFERENCE_COLUMNS = {"hip_r_flexion_deg": "hip_flexion_deg", "knee_r_flexion_deg": "knee_flexion_deg",
+                     "ankle_r_dorsiflexion_deg": "ankle_flexion_deg", "grf_x_r_N_per_kg": "grf_x_N_per_kg",
+                     "grf_z_r_N_per_kg": "grf_z_N_per_kg"}
+
+
+@dataclass(frozen=True)
+class NormalBand:
+    """``mean``/``sd`` {variable: (101,)} over :data:`CYCLE_PCT`; ``source``: where it came from (for captions)."""
+
+    mean: dict[str, np.ndarray]
+    sd: dict[str, np.ndarray]
+    source: str = ""
+    strides: dict[str, int] = field(default_factory=dict)
+
+    def get(self, variable: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """(mean, SD) of ``variable`` or None when the band has none."""
+        return (self.mean[variable], self.sd[variable]) if variable in self.mean else None
+
+    def columns(self) -> dict[str, np.ndarray]:
+        out = {"cycle_pct": CYCLE_PCT}
+        for name in self.mean:
+            out[f"{name}_mean"], out[f"{name}_sd"] = self.mean[name], self.sd[name]
+        return out
+
+
+def floor_of(variable: str) -> float:
+    return next((v for suffix, v in SD_FLOOR.items() if variable.endswith(suffix)), 0.0)
+
+
+def band_variables() -> tuple[str, ...]:
+    """Every variable a band from idyn outputs has."""
+    angles = tuple(f"{j}_{a}_deg" for j in JOINTS for a in AXES)
+    moments = tuple(f"{j}_{a}_moment_per_kg" for j in JOINTS for a in AXES)
+    return angles + moments
+
+
+def band_from_gait_cycles(paths, *, source: str = "") -> NormalBand:
+    """The band of every stride in idyn's ``gait_cycle.csv`` files (both legs pooled, each over its own cycle;
+    at each percentage the strides that give the variable there: a moment where its foot's load is known, NaN
+    where none does); each SD raised to its floor."""
+    import pandas as pd
+
+    stacks: dict[str, list[np.ndarray]] = {v: [] for v in band_variables()}
+    for path in paths:
+        table = pd.read_csv(path, keep_default_na=False, na_values=["NaN"])
+        for (side, stride), block in table.groupby(["side", "stride"], sort=True):
+            if len(block) != CYCLE_PCT.size:
+                continue
+            for j in JOINTS:
+                for a in AXES:
+                    stacks[f"{j}_{a}_deg"].append(block[f"{j}_{side}_{a}"].to_numpy(float))
+                    stacks[f"{j}_{a}_moment_per_kg"].append(block[f"{j}_{side}_{a}_moment_per_kg"].to_numpy(float))
+    mean, sd, strides = {}, {}, {}
+    for name, curves in stacks.items():
+        if not curves:
+            continue
+        stack = np.stack(curves)  # NaN where a stride's moment is unknown (its foot off the plates)
+        count = np.isfinite(stack).sum(axis=0)
+        if not count.any():
+            continue
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean[name] = np.where(count > 0, np.nansum(stack, axis=0) / np.maximum(count, 1), np.nan)
+            spread = np.sqrt(np.nansum((stack - mean[name]) ** 2, axis=0) / np.maximum(count - 1, 1))
+        sd[name] = np.where(count > 0, np.maximum(np.where(count > 1, spread, 0.0), floor_of(name)), np.nan)
+        strides[name] = int(count.max())
+    if not mean:
+        raise InputError(None, "band", "no complete stride in the trials' gait_cycle.csv (expected idyn outputs)")
+    return NormalBand(mean, sd, source, strides)
+
+
+def read_band(path: str | Path) -> NormalBand:
+    """A band file, or a ``gait reference`` table (its right-leg sagittal angles and forces); one-line errors."""
+    import pandas as pd
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "--reference", "file not found (expected a band or reference CSV)")
+    try:
+        table = pd.read_csv(path)
+    except (ValueError, UnicodeDecodeError):
+        raise InputError(path, None, "not a CSV table (expected cycle_pct and <variable>_mean, _sd)") from None
+    if "cycle_pct" not in table:
+        raise InputError(path, "cycle_pct", "missing column (expected cycle_pct and <variable>_mean, _sd)")
+    pct = table["cycle_pct"].to_numpy(float)
+    if pct.size < 2 or pct[0] != 0.0 or pct[-1] != 100.0 or np.any(np.diff(pct) <= 0):
+        raise InputError(path, "cycle_pct", "expected increasing values from 0 to 100")
+    rename = REFERENCE_COLUMNS if any(f"{c}_mean" in table for c in REFERENCE_COLUMNS) else {}
+    mean, sd = {}, {}
+    for column in table.columns:
+        if not column.endswith("_mean") or f"{column[:-5]}_sd" not in table:
+            continue
+        name = column[:-5]
+        if rename and name not in rename:
+            continue
+        m, s = table[column].to_numpy(float), table[f"{name}_sd"].to_numpy(float)
+        if not (np.isfinite(m).any() and np.array_equal(np.isfinite(m), np.isfinite(s)) and np.all(s[np.isfinite(s)] >= 0)):
+            raise InputError(path, f"{name}_sd", "expected means and standard deviations ≥ 0 (NaN where a band has "
+                                                 "no stride, in both)")
+        mean[rename.get(name, name)] = np.interp(CYCLE_PCT, pct, m)
+        sd[rename.get(name, name)] = np.interp(CYCLE_PCT, pct, s)
+    if not mean:
+        raise InputError(path, None, "no <variable>_mean and _sd columns (expected a band or reference CSV)")
+    return NormalBand(mean, sd, path.name)
+
+
+def default_band() -> NormalBand:
+    """The package's band (the bundled normal sample trial's strides)."""
+    band = read_band(BAND_FILE)
+    return NormalBand(band.mean, band.sd, "gaitcli's band: the bundled normal sample trial")
+
+
+def draw_band(ax, band: NormalBand | None, variable: str, *, label: bool = True) -> bool:
+    """Grey mean ± 1 SD of ``variable`` behind whatever ``ax`` shows over 0–100 % (True when drawn)."""
+    got = None if band is None else band.get(variable)
+    if got is None:
+        return False
+    mean, sd = got
+    ax.fill_between(CYCLE_PCT, mean - sd, mean + sd, color="0.82", lw=0, zorder=0,
+                    label="normal ± 1 SD" if label else None)
+    ax.plot(CYCLE_PCT, mean, color="0.6", lw=0.8, ls=":", zorder=0.5)
+    return True

@@ -1,0 +1,282 @@
+"""``gait report``: one self-contained HTML page per trial, prediction or study, and an index for a batch.
+
+A page embeds its figures as data URIs (PNG, the prediction's GIF): it opens from a file or an e-mail
+attachment with no network, and its Content-Security-Policy allows nothing else to load. Figures are drawn
+again from the stages' HDF5 files (:mod:`gaitcli.report.plots`, :mod:`gaitcli.report.predict_plots`), the
+cycle figures over the grey normal band (:mod:`gaitcli.report.bands`); a study's figures are its own PNGs.
+Right is red and left blue throughout, every axis has its unit, every figure a caption, and titles name the
+trial folder, never a path outside it.
+
+What a folder is (:func:`find_report`): a batch (``batch_summary.csv``: an index page and a page per trial), a
+trial output root (stage folders with ``summary.json``; or a trial folder holding ``gait_out/``), or a
+predict study (``study/study.csv`` or ``study.csv``).
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import html
+import json
+import tempfile
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+
+from gaitcli import __version__
+from gaitcli.errors import InputError
+from gaitcli.io.atomic import atomic_path
+from gaitcli.report.bands import NormalBand
+
+#: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
+#: Wolf and Rettig), the literature values the dissertation compares Table 3.1 with
+NORMAL_FEATURES = {"speed_m_s": 1.38, "stride_length_m": 1.41, "stance_right_pct": 61.0, "stance_left_pct": 61.0}
+FEATURES = (("speed_m_s", "walking speed", "m/s", 2), ("stride_length_m", "stride length", "m", 2),
+            ("period_s", "stride period", "s", 2), ("stance_right_pct", "stance, right", "% of cycle", 1),
+            ("stance_left_pct", "stance, left", "% of cycle", 1),
+            ("double_stance_pct", "double stance", "% of cycle", 1))
+STYLE = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1250px; color: #222; }
+h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.15em; margin-top: 1.8em; border-bottom: 1px solid #ccc; }
+table { border-collapse: collapse; margin: 0.5em 0; } td, th { padding: 0.2em 0.8em; border-bottom: 1px solid #eee;
+text-align: right; } th { background: #f4f4f4; } td:first-child, th:first-child { text-align: left; }
+figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
+figcaption { font-size: 0.9em; color: #444; max-width: 1100px; } .meta { color: #666; font-size: 0.9em; }
+.right { color: #d62728; } .left { color: #1f77b4; } .bad { color: #b00; font-weight: bold; }
+"""
+#: nothing but inline styles and data-URI images may load
+CSP = "default-src 'none'; img-src data:; style-src 'unsafe-inline'"
+
+
+@dataclass(frozen=True)
+class Page:
+    """One page to write: its path and, for a batch index, its status."""
+
+    path: Path
+    title: str
+    status: str = ""
+
+
+def _data_uri(path: Path) -> str:
+    kind = {".png": "image/png", ".gif": "image/gif"}[path.suffix.lower()]
+    return f"data:{kind};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"
+
+
+def _figure(path: Path, caption: str) -> str:
+    return (f'<figure><img src="{_data_uri(path)}" alt="{html.escape(caption)}">'
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+
+
+def _table(header, rows) -> str:
+    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _page(title: str, body: str) -> str:
+    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    return (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
+            f'<meta http-equiv="Content-Security-Policy" content="{CSP}">'
+            f"<title>{html.escape(title)}</title><style>{STYLE}</style></head><body>{body}"
+            f'<p class="meta">gaitcli {__version__}, {stamp}</p></body></html>')
+
+
+def _summary(folder: Path) -> dict:
+    path = folder / "summary.json"
+    return json.loads(path.read_text()) if path.is_file() else {}
+
+
+def _number(value, digits: int) -> str:
+    return "—" if value is None else f"{float(value):.{digits}f}"
+
+
+def _subject(trial_folder: Path | None) -> str:
+    """The subject line from the trial's subject.yaml, when the output root sits in its trial folder."""
+    if trial_folder is None or not (trial_folder / "subject.yaml").is_file():
+        return ""
+    try:
+        from gaitcli.trial import load_subject
+
+        s = load_subject(trial_folder / "subject.yaml")
+    except InputError:
+        return ""
+    mass = "mass from the trial" if s.mass_kg is None else f"{s.mass_kg:g} kg"
+    return f"{s.sex}, {mass}, {s.stature_m:g} m" + (f", marker set {s.marker_set}" if s.marker_set else "")
+
+
+def trial_body(root: Path, name: str, band: NormalBand | None, work: Path) -> str:
+    """The sections of a trial output root's page (``root``: the folder holding filter/, idyn/, ...)."""
+    from gaitcli.report.plots import filter_figures, idyn_figures, muscle_figures
+
+    trial_folder = root.parent if root.name == "gait_out" else None
+    subject = _subject(trial_folder)
+    if not subject and _summary(root / "idyn").get("mass_kg"):
+        subject = f"body mass {float(_summary(root / 'idyn')['mass_kg']):.1f} kg"
+    parts = [f"<h1>{html.escape(name)}</h1>",
+             f'<p class="meta">{html.escape(subject)}{"; " if subject else ""}outputs in {html.escape(root.name)}/; '
+             f'<span class="right">right in red</span>, <span class="left">left in blue</span></p>']
+    idyn = _summary(root / "idyn")
+    if idyn:
+        rows = [(label, _number(idyn.get(key), digits), _number(NORMAL_FEATURES.get(key), digits), unit)
+                for key, label, unit, digits in FEATURES]
+        parts.append("<h2>Gait features (Table 3.1)</h2>" + _table(
+            ("feature", "this trial", "normal walking (3.3.3: 26 subjects, Heidelberg)", "unit"), rows))
+        figures = idyn_figures(root / "idyn" / "idyn.h5", work / "idyn", title=name, band=band)
+        band_text = f"the grey band is the normal mean ± 1 SD ({band.source})" if band else "no normal band given"
+        captions = {
+            "cycle.png": f"Sagittal hip, knee and ankle angles (deg) and joint moments (N·m/kg, internal, positive "
+                         f"as the angle) over the gait cycle from heel strike to heel strike: mean ± SD of each "
+                         f"side's strides; {band_text}. Moments are blank where the foot's load was not measured.",
+            "cycle_frontal.png": f"Frontal angles (deg) and moments (N·m/kg) over the gait cycle: hip adduction, knee "
+                                 f"varus, ankle inversion positive; {band_text}.",
+            "residuals.png": "Pelvis residual force (N) and moment (N·m): what the model and the measured ground "
+                             "reactions leave unexplained (3.22); grey where a foot on the ground stood off the "
+                             "plates (the residuals are meaningless there). Lines: heel strike (solid), toe off "
+                             "(dashed)."}
+        parts.append("<h2>Joint angles and moments</h2>" + "".join(_figure(p, captions[p.name]) for p in figures
+                                                                     if p.name != "residuals.png"))
+        parts.append("<h2>Pelvis residuals</h2>" + "".join(_figure(p, captions[p.name]) for p in figures
+                                                           if p.name == "residuals.png"))
+    if (root / "filter" / "filter.h5").is_file():
+        figures = filter_figures(root / "filter" / "filter.h5", work / "filter", title=name)
+        captions = {"markers.png": "Marker trajectories (m), raw and after the zero-lag low-pass filter.",
+                    "grf.png": "Ground reaction per foot (N) and its centre of pressure, with the gait events "
+                               "(heel strike solid, toe off dashed)."}
+        parts.append("<h2>Signals</h2>" + "".join(_figure(p, captions.get(p.name, p.stem)) for p in figures))
+    for h5 in sorted((root / "muscles").glob("*/muscles.h5")) if (root / "muscles").is_dir() else ():
+        method = h5.parent.name
+        summary = _summary(h5.parent)
+        figures = muscle_figures(h5, work / "muscles" / method, title=name)
+        cost = summary.get("metabolic_cost_J")
+        state = "" if summary.get("converged", True) else ' <span class="bad">(did not converge)</span>'
+        parts.append(f"<h2>Muscles: {html.escape(method.upper())}{state}</h2>"
+                     f"<p>metabolic cost of one leg over the interval: {_number(cost, 1)} J; cost of transport "
+                     f"{_number(summary.get('cost_of_transport_J_per_m'), 1)} J/m</p>")
+        names = {"forces.png": "forces (N)", "activations.png": "activations (0–1)",
+                 "excitations.png": "excitations (0–1)", "metabolic_cost.png": "metabolic energy per muscle (J)"}
+        parts += [_figure(p, f"The 8 muscles of Table A.1: {names.get(p.name, p.stem)}, {method.upper()}.")
+                  for p in figures]
+    if (root / "predict" / "predict.h5").is_file():
+        parts.append(predict_section(root / "predict", name, work / "predict"))
+    return "".join(parts)
+
+
+def predict_section(folder: Path, name: str, work: Path) -> str:
+    """A prediction's figures (stick figure, animation, angles and GRF against its reference, moments,
+    muscles, the prosthesis curve) and key figures."""
+    from gaitcli.report.predict_plots import predict_figures
+
+    summary = _summary(folder)
+    figures = predict_figures(folder / "predict.h5", work, title=name)
+    state = "" if summary.get("converged", True) else ' <span class="bad">(did not converge)</span>'
+    rows = [("speed", _number(summary.get("speed_m_s"), 2), "m/s"),
+            ("metabolic cost of transport Et", _number(summary.get("cost_of_transport_J_per_m"), 1), "J/m"),
+            ("deviation from the reference Jdev", _number(summary.get("deviation"), 2), ""),
+            ("objective J", _number(summary.get("objective"), 3), "")]
+    captions = {
+        "angles.png": "Predicted hip, knee and ankle angles (deg) over the cycle against the reference (grey, mean ± "
+                      "1 SD).", "grf.png": "Predicted ground reactions (N/kg) against the reference (grey, mean ± 1 SD).",
+        "moments.png": "Joint moments (N·m): inverse dynamics of the predicted motion and the muscles' and passive "
+                       "structures' moments.", "muscles.png": "Muscle activations over the cycle (0–1).",
+        "stick.png": "Stick figure of the predicted cycle.", "walk.gif": "The predicted gait, animated.",
+        "prosthesis.png": "The prosthetic ankle's spring moment (N·m) against its angle (rad), beside Table A.7's "
+                          "feet."}
+    body = "".join(_figure(p, captions.get(p.name, p.stem)) for p in figures)
+    return (f"<h2>Predicted gait{state}</h2>"
+            + _table(("", "value", "unit"), rows) + body)
+
+
+def study_body(folder: Path) -> str:
+    """A predict study's page: its table and its figures (study.png, curves.png)."""
+    rows = list(csv.DictReader((folder / "study.csv").open()))
+    header = ("case", "speed (m/s)", "weights", "condition", "J", "Et (J/m)", "Jdev", "converged")
+    table = [(r["case"], r["speed_m_s"], r["weights"], r["condition"], _number(r["objective"] or None, 3),
+              _number(r["cost_of_transport_J_per_m"] or None, 1), _number(r["deviation"] or None, 2),
+              "yes" if r["converged"] in ("True", "true", "1") else "NO") for r in rows]
+    parts = [f"<h1>Study {html.escape(folder.parent.name)}/{html.escape(folder.name)}</h1>",
+             "<h2>Cases (as Table 5.3)</h2>" + _table(header, table)]
+    captions = {"study.png": "J per condition, weight set and speed (as Fig. 5.15).",
+                "curves.png": "The optimal prostheses' spring moment (N·m) against ankle angle (rad) beside the "
+                              "commercial feet (as Fig. 5.16)."}
+    for name, caption in captions.items():
+        if (folder / name).is_file():
+            parts.append(_figure(folder / name, caption))
+    return "".join(parts)
+
+
+def find_report(out_dir: Path) -> tuple[str, Path]:
+    """(kind, root) of a folder: ``batch``, ``study`` or ``trial`` (see the module docstring)."""
+    out_dir = Path(out_dir)
+    if not out_dir.is_dir():
+        raise InputError(out_dir, None, "not found (expected an output folder: a trial's gait_out, a batch's lab "
+                                        "folder or a predict study)")
+    if (out_dir / "batch_summary.csv").is_file():
+        return "batch", out_dir
+    for study in (out_dir / "study", out_dir):
+        if (study / "study.csv").is_file():
+            return "study", study
+    for root in (out_dir, out_dir / "gait_out"):
+        if any((root / s / "summary.json").is_file() for s in ("filter", "idyn", "predict")) or \
+                list(root.glob("muscles/*/summary.json")):
+            return "trial", root
+    raise InputError(out_dir, None, "holds no stage outputs (expected filter/, idyn/, muscles/ or predict/ with "
+                                    "summary.json, a study.csv or a batch_summary.csv)")
+
+
+def _trial_name(root: Path) -> str:
+    """The trial folder's name as the stages recorded it (HDF5 attribute ``trial``), else the output root's folder."""
+    import h5py
+
+    for path in sorted(root.glob("*/*.h5")) + sorted(root.glob("muscles/*/*.h5")):
+        try:
+            with h5py.File(path, "r") as h5:
+                name = h5.attrs.get("trial")
+        except OSError:
+            continue
+        if name:
+            return str(name)
+    root = root.resolve()
+    return root.parent.name if root.name == "gait_out" else root.name
+
+
+def write_page(path: Path, title: str, body: str) -> Path:
+    with atomic_path(path) as tmp:
+        tmp.write_text(_page(title, body), encoding="utf-8")
+    return path
+
+
+def write_report(out_dir: Path, band: NormalBand | None) -> list[Page]:
+    """Write the report pages of ``out_dir`` (a trial's ``report.html`` in its output root, a study's in its
+    folder, a batch's ``report.html`` index in the lab folder beside each trial's own page)."""
+    kind, root = find_report(Path(out_dir).resolve())
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        if kind == "study":
+            return [Page(write_page(root / "report.html", f"study {root.parent.name}", study_body(root)), "study")]
+        if kind == "trial":
+            name = _trial_name(root)
+            return [Page(write_page(root / "report.html", name, trial_body(root, name, band, work)), name)]
+        rows = list(csv.DictReader((root / "batch_summary.csv").open()))
+        status: dict[str, str] = {}
+        for r in rows:
+            order = ("failed", "unconverged", "ok", "skipped")
+            before = status.get(r["trial"], "skipped")
+            status[r["trial"]] = min(before, r["status"], key=lambda s: order.index(s) if s in order else 0)
+        reasons = {r["trial"]: r["reason"] for r in rows if r["reason"]}
+        pages, links = [], []
+        for trial, state in sorted(status.items()):
+            output = root / trial / "gait_out"
+            if state != "failed" and output.is_dir():
+                page = write_page(output / "report.html", trial,
+                                  trial_body(output, trial, band, work / trial.replace("/", "_")))
+                pages.append(Page(page, trial, state))
+                link = f'<a href="{html.escape(page.relative_to(root).as_posix())}">{html.escape(trial)}</a>'
+            else:
+                link = html.escape(trial)
+            links.append((link, state, reasons.get(trial, "")))
+        table = ("<table><tr><th>trial</th><th>status</th><th>reason</th></tr>" + "".join(
+            f"<tr><td>{link}</td><td>{html.escape(s)}</td><td>{html.escape(reason)}</td></tr>"
+            for link, s, reason in links) + "</table>")
+        index = write_page(root / "report.html", f"batch {root.name}",
+                           f"<h1>Batch {html.escape(root.name)}</h1><p>{len(links)} trials</p>{table}")
+        return [Page(index, f"batch {root.name}", "index"), *pages]
