@@ -181,23 +181,13 @@ def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | No
             if on_done:
                 on_done(k, results[-1])
         return results
-    results: list = [None] * starts
     with pool(workers) as executor:
-        futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
-        try:
-            for future in as_completed(futures):
-                k = futures[future]
-                results[k] = future.result()
-                if on_done:
-                    on_done(k, results[k])
-        except BaseException:
-            stop(executor)
-            raise
-    return results
+        return _run_on(executor, jobs, on_done, stop)
 
 
-def _run_on(executor, jobs, on_done) -> list[PredictResult]:
-    """The starts as tasks of ``executor``; on an interrupt what has not started is cancelled."""
+def _run_on(executor, jobs, on_done, stopping=None) -> list[PredictResult]:
+    """The starts as tasks of ``executor``; on an interrupt what has not started is cancelled (and ``stopping``
+    ends the running ones, for a process pool)."""
     results: list = [None] * len(jobs)
     futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
     try:
@@ -207,7 +197,7 @@ def _run_on(executor, jobs, on_done) -> list[PredictResult]:
             if on_done:
                 on_done(k, results[k])
     except BaseException:
-        executor.shutdown(wait=False, cancel_futures=True)
+        (stopping or (lambda e: e.shutdown(wait=False, cancel_futures=True)))(executor)
         raise
     return results
 

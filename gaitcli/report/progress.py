@@ -5,6 +5,17 @@ from __future__ import annotations
 import sys
 
 
+def _bars(count: str):
+    """A started rich display on stderr: description, bar, ``count`` (a rich format of the task), elapsed time."""
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    progress = Progress(TextColumn("{task.description}"), BarColumn(), TextColumn(count), TimeElapsedColumn(),
+                        console=Console(stderr=True), transient=True)
+    progress.start()
+    return progress
+
+
 class ProgressDisplay:
     """A progress callback for :func:`gaitcli.pipeline.run_stages`: one rich bar per stage and description.
 
@@ -18,13 +29,7 @@ class ProgressDisplay:
 
     def __enter__(self) -> ProgressDisplay:
         if self.enabled:
-            from rich.console import Console
-            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-            self._progress = Progress(TextColumn("{task.description}"), BarColumn(),
-                                      TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn(),
-                                      console=Console(stderr=True), transient=True)
-            self._progress.start()
+            self._progress = _bars("{task.completed}/{task.total}")
         return self
 
     def __exit__(self, *exc) -> None:
@@ -56,13 +61,7 @@ class BatchProgress:
 
     def __enter__(self) -> BatchProgress:
         if self.enabled:
-            from rich.console import Console
-            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-            self._progress = Progress(TextColumn("{task.description}"), BarColumn(),
-                                      TextColumn("{task.completed}/{task.total} trials"), TimeElapsedColumn(),
-                                      console=Console(stderr=True), transient=True)
-            self._progress.start()
+            self._progress = _bars("{task.completed}/{task.total} trials")
         return self
 
     def __exit__(self, *exc) -> None:
