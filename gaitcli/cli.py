@@ -156,11 +156,21 @@ def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz):
 @_trial_options
 @_config_option(IdynConfig, "frames", "--frames")
 @_config_option(IdynConfig, "pose", "--pose")
+@click.option("--export", "exports", type=Choice(("opensim", "c3d")), multiple=True,
+              help="Also write the results for OpenSim (.trc, .mot, .sto, ExternalLoads) or as a C3D copy of the "
+                   "trial with angles and moments, into OUT/export/ (repeatable).")
 @click.pass_obj
-def idyn_command(console: Console, trial, out, pipeline, no_plots, frames, pose):
+def idyn_command(console: Console, trial, out, pipeline, no_plots, frames, pose, exports):
     """Segment poses, 27 coordinates, 21 joint moments and the pelvis residuals."""
     cfg = configure(pipeline, idyn={"frames": frames, "pose": pose})
     console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
+    if exports:
+        from gaitcli.pipeline import TrialRun
+        from gaitcli.report.exports import export_trial
+
+        run = TrialRun(trial, out, cfg)
+        for path in export_trial(run.out_root, set(exports), trial_c3d=run.trial.trial_path):
+            console.info(f"idyn: exported {path}")
 
 
 @gait.command("muscles")
@@ -451,16 +461,31 @@ def _print_findings(result) -> None:
 @click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
               help="Normal band for the cycle figures: a band CSV (gait reference --band) or a gait reference "
                    "table (default: the package's band, from the bundled normal trial).")
+@click.option("--export", "exports", type=Choice(("opensim", "c3d")), multiple=True,
+              help="Also export each trial's idyn results for OpenSim or as a C3D copy (as gait idyn --export).")
 @click.pass_obj
-def report_command(console: Console, out_dir, reference):
+def report_command(console: Console, out_dir, reference, exports):
     """A self-contained HTML page per trial, prediction or study in OUT_DIR (and an index for a batch)."""
     from gaitcli.report.bands import default_band, read_band
-    from gaitcli.report.html import write_report
+    from gaitcli.report.html import find_report, write_report
 
     band = default_band() if reference is None else read_band(reference)
     pages = write_report(out_dir, band)
     for page in pages:
         console.info(f"report: wrote {page.path}")
+    if exports:
+        from gaitcli.report.exports import export_trial
+        from gaitcli.trial import open_trial
+
+        kind, root = find_report(Path(out_dir).resolve())
+        roots = [root] if kind == "trial" else [p.path.parent for p in pages if p.status not in ("index", "study")]
+        for output in roots:
+            if not (output / "idyn" / "idyn.h5").is_file():
+                continue
+            trial_file = open_trial(output.parent).trial_path if output.name == "gait_out" else None
+            formats = set(exports) if trial_file is not None else set(exports) - {"c3d"}
+            for path in export_trial(output, formats, trial_c3d=trial_file):
+                console.info(f"report: exported {path}")
 
 
 def main(argv: list[str] | None = None) -> int:

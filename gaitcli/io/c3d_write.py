@@ -157,3 +157,48 @@ def _plate_channels(path, plates, R, up_lab, n_frames, point_rate, origin_mm):
         origins.append(origin_mm)
     analogs = np.concatenate(channels, axis=0)[None]
     return analogs, analog_rate, np.stack(corners, axis=2), np.stack(origins, axis=1)
+
+
+def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions: Mapping[str, str] | None = None,
+               parameters: Mapping[str, object] | None = None) -> Path:
+    """A copy of the C3D file ``source`` at ``target`` with ``points`` ({label: (frames, 3)}, in the units the
+    caller names in ``parameters``) appended after its own points, which, its analogs and its other parameters
+    stay as they were. NaN rows become invalid points (residual −1). ``parameters``: {"GROUP:NAME": value}
+    added or replaced (e.g. ``POINT:ANGLE_UNITS``, ``POINT:ANGLES``). Written atomically."""
+    source, target = Path(source), Path(target)
+    c = ezc3d.c3d(str(source), extract_forceplat_data=False)
+    data = c["data"]["points"]
+    n_frames = data.shape[2]
+    labels = list(points)
+    added = np.ones((4, len(labels), n_frames))
+    missing = np.zeros((len(labels), n_frames), bool)
+    for j, label in enumerate(labels):
+        values = np.asarray(points[label], float)
+        if values.shape != (n_frames, 3):
+            raise ValueError(f"{label}: {values.shape} values for a file of {n_frames} frames")
+        missing[j] = ~np.isfinite(values).all(axis=1)
+        added[:3, j] = np.where(missing[j][:, None], 0.0, values).T
+    point = c["parameters"]["POINT"]
+    old_labels = list(point["LABELS"]["value"])
+    old_descriptions = list(point.get("DESCRIPTIONS", {}).get("value", [""] * len(old_labels)))
+    old_descriptions += [""] * (len(old_labels) - len(old_descriptions))
+    residuals = c["data"]["meta_points"]["residuals"]
+    masks = c["data"]["meta_points"]["camera_masks"]
+    c["data"]["points"] = np.concatenate([data, added], axis=1)
+    c["data"]["meta_points"]["residuals"] = np.concatenate([residuals, np.where(missing, -1.0, 0.0)[None]], axis=1)
+    c["data"]["meta_points"]["camera_masks"] = np.concatenate(
+        [masks, np.zeros((masks.shape[0], len(labels), n_frames), bool)], axis=1)
+    point["LABELS"]["value"] = old_labels + labels
+    point["DESCRIPTIONS"]["value"] = old_descriptions + [(descriptions or {}).get(lab, "") for lab in labels]
+    for key, value in (parameters or {}).items():
+        group, name = key.split(":")
+        c.add_parameter(group, name, value if isinstance(value, list) else [value])
+    with atomic_path(target) as tmp:
+        staging = tmp.with_name(tmp.name + ".c3d")  # ezc3d appends .c3d to any other name
+        try:
+            c.write(str(staging))
+            os.replace(staging, tmp)
+        finally:
+            if staging.exists():
+                staging.unlink()
+    return target
