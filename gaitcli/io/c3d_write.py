@@ -116,15 +116,7 @@ def write_c3d(
         group, name = key.split(":")
         c.add_parameter(group, name, [float(value)])
     write_frame_count(c, n_frames)  # more than 65 535 frames: the TRIAL fields hold the count
-    with atomic_path(path) as tmp:
-        staging = tmp.with_name(tmp.name + ".c3d")  # ezc3d appends .c3d to any other name
-        try:
-            c.write(str(staging))
-            os.replace(staging, tmp)
-        finally:
-            if staging.exists():
-                staging.unlink()
-    return path
+    return _write_atomically(c, path)
 
 
 def _plate_channels(path, plates, R, up_lab, n_frames, point_rate, origin_mm):
@@ -193,7 +185,12 @@ def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions
     for key, value in (parameters or {}).items():
         group, name = key.split(":")
         c.add_parameter(group, name, value if isinstance(value, list) else [value])
-    with atomic_path(target) as tmp:
+    return _write_atomically(c, target)
+
+
+def _write_atomically(c, path: Path) -> Path:
+    """Write the ezc3d object ``c`` to ``path`` atomically (whole or not at all)."""
+    with atomic_path(path) as tmp:
         staging = tmp.with_name(tmp.name + ".c3d")  # ezc3d appends .c3d to any other name
         try:
             c.write(str(staging))
@@ -201,4 +198,4 @@ def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions
         finally:
             if staging.exists():
                 staging.unlink()
-    return target
+    return path
