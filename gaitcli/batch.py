@@ -28,10 +28,11 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 
 from gaitcli.config import PipelineConfig, to_yaml
-from gaitcli.core.registry import requirements, stage_names
+from gaitcli.core.registry import stage_names
 from gaitcli.cluster import dask_client
 from gaitcli.errors import GaitError, InputError
 from gaitcli.io.atomic import atomic_path, remove_stale
+from gaitcli.pipeline import needed_stages
 
 BATCH_SUMMARY = "batch_summary.csv"
 #: folders never searched for trials: outputs, and hidden or cache folders
@@ -107,8 +108,13 @@ def find_trials(lab_dir: str | Path) -> list[Path]:
 
 def stages_of(cfg: PipelineConfig) -> tuple[str, ...]:
     """The pipeline's stages with whatever they need, in run order."""
-    wanted = {n for name in cfg.stages for n in requirements(name)}
-    return tuple(n for n in stage_names() if n in wanted)
+    return needed_stages(cfg.stages)
+
+
+def failure_rows(name: str, key: str, cfg: PipelineConfig, code: int, reason: str,
+                 wall_s: float = 0.0) -> list[BatchRow]:
+    """A failed trial's rows, one per stage of the pipeline."""
+    return [BatchRow(name, s, "failed", code, reason, round(wall_s, 3), key) for s in stages_of(cfg)]
 
 
 def input_key(folder: Path, cfg: PipelineConfig) -> str:
@@ -155,24 +161,19 @@ def run_trial(folder: str, name: str, cfg: PipelineConfig, key: str, stale: Sequ
               plots: bool = True) -> list[BatchRow]:
     """The Dask task: run the ``stale`` stages on one trial (the fresh ones they need are read back); its rows
     (a failure is rows, not an exception)."""
-    from gaitcli.errors import NotConvergedError
     from gaitcli.pipeline import run_stages
 
     started = time.perf_counter()
-    names = stages_of(cfg)
 
     def failed(code: int, reason: str) -> list[BatchRow]:
         remove_stale_parts(Path(folder), cfg)
-        return [BatchRow(name, s, "failed", code, reason, round(time.perf_counter() - started, 3), key)
-                for s in names]
+        return failure_rows(name, key, cfg, code, reason, time.perf_counter() - started)
 
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             outcomes = run_stages(Path(folder), stale, cfg, plots=plots)
-    except (InputError, NotConvergedError) as exc:
-        return failed(exc.exit_code, str(exc))
-    except GaitError as exc:
+    except GaitError as exc:  # bad input (2), an unconverged optimization that raised (3)
         return failed(exc.exit_code, str(exc))
     except Exception as exc:  # an internal error in one trial is that trial's failure
         return failed(1, f"internal error: {type(exc).__name__}: {exc}")
@@ -295,11 +296,10 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int = 2, sch
                     got = future.result()
                 except KilledWorker:
                     remove_stale_parts(folder, cfg)
-                    got = [BatchRow(name, s, "failed", 1, "the worker running this trial died twice (killed or out "
-                                    "of memory)", 0.0, key) for s in stages_of(cfg)]
+                    got = failure_rows(name, key, cfg, 1, "the worker running this trial died twice (killed or out "
+                                                          "of memory)")
                 except Exception as exc:  # a task that could not run (e.g. a worker without gaitcli)
-                    got = [BatchRow(name, s, "failed", 1, f"internal error: {type(exc).__name__}: {exc}", 0.0, key)
-                           for s in stages_of(cfg)]
+                    got = failure_rows(name, key, cfg, 1, f"internal error: {type(exc).__name__}: {exc}")
                 future.release()
                 rows += got
                 if on_rows is not None:

@@ -152,6 +152,12 @@ def _history(result) -> tuple[str, ...]:
     return tuple(history)
 
 
+def needed_stages(names) -> tuple[str, ...]:
+    """The stages ``names`` and whatever they need, in run order (every stage after the ones it depends on)."""
+    wanted = {n for name in names for n in requirements(name)}
+    return tuple(n for n in stage_names() if n in wanted)
+
+
 def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | None = None,
                progress: ProgressCallback = no_progress, plots: bool = True) -> list[StageOutcome]:
     """Run the stages ``names`` (and whatever they need) on one trial; one outcome per stage touched.
@@ -163,8 +169,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     """
     run = TrialRun(trial, out, cfg)
     names = tuple(names)
-    wanted = {n for name in names for n in requirements(name)}
-    needed = [n for n in stage_names() if n in wanted]  # every stage after the ones it depends on
+    needed = needed_stages(names)
     handoffs, sources, outcomes, computed = {}, {}, [], []
 
     def static_recording():

@@ -185,10 +185,14 @@ def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, at
         root = root.resolve()
 
         done = []
+
+        def case_done(row):
+            done.append(row)
+            progress(Progress("study", "cases", len(done), total))
+
         with dask_client(1, scheduler) as client:
             by_name = run_study_on_cluster(client, chains, spec, str(root), params, reference, subject, attrs, force,
-                                           on_row=lambda row: (done.append(row),
-                                                               progress(Progress("study", "cases", len(done), total))))
+                                           on_row=case_done)
         rows_by_chain = {k: [by_name[case.name] for case in chain] for k, chain in enumerate(chains)}
     elif workers == 1:
         for k, a in enumerate(args):

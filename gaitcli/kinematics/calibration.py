@@ -56,8 +56,20 @@ _PURPOSE = {"ASIS": "the pelvis frame and hip joint centres", "PSIS": "the pelvi
             "LEF": "the knee joint centre", "MEF": "the knee joint centre", "LM": "the ankle joint centre",
             "MM": "the ankle joint centre", "CA": "the foot", "VM": "the foot", "FM": "the foot", "MT2": "the foot"}
 #: the medial marker a chord needs in its place: the width subject.yaml or the C3D's PROCESSING group gives
-_CHORD_ALTERNATIVE = {"MEF": ("knee", "knee_width_mm", "RightKneeWidth"),
-                      "MM": ("ankle", "ankle_width_mm", "RightAnkleWidth")}
+_CHORD_ALTERNATIVE = {"MEF": ("knee", "thigh", "knee_width_mm", "KneeWidth"),
+                      "MM": ("ankle", "shank", "ankle_width_mm", "AnkleWidth")}
+
+
+def _chord_of(name: str, marker_set: MarkerSet | None):
+    """(joint, segment, subject.yaml key, PROCESSING parameter) when the missing medial marker ``name`` could be
+    replaced by the chord method (the marker set has a wand on that segment), else None."""
+    if name[:-1] not in _CHORD_ALTERNATIVE or marker_set is None:
+        return None
+    joint, segment, key, suffix = _CHORD_ALTERNATIVE[name[:-1]]
+    side = name[-1]
+    if not marker_set.wands.get(f"{segment}_{side}"):
+        return None
+    return joint, f"{segment}_{side}", key, f"{'Right' if side == 'r' else 'Left'}{suffix}"
 
 
 @dataclass
@@ -136,10 +148,10 @@ def chord_and_toe_sides(P: Mapping[str, np.ndarray], widths: jcm.JointWidths | N
 
 def _check_wand(name: str, P: Mapping[str, np.ndarray], marker_set: MarkerSet | None, widths, source) -> None:
     """A missing medial marker whose chord has its width but not its wand: the wand is what is missing."""
-    joint, _, _ = _CHORD_ALTERNATIVE.get(name[:-1], ("", "", ""))
-    segment = f"{'thigh' if joint == 'knee' else 'shank'}_{name[-1]}"
-    if not joint or marker_set is None or not marker_set.wands.get(segment) or widths is None:
+    chord = _chord_of(name, marker_set)
+    if chord is None or widths is None:
         return
+    joint, segment, _, _ = chord
     if widths.offset_m(joint, name[-1]) is not None and widths.chord_inputs(joint, name[-1], P) is None:
         labels = marker_set.wands[segment]
         raise InputError(source, labels[0], f"marker missing from the static trial: {' or '.join(labels)} (marker_set "
@@ -157,12 +169,11 @@ def _check_required(P: Mapping[str, np.ndarray], source, marker_set: MarkerSet |
         if name not in P:
             _check_wand(name, P, marker_set, widths, source)
             purpose = _PURPOSE[name[:-1]]
-            joint, key, parameter = _CHORD_ALTERNATIVE.get(name[:-1], ("", "", ""))
-            segment = f"{'thigh' if joint == 'knee' else 'shank'}_{name[-1]}"
-            if joint and marker_set is not None and marker_set.wands.get(segment):
+            chord = _chord_of(name, marker_set)
+            if chord is not None:
+                _, segment, key, parameter = chord
                 purpose += (f"; without it, the chord method needs {key} in subject.yaml or the C3D's "
-                            f"PROCESSING:{parameter.replace('Right', 'Right' if name[-1] == 'r' else 'Left')} "
-                            f"and the {'thigh' if joint == 'knee' else 'shank'} wand")
+                            f"PROCESSING:{parameter} and the {segment[:-2]} wand")
             if marker_set is None:
                 raise InputError(source, name, f"marker missing from the static trial (needed for {purpose})")
             raise InputError(source, marker_set.label_of(name) or name, marker_set.missing_message(name, purpose))
@@ -170,6 +181,8 @@ def _check_required(P: Mapping[str, np.ndarray], source, marker_set: MarkerSet |
 
 #: a leg segment's proximal joint centre (the chained third tracking point)
 _PROXIMAL_CENTRE = {"thigh": "HJC", "shank": "KJC", "foot": "AJC"}
+
+
 def _locked_leg_message(body: str, found: list[str], P: Mapping[str, np.ndarray],
                         marker_set: MarkerSet) -> tuple[str, str]:
     """(label, message) for a leg segment with fewer than 2 markers of its own in the static trial."""

@@ -27,6 +27,7 @@ import numpy as np
 
 from gaitcli.core.container import Trial
 from gaitcli.errors import InputError
+from gaitcli.io.atomic import atomic_path
 from gaitcli.io.h5 import read_record
 from gaitcli.io.opensim import write_motion, write_trc
 
@@ -101,8 +102,6 @@ def export_opensim(out_root: Path) -> list[Path]:
     written.append(write_motion(folder / "joint_moments.sto", {"time": time, **dict(zip(idyn["moment_columns"],
                                                                                         idyn["moments"].T))},
                                 in_degrees=False, name="joint_moments"))
-    from gaitcli.io.atomic import atomic_path
-
     with atomic_path(folder / "external_loads.xml") as tmp:
         tmp.write_text(EXTERNAL_LOADS.format(forces="\n".join(EXTERNAL_FORCE.format(side=s) for s in ("r", "l"))))
     return written + [folder / "external_loads.xml"]

@@ -110,12 +110,12 @@ def trial_body(root: Path, name: str, band: NormalBand | None, work: Path) -> st
 
     trial_folder = root.parent if root.name == "gait_out" else None
     subject = _subject(trial_folder)
-    if not subject and _summary(root / "idyn").get("mass_kg"):
-        subject = f"body mass {float(_summary(root / 'idyn')['mass_kg']):.1f} kg"
+    idyn = _summary(root / "idyn")
+    if not subject and idyn.get("mass_kg"):
+        subject = f"body mass {float(idyn['mass_kg']):.1f} kg"
     parts = [f"<h1>{html.escape(name)}</h1>",
              f'<p class="meta">{html.escape(subject)}{"; " if subject else ""}outputs in {html.escape(root.name)}/; '
              f'<span class="right">right in red</span>, <span class="left">left in blue</span></p>']
-    idyn = _summary(root / "idyn")
     if idyn:
         rows = [(label, _number(idyn.get(key), digits), _number(NORMAL_FEATURES.get(key), digits), unit)
                 for key, label, unit, digits in FEATURES]
