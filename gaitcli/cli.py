@@ -201,6 +201,7 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 @click.option("--symmetric/--no-symmetric", "symmetric", default=None,
               help="Left leg = right leg half a cycle later (5.3.1; default on).")
 @_config_option(PredictConfig, "max_iterations", "--max-iterations")
+@_config_option(PredictConfig, "time_limit_s", "--time-limit")
 @click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
               help="Reference CSV of `gait reference` (default: the trial's own, or the bundled normal one).")
 @click.option("--subject", "subject", type=click.Path(path_type=Path, dir_okay=False),
@@ -235,7 +236,8 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 @click.option("--force", "force", is_flag=True, help="With --study: solve every case again.")
 @click.option("--no-plots", "no_plots", is_flag=True, help="Skip the figures (plots/).")
 @click.pass_obj
-def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, symmetric, max_iterations, reference,
+def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, symmetric, max_iterations, time_limit_s,
+                    reference,
                     subject, init, foot_mass_kg, foot_mass_at, prosthesis, strength_scale, monotone_range_deg,
                     starts, seed, workers, scheduler, study, force, no_plots):
     """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
@@ -246,7 +248,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
 
     cfg = dataclasses.replace(PredictConfig(), **{k: v for k, v in {
         "speed_m_s": speed_m_s, "weights": weights, "nodes": nodes, "symmetric": symmetric,
-        "max_iterations": max_iterations, "foot_mass_kg": foot_mass_kg, "foot_mass_at": foot_mass_at,
+        "max_iterations": max_iterations, "time_limit_s": time_limit_s, "foot_mass_kg": foot_mass_kg, "foot_mass_at": foot_mass_at,
         "prosthesis": prosthesis.lower() if prosthesis and not prosthesis.lower().endswith((".yaml", ".yml"))
         else prosthesis, "strength_scale": strength_scale,
         "monotone_range_deg": monotone_range_deg}.items() if v is not None})

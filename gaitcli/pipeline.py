@@ -356,6 +356,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     from gaitcli.core.registry import Progress
     from gaitcli.errors import InputError
     from gaitcli.predict.layout import DesignLayout
+    from gaitcli.predict.nlp import TIME_LIMIT_STATUS
     from gaitcli.predict.prosthesis import CHOICES as PROSTHESIS_CHOICES
     from gaitcli.predict.stage import run_predict, violated_groups
     from gaitcli.report.predict_outputs import write_predict_outputs
@@ -416,6 +417,8 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     if not result.converged:
         bad = violated_groups(result.violations)
         parts = [f"{name} by {value:.3g}" for name, value in bad.items()]
-        message = (f"the prediction did not converge ({result.status}"
+        status = (f"time limit of {cfg.time_limit_s:g} s reached" if result.status == TIME_LIMIT_STATUS
+                  else result.status)
+        message = (f"the prediction did not converge ({status}"
                    + (f"; violated: {', '.join(parts)}" if parts else "") + ")")
     return PredictOutcome(folder=target, summary=summary, converged=result.converged, message=message)

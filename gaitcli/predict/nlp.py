@@ -74,6 +74,7 @@ EID (reported costs use the exact model).
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
@@ -107,6 +108,8 @@ COORDINATE_RANGES = ((-0.5, 0.5), (0.5, 1.3), (-0.6, 0.6), (-1.2, 1.0), (0.0, 1.
 STRETCH_RANGE = (0.0, 1.3)  # F ≤ 1.69 F_max
 DURATION_RANGE_S = (0.01, 0.8)
 STEP_RANGE_M = (0.2, 1.2)
+#: the status of a solve stopped by its time limit (PredictConfig.time_limit_s)
+TIME_LIMIT_STATUS = "Time_Limit_Reached"
 #: scale of the device coefficients a_p, b_p, c0, a_n, b_n (N·m/rad³, /rad², /rad) and d_prosth (N·m·s/rad)
 DEVICE_SCALE = np.array([1e4, 1e3, 1e2, 1e3, 1e3, 1.0])
 #: bounds of the optimal prosthesis's coefficients: they contain Table A.7's feet and Table A.8's optima;
@@ -702,11 +705,12 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
 
 class IterationReport(ca.Callback):
     """IPOPT's iteration callback: ``report(iteration, objective, constraint_violation)`` after each iteration
-    (the violation is the largest distance of g from its bounds)."""
+    (the violation is the largest distance of g from its bounds); past ``deadline`` (time.perf_counter's clock)
+    it stops IPOPT, which then returns ``User_Requested_Stop`` (:data:`TIME_LIMIT_STATUS` in the result)."""
 
     def __init__(self, nlp: NLP, report=None):
         ca.Callback.__init__(self)
-        self.report, self.lbg, self.ubg, self.iteration = report, nlp.lbg, nlp.ubg, 0
+        self.report, self.lbg, self.ubg, self.iteration, self.deadline = report, nlp.lbg, nlp.ubg, 0, None
         self.sizes = {"x": nlp.w.size1(), "g": nlp.constraints.size1()}
         self.construct("iteration_report", {"enable_fd": False})
 
@@ -732,18 +736,20 @@ class IterationReport(ca.Callback):
             return ca.Sparsity.dense(self.sizes["g"])
         return ca.Sparsity(0, 0)
 
-    def start(self, report) -> None:
-        """Report to ``report`` (or nobody) from iteration 0: the compiled solver keeps this callback."""
-        self.report, self.iteration = report, 0
+    def start(self, report, deadline: float | None = None) -> None:
+        """Report to ``report`` (or nobody) from iteration 0, and stop past ``deadline``: the compiled solver
+        keeps this callback."""
+        self.report, self.iteration, self.deadline = report, 0, deadline
 
     def eval(self, arg):
+        stop = int(self.deadline is not None and time.perf_counter() > self.deadline)
         if self.report is None:
-            return [0]
+            return [stop]
         g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
         violation = float(np.max(np.maximum(self.lbg - g, 0) + np.maximum(g - self.ubg, 0))) if g.size else 0.0
         self.report(self.iteration, float(arg[ca.nlpsol_out().index("f")]), violation)
         self.iteration += 1
-        return [0]
+        return [stop]
 
 
 def _ipopt_options(settings: PredictSettings, warm: bool) -> dict:
@@ -778,16 +784,17 @@ def solver_for(nlp: NLP, settings: PredictSettings, *, warm: bool = False, optio
 
 def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
           multipliers: dict | None = None, options: dict | None = None, report=None, device=None,
-          optimal_device: bool = False) -> dict:
+          optimal_device: bool = False, deadline: float | None = None) -> dict:
     """IPOPT with exact derivatives (Hessian included) from χ ``x0`` (or the whole ``w0``, and IPOPT's
     ``multipliers`` of an earlier solve for a warm start); returns χ, w, the multipliers, the status,
     iterations and cost. ``options``: further IPOPT/CasADi options; ``report(iteration, objective, violation)``
     is called after every IPOPT iteration. Prosthetic models: D starts at (and, unless ``optimal_device``, is
     fixed at) ``device`` (a ProsthesisCurve; default the transcriber's), free within DEVICE_BOUNDS when
-    ``optimal_device``; the result's ``device`` holds the coefficients."""
+    ``optimal_device``; the result's ``device`` holds the coefficients. Past ``deadline`` (time.perf_counter's
+    clock) IPOPT stops with status :data:`TIME_LIMIT_STATUS`, unsuccessful."""
     s = settings or PredictSettings()
     solver, callback = solver_for(nlp, s, warm=bool(multipliers), options=options)
-    callback.start(report)
+    callback.start(report, deadline)
     start = nlp.start(x0, device) if w0 is None else w0
     if nlp.device_size and device is not None and w0 is not None:  # D starts at the given device
         start = np.concatenate([start[:start.size - nlp.device_size], device.coefficients() / DEVICE_SCALE])
@@ -799,7 +806,10 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
                         p=nlp.parameter_values(s), **extra)
     stats = solver.stats()
     w = np.array(result["x"]).ravel()
-    return {"x": nlp.design(w), "w": w, "status": stats.get("return_status", ""), "device": nlp.device(w),
+    status = stats.get("return_status", "")
+    if status == "User_Requested_Stop" and deadline is not None and time.perf_counter() > deadline:
+        status = TIME_LIMIT_STATUS
+    return {"x": nlp.design(w), "w": w, "status": status, "device": nlp.device(w),
             "multipliers": {"lam_g": np.array(result["lam_g"]).ravel(), "lam_x": np.array(result["lam_x"]).ravel()},
             "success": bool(stats.get("success")), "iterations": int(stats.get("iter_count", -1)),
             "cost": float(result["f"])}
@@ -827,19 +837,19 @@ def moved_windows(nlp: NLP, multipliers: dict, threshold: float = 1e-8) -> dict 
 def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarray,
                    settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
                    options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
-                   optimal_device: bool = False) -> dict:
+                   optimal_device: bool = False, deadline: float | None = None) -> dict:
     """:func:`solve` with the spline windows placed where ``x0`` puts the instants; while a solution presses on
     a window's edge, that window moves on and the problem is solved again from the last solution (warm, with
     its multipliers; at most ``rounds`` solves). Adds ``rounds``, ``windows_hold`` (no window binds) and the last
     ``nlp``. ``w0``: the whole first start (an earlier solution of a problem of the same structure);
-    ``device``, ``optimal_device`` as :func:`solve`. The problems come from :func:`cached_nlp`."""
+    ``device``, ``optimal_device``, ``deadline`` as :func:`solve`. The problems come from :func:`cached_nlp`."""
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
     segments = instant_segments(transcriber, layout, x0)
     x, w, multipliers, total = x0, w0, None, 0
     for k in range(1, rounds + 1):
         nlp = cached_nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
         result = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report,
-                       device=device, optimal_device=optimal_device)
+                       device=device, optimal_device=optimal_device, deadline=deadline)
         total += result["iterations"]
         x, w, multipliers = result["x"], result["w"], result["multipliers"]
         segments = moved_windows(nlp, multipliers)

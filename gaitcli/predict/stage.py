@@ -54,6 +54,9 @@ class PredictConfig:
     nodes: int = parameter(18, low=6, high=40, help="Spline nodes over the cycle, even (5.2.4; default 18).")
     symmetric: bool = parameter(True, help="Left leg = right leg half a cycle later (5.3.1; default on).")
     max_iterations: int = parameter(3000, low=1, high=100000, help="IPOPT's iteration limit (default 3000).")
+    time_limit_s: float = parameter(0.0, low=0.0, high=1e6,
+                                    help="Wall-clock budget of the solves, s: past it IPOPT stops and the result "
+                                         "is marked unconverged (default 0: none).")
     foot_mass_kg: float = parameter(0.0, low=0.0, high=20.0,
                                     help="Mass added to each foot, kg (5.3.2: 2; default 0).")
     foot_mass_at: str = parameter("", help="Where the added foot mass sits: FORWARD,DOWN of the ankle in the foot "
@@ -257,6 +260,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         raise InputError(None, "--init", f"holds {np.size(init)} design variables (expected {layout.size} for "
                                          f"{cfg.nodes} nodes, {'symmetric' if cfg.symmetric else 'full'} model)")
     start, history, iterations, rounds = time.perf_counter(), [], 0, 0
+    deadline = start + cfg.time_limit_s if cfg.time_limit_s > 0 else None
     if report is not None:  # one count over every solve (each IPOPT run counts from 0)
         calls, each = itertools.count(), report
         report = lambda k, objective, violation: each(next(calls), objective, violation)  # noqa: E731
@@ -264,7 +268,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
              + (f", prosthesis {cfg.prosthesis}" if cfg.prosthetic else "")
              + (f", +{cfg.foot_mass_kg:g} kg per foot" if cfg.foot_mass_kg else "")
              + (f", F_max ×{cfg.strength():g}" if cfg.strength() != 1 else ""))
-    solve_options = {"device": device, "optimal_device": optimal}
+    solve_options = {"device": device, "optimal_device": optimal, "deadline": deadline}
     if init is not None:
         # a start from a solution (of a neighbouring case): windows of ±1 segment, a third of the
         # factorisation's cost; a window that binds is moved and the problem solved again (solve_windowed)

@@ -225,7 +225,8 @@ class StudySpec:
 
     ``weights``: labels of :data:`WEIGHT_SETS` or "W1,W2" strings; ``conditions``: of :data:`CONDITIONS`;
     ``strength_scale``: every case's F_max scale, the normal one's included (5.3.3: 1.5; 0: each condition's
-    default); ``foot_mass_kg``: the foot_mass condition's added mass (5.3.2: 2); ``starts``: solves per case.
+    default); ``foot_mass_kg``: the foot_mass condition's added mass (5.3.2: 2); ``starts``: solves per case;
+    ``time_limit_s``: each case's wall-clock budget (s; 0: none).
     """
 
     name: str
@@ -237,6 +238,7 @@ class StudySpec:
     foot_mass_kg: float = 2.0
     starts: int = 1
     max_iterations: int = 3000
+    time_limit_s: float = 0.0
 
     @classmethod
     def from_mapping(cls, data, path) -> StudySpec:
@@ -272,7 +274,7 @@ class StudySpec:
                 "weights": listed("weights", weight), "conditions": listed("conditions", condition)}
         for key, kind, low, high in (("nodes", int, 6, 40), ("strength_scale", float, 0.0, 5.0),
                                      ("foot_mass_kg", float, 0.0, 20.0), ("starts", int, 1, 100),
-                                     ("max_iterations", int, 1, 100000)):
+                                     ("max_iterations", int, 1, 100000), ("time_limit_s", float, 0.0, 1e6)):
             if key in data:
                 value = data[key]
                 if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high \
@@ -314,7 +316,8 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
             weights = WEIGHT_SETS.get(w, w)
             label = weight_label(weights)
             base = dataclasses.replace(PredictConfig(), speed_m_s=speed, weights=weights, nodes=spec.nodes,
-                                       max_iterations=spec.max_iterations, strength_scale=spec.strength_scale)
+                                       max_iterations=spec.max_iterations, time_limit_s=spec.time_limit_s,
+                                       strength_scale=spec.strength_scale)
             prefix = f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
             normal = f"{prefix}_normal"
             order = ["normal"] + [c for c in spec.conditions if c not in ("normal", "optimal")] + \

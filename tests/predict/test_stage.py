@@ -68,3 +68,13 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     for name in ("motion.csv", "muscles.csv"):
         assert sum(1 for _ in open(tmp_path / name)) == 81  # header + 80 instants
     assert json.loads(json.dumps(summary, default=float))["fine_grid"]["refinement"] == 4
+
+
+def test_a_solve_past_its_time_limit_stops_unconverged_and_says_why():
+    """The limit counts from the start of the prediction: 1 µs is spent before IPOPT's first iteration, so the
+    iteration callback stops it there (not the 50-iteration limit)."""
+    from gaitcli.predict.nlp import TIME_LIMIT_STATUS
+
+    result = run_predict(PredictConfig(nodes=6, max_iterations=50, time_limit_s=1e-6),
+                         reference=read_reference(bundled_reference()))
+    assert result.status == TIME_LIMIT_STATUS and result.iterations == 0 and not result.converged

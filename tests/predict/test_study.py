@@ -37,6 +37,7 @@ def test_the_prosthesis_study_is_table_5_3s_grid():
             assert [c.condition for c in group] == ["normal", "sach", "seattle", "flex", "optimal"]
             assert len({c.cfg.weights for c in group}) == 1
             assert all(c.cfg.strength() == 1.5 for c in group)  # F_max +50 %, the normal comparison run too
+            assert all(c.cfg.time_limit_s == 150 for c in group)
             assert normal.starts_from == (() if k == 0 else (previous,))
             assert all(c.starts_from == (normal.name,) for c in group[1:4])
             assert optimal.starts_from == tuple(c.name for c in group[1:4]) + (normal.name,)
@@ -57,7 +58,7 @@ def test_the_foot_mass_study_is_table_5_2s_grid():
 
 @pytest.mark.parametrize("change, field", [({"conditions": ["normal", "optimal"]}, "conditions"),
                                            ({"weights": ["3,3"]}, "--weights"), ({"starts": 0}, "starts"),
-                                           ({"speeds": [1.0]}, "speeds")])
+                                           ({"speeds": [1.0]}, "speeds"), ({"time_limit_s": -1}, "time_limit_s")])
 def test_a_bad_study_file_is_refused_naming_the_field(change, field):
     data = {"speeds_m_s": [1.0], "weights": ["b"], "conditions": ["normal"], **change}
     with pytest.raises(InputError) as caught:
