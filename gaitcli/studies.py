@@ -96,7 +96,9 @@ def _solve_case(case: StudyCase, spec: StudySpec, solved: dict, params, referenc
         feet = {name: solved[start] for name, start in zip(COMMERCIAL_FEET, case.starts_from)}
         normal = solved[case.starts_from[-1]]
         return predict_optimal(case.cfg, params=params, reference=reference, feet=feet, normal=normal), 1
-    init = solved[case.starts_from[0]].design if case.starts_from else _shipped_start(case)
+    # the first start that converged (a foot after the first: that foot's solution, else the normal one)
+    starts = [solved[name] for name in case.starts_from]
+    init = next((r for r in starts if r.converged), starts[0]).design if starts else _shipped_start(case)
     if spec.starts > 1:  # start 0 from the chain's solution, the others from perturbed guesses
         results = run_starts(case.cfg, spec.starts, params=params, reference=reference, workers=1, init=init)
         agreed, best = agreeing(results)

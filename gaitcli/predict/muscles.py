@@ -24,7 +24,7 @@ from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.muscles.hill import MuscleModel
 from gaitcli.muscles.parameters import MUSCLE_NAMES, JointParameters, MuscleParameters, table_a1
 from gaitcli.muscles.passive import JointModel
-from gaitcli.predict.prosthesis import BRANCH_BLEND_RAD, COEFFICIENTS, ProsthesisCurve
+from gaitcli.predict.prosthesis import COEFFICIENTS, ProsthesisCurve
 
 #: (HAT, thigh, knee, ankle) indices of y per side
 LEG_COORDINATES = {"r": (2, 3, 4, 5), "l": (2, 6, 7, 8)}
@@ -46,8 +46,8 @@ class WalkerMuscles:
     - ``moment_arms(y) → R`` (9 × 16): generalized force per newton of muscle force (A.11);
     - ``tissue(y, yd) → Q_t`` (9): Riener–Edrich moments and hip/knee damping as generalized forces;
     - ``device(y, yd, c) → Q_d`` (9): the prostheses' moments (5.59) for coefficients ``c`` (6, the order of
-      :data:`gaitcli.predict.prosthesis.COEFFICIENTS`), τ_s's branches blended over ±BRANCH_BLEND_RAD
-      (``prosthesis.py``); zero without prostheses;
+      :data:`gaitcli.predict.prosthesis.COEFFICIENTS`), τ_s's branches blended over ±ε(c)
+      (``ProsthesisCurve.branch_blend_rad``); zero without prostheses;
     - ``passive(y, yd) → Q_p = Q_t + Q_d`` with the given ``prosthesis``.
 
     ``prosthesis``: bilateral transtibial prostheses with this curve (module docstring); ``strength_scale``:
@@ -80,7 +80,7 @@ class WalkerMuscles:
             curve = ProsthesisCurve("symbolic", *ca.vertsplit(c))
             for s in ("r", "l"):
                 ankle = LEG_COORDINATES[s][3]
-                device[ankle] = curve.moment_Nm(y[ankle], yd[ankle], BRANCH_BLEND_RAD)  # τ_s,ε
+                device[ankle] = curve.moment_Nm(y[ankle], yd[ankle], curve.branch_blend_rad())  # τ_s,ε
         F = ca.Function
         self.joint_angles = F("joint_angles", [y], [psi["r"], psi["l"]], ["y"], ["psi_r", "psi_l"])
         self.lengths = F("lengths", [y], [lengths], ["y"], ["l_m"])

@@ -9,16 +9,23 @@ dorsiflexion) and its rate:
 in N·m, positive in the sense of y (plantarflexing), so a restoring spring decreases with y (c0 < 0). τ_s(0) = 0
 and its slope is c0 from both sides. The three commercial feet are Table A.7's fits of Klute et al.'s curves.
 
-Deviation in the NLP (:data:`BRANCH_BLEND_RAD`): the two branches meet at y = 0 with equal value and slope but
-not curvature (SACH: 2·b_p = −1280, 2·b_n = 12792 N·m/rad²), so the exact Hessian jumps there, and IPOPT
-crawls wherever an instant's ankle rests at neutral. Measured on SACH at 1.33 m/s, weights b): more than 1500
-iterations at μ ≈ 4·10⁻⁶ with the objective fixed to 6 digits and no convergence. With the branches blended
-over ±ε it converged in 363 iterations. The NLP therefore uses σ(y) = ½(1 + tanh(y/ε)):
+Deviation in the NLP (:meth:`ProsthesisCurve.branch_blend_rad`): the two branches meet at y = 0 with equal
+value and slope but not curvature (SACH: 2·b_p = −1280, 2·b_n = 12792 N·m/rad²), so the exact Hessian jumps
+there, and IPOPT crawls wherever an instant's ankle rests at neutral (a prosthetic ankle does through swing).
+Measured on SACH at 1.33 m/s, weights b): more than 1500 iterations at μ ≈ 4·10⁻⁶ with the objective fixed to
+6 digits and no convergence; with the branches blended over ±0.01 rad, 363 iterations. The NLP therefore uses
+σ(y) = ½(1 + tanh(y/ε)):
 
     τ_s,ε(y) = σ(y)·plantar(y) + (1 − σ(y))·dorsal(y)
 
-This differs from (5.58) by at most 0.121·|Δb|·ε² + 0.161·|Δa|·ε³ (0.085 N·m for SACH at ε = 0.01 rad) and by
-less than 10⁻⁶ N·m beyond |y| = 0.1 rad. Every output (prosthesis.csv, the plots, the tables) uses (5.58) itself.
+which differs from (5.58) by at most B ε² + A ε³, B = 0.121·|b_p − b_n|, A = 0.161·|a_p − a_n|, and (for the
+three feet) by less than 10⁻⁶ N·m beyond |y| = 0.2 rad. ε is as wide as an error budget of :data:`BLEND_ERROR_NM` allows, at most
+:data:`BLEND_MAX_RAD`: ε = ε_max / √(1 + (B + A ε_max) ε_max² / δ), which keeps B ε² + A ε³ ≤ δ. Seattle's
+and Flex's branches differ less in curvature than SACH's, so they get a wider blend (ε = 0.0197, 0.0200 rad;
+SACH 0.0136). Why not one narrow ε: Seattle at 1.00 m/s, weights a), from the SACH solution, creeps on for
+over 300 s at ε = 0.01 rad with J fixed to 5 digits, and converges in 83 iterations (25 s, J 22.48) at 0.02.
+The free device of the optimal prosthesis gets the same ε as a smooth function of its coefficients. Every
+output (prosthesis.csv, the plots, the tables) uses (5.58) itself.
 """
 
 from __future__ import annotations
@@ -33,8 +40,10 @@ from gaitcli.predict.splines import is_casadi
 
 #: the curve's coefficients, in the order of Table A.7 (and of the optimal prosthesis's design variables)
 COEFFICIENTS = ("a_p", "b_p", "c0", "a_n", "b_n", "damping_Nms_per_rad")
-#: ε of the NLP's blend of the branches of (5.58) (rad; module docstring)
-BRANCH_BLEND_RAD = 0.01
+#: the NLP's blend of the branches of (5.58): its largest departure from (5.58), N·m, and widest ε, rad
+#: (module docstring; the moment equations themselves are met to PredictSettings.moment_tolerance_Nm = 2 N·m)
+BLEND_ERROR_NM = 0.2
+BLEND_MAX_RAD = 0.03
 
 
 @dataclass(frozen=True)
@@ -53,13 +62,20 @@ class ProsthesisCurve:
         """(a_p, b_p, c0, a_n, b_n, d_prosth) as an array (:data:`COEFFICIENTS`)."""
         return np.array([getattr(self, k) for k in COEFFICIENTS], float)
 
+    def branch_blend_rad(self):
+        """ε of the NLP's τ_s,ε for these coefficients (rad; numpy or CasADi coefficients; module docstring)."""
+        lib = ca if is_casadi(self.b_p) or is_casadi(self.a_p) else np
+        curvature = 0.1207 * lib.sqrt((self.b_p - self.b_n) ** 2 + 1.0)
+        cubic = 0.1606 * lib.sqrt((self.a_p - self.a_n) ** 2 + 1.0)
+        return BLEND_MAX_RAD / lib.sqrt(1.0 + (curvature + cubic * BLEND_MAX_RAD) * BLEND_MAX_RAD ** 2 / BLEND_ERROR_NM)
+
     def spring_moment_Nm(self, y, blend_rad: float = 0.0):
         """τ_s(y) (5.58) at ankle angles ``y`` (rad; numpy or CasADi); with ``blend_rad`` = ε > 0 the branches
         blended by ½(1 + tanh(y/ε)) (the NLP's τ_s,ε, module docstring)."""
         plantar = (self.a_p * y + self.b_p) * y * y + self.c0 * y
         dorsal = (self.a_n * y + self.b_n) * y * y + self.c0 * y
         lib = ca if is_casadi(y) else np
-        if blend_rad > 0:
+        if is_casadi(blend_rad) or blend_rad > 0:
             share = 0.5 * (1 + lib.tanh(y / blend_rad))
             return share * plantar + (1 - share) * dorsal
         if lib is ca:

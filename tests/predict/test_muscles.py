@@ -8,7 +8,6 @@ import pytest
 
 from gaitcli.predict.contact import joint_moment_map
 from gaitcli.predict.muscles import WalkerMuscles
-from gaitcli.predict.prosthesis import BRANCH_BLEND_RAD
 
 RNG = np.random.default_rng(5)
 #: the model's senses (y4 thigh extension, y5 knee flexion, y6 plantarflexion): which way each muscle pulls
@@ -115,7 +114,7 @@ def test_a_prosthetic_ankle_removes_soleus_tibialis_and_the_ankle_structures():
         assert np.array(joints.passive(psi)).ravel()[1] == pytest.approx(knee_neutral, abs=1e-12)
     assert tissue[5] == 0.0 and tissue[8] == 0.0  # nothing else spans the ankle
     device = np.array(prosthetic.passive(y, yd)).ravel() - tissue
-    expected[5], expected[8] = (foot.moment_Nm(y[k], yd[k], BRANCH_BLEND_RAD) for k in (5, 8))
+    expected[5], expected[8] = (foot.moment_Nm(y[k], yd[k], foot.branch_blend_rad()) for k in (5, 8))
     np.testing.assert_allclose(device, expected, atol=1e-10)
 
 

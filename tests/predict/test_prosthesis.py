@@ -7,7 +7,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gaitcli.predict.prosthesis import BRANCH_BLEND_RAD, COMMERCIAL_FEET, ProsthesisCurve
+from gaitcli.predict.prosthesis import BLEND_ERROR_NM, BLEND_MAX_RAD, COMMERCIAL_FEET, ProsthesisCurve
 
 ANGLES_RAD = (-0.3, -0.2, -0.1, 0.1, 0.2)
 KNOWN_NM = {"sach": (603.2, 283.4, 80.5, -22.3, -48.2), "seattle": (246.6, 131.1, 50.0, -44.5, -243.2),
@@ -47,11 +47,13 @@ def test_zero_at_neutral_with_slope_c0_from_both_sides(name):
 @pytest.mark.parametrize("name", list(KNOWN_NM))
 def test_the_nlps_blend_stays_within_its_bound_and_has_a_continuous_curvature(name):
     # max over u of u²·(1 − tanh u)/2 = 0.1207 and of u³·(1 − tanh u)/2 = 0.1606 (the bound of the docstring)
-    curve, eps = COMMERCIAL_FEET[name], BRANCH_BLEND_RAD
+    curve = COMMERCIAL_FEET[name]
+    eps = float(curve.branch_blend_rad())
     y = np.linspace(-0.5, 0.5, 100001)
     difference = np.abs(curve.spring_moment_Nm(y, eps) - curve.spring_moment_Nm(y))
     bound = 0.1207 * abs(curve.b_p - curve.b_n) * eps ** 2 + 0.1606 * abs(curve.a_p - curve.a_n) * eps ** 3
-    assert difference.max() <= bound and difference[np.abs(y) >= 0.1].max() < 1e-6
+    assert difference.max() <= bound <= BLEND_ERROR_NM and difference[np.abs(y) >= 0.2].max() < 1e-6
+    assert 0.01 < eps < BLEND_MAX_RAD
     np.testing.assert_allclose(curve.spring_moment_Nm(np.array(ANGLES_RAD), eps), KNOWN_NM[name], atol=0.1)
     s = ca.SX.sym("y")
     curvature = ca.Function("c", [s], [ca.hessian(curve.spring_moment_Nm(s, eps), s)[0]])
@@ -59,6 +61,20 @@ def test_the_nlps_blend_stays_within_its_bound_and_has_a_continuous_curvature(na
     exact = ca.Function("c", [s], [ca.hessian(curve.spring_moment_Nm(s), s)[0]])
     assert float(exact(1e-7)) == pytest.approx(2 * curve.b_p, rel=1e-3)  # (5.58) itself: the jump the blend removes
     assert float(exact(-1e-7)) == pytest.approx(2 * curve.b_n, rel=1e-3)
+
+
+def test_the_blend_is_widest_where_the_branches_agree_and_smooth_in_the_coefficients():
+    """ε = ε_max where the branches coincide (up to the 1 N·m/rad² of the smooth |·|), narrower the more their
+    curvatures differ (SACH < Seattle ≈ Flex), and the same function of symbolic coefficients (the optimal
+    device's) as of numbers."""
+    same = ProsthesisCurve("same", -1000.0, 500.0, -200.0, -1000.0, 500.0, 1.0)
+    assert float(same.branch_blend_rad()) == pytest.approx(BLEND_MAX_RAD, rel=1e-3)
+    eps = {k: float(c.branch_blend_rad()) for k, c in COMMERCIAL_FEET.items()}
+    assert eps["sach"] < eps["seattle"] < eps["flex"]
+    c = ca.SX.sym("c", 6)
+    symbolic = ca.Function("e", [c], [ProsthesisCurve("symbolic", *ca.vertsplit(c)).branch_blend_rad()])
+    for curve in COMMERCIAL_FEET.values():
+        assert float(symbolic(curve.coefficients())) == pytest.approx(float(curve.branch_blend_rad()), rel=1e-12)
 
 
 def test_the_product_convention_gives_sach_a_plantarflexor_moment_at_dorsiflexion():
