@@ -10,6 +10,7 @@ import signal
 import h5py
 import numpy as np
 import pandas as pd
+from PIL import Image
 
 from .conftest import copy_sample, gait_many, snapshot
 from .test_interrupts import interrupt_after, start_gait
@@ -71,6 +72,8 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
         assert design.size == 11 * 5 + 3 * 3 + 5  # the full model's layout: tests/predict/test_stage.py
     figures = ("angles.png", "grf.png", "moments.png", "muscles.png", "stick.png", "walk.gif")
     assert all((tmp_path / "out" / "predict" / "plots" / f).stat().st_size > 1000 for f in figures)
+    with Image.open(tmp_path / "out" / "predict" / "plots" / "walk.gif") as gif:  # one frame per motion row
+        assert gif.n_frames == len(pd.read_csv(tmp_path / "out" / "predict" / "motion.csv"))
     assert not (tmp_path / "normal" / "gait_out" / "predict" / "plots").exists()
     # the trial's own subject (55 kg) and reference, and its idyn made on the way
     trial_summary = json.loads((tmp_path / "normal" / "gait_out" / "predict" / "summary.json").read_text())
