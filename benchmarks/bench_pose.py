@@ -1,10 +1,11 @@
 """Which pose fit recovers the truth better: ``segment_svd`` (the dissertation's, chained from the pelvis) or
 ``chain_lsq`` (the whole chain fitted to all markers), on synthetic walks with noise and skin artefact.
 
-For each seed (``gait synth``'s default subject and marker set, 2 mm noise, 10 mm artefact) and hip-centre error (none, or the static trial's hip centres 25 mm anterior, superior or
-lateral of the truth), prints per pose the knee and ankle centres' RMS distance from the truth over stance (mm)
-and the sagittal hip, knee and ankle moments' RMS error against the truth where the foot's load is known
-(N·m/kg), both legs pooled, and the idyn stage's wall time. Run: ``python benchmarks/bench_pose.py``.
+For each seed (``gait synth``'s default subject and marker set, 2 mm noise, 10 mm artefact) and hip-centre
+error (none, or the static trial's hip centres 25 mm anterior, superior or lateral of the truth), prints per
+pose the knee and ankle centres' RMS distance from the truth over stance (mm) and the sagittal hip, knee and
+ankle moments' RMS error against the truth where the foot's load is known (N·m/kg), both legs pooled, and the
+idyn stage's wall time. Run: ``python benchmarks/bench_pose.py``.
 """
 
 from __future__ import annotations
@@ -26,8 +27,9 @@ from gaitcli.signal.stage import FilterConfig, filter_trial
 from gaitcli.synth import simulate_trial
 
 MASS_KG, STATURE_M = 75.0, 1.78
-SHIFTS = {"none": None, "25 mm anterior": [0.025, 0, 0], "25 mm superior": [0, 0, 0.025],
-          "25 mm lateral": "lateral"}
+#: the hip centres' displacement (m: forward, outward, up)
+SHIFTS = {"none": None, "25 mm anterior": (0.025, 0, 0), "25 mm superior": (0, 0, 0.025),
+          "25 mm lateral": (0, 0.025, 0)}
 
 
 def errors(trial, result):
@@ -65,10 +67,8 @@ def main() -> None:
             if shift is None:
                 calibration = bell
             else:
-                move = {}
-                for s, outward in (("r", -1.0), ("l", 1.0)):
-                    step = np.array([0, 0.025 * outward, 0]) if shift == "lateral" else np.asarray(shift, float)
-                    move[f"HJC{s}"] = bell.joint_centres_m[f"HJC{s}"] + step
+                move = {f"HJC{s}": bell.joint_centres_m[f"HJC{s}"] + np.multiply(shift, (1.0, outward, 1.0))
+                        for s, outward in (("r", -1.0), ("l", 1.0))}
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     calibration = calibrate(with_fixed_points(trial.static, move), mass_kg=MASS_KG,
