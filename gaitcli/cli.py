@@ -27,7 +27,7 @@ from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.synth.gait import CONDITIONS
-from gaitcli.synth.recording import SYNTH_MARKER_SETS
+from gaitcli.synth.recording import SYNTH_GAITS, SYNTH_MARKER_SETS
 from gaitcli.trial import SEXES
 
 
@@ -300,15 +300,18 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
               help="Gait cycle, s (default: the condition's, 1.20 s for normal walking).")
 @click.option("--marker-set", type=Choice(tuple(SYNTH_MARKER_SETS)), default="dissertation", show_default=True,
               help="Label the markers as this preset does, with its clusters (subject.yaml names it).")
+@click.option("--gait", "gait_kind", type=Choice(SYNTH_GAITS), default="normative", show_default=True,
+              help="normative: Winter's curves re-timed over the stance foot; predicted: the shipped muscle-driven "
+                   "prediction (1.30 m/s at 1.78 m, period 1.07 s scaled by √stature; no locked joints).")
 @click.pass_obj
 def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides,
-                  mass_kg, stature_m, sex, period_s, marker_set):
+                  mass_kg, stature_m, sex, period_s, marker_set, gait_kind):
     """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/)."""
     from gaitcli.synth import write_trial
 
     trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                         plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
-                        sex=sex, period_s=period_s, marker_set=marker_set)
+                        sex=sex, period_s=period_s, marker_set=marker_set, gait=gait_kind)
     console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames, "
                  f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates)")
 

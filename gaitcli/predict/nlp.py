@@ -142,6 +142,8 @@ class PredictSettings:
     #: sampled at ``monotone_samples`` angles: −25° … +10° (Table A.8's 1.68 m/s c, d turn beyond +10°)
     monotone_range_rad: tuple[float, float] = (float(np.radians(-25.0)), float(np.radians(10.0)))
     monotone_samples: int = 71
+    #: > 0: every step this long, m (a walk at a chosen stride, e.g. the synthetic trials'); 0: free in STEP_RANGE_M
+    step_m: float = 0.0
 
 
 def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -625,6 +627,8 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     # bounds: nodal values p_{k,0}, durations and steps as box_bounds; ŝ ≥ 0, 0 ≤ a ≤ 1
     low, high = box_bounds(layout, muscles.present)
     blocks_low, blocks_high = layout.unpack(low), layout.unpack(high)
+    if s.step_m > 0:
+        blocks_low["steps"] = blocks_high["steps"] = np.full_like(blocks_low["steps"], s.step_m)
     lbw, ubw = [], []
     for b in splines:
         width = b.spline.degree + 1

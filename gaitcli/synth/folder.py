@@ -69,14 +69,14 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
 def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0,
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
                 stature_m: float = 1.78, sex: str = "male", period_s: float | None = None,
-                marker_set: str = "dissertation") -> SyntheticTrial:
+                marker_set: str = "dissertation", gait: str = "normative") -> SyntheticTrial:
     """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/."""
     from gaitcli.io.atomic import atomic_path, make_parent
     from gaitcli.io.c3d_write import write_c3d
 
     trial = simulate_trial(condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                            plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
-                           sex=sex, period_s=period_s, marker_set=marker_set)
+                           sex=sex, period_s=period_s, marker_set=marker_set, gait=gait)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(out, None, "is a file (expected the trial folder to write)")

@@ -18,6 +18,7 @@ from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
 from gaitcli.synth.gait import ANALOG_RATE_HZ, CONDITIONS, GaitDesign, Geometry, balanced_gait
+from gaitcli.synth.predicted import predicted_gait, predicted_period_s
 from gaitcli.synth.ground import ground_reactions
 
 MARKER_RATE_HZ = 100.0
@@ -86,6 +87,8 @@ SYNTH_MARKER_SETS = {"dissertation": ((), {}),
                      "cleveland": (("GT", "MRF", "TT"), {"thigh_r": 3, "thigh_l": 3, "shank_r": 3, "shank_l": 3}),
                      "cast": (("MRF",), {"thigh_r": 1, "thigh_l": 1, "shank_r": 2, "shank_l": 2}),
                      "plug_in_gait": (("GT", "MRF", "MEF", "TT", "LM", "MM", "VM", "FM"), {})}
+#: the walking motions ``gait synth --gait`` makes (``simulate_trial``)
+SYNTH_GAITS = ("normative", "predicted")
 #: Plug-in Gait's synthetic subject: marker diameter (m), how far lateral of the joint centre the ankle marker sits
 #: (× stature; the knee marker is the template's LEF, 0.025 × stature) and of the segment axis the wands sit (m)
 PIG_MARKER_DIAMETER_M = 0.014
@@ -227,7 +230,8 @@ def contact_moments(q, qd, qdd, params, feet):
 def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0, artefact_mm: float = 10.0,
                    strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78, sex: str = "male",
                    plate_noise_N: float = 1.0, period_s: float | None = None,
-                   shared_plate: bool = False, marker_set: str = "dissertation") -> SyntheticTrial:
+                   shared_plate: bool = False, marker_set: str = "dissertation",
+                   gait: str = "normative") -> SyntheticTrial:
     """Make a synthetic walking trial with known truth (nothing written).
 
     Two plates measure one right and one left stance in the middle of the walk; with
@@ -241,15 +245,26 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     per axis), as optical systems quote their accuracy; ``artefact_mm`` the peak
     3-D displacement of the low-frequency skin artefact. ``period_s`` (gait cycle, s)
     defaults to the condition's; the stride length follows from stature and angles.
+
+    ``gait`` (:data:`SYNTH_GAITS`): ``normative``, the normative curves re-timed over the stance foot
+    (:mod:`~gaitcli.synth.gait`), or ``predicted``, the shipped muscle-driven prediction of the walking model
+    (:mod:`~gaitcli.synth.predicted`; every joint free, so not with a locked-joint condition; its period by
+    default the prediction's scaled to the stature, 1.07 s at 1.78 m).
     """
     from gaitcli.kinematics.calibration import calibrate
     from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 
     one_of(condition, CONDITIONS, where="--condition")
     one_of(marker_set, SYNTH_MARKER_SETS, where="--marker-set")
+    one_of(gait, SYNTH_GAITS, where="--gait")
     if noise_mm < 0 or artefact_mm < 0:
         raise InputError(None, "--noise-mm", "expected noise and artefact amplitudes ≥ 0 mm")
     cond = CONDITIONS[condition]
+    if gait == "predicted":
+        if cond.locked_knee_r or cond.locked_ankle_r:
+            raise InputError(None, "--gait", f"predicted walks with every joint free (expected --gait normative "
+                                             f"with --condition {condition})")
+        cond = replace(cond, period_s=predicted_period_s(stature_m))
     if period_s is not None:
         if not 0.6 <= period_s <= 3.0:
             raise InputError(None, "--period-s", f"got {period_s} s (expected a gait cycle of 0.6–3.0 s)")
@@ -259,7 +274,10 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     cal = calibrate(landmarks_to_markers(template, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg, stature_m=stature_m,
                     sex=sex, disturbances=() if condition == "normal" else (condition,))
     params = cal.body
-    design = balanced_gait(Geometry.standing(template, cal.joint_centres_m), cond, params)
+    if gait == "predicted":
+        design = predicted_gait(cond, params, stature_m=stature_m)
+    else:
+        design = balanced_gait(Geometry.standing(template, cal.joint_centres_m), cond, params)
     qd_c, qdd_c, feet_c, clip = ground_reactions(design, params)
 
     # tile the cycle over the trial at the analog rate; markers every `step` analog samples

@@ -96,13 +96,17 @@ def _build(root: Path) -> dict:
     for name in ("eid", "cb", "mso", "validate", "validate_cycle", "swing", "left"):
         _copy_with_outputs(normal, root / name)
     heavy = gait("synth", root / "heavy", "--seed", "1", cwd=root)
-    if heavy.returncode != 0:
-        return {"failed": [heavy.to_json()]}
+    predicted = gait("synth", root / "predicted_r", "--seed", "1", "--gait", "predicted", cwd=root)
+    if heavy.returncode != 0 or predicted.returncode != 0:
+        return {"failed": [heavy.to_json(), predicted.to_json()]}
+    shutil.copytree(root / "predicted_r", root / "predicted_l")
     start_s = json.loads((out / "muscles" / "so" / "summary.json").read_text())["interval_s"][0]
     corrupted = _corrupt_knee(nan / "gait_out" / "idyn" / "idyn.h5", start_s)
     nan_idyn = snapshot(nan / "gait_out")
     results = gait_many({  # the longest first
         "heavy": (("muscles", root / "heavy", "--method", "eid"), root),
+        "predicted_r": (("muscles", root / "predicted_r", "--method", "so"), root),
+        "predicted_l": (("muscles", root / "predicted_l", "--method", "so", "--side", "l"), root),
         "eid": (("muscles", root / "eid", "--method", "eid"), root),
         "validate": (("muscles", root / "validate", "--method", "eid", "--phase", "swing", "--validate"), root),
         "validate_cycle": (("muscles", root / "validate_cycle", "--method", "eid", "--validate"), root),
@@ -325,6 +329,17 @@ def test_validate_over_a_cycle_restarts_at_the_nodes(runs):
     assert 0 <= info["validation_rms_deg"] < 3.0
     assert info["validation_metabolic_cost_J"] == pytest.approx(info["metabolic_cost_J"], rel=0.10)
     assert any("restarted from the EID state at every node" in note for note in info["notes"])
+
+
+def test_so_converges_on_both_legs_of_the_predicted_walk(runs):
+    """`gait synth --gait predicted`: the default subject (75 kg, 1.78 m) at 1.30 m/s, a muscle-driven walk
+    (its prediction's F_max × 0.7), from its noisy markers and plates: SO finds forces for both legs' strides."""
+    for side in "rl":
+        run = result(runs, f"predicted_{side}")
+        assert run.returncode == 0, run.describe()
+        info = summary_of(runs[1] / f"predicted_{side}" / "gait_out" / "muscles" / "so")
+        assert info["converged"] is True and info["side"] == side
+        assert info["speed_m_s"] == pytest.approx(1.30, abs=0.03)
 
 
 def test_eid_not_converged_exit_3(runs):
