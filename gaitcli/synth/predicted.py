@@ -4,7 +4,7 @@ A converged ``gait predict`` cycle of the 9-DoF planar model for the default sub
 1.30 m/s, every step 0.39·H (shipped as its design vector χ in ``data/``; :func:`make_walk` made it).
 In each contact phase its feet are pinned at heel and metatarsal heads (to εk = 2 mm), so the double-support
 chain closes by construction, and its joint moments are those its eight muscles produce with excitations in
-[0, 1] (to εm = 2 N·m), with F_max at 0.7 × Table A.1 so that the muscle stage's full-strength muscles keep
+[0, 1] (to εm = 2 N·m), with F_max at 0.65 × Table A.1 so that the muscle stage's full-strength muscles keep
 a margin for the markers' noise and artefact. The 27-DoF motion takes the sagittal plane from it — the hip
 centres' path, the HAT angle as the pelvis's tilt (lumbar joint straight), hip, knee and ankle flexion —
 scaled to the subject by stature (lengths ∝ H) and to the cycle's period (time); sideways, the pelvis sways
@@ -32,7 +32,7 @@ STRIDE_PER_STATURE = 0.78  # the prescribed stride, 1.39 m at 1.78 m
 WALK_NODES = 18
 #: how the shipped file was made (its header says so too)
 MAKE_COMMAND = 'python -c "from gaitcli.synth.predicted import make_walk; print(make_walk())"'
-WALK_STRENGTH_SCALE = 0.7  # the prediction's F_max, × Table A.1
+WALK_STRENGTH_SCALE = 0.65  # the prediction's F_max, × Table A.1
 STEP_WIDTH_PER_STATURE = 0.067  # between the ankle centres, m per m of stature
 RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
 LEFT_STANCE_PHASES = (5, 6, 7, 8, 1, 2)
