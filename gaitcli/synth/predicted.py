@@ -183,4 +183,3 @@ def make_walk(out: Path = WALK_FILE, *, strength_scale: float = WALK_STRENGTH_SC
         raise RuntimeError(f"the walk's prediction did not converge: {solved['status']}")
     np.savetxt(out, solved["x"], fmt="%.17g", header=header)
     return summary
-

@@ -14,8 +14,8 @@ from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 from gaitcli.kinematics.model import JOINTS
 from gaitcli.synth import ground_reactions
 from gaitcli.synth.gait import CONDITIONS
-from gaitcli.synth.predicted import (STEP_WIDTH_PER_STATURE, STRIDE_PER_STATURE, WALK_SPEED_M_S, WALK_SUBJECT,
-                                     phase_of, predicted_gait, predicted_period_s, walker_cycle)
+from gaitcli.synth.predicted import (STEP_WIDTH_PER_STATURE, STRIDE_PER_STATURE, WALK_FILE, WALK_SPEED_M_S,
+                                     WALK_SUBJECT, phase_of, predicted_gait, predicted_period_s, walker_cycle)
 from gaitcli.synth.recording import MARKER_BODY, MARKER_RATE_HZ
 
 MASS_KG, STATURE_M = WALK_SUBJECT["mass_kg"], WALK_SUBJECT["stature_m"]
@@ -53,8 +53,7 @@ def test_the_3d_whole_body_wrench_is_the_walking_models(walk):
     design, params, durations = walk
     period = float(np.sum(durations))
     times = np.linspace(0.0, period, 11)[:-1]
-    _, _, _, (y, yd, ydd, _) = gait_at(DesignLayout.build(18, symmetric=True), np.loadtxt(
-        __import__("gaitcli.synth.predicted", fromlist=["WALK_FILE"]).WALK_FILE), times)
+    _, _, _, (y, yd, ydd, _) = gait_at(DesignLayout.build(18, symmetric=True), np.loadtxt(WALK_FILE), times)
     model = WalkingModel(WalkerParameters.from_subject(**WALK_SUBJECT))
     base = np.array([np.array(model.mass_matrix(a)) @ c + np.array(model.bias(a, b)).ravel()
                      - np.array(model.gravity(a)).ravel() for a, b, c in zip(y, yd, ydd)])
