@@ -1,0 +1,69 @@
+"""The predicted synthetic walk (``gait synth --gait predicted``) against issue 11's typical-adult targets.
+
+For each seed: writes the default subject's trial (75 kg, 1.78 m, default noise and artefact) and runs SO, MSO
+and EID on both legs through the ``gait`` command; prints each method's convergence, its infeasible frames and
+their largest excitation bound violation, and the metabolic energy. From the truth: the swing-phase hip
+moment's range (the issue asks ±0.3 N·m/kg) and the vertical ground reaction's range. With ``--gait
+normative`` the same for the normative curves.
+Run: ``python benchmarks/bench_synth_walk.py [--seeds 1 2] [--gait predicted]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+
+def gait(*args, cwd: Path) -> int:
+    return subprocess.run([sys.executable, "-m", "gaitcli.cli", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True).returncode
+
+
+def truth_figures(folder: Path, mass_kg: float) -> dict:
+    """From the truth tables: each leg's swing hip moment range (N·m/kg) and the vertical GRF's range (BW)."""
+    moments = pd.read_csv(folder / "truth" / "joint_moments.csv")
+    grf = pd.read_csv(folder / "truth" / "grf.csv")
+    out = {}
+    for side in "rl":
+        swing = grf[f"foot_{side}_force_z_N"].to_numpy() <= 0
+        hip = moments[f"hip_{side}_flexion_moment"].to_numpy()[swing] / mass_kg
+        out[f"swing hip {side} N·m/kg"] = [round(float(hip.min()), 2), round(float(hip.max()), 2)]
+    total = (grf["foot_r_force_z_N"] + grf["foot_l_force_z_N"]).to_numpy() / (mass_kg * 9.81)
+    out["Fz BW"] = [round(float(total.min()), 2), round(float(total.max()), 2)]
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", nargs="+", type=int, default=[1, 2])
+    parser.add_argument("--gait", default="predicted", choices=("predicted", "normative"))
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        for seed in args.seeds:
+            trial = root / f"seed{seed}"
+            if gait("synth", trial, "--seed", seed, "--gait", args.gait, cwd=root) != 0:
+                raise SystemExit(f"gait synth failed for seed {seed}")
+            print(f"seed {seed}, --gait {args.gait}:", json.dumps(truth_figures(trial, 75.0), ensure_ascii=False))
+            for method in ("so", "mso", "eid"):
+                for side in "rl":
+                    out = root / f"out_{seed}_{method}_{side}"
+                    code = gait("muscles", trial, "--method", method, "--side", side, "--no-plots", "-o", out,
+                                cwd=root)
+                    info = json.loads((out / "muscles" / method / "summary.json").read_text())
+                    frames = info.get("infeasible_frames") or []
+                    worst = info.get("max_infeasibility") or 0.0
+                    energy = info.get("metabolic_cost_J")
+                    print(f"  {method:4} {side}: exit {code}, converged {info['converged']}, infeasible frames "
+                          f"{len(frames)} (by ≤ {worst:.3f}), metabolic "
+                          f"{'-' if energy is None else f'{energy:.0f} J'}")
+
+
+if __name__ == "__main__":
+    main()
