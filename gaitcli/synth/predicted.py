@@ -15,6 +15,7 @@ and puts the single-support centre of pressure 0.06–0.21 m ahead of the ankle 
 
 from __future__ import annotations
 
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -38,11 +39,27 @@ RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
 LEFT_STANCE_PHASES = (5, 6, 7, 8, 1, 2)
 
 
+def shipped_walk() -> np.ndarray:
+    """The shipped prediction's χ (read once per process; a copy)."""
+    return _read_walk().copy()
+
+
+@lru_cache(maxsize=1)
+def _read_walk() -> np.ndarray:
+    return np.loadtxt(WALK_FILE)
+
+
+def walk_durations(x: np.ndarray | None = None) -> np.ndarray:
+    """The eight contact phases' durations (s) of the shipped prediction (or of χ ``x``)."""
+    from gaitcli.predict.layout import DesignLayout
+
+    return DesignLayout.build(WALK_NODES, symmetric=True).phase_durations(shipped_walk() if x is None else x)
+
+
 def predicted_period_s(stature_m: float) -> float:
     """The prediction's gait cycle for a subject of ``stature_m``, s: Froude-similar (T ∝ √H), to 10 ms (the
     trials' marker frames)."""
-    _, durations, _ = walker_cycle(np.zeros(1))
-    return round(float(np.sum(durations)) * np.sqrt(stature_m / WALK_SUBJECT["stature_m"]), 2)
+    return round(float(np.sum(walk_durations())) * np.sqrt(stature_m / WALK_SUBJECT["stature_m"]), 2)
 
 
 def walker_cycle(times_s, x: np.ndarray | None = None):
@@ -51,7 +68,7 @@ def walker_cycle(times_s, x: np.ndarray | None = None):
     from gaitcli.predict.layout import DesignLayout
     from gaitcli.predict.problem import gait_at
 
-    x = np.loadtxt(WALK_FILE) if x is None else x
+    x = shipped_walk() if x is None else x
     layout = DesignLayout.build(WALK_NODES, symmetric=True)
     durations, step_r, step_l, (y, _, _, _) = gait_at(layout, x, times_s)
     return y, np.asarray(durations, float), (float(step_r), float(step_l))
@@ -88,7 +105,7 @@ def predicted_gait(condition: Condition, params, *, stature_m: float, x: np.ndar
     T = condition.period_s
     n = int(round(T * ANALOG_RATE_HZ))
     phase = np.arange(n) / n
-    _, durations, _ = walker_cycle(np.zeros(1), x)
+    durations = walk_durations(x)
     own_period = float(np.sum(durations))
     y, _, (step_r, step_l) = walker_cycle(phase * own_period, x)
     scale = stature_m / WALK_SUBJECT["stature_m"]
