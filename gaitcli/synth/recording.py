@@ -283,7 +283,8 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     # tile the cycle over the trial at the analog rate; markers every `step` analog samples
     n = design.q.shape[0]
     step = int(round(ANALOG_RATE_HZ / MARKER_RATE_HZ))
-    j = np.arange(int(round(0.25 * n)), int(round((strides + 1.25) * n)))
+    first, end = int(round(0.25 * n)), int(round((strides + 1.25) * n))
+    j = np.arange(first, end - (end - first) % step)  # whole marker frames: analog = frames × step
     cycle, i = j // n, j % n
     t_abs = j / ANALOG_RATE_HZ
     t = t_abs - t_abs[0]
