@@ -144,6 +144,13 @@ class PredictSettings:
     monotone_samples: int = 71
     #: > 0: every step this long, m (a walk at a chosen stride, e.g. the synthetic trials'); 0: free in STEP_RANGE_M
     step_m: float = 0.0
+    #: > 0: Jdev (5.28) also tracks the HAT's pitch rate ẏ3 against 0 with this SD, deg/s (a steady trunk, e.g.
+    #: the synthetic walk's); 0: the dissertation's Jdev
+    trunk_rate_sd_deg_s: float = 0.0
+    #: > 0: Jdev (5.28) also tracks, from foot flat to the other foot's heel strike, each foot's centre of
+    #: pressure (from its heel and MTP forces; the MTP moment not counted) against a heel-to-MTP progression
+    #: linear over 85 % of its stance, with this SD, m; 0: the dissertation's Jdev
+    cop_sd_m: float = 0.0
 
 
 def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -554,6 +561,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
 
     # per control point: reactions, moment error, contact, ground forces, clearance
     foot_forces = {}  # point → side → (f_x, f_z), N
+    foot_split = {}  # point → side → (heel f_z, MTP f_z), N
     joint_map_pinv = ca.DM(transcriber.joint_map_pinv)
     for j in points:
         phase, i = phases[j], int(grid.instant[j])
@@ -572,6 +580,8 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
             fz = sum((lam[k] for k, name in enumerate(names) if name.endswith(f"_{side}_fz_N")), ca.SX(0))
             feet[side] = (fx, fz)
         foot_forces[j] = feet
+        foot_split[j] = {side: tuple(sum((lam[k] for k, name in enumerate(names) if name == f"{point}_{side}_fz_N"),
+                                         ca.SX(0)) for point in ("heel", "mtp")) for side in ("r", "l")}
         for k, name in enumerate(names):
             if name.endswith("_fz_N"):
                 add("unilateral", lam[k], 0.0, np.inf)
@@ -611,6 +621,31 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     means = ca.horzcat(*[f(pct) for f in _interpolants(reference.mean)])
     sds = ca.horzcat(*[f(pct) for f in _interpolants(reference.sd)])
     jdev = deviation(ca.vertcat(*deviation_rows), means, sds, times, period)
+    if s.cop_sd_m > 0:
+        delta = contact.heel_to_mtp_m
+        strikes = {"r": 0.0, "l": ca.sum1(durations[:4])}
+        stance = ca.sum1(durations[:6])
+        rows = []
+        for i, j in enumerate(grid.instant_points):
+            phase = phases[int(j)]
+            if int(j) in foot_split:
+                split = foot_split[int(j)]
+            else:
+                mirrored = foot_split[int(grid.instant_points[i - half])]
+                split = {"r": mirrored["l"], "l": mirrored["r"]}
+            row = ca.SX(0)
+            for side, rolling in (("r", (2, 3, 4)), ("l", (6, 7, 8))):
+                if phase in rolling:
+                    heel, mtp = split[side]  # heel 0 once it is off (phases 4, 8)
+                    progress = (times[i] - strikes[side]) / (0.85 * stance)
+                    row = (mtp * delta - (heel + mtp) * delta * progress) / (mass * 9.81)
+            rows.append(row)
+        jdev = jdev + deviation(ca.vertcat(*rows), ca.DM.zeros(n_i, 1), ca.DM.ones(n_i, 1) * s.cop_sd_m, times,
+                                period)
+    if s.trunk_rate_sd_deg_s > 0:
+        trunk_rate = ca.vertcat(*[value["yd"][i][2] * 180 / np.pi for i in range(n_i)])
+        jdev = jdev + deviation(trunk_rate, ca.DM.zeros(n_i, 1), ca.DM.ones(n_i, 1) * s.trunk_rate_sd_deg_s,
+                                times, period)
     cost = parameters[1] * et / 100.0 + parameters[2] * jdev  # (5.29), weights checked by check_weights
 
     exprs, lows, highs, slices, start = [], [], [], {}, 0

@@ -5,12 +5,16 @@ A converged ``gait predict`` cycle of the 9-DoF planar model for the default sub
 In each contact phase its feet are pinned at heel and metatarsal heads (to εk = 2 mm), so the double-support
 chain closes by construction, and its joint moments are those its eight muscles produce with excitations in
 [0, 1] (to εm = 2 N·m), with F_max at 0.65 × Table A.1 so that the muscle stage's full-strength muscles keep
-a margin for the markers' noise and artefact. The 27-DoF motion takes the sagittal plane from it — the hip
+a margin for the markers' noise and artefact. Its Jdev also tracks each foot's centre of pressure rolling from
+heel to metatarsal heads and a steady trunk (WALK_TRACKING): without them the optimum stands on the MTP
+point from 12 % of the cycle and rocks the HAT by 7°, and MSO cannot follow its knee and ankle moments.
+The 27-DoF motion takes the sagittal plane from it — the hip
 centres' path, the HAT angle as the pelvis's tilt (lumbar joint straight), hip, knee and ankle flexion —
 scaled to the subject by stature (lengths ∝ H) and to the cycle's period (time); sideways, the pelvis sways
 as the linear inverted pendulum over the stance foot's lane and each hip adducts (the ankle everts as much)
 to keep its foot in the lane. Its exact whole-body wrench is the planar model's (tests/synth/test_predicted.py)
-and puts the single-support centre of pressure 0.06–0.21 m ahead of the ankle (measured at 1.78 m).
+and rolls the single-support centre of pressure from 0.02 to 0.20 m ahead of the ankle by heel-off at 39 % of the
+cycle (measured at 1.78 m).
 """
 
 from __future__ import annotations
@@ -34,6 +38,10 @@ WALK_NODES = 18
 #: how the shipped file was made (its header says so too)
 MAKE_COMMAND = 'python -c "from gaitcli.synth.predicted import make_walk; print(make_walk())"'
 WALK_STRENGTH_SCALE = 0.65  # the prediction's F_max, × Table A.1
+#: Jdev's extra terms (PredictSettings): each foot's centre of pressure rolling from heel to MTP over 85 % of
+#: its stance, and a steady trunk — without them the optimum stands on the MTP point from 12 % of the cycle
+#: and rocks the HAT by 7°, which MSO cannot follow at full strength
+WALK_TRACKING = {"cop_sd_m": 0.007, "trunk_rate_sd_deg_s": 5.0}
 STEP_WIDTH_PER_STATURE = 0.067  # between the ankle centres, m per m of stature
 RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
 LEFT_STANCE_PHASES = (5, 6, 7, 8, 1, 2)
@@ -166,7 +174,9 @@ def make_walk(out: Path = WALK_FILE, *, strength_scale: float = WALK_STRENGTH_SC
     """Solve the shipped prediction anew and write its χ to ``out``: ``gait predict``'s symmetric model for
     WALK_SUBJECT at WALK_SPEED_M_S with its default weights and reference, every step STRIDE_PER_STATURE · H / 2
     long, the muscles' F_max × ``strength_scale`` (weaker than the muscle stage's, so that the walk leaves
-    the muscles of Table A.1 a margin for the markers' noise and artefact). Returns the solve's summary."""
+    the muscles of Table A.1 a margin for the markers' noise and artefact); solved from the default guess with
+    the dissertation's Jdev, then again from there with Jdev also tracking each foot's centre of pressure and
+    a steady trunk (WALK_TRACKING). Returns the last solve's summary."""
     import dataclasses
     import time
 
@@ -180,23 +190,30 @@ def make_walk(out: Path = WALK_FILE, *, strength_scale: float = WALK_STRENGTH_SC
 
     cfg = PredictConfig(speed_m_s=WALK_SPEED_M_S, nodes=WALK_NODES, strength_scale=strength_scale)
     stature = WALK_SUBJECT["stature_m"]
-    settings = dataclasses.replace(settings_of(cfg), step_m=STRIDE_PER_STATURE * stature / 2)
+    plain = dataclasses.replace(settings_of(cfg), step_m=STRIDE_PER_STATURE * stature / 2)
     reference = read_reference(bundled_reference())
     params = WalkerParameters.from_subject(**WALK_SUBJECT)
     transcriber = Transcriber(cfg.nodes, model=WalkingModel(params), muscles=walker_muscles(cfg, None))
     began = time.perf_counter()
-    start_x = initial_guess(transcriber, reference, settings, symmetric=True)
+    x = initial_guess(transcriber, reference, plain, symmetric=True)
     steps, rows, _ = DesignLayout.build(WALK_NODES, symmetric=True).blocks["steps"]
-    start_x[steps:steps + rows] = settings.step_m  # the default guess, its steps at the prescribed length
-    solved = solve_windowed(transcriber, reference, start_x, settings, symmetric=True)
-    summary = evaluate_design(cfg, solved["x"], reference=reference, params=params).summary()
-    header = (f"A converged prediction (issue 11 item 7): the symmetric model's design vector chi ({solved['x'].size} "
+    x[steps:steps + rows] = plain.step_m  # the default guess, its steps at the prescribed length
+    iterations = []
+    for settings in (plain, dataclasses.replace(plain, **WALK_TRACKING)):
+        solved = solve_windowed(transcriber, reference, x, settings, symmetric=True)
+        if not solved["success"]:
+            raise RuntimeError(f"the walk's prediction did not converge: {solved['status']}")
+        x = solved["x"]
+        iterations.append(str(solved["iterations"]))
+    summary = evaluate_design(cfg, x, reference=reference, params=params).summary()
+    tracking = ", ".join(f"{k} {v:g}" for k, v in WALK_TRACKING.items())
+    header = (f"A converged prediction (issue 11 item 7): the symmetric model's design vector chi ({x.size} "
               f"values), nn = {WALK_NODES},\n{WALK_SUBJECT['mass_kg']:g} kg, {stature:g} m, {WALK_SPEED_M_S:g} m/s, "
-              f"steps {settings.step_m:.4f} m, F_max x {strength_scale:g}, default weights and reference; made by\n"
-              f"`{MAKE_COMMAND}` ({solved['iterations']} iterations, {solved['status']}, "
+              f"steps {plain.step_m:.4f} m, F_max x {strength_scale:g}, default weights and reference, Jdev also\n"
+              f"tracking {tracking}; made by `{MAKE_COMMAND}`\n({' + '.join(iterations)} iterations, "
               f"{time.perf_counter() - began:.0f} s; J {summary['objective']:.3f}, Et "
-              f"{summary['cost_of_transport_J_per_m']:.1f} J/m, Jdev {summary['deviation']:.3f}).")
-    if not (solved["success"] and summary["converged"]):
-        raise RuntimeError(f"the walk's prediction did not converge: {solved['status']}")
-    np.savetxt(out, solved["x"], fmt="%.17g", header=header)
+              f"{summary['cost_of_transport_J_per_m']:.1f} J/m, the dissertation's Jdev {summary['deviation']:.3f}).")
+    if not summary["converged"]:
+        raise RuntimeError("the walk's prediction ends outside its constraints")
+    np.savetxt(out, x, fmt="%.17g", header=header)
     return summary

