@@ -606,15 +606,21 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     # cost: Et (5.27) and Jdev (5.28) at the instants
     et = energy_factor * cost_of_transport(ca.horzcat(*rate), times, period, stride)
     mass = model.total_mass_kg
+
+    def per_side(table, i):
+        """``table[point]`` (side → value) at instant i; the symmetric model's second half: the first half's,
+        sides swapped."""
+        j = int(grid.instant_points[i])
+        if j in table:
+            return table[j]
+        mirrored = table[int(grid.instant_points[i - half])]
+        return {"r": mirrored["l"], "l": mirrored["r"]}
+
     deviation_rows = []
     for i, j in enumerate(grid.instant_points):
         y = value["y"][i]
         angles = [*walker_joint_angles(y[2], y[3], y[4], y[5]), *walker_joint_angles(y[2], y[6], y[7], y[8])]
-        if int(j) in foot_forces:
-            feet = foot_forces[int(j)]
-        else:  # the symmetric model's second half: the first half's forces, sides swapped
-            mirrored = foot_forces[int(grid.instant_points[i - half])]
-            feet = {"r": mirrored["l"], "l": mirrored["r"]}
+        feet = per_side(foot_forces, i)
         ground = [feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1]]
         deviation_rows.append(ca.horzcat(*[angle * 180 / np.pi for angle in angles], *[f / mass for f in ground]))
     pct = 100 * fractions
@@ -627,12 +633,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         stance = ca.sum1(durations[:6])
         rows = []
         for i, j in enumerate(grid.instant_points):
-            phase = phases[int(j)]
-            if int(j) in foot_split:
-                split = foot_split[int(j)]
-            else:
-                mirrored = foot_split[int(grid.instant_points[i - half])]
-                split = {"r": mirrored["l"], "l": mirrored["r"]}
+            phase, split = phases[int(j)], per_side(foot_split, i)
             row = ca.SX(0)
             for side, rolling in (("r", (2, 3, 4)), ("l", (6, 7, 8))):
                 if phase in rolling:

@@ -187,9 +187,9 @@ def test_steady_trunk_and_centre_of_pressure_terms_add_their_integrals(built, tr
     x = np.clip(x + 0.01 * np.random.default_rng(1).normal(size=x.size), *box_bounds(nlp.layout))  # a rocking trunk
     w0 = nlp.start(x)
     jdev, jdev_extended = nlp.cost_parts(w0)[2], extended.cost_parts(w0, settings)[2]
-    t = transcriber.at(*nlp.gait(w0))
+    gait = nlp.gait(w0)
+    t, durations = transcriber.at(*gait), gait[0]
     grid, names = transcriber.grid, transcriber.contact.reaction_names
-    durations = nlp.gait(w0)[0]
     strikes, stance, delta = {"r": 0.0, "l": durations[:4].sum()}, durations[:6].sum(), transcriber.contact.heel_to_mtp_m
     trunk, cop = [], []
     for i, j in enumerate(grid.instant_points):
