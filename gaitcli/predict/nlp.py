@@ -51,6 +51,7 @@ Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first
     excitation  0 ≤ u ≤ 1 as −t2·a ≤ ȧ ≤ (1 − a)(t1 + t2) with 0 ≤ a ≤ 1 (5.32, §3 item 19)
     speed       ΣT_ph − ΔS/v = 0                                          (5.43)
     shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5°  (5.45–5.48, §3 item 10)
+    hip_bound   |hip moment| ≤ bound at every instant, a tighter one in swing (opt-in, PredictSettings)
     windows     each instant inside its window of segments
     monotone    dτ_s/dy ≤ 0 at the sampled ankle angles of ``monotone_range_rad`` (prosthetic models; linear in D)
 
@@ -151,6 +152,11 @@ class PredictSettings:
     #: pressure (from its heel and MTP forces; the MTP moment not counted) against a heel-to-MTP progression
     #: linear over 85 % of its stance, with this SD, m; 0: the dissertation's Jdev
     cop_sd_m: float = 0.0
+    #: > 0: the hip moment of a leg in swing (phases 7–8 right, 3–4 left) stays within ± this, N·m/kg, at every
+    #: instant (a typical adult's swing, e.g. the synthetic walk's); 0: unbounded, as in the dissertation
+    swing_hip_moment_Nm_per_kg: float = 0.0
+    #: > 0: the hip moments stay within ± this, N·m/kg, at every instant; 0: unbounded, as in the dissertation
+    hip_moment_Nm_per_kg: float = 0.0
 
 
 def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -433,7 +439,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
 
     groups: dict[str, list] = {name: [] for name in (
         "continuity", "splines", "dynamics", "paths", "activation", "reactions", "moment", "contact", "unilateral",
-        "mtp", "friction", "clearance", "excitation", "speed", "shape", "windows", "monotone")}
+        "mtp", "friction", "clearance", "excitation", "speed", "shape", "hip_bound", "windows", "monotone")}
     bounds: dict[str, list] = {name: [] for name in groups}
 
     def add(name, expression, low, high):
@@ -602,6 +608,18 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     for name, (index, shape_phases, minimum) in GAIT_SHAPE.items():
         chosen = sorted({int(grid.instant[j]) for j in range(grid.points) if phases[j] in shape_phases})
         add("shape", smooth_max(ca.vertcat(*[value["y"][i][index] for i in chosen])), minimum, np.inf)
+
+    if s.swing_hip_moment_Nm_per_kg > 0 or s.hip_moment_Nm_per_kg > 0:  # opt-in bounds on the hip moments (the
+        # symmetric model's left leg is its right leg half a cycle later: bounding both would repeat each row)
+        limits = (s.hip_moment_Nm_per_kg or np.inf, s.swing_hip_moment_Nm_per_kg or np.inf)
+        for i, j in enumerate(grid.instant_points):
+            for thigh, swing in (((3, (7, 8)),) if symmetric else ((3, (7, 8)), (6, (3, 4)))):
+                bound = min(limits[0], limits[1] if phases[int(j)] in swing else np.inf) * model.total_mass_kg
+                if np.isfinite(bound):
+                    y, yd = value["y"][i], value["yd"][i]
+                    # on an absolute thigh angle, knee and ankle relative: the muscles' and tissues' hip moment
+                    add("hip_bound", (muscles.moment_arms(y) @ forces[i] + muscles.tissue(y, yd))[thigh], -bound,
+                        bound)
 
     # cost: Et (5.27) and Jdev (5.28) at the instants
     et = energy_factor * cost_of_transport(ca.horzcat(*rate), times, period, stride)

@@ -210,3 +210,30 @@ def test_steady_trunk_and_centre_of_pressure_terms_add_their_integrals(built, tr
 
     assert integral(cop) > 1.0 and integral(trunk) > 0.1  # neither steady nor rolling
     assert jdev_extended == pytest.approx(jdev + integral(trunk) + integral(cop), rel=1e-9)
+
+
+def test_the_hip_bounds_hold_the_hip_moments(built, transcriber, reference):
+    # the opt-in hip_bound rows are what the muscles and tissues give each thigh, recomputed here from its
+    # equation of motion: (M ÿ + k − g)_thigh − rhs_thigh, at every instant (the symmetric model: the right leg's,
+    # its left leg being the same half a cycle later), within ± bound × body mass, the swing's bound in swing
+    from gaitcli.predict.nlp import PredictSettings
+
+    symmetric, nlp = built
+    settings = PredictSettings(swing_hip_moment_Nm_per_kg=0.3, hip_moment_Nm_per_kg=0.9)
+    bounded = build_nlp(transcriber, reference, settings, symmetric=symmetric, segments=nlp.segments)
+    assert "hip_bound" not in nlp.groups  # off by default
+    w0 = bounded.start(initial_guess(transcriber, reference, symmetric=symmetric))
+    rows = bounded.constraint_values(w0, settings)[bounded.groups["hip_bound"]]
+    t, model, grid = transcriber.at(*bounded.gait(w0)), transcriber.model, transcriber.grid
+    expected, bounds = [], []
+    for j in grid.instant_points:
+        for thigh, swing in (((3, (7, 8)),) if symmetric else ((3, (7, 8)), (6, (3, 4)))):
+            y, yd, ydd = t.y[j], t.yd[j], t.ydd[j]
+            net = (np.array(model.mass_matrix(y)) @ ydd + np.array(model.bias(y, yd)).ravel()
+                   - np.array(model.gravity(y)).ravel())
+            expected.append(net[thigh] - np.array(t.generalized_forces[j], float).ravel()[thigh])
+            bounds.append((0.3 if int(grid.phase[j]) + 1 in swing else 0.9) * model.total_mass_kg)
+    assert len(expected) == len(grid.instant_points) * (1 if symmetric else 2) and len(set(bounds)) == 2
+    np.testing.assert_allclose(rows, expected, rtol=1e-9, atol=1e-6)
+    np.testing.assert_array_equal(bounded.lbg[bounded.groups["hip_bound"]], -np.array(bounds))
+    np.testing.assert_array_equal(bounded.ubg[bounded.groups["hip_bound"]], bounds)
