@@ -10,14 +10,18 @@ surface plus a free moment ``T_z`` about the vertical:
 
 Following 3.1.4 the force and moment signals are low-pass filtered (zero-lag
 Butterworth) first, at the analog rate, and the COP and free moment are formed from
-the filtered signals, only where the filtered vertical force exceeds a threshold.
+the filtered signals, only where the plate is loaded (below).
 
 Decisions (documented here once):
 
-* **Unloaded frames**: ``force_N`` is set to exactly 0 where the plate is not
-  loaded (below threshold the reading is offset and noise and no foot is on the
-  plate, so inverse dynamics must see no load); ``cop_m`` and ``free_moment_Nm``
-  are NaN there.
+* **Unloaded frames**: below the threshold the reading is offset and noise and no
+  foot is on the plate, so inverse dynamics must see no load. The raw wrench is set
+  to 0 where its vertical force is below the threshold *before* filtering, so that
+  the filtered load runs continuously down to 0 at a contact's edges (cutting the
+  filtered force at the threshold instead steps a 20 N load, ~4 N·m at the hip, to 0
+  in one frame at toe-off). A frame counts as loaded where the filtered vertical
+  force exceeds ``LOADED_FRACTION`` × threshold; elsewhere ``force_N`` is exactly 0
+  and ``cop_m`` and ``free_moment_Nm`` are NaN.
 * **Resampling to the marker frames**: the filtered signals are taken at the frame
   times, i.e. the first analog sample of each frame when the analog rate is an
   integer multiple of the marker rate (C3D stores ``rate_analog/rate_point``
@@ -39,7 +43,11 @@ import numpy as np
 
 from gaitcli.errors import InputError, shown
 from gaitcli.core.recording import ForcePlate
-from gaitcli.signal.butterworth import lowpass
+from gaitcli.signal.butterworth import finite_runs, lowpass
+
+#: the filtered vertical force, as a fraction of the threshold, above which a frame counts as loaded: the
+#: filter spreads each contact's edges over a few frames in which the load is small but real
+LOADED_FRACTION = 1e-3
 
 __all__ = ["PlateLoad", "centre_of_pressure", "plate_load", "combine_loads", "resample_to_frames"]
 
@@ -51,7 +59,8 @@ class PlateLoad:
     ``force_N`` (n, 3): ground-on-subject force, 0 where not loaded. ``cop_m`` (n, 3):
     centre of pressure on the plate surface, NaN where not loaded. ``free_moment_Nm``
     (n,): vertical free moment about the COP, NaN where not loaded. ``loaded`` (n,):
-    filtered vertical force above ``threshold_N``. ``corners_m`` (4, 3): the plate
+    the frames of a contact (raw vertical force above ``threshold_N``) and the filter's run-in and run-out
+    beside it (module docstring). ``corners_m`` (4, 3): the plate
     outline (None for a per-foot sum). ``raw_vertical_force_N`` (m,): the unfiltered
     vertical force at ``raw_rate_hz`` for contact timing (None for a per-foot sum).
     """
@@ -144,11 +153,16 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
         raise InputError(None, "cutoff_hz",
                          f"got {shown(cutoff_hz)} Hz (expected below the output Nyquist frequency {out_rate / 2:g} Hz)")
     wrench = np.concatenate([force, moment], axis=1)
+    # off the plate the reading is offset and noise: zeroed before the filter, so that the filtered load
+    # falls continuously to 0 at the contact's edges instead of being cut off at the threshold
+    off_plate = (np.nan_to_num(force[:, 2], nan=np.inf) <= threshold_N) & np.isfinite(wrench).all(axis=1)
+    wrench = np.where(off_plate[:, None], 0.0, wrench)
     if cutoff_hz:  # 0 or None: unfiltered (exact synthetic data)
         wrench = lowpass(wrench, rate_hz=plate.rate_hz, cutoff_hz=cutoff_hz)
     wrench = resample_to_frames(wrench, source_rate_hz=plate.rate_hz, rate_hz=out_rate)
     force_f, moment_f = wrench[:, :3], wrench[:, 3:]
-    loaded = np.nan_to_num(force_f[:, 2], nan=-np.inf) > threshold_N
+    touched = resample_to_frames((~off_plate).astype(float), source_rate_hz=plate.rate_hz, rate_hz=out_rate) > 0
+    loaded = _runs_touching(np.nan_to_num(force_f[:, 2], nan=-np.inf) > LOADED_FRACTION * threshold_N, touched)
     cop, free = centre_of_pressure(force_f, moment_f, plate.centre_m)
     return PlateLoad(
         name=plate.name,
@@ -163,6 +177,17 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
         raw_vertical_force_N=force[:, 2].copy(),
         raw_rate_hz=float(plate.rate_hz),
     )
+
+
+def _runs_touching(positive: np.ndarray, touched: np.ndarray) -> np.ndarray:
+    """``positive`` without its runs that hold no ``touched`` frame: the filter's ringing lobes beside a
+    contact."""
+    starts, stops = finite_runs(positive)
+    keep = np.zeros_like(positive)
+    for start, stop in zip(starts, stops):
+        if touched[start:stop].any():
+            keep[start:stop] = True
+    return keep
 
 
 def combine_loads(loads: list[PlateLoad], owner) -> dict[str, PlateLoad]:
