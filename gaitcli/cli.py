@@ -27,7 +27,7 @@ from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.synth.gait import CONDITIONS
-from gaitcli.synth.recording import SYNTH_GAITS, SYNTH_MARKER_SETS
+from gaitcli.synth.recording import DEFAULT_NOISE_MM, SYNTH_GAITS, SYNTH_MARKER_SETS
 from gaitcli.trial import SEXES
 
 
@@ -282,7 +282,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
 @click.option("--condition", type=Choice(tuple(CONDITIONS)), default="normal", show_default=True,
               help="Experiment of 3.1.1 (added masses, locked joints).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the marker noise and artefact.")
-@click.option("--noise-mm", type=click.FloatRange(min=0), default=2.0, show_default=True,
+@click.option("--noise-mm", type=click.FloatRange(min=0), default=DEFAULT_NOISE_MM, show_default=True,
               help="White marker noise: RMS of the 3-D position error, mm (each axis gets noise/√3).")
 @click.option("--artefact-mm", type=click.FloatRange(min=0), default=10.0, show_default=True,
               help="Low-frequency skin artefact: peak 3-D displacement of a marker, mm.")
@@ -297,18 +297,21 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
 @click.option("--sex", type=Choice(SEXES), default="male", show_default=True,
               help="Selects de Leva's segment tables.")
 @click.option("--period-s", type=click.FloatRange(min=0.5, max=3.0), default=None,
-              help="Gait cycle, s (default: the condition's, 1.20 s for normal walking).")
+              help="Gait cycle, s (default: the gait's: the prediction's scaled by √stature, or the condition's "
+                   "for the normative curves).")
 @click.option("--marker-set", type=Choice(tuple(SYNTH_MARKER_SETS)), default="dissertation", show_default=True,
               help="Label the markers as this preset does, with its clusters (subject.yaml names it).")
-@click.option("--gait", "gait_kind", type=Choice(SYNTH_GAITS), default="normative", show_default=True,
-              help="normative: Winter's curves re-timed over the stance foot; predicted: the shipped muscle-driven "
-                   "prediction (1.30 m/s at 1.78 m, period 1.07 s scaled by √stature; no locked joints).")
+@click.option("--gait", "gait_kind", type=Choice(SYNTH_GAITS), default=None,
+              help="predicted: the shipped muscle-driven prediction (1.30 m/s at 1.78 m, period 1.07 s scaled by "
+                   "√stature; no locked joints); normative: Winter's curves re-timed over the "
+                   "stance foot.  [default: predicted for normal walking, normative for the other conditions]")
 @click.pass_obj
 def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides,
                   mass_kg, stature_m, sex, period_s, marker_set, gait_kind):
     """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/)."""
     from gaitcli.synth import write_trial
 
+    gait_kind = gait_kind or ("predicted" if condition == "normal" else "normative")
     trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                         plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
                         sex=sex, period_s=period_s, marker_set=marker_set, gait=gait_kind)

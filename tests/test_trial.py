@@ -86,8 +86,8 @@ def test_sample_subjects_load(name):
     path = sample_trial(name) / "subject.yaml"
     raw = yaml.safe_load(path.read_text())
     s = load_subject(path)
-    # the sample subject of sample_trials/README.md
-    assert (s.mass_kg, s.stature_m, s.sex) == (55.0, 1.65, "male")
+    # the sample subjects of sample_trials/README.md: gait synth's default subject walks normally
+    assert (s.mass_kg, s.stature_m, s.sex) == ((75.0, 1.78, "male") if name == "normal" else (55.0, 1.65, "male"))
     assert len(s.disturbances) == len(raw.get("disturbances", []))
     for d, r in zip(s.disturbances, raw.get("disturbances", [])):
         assert d.segment == r["segment"] and d.mass_kg == r["mass_kg"] and d.name == r["name"]

@@ -736,7 +736,8 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
 def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
                   symmetric: bool = False) -> np.ndarray:
     """χ from the reference's angles (HAT upright), a hip height that puts the standing foot on the floor,
-    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1)."""
+    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1); clipped into
+    the box bounds (:func:`box_bounds`)."""
     s = settings or PredictSettings()
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
     p = transcriber.model.params
@@ -753,12 +754,14 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
     if symmetric:
         n_h = layout.blocks["trunk"][1]
         trunk = np.column_stack([np.zeros(n_h), np.full(n_h, 0.97 * leg), np.zeros(n_h)])
-        return layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
-                            "right_stretch": np.full((n, 8), np.sqrt(0.1)), "durations": phases, "steps": [step]})
-    coordinates = np.column_stack([np.zeros(n), np.full(n, 0.97 * leg), np.zeros(n), *right,
-                                   -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
-    return layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), np.sqrt(0.1)),
-                        "durations": np.tile(phases, 2), "steps": [step, step]})
+        x = layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
+                         "right_stretch": np.full((n, 8), np.sqrt(0.1)), "durations": phases, "steps": [step]})
+    else:
+        coordinates = np.column_stack([np.zeros(n), np.full(n, 0.97 * leg), np.zeros(n), *right,
+                                       -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
+        x = layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), np.sqrt(0.1)),
+                         "durations": np.tile(phases, 2), "steps": [step, step]})
+    return np.clip(x, *box_bounds(layout))  # a reference's knee hyperextended by 2° starts straight
 
 
 class IterationReport(ca.Callback):

@@ -15,7 +15,7 @@ import yaml
 
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import COORDINATES, MOMENTS
-from gaitcli.synth.recording import SyntheticTrial, simulate_trial
+from gaitcli.synth.recording import DEFAULT_NOISE_MM, SyntheticTrial, simulate_trial
 
 #: the side carrying the condition's added masses and locked joints
 DISTURBED_SIDE = "r"
@@ -66,7 +66,7 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
     write_table(out / "plates.csv", {"plate": [p.name for p in trial.plates], "foot": trial.plate_feet})
 
 
-def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = 2.0,
+def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = DEFAULT_NOISE_MM,
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
                 stature_m: float = 1.78, sex: str = "male", period_s: float | None = None,
                 marker_set: str = "dissertation", gait: str = "normative") -> SyntheticTrial:

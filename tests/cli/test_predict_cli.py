@@ -75,12 +75,12 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
     with Image.open(tmp_path / "out" / "predict" / "plots" / "walk.gif") as gif:  # one frame per motion row
         assert gif.n_frames == len(pd.read_csv(tmp_path / "out" / "predict" / "motion.csv"))
     assert not (tmp_path / "normal" / "gait_out" / "predict" / "plots").exists()
-    # the trial's own subject (55 kg) and reference, and its idyn made on the way
+    # the trial's own subject (75 kg) and reference, and its idyn made on the way
     trial_summary = json.loads((tmp_path / "normal" / "gait_out" / "predict" / "summary.json").read_text())
     assert trial_summary["symmetric"] is True
     assert (tmp_path / "normal" / "gait_out" / "idyn" / "idyn.h5").is_file()
     with h5py.File(tmp_path / "normal" / "gait_out" / "predict" / "predict.h5", "r") as h5:
-        assert abs(float(h5["result/body_mass_kg"][()]) - 55.0) < 0.5
+        assert abs(float(h5["result/body_mass_kg"][()]) - 75.0) < 0.5
 
     # SIGTERM inside the next run's IPOPT iterations (issue 9): "gait: interrupted", exit 130, the unconverged
     # result above untouched and no half-written folder. The first run's solve time (construction and two

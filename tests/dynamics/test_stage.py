@@ -8,8 +8,8 @@ The first and last two frames are left out: there the not-a-knot end conditions 
 interpolating spline (gaitcli/dynamics/derivatives.py) dominate q̈ (frames 0 and n−1: 0.45 % of
 peak, residual 1.0 N). The same trial through C3D (float32) and the CLI is in tests/cli/test_idyn_cli.py.
 
-Noisy case: the defaults of ``gait synth`` (white marker noise of 2 mm RMS 3-D error, 10 mm peak
-skin artefact, 1 N plate noise), through the real filter stage (6 Hz) and the idyn stage. Sagittal
+Noisy case: ``gait synth``'s normative walk (white marker noise of 2 mm RMS 3-D error, twice today's default,
+10 mm peak skin artefact, 1 N plate noise), through the real filter stage (6 Hz) and the idyn stage. Sagittal
 moment RMS error (N·m/kg) over the frames where that foot's load is known (swing, or stance on a
 plate), seeds 0–9 (measured through the CLI):
 
@@ -250,7 +250,7 @@ def noisy():
     """Per seed: the synthetic trial, the filtered trial and the idyn result (defaults of gait synth)."""
     out = {}
     for seed in NOISY_SEEDS:
-        trial = simulate_trial(condition="normal", seed=seed)
+        trial = simulate_trial(condition="normal", seed=seed, noise_mm=2.0)
         filtered = filter_trial(Recording(trial.markers, trial.plates), FilterConfig()).trial
         result = inverse_dynamics_stage(filtered, calibration_of(trial), IdynConfig(), mass_kg=MASS_KG,
                                         mass_source="test")
@@ -372,7 +372,7 @@ def test_a_synthetic_cleveland_trial_needs_only_its_marker_set():
     out GT, MRF and TT and puts a 3-marker cluster on each thigh and shank; with ``marker_set: cleveland`` and no
     map the sagittal moments are as accurate as with Table A.6's markers (measured, seed 2, N·m/kg r/l: hip
     0.080/0.093, knee 0.032/0.070, ankle 0.033/0.035; Table A.6, seed 1: 0.075/0.094, 0.034/0.076, 0.031/0.035)."""
-    trial = simulate_trial(seed=2, marker_set="cleveland")
+    trial = simulate_trial(seed=2, marker_set="cleveland", noise_mm=2.0)
     assert {"RASI", "RLFC", "RMFC", "RLMAL", "RMT5", "RTH1", "LTB3"} <= set(trial.markers.labels)
     assert not {"GTr", "MRFr", "TTr", "ASISr"} & set(trial.markers.labels)
     preset = marker_set("cleveland")
@@ -395,7 +395,7 @@ def test_synthetic_plug_in_gait_and_cast_trials_need_only_their_marker_set(name)
     with the joint centre above. ``cast`` has a thigh wand and a shank fibula-head marker plus wand. Measured,
     seed 2, N·m/kg r/l: plug_in_gait hip 0.057/0.076, knee 0.028/0.070, ankle 0.035/0.034; cast 0.060/0.081,
     0.027/0.073, 0.036/0.032."""
-    trial = simulate_trial(seed=2, marker_set=name)
+    trial = simulate_trial(seed=2, marker_set=name, noise_mm=2.0)
     preset = marker_set(name)
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set=name)
     with warnings.catch_warnings():

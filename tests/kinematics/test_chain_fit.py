@@ -54,7 +54,7 @@ def test_an_exact_trial_is_a_fixed_point():
 @pytest.fixture(scope="module")
 def displaced():
     """Seed 1 with noise and artefact; the static trial's hip centres 25 mm anterior of the truth."""
-    trial = simulate_trial(seed=1, plate_noise_N=0.0)
+    trial = simulate_trial(seed=1, noise_mm=2.0, plate_noise_N=0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         filtered = filter_trial(Recording(trial.markers, trial.plates), FilterConfig()).trial
