@@ -218,7 +218,8 @@ def make_walk(out: Path = WALK_FILE, *, strength_scale: float = WALK_STRENGTH_SC
     header = (f"A converged prediction (issue 11 item 7): the symmetric model's design vector chi ({x.size} "
               f"values), nn = {WALK_NODES},\n{WALK_SUBJECT['mass_kg']:g} kg, {stature:g} m, {WALK_SPEED_M_S:g} m/s, "
               f"steps {plain.step_m:.4f} m, F_max x {strength_scale:g}, default weights, reference\n"
-              f"{WALK_REFERENCE.name}, then {tracking};\nmade by `{MAKE_COMMAND}`\n({' + '.join(iterations)} iterations, "
+              f"{WALK_REFERENCE.name}, then {tracking};\nmade by `{MAKE_COMMAND}`\n"
+              f"({' + '.join(iterations)} iterations, "
               f"{time.perf_counter() - began:.0f} s; J {summary['objective']:.3f}, Et "
               f"{summary['cost_of_transport_J_per_m']:.1f} J/m, the dissertation's Jdev {summary['deviation']:.3f}).")
     if not summary["converged"]:

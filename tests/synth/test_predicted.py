@@ -110,3 +110,23 @@ def test_the_centre_of_pressure_rolls_and_the_trunk_is_steady(walk):
     assert ahead[rolling][0] < 0.03 and 0.15 < ahead[rolling].max() < 0.25
     assert np.all(np.diff(ahead[rolling]) > -1e-3)
     assert np.degrees(np.ptp(design.q[:, 4])) < 2.0
+
+
+def test_the_bundled_normal_trial_is_the_default_subjects_walk_with_a_typical_swing_hip():
+    """sample_trials/normal is `gait synth --seed 1`: the default subject on the predicted walk; its truth's hip
+    moment in swing (the foot off the ground) stays within ±0.3 N·m/kg (issue 11; measured −0.24 … +0.28)."""
+    import pandas as pd
+    import yaml
+
+    from gaitcli.resources import sample_trials_dir
+
+    folder = sample_trials_dir() / "normal"
+    subject = yaml.safe_load((folder / "subject.yaml").read_text())
+    assert (subject["mass_kg"], subject["stature_m"]) == (MASS_KG, STATURE_M)
+    moments, grf = pd.read_csv(folder / "truth" / "joint_moments.csv"), pd.read_csv(folder / "truth" / "grf.csv")
+    kinematics = pd.read_csv(folder / "truth" / "kinematics.csv")
+    assert np.polyfit(kinematics.time_s, kinematics.pelvis_x, 1)[0] == pytest.approx(WALK_SPEED_M_S, abs=0.01)
+    for side in "rl":
+        swing = grf[f"foot_{side}_force_z_N"].to_numpy() <= 0
+        hip = moments[f"hip_{side}_flexion_moment"].to_numpy()[swing] / MASS_KG
+        assert swing.sum() > 100 and np.abs(hip).max() < 0.3
