@@ -554,7 +554,11 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         c = slice(8 * k, 8 * k + 8)
         l_ce, v_ce = muscles.muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, matrix("l_m")[:, c].T,
                                                      matrix("v_m")[:, c].T)
-        u = muscles.muscle.excitation(a_m[:, c].T, adot[:, c].T)
+        # the root of 4.3.3 is real where ȧ ≥ −t2·a (u ≥ 0, the first excitation bound below); a start outside
+        # it (a neighbouring case's unconverged solution) would make Et NaN and stop IPOPT at iteration 0, so
+        # u is taken at max(ȧ, −t2·a): the same u on the feasible set, finite off it
+        T2_rows = ca.repmat(ca.DM(t2[c]), 1, n_i)
+        u = muscles.muscle.excitation(a_m[:, c].T, ca.fmax(adot[:, c].T, -T2_rows * a_m[:, c].T))
         f_ce = force_m[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, n_i)
         # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
         # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small

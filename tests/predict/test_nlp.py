@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gaitcli.predict.contact import PHASE_TABLE
-from gaitcli.predict.nlp import box_bounds, build_nlp, initial_guess, moved_windows
+from gaitcli.predict.nlp import PredictSettings, box_bounds, build_nlp, initial_guess, moved_windows
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
 from gaitcli.resources import bundled_reference
@@ -237,3 +237,25 @@ def test_the_hip_bounds_hold_the_hip_moments(built, transcriber, reference):
     np.testing.assert_allclose(rows, expected, rtol=1e-9, atol=1e-6)
     np.testing.assert_array_equal(bounded.lbg[bounded.groups["hip_bound"]], -np.array(bounds))
     np.testing.assert_array_equal(bounded.ubg[bounded.groups["hip_bound"]], bounds)
+
+
+def test_the_cost_stays_finite_where_an_activation_falls_faster_than_any_excitation_allows(transcriber, reference,
+                                                                                            built):
+    # a start whose activation drops 1 → 0.02 in one instant (an unconverged neighbour's solution did): no real
+    # excitation root (4.3.3) there; Et and its gradient stay finite (IPOPT stopped at iteration 0 on a NaN)
+    import casadi as ca
+
+    symmetric, nlp = built
+    w0 = nlp.start(initial_guess(transcriber, reference, symmetric=symmetric))
+    head = sum(b.coefficients.numel() for b in nlp.splines) + nlp.layout.blocks["durations"][1] \
+        + nlp.layout.blocks["steps"][1]
+    columns = [name for name, cols in nlp.lifted[0][2] for _ in range(cols)]
+    n_i = transcriber.grid.instants
+    a = head + columns.index("a") * n_i  # the first muscle's activations, instant by instant (column-major)
+    w = w0.copy()
+    w[a + 40], w[a + 41] = 1.0, 0.02
+    cost = ca.Function("cost", [nlp.w, nlp.parameters], [nlp.cost, ca.gradient(nlp.cost, nlp.w)])
+    p = nlp.parameter_values(PredictSettings())
+    value, gradient = (np.array(v).ravel() for v in cost(w, p))
+    assert np.isfinite(value).all() and np.isfinite(gradient).all()
+    assert nlp.constraint_values(w)[nlp.groups["excitation"]].min() < 0  # the point is outside the bounds
