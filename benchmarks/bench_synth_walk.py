@@ -3,8 +3,10 @@
 For each seed: writes the default subject's trial (75 kg, 1.78 m, default noise and artefact) and runs SO, MSO
 and EID on both legs through the ``gait`` command; prints each method's convergence, its infeasible frames and
 their largest excitation bound violation, and the metabolic energy. From the truth: the swing-phase hip
-moment's range (the issue asks ±0.3 N·m/kg) and the vertical ground reaction's range. With ``--gait
-normative`` the same for the normative curves.
+moment's range (the issue asks ±0.3 N·m/kg), the vertical ground reaction's range, and how far the right leg's
+sagittal angles are from Winter's adult curves (``gaitcli.synth.gait``: RMS over the cycles from right heel
+strike, and the loading-response knee flexion and the stance dorsiflexion peaks beside Winter's 19° and 10°).
+With ``--gait normative`` the same for the normative curves.
 Run: ``python benchmarks/bench_synth_walk.py [--seeds 1 2] [--gait predicted]``.
 """
 
@@ -17,7 +19,10 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
+
+from gaitcli.synth.gait import ANKLE_DORSIFLEXION, HIP_FLEXION, KNEE_FLEXION, periodic_curve
 
 
 def gait(*args, cwd: Path) -> int:
@@ -36,6 +41,28 @@ def truth_figures(folder: Path, mass_kg: float) -> dict:
         out[f"swing hip {side} N·m/kg"] = [round(float(hip.min()), 2), round(float(hip.max()), 2)]
     total = (grf["foot_r_force_z_N"] + grf["foot_l_force_z_N"]).to_numpy() / (mass_kg * 9.81)
     out["Fz BW"] = [round(float(total.min()), 2), round(float(total.max()), 2)]
+    return {**out, **sagittal_figures(folder)}
+
+
+def sagittal_figures(folder: Path) -> dict:
+    """The right leg's hip, knee, ankle angles (truth, degrees, clinical signs) against Winter's curves: RMS
+    over whole cycles from right heel strike; the knee's peak in 0–25 % and the ankle's in 10–60 % of the cycle."""
+    kinematics = pd.read_csv(folder / "truth" / "kinematics.csv")
+    events = pd.read_csv(folder / "truth" / "events.csv")
+    strikes = events[(events.side == "r") & (events.event == "heel_strike")].time_s.to_numpy()
+    t = kinematics.time_s.to_numpy()
+    within = (t >= strikes[0]) & (t < strikes[-1])
+    k = np.searchsorted(strikes, t[within], side="right") - 1
+    phase = (t[within] - strikes[k]) / (strikes[k + 1] - strikes[k])
+    out = {}
+    for column, curve in (("hip_r_flexion", HIP_FLEXION), ("knee_r_flexion", KNEE_FLEXION),
+                          ("ankle_r_flexion", ANKLE_DORSIFLEXION)):
+        angle = kinematics[column].to_numpy()[within]
+        out[f"{column} RMS vs Winter deg"] = round(float(np.sqrt(np.mean((angle - periodic_curve(curve, phase)) ** 2))),
+                                                   1)
+    angles = {c: kinematics[c].to_numpy()[within] for c in ("knee_r_flexion", "ankle_r_flexion")}
+    out["loading knee flexion deg"] = round(float(angles["knee_r_flexion"][phase < 0.25].max()), 1)
+    out["stance dorsiflexion deg"] = round(float(angles["ankle_r_flexion"][(phase > 0.1) & (phase < 0.6)].max()), 1)
     return out
 
 
