@@ -6,9 +6,10 @@ dorsiflexion, ...), moments ``<joint>_<axis>_moment_per_kg`` (N·m/kg) and the g
 ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
 ``<variable>_sd``; ``gait reference ... --band FILE`` writes one from idyn outputs) or from a ``gait reference``
 table, whose right-leg columns give the sagittal angles and forces. The package's band
-(``report/data/normal_band.csv``) comes from the bundled normal sample trial; one subject's strides vary far
-less than between subjects, so each SD is raised to a floor (3°, 0.1 N·m/kg, 0.3 N/kg, our choice as for the
-prediction's reference, :data:`gaitcli.predict.reference.SD_FLOOR`).
+(``report/data/normal_band.csv``) comes from ``gait synth``'s normative trial (Winter's curves; the command is in
+sample_trials/README.md); one subject's strides vary far less than between subjects, so each SD is raised to a
+floor (3°, 0.1 N·m/kg, 0.3 N/kg, our choice as for the prediction's reference,
+:data:`gaitcli.predict.reference.SD_FLOOR`).
 """
 
 from __future__ import annotations
@@ -133,9 +134,9 @@ def read_band(path: str | Path) -> NormalBand:
 
 
 def default_band() -> NormalBand:
-    """The package's band (the bundled normal sample trial's strides)."""
+    """The package's band (the strides of ``gait synth``'s normative trial: Winter's curves)."""
     band = read_band(BAND_FILE)
-    return NormalBand(band.mean, band.sd, "gaitcli's band: the bundled normal sample trial")
+    return NormalBand(band.mean, band.sd, "gaitcli's band: Winter's adult curves (gait synth --gait normative)")
 
 
 def draw_band(ax, band: NormalBand | None, variable: str, *, label: bool = True) -> bool:

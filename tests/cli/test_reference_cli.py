@@ -1,5 +1,5 @@
-"""``gait reference`` as a command: the bundled reference is what the documented command makes of the bundled
-normal sample trial; a bad trial is one line, exit 2."""
+"""``gait reference`` as a command: the bundled reference and the report's normal band are what the documented
+commands (sample_trials/README.md) make of `gait synth`'s normative trial; a bad trial is one line, exit 2."""
 
 from __future__ import annotations
 
@@ -8,18 +8,30 @@ import pandas as pd
 
 from gaitcli.resources import bundled_reference
 
-from .conftest import copy_sample, gait_many
+from gaitcli.report.bands import BAND_FILE
+
+from .conftest import gait, gait_many
+
+#: the trial the bundled reference and band come from (sample_trials/README.md)
+NORMATIVE_TRIAL = ("--gait", "normative", "--seed", "1", "--mass-kg", "55", "--stature-m", "1.65", "--period-s", "1.40",
+                   "--noise-mm", "2")
 
 
 def test_the_bundled_reference_is_what_the_command_makes(tmp_path):
-    copy_sample("normal", tmp_path / "normal")
-    runs = gait_many({"made": (("reference", "normal", "-o", "ref.csv"), tmp_path),
+    made = gait("synth", tmp_path / "normal", *NORMATIVE_TRIAL, cwd=tmp_path)
+    assert made.returncode == 0, made.describe()
+    runs = gait_many({"made": (("reference", "normal", "-o", "ref.csv", "--band", "band.csv"), tmp_path),
                       "missing": (("reference", "no_such_trial", "-o", "bad.csv"), tmp_path)})
     made = runs["made"]
     assert made.returncode == 0, made.describe()
     got, bundled = pd.read_csv(tmp_path / "ref.csv"), pd.read_csv(bundled_reference())
     assert list(got.columns) == list(bundled.columns) and len(got) == 101
     np.testing.assert_allclose(got.to_numpy(), bundled.to_numpy(), rtol=1e-5, atol=1e-9)
+    band, bundled_band = pd.read_csv(tmp_path / "band.csv"), pd.read_csv(BAND_FILE)
+    assert list(band.columns) == list(bundled_band.columns)
+    np.testing.assert_allclose(band.to_numpy(), bundled_band.to_numpy(), rtol=1e-5, atol=1e-9)
+    # a typical adult's sagittal angles (Winter: loading knee 19°, stance dorsiflexion 10°), not a crouch
+    assert 13 < got.knee_r_flexion_deg_mean[:25].max() < 25 and 5 < got.ankle_r_dorsiflexion_deg_mean[10:60].max() < 15
     # plausible walking: vertical GRF above body weight in the loading response, none in the right swing
     assert got.grf_z_r_N_per_kg_mean[10:20].max() > 9.81 and got.grf_z_r_N_per_kg_mean[75:95].max() < 0.5
     missing = runs["missing"]

@@ -1,0 +1,113 @@
+"""Which of the synthetic walk's settings make it crouch: ``make_walk``'s solves, one setting at a time.
+
+Solves the dissertation's prediction for the walk's subject, speed and step (``gaitcli.synth.predicted``: 75 kg,
+1.78 m, 1.30 m/s, steps 0.694 m, the reference WALK_REFERENCE) from the default guess with Table A.1's muscles
+(the "plain" start), then, from that start, the second solve with each variant of WALK_TRACKING's settings at the
+muscles' F_max × ``--scale``. Prints, per solve, IPOPT's status, iterations and seconds, J, Et and the
+dissertation's Jdev, heel-off (% of the cycle), and the right leg's angles against Winter's adult curves
+(``gaitcli.synth.gait``): the loading-response knee peak (0–25 %; Winter 19°), the stance dorsiflexion peak
+(10–60 %; Winter 10°), the ankle at heel strike (Winter 0°) and each joint's RMS difference. The shipped walk
+(made by ``make_walk``) is printed first for comparison.
+Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip moment trunk]
+[--start plain.csv]`` (``--start``: a plain start saved by an earlier run's ``--save-start``; each solve takes
+2–10 minutes on one core, some variants longer).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+# timing first, before numpy: one thread, Agg backend (its import sets the environment)
+from timing import one_core
+
+import numpy as np
+
+from gaitcli.kinematics.conventions import walker_to_clinical
+from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.model import WalkerParameters, WalkingModel
+from gaitcli.predict.nlp import initial_guess, solve_windowed
+from gaitcli.predict.problem import Transcriber
+from gaitcli.predict.reference import read_reference
+from gaitcli.predict.stage import PredictConfig, evaluate_design, settings_of, violated_groups, walker_muscles
+from gaitcli.synth import predicted as walk
+from gaitcli.synth.gait import ANKLE_DORSIFLEXION, HIP_FLEXION, KNEE_FLEXION, periodic_curve
+
+#: the second solve's variants: WALK_TRACKING's settings kept (each alone, or all)
+VARIANTS = {"shipped": tuple(walk.WALK_TRACKING), "cop": ("cop_sd_m",), "trunk": ("trunk_rate_sd_deg_s",),
+            "moment": ("moment_tolerance_Nm",), "hip": ("swing_hip_moment_Nm_per_kg", "hip_moment_Nm_per_kg")}
+
+
+def walk_figures(x: np.ndarray) -> dict:
+    """The walk χ's right-leg sagittal angles against Winter's curves (degrees), and its heel-off."""
+    durations = walk.walk_durations(x)
+    phase = np.arange(400) / 400
+    y, _, _ = walk.walker_cycle(phase * float(np.sum(durations)), x)
+    angles = walker_to_clinical(y)
+    out = {"heel_off_pct": round(100 * walk.phase_of(durations)[3][1], 1),
+           "loading_knee_deg": round(float(angles[phase < 0.25, 1].max()), 1),
+           "stance_dorsiflexion_deg": round(float(angles[(phase > 0.1) & (phase < 0.6), 2].max()), 1),
+           "heel_strike_ankle_deg": round(float(angles[0, 2]), 1)}
+    for k, (joint, curve) in enumerate((("hip", HIP_FLEXION), ("knee", KNEE_FLEXION), ("ankle", ANKLE_DORSIFLEXION))):
+        out[f"{joint}_rms_deg"] = round(float(np.sqrt(np.mean((angles[:, k] - periodic_curve(curve, phase)) ** 2))), 1)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scale", type=float, default=walk.WALK_STRENGTH_SCALE, help="the second solve's F_max")
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    parser.add_argument("--start", type=Path, help="a plain start (χ, one value per line) instead of solving it")
+    parser.add_argument("--save-start", type=Path, help="write the plain start's χ here")
+    args = parser.parse_args()
+    one_core()
+    reference = read_reference(walk.WALK_REFERENCE)
+    params = WalkerParameters.from_subject(**walk.WALK_SUBJECT)
+    step_m = walk.STRIDE_PER_STATURE * walk.WALK_SUBJECT["stature_m"] / 2
+
+    def problem(scale):
+        cfg = PredictConfig(speed_m_s=walk.WALK_SPEED_M_S, nodes=walk.WALK_NODES, strength_scale=scale)
+        transcriber = Transcriber(cfg.nodes, model=WalkingModel(params), muscles=walker_muscles(cfg, None))
+        return cfg, transcriber, dataclasses.replace(settings_of(cfg), step_m=step_m)
+
+    def show(label, cfg, x, solved=None, seconds=None):
+        summary = evaluate_design(cfg, x, reference=reference, params=params).summary()
+        row = {"solve": label}
+        if solved is not None:
+            row.update(status=solved["status"], iterations=solved["iterations"], s=round(seconds))
+        row.update(J=round(summary["objective"], 2), Et_J_per_m=round(summary["cost_of_transport_J_per_m"], 1),
+                   Jdev=round(summary["deviation"], 1), **walk_figures(x))
+        # the constraint groups violated at the dissertation's settings (εm 2 N·m; no hip bounds)
+        row["violated"] = {k: round(v, 4) for k, v in violated_groups(summary["violations"]).items()}
+        print(json.dumps(row, ensure_ascii=False), flush=True)
+
+    show(f"shipped walk (F_max × {walk.WALK_STRENGTH_SCALE:g})", problem(walk.WALK_STRENGTH_SCALE)[0],
+         walk.shipped_walk())
+    cfg, transcriber, plain = problem(1.0)
+    if args.start is not None:
+        start = np.loadtxt(args.start)
+        show(f"plain start from {args.start}", cfg, start)
+    else:
+        x = initial_guess(transcriber, reference, plain, symmetric=True)
+        rows_at, rows, _ = DesignLayout.build(walk.WALK_NODES, symmetric=True).blocks["steps"]
+        x[rows_at:rows_at + rows] = step_m
+        began = time.perf_counter()
+        solved = solve_windowed(transcriber, reference, x, plain, symmetric=True)
+        start = solved["x"]
+        show("plain start (F_max × 1, the dissertation's settings)", cfg, start, solved, time.perf_counter() - began)
+    if args.save_start is not None:
+        np.savetxt(args.save_start, start, fmt="%.17g")
+    cfg, transcriber, plain = problem(args.scale)
+    for name in args.variants:
+        settings = dataclasses.replace(plain, **{k: walk.WALK_TRACKING[k] for k in VARIANTS[name]})
+        began = time.perf_counter()
+        solved = solve_windowed(transcriber, reference, start, settings, symmetric=True)
+        show(f"{name}: {', '.join(VARIANTS[name])} (F_max × {args.scale:g})", cfg, solved["x"], solved,
+             time.perf_counter() - began)
+
+
+if __name__ == "__main__":
+    main()
