@@ -57,9 +57,10 @@ Constraint groups g (CHAPTER5_NOTES §1.9 with the corrections of §3; the first
 
 Status (nn = 18, from :func:`initial_guess`, one core shared with a second solve): the symmetric
 model with windows of ±3 segments reaches IPOPT's optimum in one solve (``gait predict``: 468 iterations,
-J 7.953, 382 s; 1.00 and 1.33 m/s: 362 and 368 iterations; against the bundled reference since 2026-12-03, from
-the 75 kg predicted walk: 1072 iterations, J 4.378, 652 s alone, ``benchmarks/bench_predict.py``). Narrower windows are cheaper per iteration but each solve is confined (instants cannot cross
-nodes) and the chain of re-centred solves ends in worse optima (J 12.5–14.0) or infeasible; the full
+J 7.953, 382 s; 1.00 and 1.33 m/s: 362 and 368 iterations; against the bundled reference of 2026-12-04, the
+normative trial's: 232 iterations, J 9.876, 172 s alone; against the crouched walk's of 2026-12-03 it took 1072,
+``benchmarks/bench_predict.py``). Narrower windows are cheaper per iteration but each solve is confined (instants
+cannot cross nodes) and the chain of re-centred solves ends in worse optima (J 12.5–14.0) or infeasible; the full
 model with ±2 segments was at J 19.9 after 190 iterations. Of each iteration, 55–65 ms go into the
 exact Hessian and 5 ms into the Jacobian; the rest is MUMPS (METIS ordering 0.44 s per iteration for
 the full model with ±0, default ordering 0.6 s, AMD 2.2 s): the KKT factor has 6–7 million entries,
