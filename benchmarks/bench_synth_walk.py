@@ -45,8 +45,7 @@ def truth_figures(folder: Path, mass_kg: float) -> dict:
 
 
 def sagittal_figures(folder: Path) -> dict:
-    """The right leg's hip, knee, ankle angles (truth, degrees, clinical signs) against Winter's curves: RMS
-    over whole cycles from right heel strike; the knee's peak in 0–25 % and the ankle's in 10–60 % of the cycle."""
+    """The truth's right-leg :func:`winter_figures` over whole cycles from right heel strike."""
     kinematics = pd.read_csv(folder / "truth" / "kinematics.csv")
     events = pd.read_csv(folder / "truth" / "events.csv")
     strikes = events[(events.side == "r") & (events.event == "heel_strike")].time_s.to_numpy()
@@ -54,15 +53,21 @@ def sagittal_figures(folder: Path) -> dict:
     within = (t >= strikes[0]) & (t < strikes[-1])
     k = np.searchsorted(strikes, t[within], side="right") - 1
     phase = (t[within] - strikes[k]) / (strikes[k + 1] - strikes[k])
+    return winter_figures(phase, *(kinematics[f"{joint}_r_flexion"].to_numpy()[within]
+                                   for joint in ("hip", "knee", "ankle")))
+
+
+def winter_figures(phase, hip, knee, ankle) -> dict:
+    """One leg's hip flexion, knee flexion and ankle dorsiflexion (degrees, clinical signs) at ``phase`` (fractions
+    of the cycle from heel strike) against Winter's curves: each one's RMS difference, the knee's peak in 0–25 %
+    and the ankle's in 10–60 % of the cycle."""
     out = {}
-    for column, curve in (("hip_r_flexion", HIP_FLEXION), ("knee_r_flexion", KNEE_FLEXION),
-                          ("ankle_r_flexion", ANKLE_DORSIFLEXION)):
-        angle = kinematics[column].to_numpy()[within]
-        out[f"{column} RMS vs Winter deg"] = round(float(np.sqrt(np.mean((angle - periodic_curve(curve, phase)) ** 2))),
-                                                   1)
-    angles = {c: kinematics[c].to_numpy()[within] for c in ("knee_r_flexion", "ankle_r_flexion")}
-    out["loading knee flexion deg"] = round(float(angles["knee_r_flexion"][phase < 0.25].max()), 1)
-    out["stance dorsiflexion deg"] = round(float(angles["ankle_r_flexion"][(phase > 0.1) & (phase < 0.6)].max()), 1)
+    for joint, angle, curve in (("hip", hip, HIP_FLEXION), ("knee", knee, KNEE_FLEXION),
+                                ("ankle", ankle, ANKLE_DORSIFLEXION)):
+        rms = np.sqrt(np.mean((angle - periodic_curve(curve, phase)) ** 2))
+        out[f"{joint}_r_flexion RMS vs Winter deg"] = round(float(rms), 1)
+    out["loading knee flexion deg"] = round(float(knee[phase < 0.25].max()), 1)
+    out["stance dorsiflexion deg"] = round(float(ankle[(phase > 0.1) & (phase < 0.6)].max()), 1)
     return out
 
 

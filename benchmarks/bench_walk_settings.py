@@ -6,8 +6,8 @@ Solves the dissertation's prediction for the walk's subject, speed and step (``g
 muscles' F_max × ``--scale``. Prints, per solve, IPOPT's status, iterations and seconds, J, Et and the
 dissertation's Jdev, heel-off (% of the cycle), and the right leg's angles against Winter's adult curves
 (``gaitcli.synth.gait``): the loading-response knee peak (0–25 %; Winter 19°), the stance dorsiflexion peak
-(10–60 %; Winter 10°), the ankle at heel strike (Winter 0°) and each joint's RMS difference. The shipped walk
-(made by ``make_walk``) is printed first for comparison.
+(10–60 %; Winter 10°), the ankle at heel strike (Winter 0°) and each joint's RMS difference (bench_synth_walk's
+:func:`winter_figures`). The shipped walk (made by ``make_walk``) is printed first for comparison.
 Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip moment trunk]
 [--start plain.csv]`` (``--start``: a plain start saved by an earlier run's ``--save-start``; each solve takes
 2–10 minutes on one core, some variants longer).
@@ -25,6 +25,7 @@ from pathlib import Path
 from timing import one_core
 
 import numpy as np
+from bench_synth_walk import winter_figures
 
 from gaitcli.kinematics.conventions import walker_to_clinical
 from gaitcli.predict.layout import DesignLayout
@@ -34,7 +35,6 @@ from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import PredictConfig, evaluate_design, settings_of, violated_groups, walker_muscles
 from gaitcli.synth import predicted as walk
-from gaitcli.synth.gait import ANKLE_DORSIFLEXION, HIP_FLEXION, KNEE_FLEXION, periodic_curve
 
 #: the second solve's variants: WALK_TRACKING's settings kept (each alone, or all)
 VARIANTS = {"shipped": tuple(walk.WALK_TRACKING), "cop": ("cop_sd_m",), "trunk": ("trunk_rate_sd_deg_s",),
@@ -42,18 +42,13 @@ VARIANTS = {"shipped": tuple(walk.WALK_TRACKING), "cop": ("cop_sd_m",), "trunk":
 
 
 def walk_figures(x: np.ndarray) -> dict:
-    """The walk χ's right-leg sagittal angles against Winter's curves (degrees), and its heel-off."""
+    """The walk χ's heel-off (% of the cycle), ankle angle at heel strike and right-leg :func:`winter_figures`."""
     durations = walk.walk_durations(x)
     phase = np.arange(400) / 400
     y, _, _ = walk.walker_cycle(phase * float(np.sum(durations)), x)
     angles = walker_to_clinical(y)
-    out = {"heel_off_pct": round(100 * walk.phase_of(durations)[3][1], 1),
-           "loading_knee_deg": round(float(angles[phase < 0.25, 1].max()), 1),
-           "stance_dorsiflexion_deg": round(float(angles[(phase > 0.1) & (phase < 0.6), 2].max()), 1),
-           "heel_strike_ankle_deg": round(float(angles[0, 2]), 1)}
-    for k, (joint, curve) in enumerate((("hip", HIP_FLEXION), ("knee", KNEE_FLEXION), ("ankle", ANKLE_DORSIFLEXION))):
-        out[f"{joint}_rms_deg"] = round(float(np.sqrt(np.mean((angles[:, k] - periodic_curve(curve, phase)) ** 2))), 1)
-    return out
+    return {"heel_off_pct": round(100 * walk.phase_of(durations)[3][1], 1),
+            "heel strike ankle deg": round(float(angles[0, 2]), 1), **winter_figures(phase, *angles[:, :3].T)}
 
 
 def main() -> None:
@@ -68,8 +63,11 @@ def main() -> None:
     params = WalkerParameters.from_subject(**walk.WALK_SUBJECT)
     step_m = walk.STRIDE_PER_STATURE * walk.WALK_SUBJECT["stature_m"] / 2
 
+    def config(scale):
+        return PredictConfig(speed_m_s=walk.WALK_SPEED_M_S, nodes=walk.WALK_NODES, strength_scale=scale)
+
     def problem(scale):
-        cfg = PredictConfig(speed_m_s=walk.WALK_SPEED_M_S, nodes=walk.WALK_NODES, strength_scale=scale)
+        cfg = config(scale)
         transcriber = Transcriber(cfg.nodes, model=WalkingModel(params), muscles=walker_muscles(cfg, None))
         return cfg, transcriber, dataclasses.replace(settings_of(cfg), step_m=step_m)
 
@@ -84,8 +82,7 @@ def main() -> None:
         row["violated"] = {k: round(v, 4) for k, v in violated_groups(summary["violations"]).items()}
         print(json.dumps(row, ensure_ascii=False), flush=True)
 
-    show(f"shipped walk (F_max × {walk.WALK_STRENGTH_SCALE:g})", problem(walk.WALK_STRENGTH_SCALE)[0],
-         walk.shipped_walk())
+    show(f"shipped walk (F_max × {walk.WALK_STRENGTH_SCALE:g})", config(walk.WALK_STRENGTH_SCALE), walk.shipped_walk())
     cfg, transcriber, plain = problem(1.0)
     if args.start is not None:
         start = np.loadtxt(args.start)
