@@ -132,6 +132,8 @@ class MuscleModel:
         self.activation_rate = F("activation_rate", [u, a], [self._activation_rate(u, a)],
                                  ["u", "a"], ["adot"])
         self.excitation = F("excitation", [a, adot], [self._excitation(a, adot)], ["a", "adot"], ["u"])
+        self.slowest_activation_rate = F("slowest_activation_rate", [a], [self._slowest_activation_rate(a)],
+                                         ["a"], ["adot"])
         self.force_length = F("force_length", [l_ce], [self._force_length(l_ce)], ["l_ce"], ["f_iso"])
         self.flv = F("flv", [l_ce, v_ce], [self._flv(l_ce, v_ce)], ["l_ce", "v_ce"], ["g"])
         self.fibre_force = F("fibre_force", [a, l_ce, v_ce], [a * self._f_max * self._flv(l_ce, v_ce)],
@@ -185,6 +187,13 @@ class MuscleModel:
         b = self._t2 - self._t1 * a
         c = self._t2 * a + adot
         return 2 * c / (b + ca.sqrt(b * b + 4 * self._t1 * c))
+
+    def _slowest_activation_rate(self, a):
+        """ȧ 99 % of the way from u = 0 (ȧ = −t2·a) to where 4.3.3 has no real root any more (its discriminant
+        (t2 − t1·a)² + 4·t1·(t2·a + ȧ) = 0, at u = −(t2 − t1·a)/(2·t1) ≈ −5), 1/s: a floor on ȧ that keeps
+        :meth:`_excitation` real and smooth on and near the feasible ȧ ≥ −t2·a (a floor at −t2·a itself
+        would put a kink on the bound u ≥ 0)."""
+        return -self._t2 * a - 0.99 * (self._t2 - self._t1 * a) ** 2 / (4 * self._t1)
 
     def _force_length(self, l_ce):
         """f_iso = −(l/l_opt)²/w² + 2(l/l_opt)/w² − 1/w² + 1, clipped at ≥ 0 (A.4)."""

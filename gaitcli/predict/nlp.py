@@ -555,16 +555,12 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
         c = slice(8 * k, 8 * k + 8)
         l_ce, v_ce = muscles.muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, matrix("l_m")[:, c].T,
                                                      matrix("v_m")[:, c].T)
-        # the root of 4.3.3 is real where ȧ ≥ −t2·a − (t2 − t1·a)²/(4·t1) (its discriminant ≥ 0), well below the
-        # feasible ȧ ≥ −t2·a (u ≥ 0, the first excitation bound below); a start beyond it (a neighbouring case's
-        # unconverged solution) would make Et NaN and stop IPOPT at iteration 0, so ȧ is raised to 99 % of the
-        # way to that edge: u exact (and smooth) on the feasible set and near it, finite everywhere. (At
-        # max(ȧ, −t2·a) the kink sat on the bound itself, where the optimum has it active: the default prediction
-        # then ended in Error_In_Step_Computation.)
-        T1_rows, T2_rows = ca.repmat(ca.DM(t1[c]), 1, n_i), ca.repmat(ca.DM(t2[c]), 1, n_i)
+        # the root of 4.3.3 is real only above a slowest ȧ, below the feasible ȧ ≥ −t2·a (u ≥ 0, the first
+        # excitation bound below); a start beyond it (a neighbouring case's unconverged solution) would make Et
+        # NaN and stop IPOPT at iteration 0, so ȧ is raised to that floor (MuscleModel.slowest_activation_rate):
+        # u exact and smooth on the feasible set and near it, finite everywhere
         a_rows = a_m[:, c].T
-        slowest = -T2_rows * a_rows - 0.99 * (T2_rows - T1_rows * a_rows) ** 2 / (4 * T1_rows)
-        u = muscles.muscle.excitation(a_rows, ca.fmax(adot[:, c].T, slowest))
+        u = muscles.muscle.excitation(a_rows, ca.fmax(adot[:, c].T, muscles.muscle.slowest_activation_rate(a_rows)))
         f_ce = force_m[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, n_i)
         # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
         # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small

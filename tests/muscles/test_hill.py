@@ -48,6 +48,20 @@ def test_excitation_root_rule(model):
     assert np.all(other < -5)
 
 
+def test_the_slowest_activation_rate_keeps_the_excitation_root_real(model):
+    """At the floor the discriminant is 1 % of (t2 − t1·a)², so the root is u = −0.45·(t2 − t1·a)/t1 exactly,
+    and (2.17) of that u gives the floor back; 1 % further down the root does not exist (NaN)."""
+    a = np.linspace(0.0, 1.0, 8)
+    t1, t2 = model.params.activation_t1_per_s, model.params.activation_t2_per_s
+    floor = model.evaluate("slowest_activation_rate", a)
+    assert np.all(floor < -t2 * a)  # below every feasible rate (u ≥ 0)
+    u = model.evaluate("excitation", a, floor)
+    np.testing.assert_allclose(u, -0.45 * (t2 - t1 * a) / t1, rtol=1e-12)
+    np.testing.assert_allclose(model.evaluate("activation_rate", u, a), floor, rtol=1e-12)
+    beyond = floor - 0.02 * (t2 - t1 * a) ** 2 / (4 * t1)
+    assert np.all(np.isnan(model.evaluate("excitation", a, beyond)))
+
+
 def test_force_length(model):
     p = model.params
     lopt, w = p.optimal_fibre_length_m, p.width
