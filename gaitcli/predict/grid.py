@@ -164,7 +164,8 @@ def periodic_derivative(values, times, period):
         x = np.asarray(values, float)
         shape = (-1,) + (1,) * (x.ndim - 1)
         a, b, c = (np.reshape(w, shape) for w in weights)
-        return a * x[before] + b * x + c * x[after]
+        with np.errstate(invalid="ignore"):  # an inf (e.g. a force no muscle state makes): NaN at it and beside it
+            return a * x[before] + b * x + c * x[after]
     x = values if is_casadi(values) else ca.DM(np.asarray(values, float))
     a, b, c = (ca.repmat(casadi_column(w), 1, x.shape[1]) for w in weights)
     return a * x[before, :] + b * x + c * x[after, :]

@@ -62,6 +62,22 @@ def test_equal_steps_give_the_central_difference():
     np.testing.assert_allclose(grid.periodic_derivative(x, times, period), expected, rtol=1e-12)
 
 
+def test_an_infinite_value_leaves_the_rates_away_from_it_untouched_and_warns_of_nothing(recwarn):
+    """Two infs side by side (activations no muscle state allows) on unequal steps: the rates there and beside
+    them are not finite (inf − inf at the pair: NaN), every other instant's is the finite series' own."""
+    n, period = 12, 1.2
+    times = np.arange(n) * period / (n + 1)
+    times[6:] += 0.5 * period / (n + 1)  # the step after instant 5 the longer: a < 0 < b there
+    finite = np.sin(2 * np.pi * times / period)
+    x = finite.copy()
+    x[4:6] = np.inf
+    xdot = grid.periodic_derivative(x, times, period)
+    assert not np.isfinite(xdot[3:7]).any() and np.isnan(xdot[5])
+    others = np.setdiff1d(np.arange(n), [3, 4, 5, 6])
+    np.testing.assert_allclose(xdot[others], grid.periodic_derivative(finite, times, period)[others], rtol=1e-12)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
 def test_periodic_wrap_does_not_depend_on_where_the_cycle_starts():
     g = grid.control_grid()
     period = DURATIONS.sum()
