@@ -8,7 +8,7 @@ dissertation's Jdev, heel-off (% of the cycle), and the right leg's angles again
 (``gaitcli.synth.gait``): the loading-response knee peak (0–25 %; Winter 19°), the stance dorsiflexion peak
 (10–60 %; Winter 10°), the ankle at heel strike (Winter 0°) and each joint's RMS difference (bench_synth_walk's
 :func:`winter_figures`). The shipped walk (made by ``make_walk``) is printed first for comparison.
-Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip moment trunk]
+Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip swing moment trunk]
 [--start plain.csv]`` (``--start``: a plain start saved by an earlier run's ``--save-start``; each solve takes
 2–10 minutes on one core, some variants longer).
 """
@@ -38,7 +38,8 @@ from gaitcli.synth import predicted as walk
 
 #: the second solve's variants: WALK_TRACKING's settings kept (each alone, or all)
 VARIANTS = {"shipped": tuple(walk.WALK_TRACKING), "cop": ("cop_sd_m",), "trunk": ("trunk_rate_sd_deg_s",),
-            "moment": ("moment_tolerance_Nm",), "hip": ("swing_hip_moment_Nm_per_kg", "hip_moment_Nm_per_kg")}
+            "moment": ("moment_tolerance_Nm",), "hip": ("swing_hip_moment_Nm_per_kg", "hip_moment_Nm_per_kg"),
+            "swing": ("swing_hip_moment_Nm_per_kg",)}
 
 
 def walk_figures(x: np.ndarray) -> dict:
