@@ -219,6 +219,9 @@ class NLP:
     device_size: int = 0
     parts: dict = field(default_factory=dict)
     solvers: dict = field(default_factory=dict)  # the compiled IPOPT solvers by their options (solver_for)
+    #: ∇J, the Jacobian of g and the Hessian of the Lagrangian as CasADi made them for the first solver
+    #: (solver_for): every later solver of this NLP (other IPOPT options) takes them instead of deriving anew
+    derivatives: dict = field(default_factory=dict)
 
     def parameter_values(self, settings: PredictSettings) -> np.ndarray:
         """p = (v, w1, w2) of ``settings``."""
@@ -846,7 +849,13 @@ def solver_for(nlp: NLP, settings: PredictSettings, *, warm: bool = False, optio
     if key not in cache:
         callback = IterationReport(nlp)
         problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints, "p": nlp.parameters}
-        cache[key] = (ca.nlpsol("predict", "ipopt", problem, {**opts, "iteration_callback": callback}), callback)
+        exact = opts.get("ipopt.hessian_approximation", "exact") == "exact"
+        reuse = nlp.derivatives if exact else {}
+        solver = ca.nlpsol("predict", "ipopt", problem, {**opts, **reuse, "iteration_callback": callback})
+        if exact and not nlp.derivatives:  # the symbolic Hessian is most of a solver's construction time
+            nlp.derivatives = {"grad_f": solver.get_function("nlp_grad_f"), "jac_g": solver.get_function("nlp_jac_g"),
+                               "hess_lag": solver.get_function("nlp_hess_l")}
+        cache[key] = (solver, callback)
     return cache[key]
 
 
