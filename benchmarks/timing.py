@@ -34,9 +34,15 @@ if str(REPO) not in sys.path:
 
 
 def one_core() -> None:
-    """Pin this process (and the processes it starts) to one core, where the OS allows it."""
+    """Pin this process (and the processes it starts) to one core, where the OS allows it: the core numbered
+    ``BENCH_CORE`` if set, else the lowest allowed. Two benchmarks run side by side need different cores
+    (``BENCH_CORE=1 python benchmarks/...``): on the same one each runs at half speed."""
     if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+        allowed = os.sched_getaffinity(0)
+        chosen = int(os.environ.get("BENCH_CORE", min(allowed)))
+        if chosen not in allowed:
+            raise SystemExit(f"BENCH_CORE={chosen}: not one of this process's cores {sorted(allowed)}")
+        os.sched_setaffinity(0, {chosen})
 
 
 def median_s(func, repeat: int):
