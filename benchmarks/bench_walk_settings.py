@@ -8,9 +8,11 @@ dissertation's Jdev, heel-off (% of the cycle), and the right leg's angles again
 (``gaitcli.synth.gait``): the loading-response knee peak (0–25 %; Winter 19°), the stance dorsiflexion peak
 (10–60 %; Winter 10°), the ankle at heel strike (Winter 0°) and each joint's RMS difference (bench_synth_walk's
 :func:`winter_figures`). The shipped walk (made by ``make_walk``) is printed first for comparison.
+``--joint-sd-scale k``: the second solve tracks the reference's knee and ankle angles with their SDs × k (k < 1:
+a stiffer hold on the kinematics; Jdev is still reported against the reference as it is).
 Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip swing moment trunk]
-[--start plain.csv]`` (``--start``: a plain start saved by an earlier run's ``--save-start``; each solve takes
-2–10 minutes on one core, some variants longer).
+[--start plain.csv] [--joint-sd-scale 0.5]`` (``--start``: a plain start saved by an earlier run's
+``--save-start``; each solve takes 2–10 minutes on one core, some variants longer).
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.nlp import initial_guess, solve_windowed
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.reference import read_reference
+from gaitcli.predict.reference import VARIABLES, Reference, read_reference
 from gaitcli.predict.stage import PredictConfig, evaluate_design, settings_of, violated_groups, walker_muscles
 from gaitcli.synth import predicted as walk
 
@@ -52,12 +54,23 @@ def walk_figures(x: np.ndarray) -> dict:
             "heel strike ankle deg": round(float(angles[0, 2]), 1), **winter_figures(phase, *angles[:, :3].T)}
 
 
+def knee_and_ankle_held(reference: Reference, scale: float) -> Reference:
+    """``reference`` with its knee and ankle angles' SDs × ``scale`` (both legs)."""
+    sd = reference.sd.copy()
+    for k, name in enumerate(VARIABLES):
+        if name.startswith(("knee_", "ankle_")):
+            sd[:, k] *= scale
+    return dataclasses.replace(reference, sd=sd)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scale", type=float, default=walk.WALK_STRENGTH_SCALE, help="the second solve's F_max")
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     parser.add_argument("--start", type=Path, help="a plain start (χ, one value per line) instead of solving it")
     parser.add_argument("--save-start", type=Path, help="write the plain start's χ here")
+    parser.add_argument("--joint-sd-scale", type=float, default=1.0,
+                        help="the second solve's knee and ankle SDs × this (module docstring)")
     args = parser.parse_args()
     one_core()
     reference = read_reference(walk.WALK_REFERENCE)
@@ -99,11 +112,13 @@ def main() -> None:
     if args.save_start is not None:
         np.savetxt(args.save_start, start, fmt="%.17g")
     cfg, transcriber, plain = problem(args.scale)
+    held = knee_and_ankle_held(reference, args.joint_sd_scale)
     for name in args.variants:
         settings = dataclasses.replace(plain, **{k: walk.WALK_TRACKING[k] for k in VARIANTS[name]})
         began = time.perf_counter()
-        solved = solve_windowed(transcriber, reference, start, settings, symmetric=True)
-        show(f"{name}: {', '.join(VARIANTS[name])} (F_max × {args.scale:g})", cfg, solved["x"], solved,
+        solved = solve_windowed(transcriber, held, start, settings, symmetric=True)
+        held_by = f", knee and ankle SD × {args.joint_sd_scale:g}" if args.joint_sd_scale != 1.0 else ""
+        show(f"{name}: {', '.join(VARIANTS[name])} (F_max × {args.scale:g}{held_by})", cfg, solved["x"], solved,
              time.perf_counter() - began)
 
 
