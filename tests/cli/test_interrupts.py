@@ -31,7 +31,7 @@ def interrupt_after(process: subprocess.Popen, delay_s: float, signum: int) -> s
 
 def test_ctrl_c_during_eid_keeps_the_earlier_converged_result(tmp_path):
     """A first uninterrupted run finds when the EID solve runs (its wall time and solve time); the second is
-    sent SIGINT half-way through the solve."""
+    sent SIGINT a quarter into the solve."""
     trial = copy_sample("normal", tmp_path / "normal")
     assert gait("idyn", trial, "--no-plots", cwd=tmp_path).returncode == 0
     start = time.perf_counter()
@@ -43,7 +43,10 @@ def test_ctrl_c_during_eid_keeps_the_earlier_converged_result(tmp_path):
     assert solve_s > 2.0, f"EID took {solve_s:.1f} s: too short to aim a signal at"
     before = snapshot(trial / "gait_out")
     process = start_gait("muscles", str(trial), "--no-plots", "--nodes", "90", cwd=tmp_path)
-    stderr = interrupt_after(process, wall - solve_s / 2, signal.SIGINT)
+    # a quarter into the solve, not half-way: the second run can be faster than the first by more than half
+    # the solve when the other test worker's load changes (seen on a clean clone: it ended before the signal);
+    # a signal a little before the solve is an interrupt all the same
+    stderr = interrupt_after(process, wall - 0.75 * solve_s, signal.SIGINT)
     assert process.returncode == 130 and stderr.strip().splitlines()[-1] == "gait: interrupted", stderr
     assert "converge" not in stderr and "Traceback" not in stderr, stderr
     assert snapshot(trial / "gait_out") == before  # the converged EID as it was, no .part folder left
