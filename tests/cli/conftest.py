@@ -1,15 +1,18 @@
-"""Helpers for the CLI tests: run the real ``gait`` command in a subprocess on copies of trials.
+"""Helpers for the CLI tests: run the real ``gait`` command in other processes on copies of trials.
 
 Every CLI test works on a copy of a bundled sample trial (or of a shared C3D file)
-under pytest's tmp_path; nothing is ever written into ``sample_trials/``. The
-expensive runs (a full ``gait filter`` takes a few seconds: imports, the stage and
-the plots) are made once per session and several at a time, since each one is a
-separate process; under pytest-xdist the first worker to need them makes them and the
-others read what it recorded (:func:`build_once`).
+under pytest's tmp_path; nothing is ever written into ``sample_trials/``. The commands run in
+runner processes that call ``gaitcli.cli.main`` (what the console script calls) once per job and
+are kept for the session, so that gaitcli is imported once per runner, not once per command
+(:class:`Runner`, :func:`gait_many`; :func:`gait` with ``fresh`` starts a new process where a test
+needs one). The expensive runs (a full ``gait filter`` takes a few seconds: the stage and the plots)
+are made once per session and several at a time; under pytest-xdist the first worker to need them
+makes them and the others read what it recorded (:func:`build_once`).
 """
 
 from __future__ import annotations
 
+import atexit
 import dataclasses
 import hashlib
 import json
@@ -20,6 +23,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from contextlib import contextmanager
@@ -72,16 +76,20 @@ class Result:
                 f"stdout:\n{self.stdout}\nstderr:\n{self.stderr}")
 
 
-def gait(*args, cwd: Path, timeout_s: float = 180.0) -> Result:
-    """Run ``python -m gaitcli.cli ARGS`` (the installed ``gait`` command's code) in ``cwd``."""
+def gait(*args, cwd: Path, timeout_s: float = 180.0, fresh: bool = False) -> Result:
+    """Run ``gait ARGS`` in ``cwd``: in one of this test process's runner processes (:func:`gait_many`), or with
+    ``fresh`` in a new ``python -m gaitcli.cli`` process (the installed command's code, imports included), as
+    where a test times the run to aim a signal at a later one."""
     args = tuple(str(a) for a in args)
+    if not fresh:
+        return gait_many({"run": (args, cwd)}, timeout_s=timeout_s, workers=1)["run"]
     done = subprocess.run([sys.executable, "-m", "gaitcli.cli", *args], cwd=cwd, env=ENV, capture_output=True,
                           text=True, timeout=timeout_s)
     return Result(args, done.returncode, done.stdout, done.stderr, Path(cwd))
 
 
-#: a fresh interpreter that imports gaitcli once and then runs ``gait`` invocations one after another (one JSON
-#: line in, one out), each in its working folder with its own stdout/stderr, as the console script does
+#: an interpreter that imports gaitcli once and then runs ``gait`` invocations one after another (one JSON line
+#: in, one out), each in its working folder with its own stdout/stderr, as the console script does
 _RUNNER = """
 import contextlib, io, json, os, sys
 from gaitcli.cli import main
@@ -96,38 +104,83 @@ for line in sys.stdin:
 """
 
 
-def _runner_loop(todo: queue.Queue, done: dict, timeout_s: float) -> None:
-    """One runner process: take jobs off ``todo`` until it is empty, put each Result into ``done``."""
-    proc = subprocess.Popen([sys.executable, "-c", _RUNNER], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, env=ENV, text=True)
-    timer = threading.Timer(timeout_s, proc.kill)
-    timer.start()
-    try:
-        while True:
+class Runner:
+    """One runner process. :func:`gait_many` keeps its runners for the whole session (:data:`_IDLE`): their
+    imports (2 s of CPU) and caches (a prediction's compiled NLP) serve every later job they take. A test may
+    hold its own, to signal it during a job (:meth:`send`, then :meth:`receive`)."""
+
+    def __init__(self) -> None:
+        self.log = tempfile.TemporaryFile("w+")  # what the process itself prints to stderr (not a job's)
+        self.proc = subprocess.Popen([sys.executable, "-c", _RUNNER], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                     stderr=self.log, env=ENV, text=True)
+
+    def send(self, args, cwd: Path) -> None:
+        """Start ``gait ARGS`` in ``cwd``."""
+        self.args, self.cwd = tuple(str(a) for a in args), Path(cwd)
+        self.proc.stdin.write(json.dumps([list(self.args), str(cwd)]) + "\n")
+        self.proc.stdin.flush()
+
+    def receive(self, timeout_s: float = 600.0) -> Result:
+        """The sent job's Result; past ``timeout_s`` the process is killed (and this runner is spent)."""
+        timer = threading.Timer(timeout_s, self.proc.kill)
+        timer.start()
+        try:
+            line = self.proc.stdout.readline()
+        finally:
+            timer.cancel()
+        if not line:
+            self.proc.kill()
+            self.log.seek(0)
+            raise RuntimeError(f"the gait runner process died running gait {' '.join(self.args)}:\n{self.log.read()}")
+        code, stdout, stderr = json.loads(line)
+        return Result(self.args, code, stdout, stderr, self.cwd)
+
+    def run(self, args, cwd: Path, timeout_s: float = 600.0) -> Result:
+        """``gait ARGS`` in ``cwd``, to its end."""
+        self.send(args, cwd)
+        return self.receive(timeout_s)
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.stdin.close()
             try:
-                key, (args, cwd) = todo.get_nowait()
-            except queue.Empty:
-                break
-            args = tuple(str(a) for a in args)
-            proc.stdin.write(json.dumps([list(args), str(cwd)]) + "\n")
-            proc.stdin.flush()
-            line = proc.stdout.readline()
-            if not line:
-                raise RuntimeError(f"the gait runner process died running gait {' '.join(args)}:\n"
-                                   f"{proc.stderr.read()}")
-            code, stdout, stderr = json.loads(line)
-            done[key] = Result(args, code, stdout, stderr, Path(cwd))
-    finally:
-        timer.cancel()
-        proc.stdin.close()
-        proc.wait()
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+
+
+#: the idle runners of this test process (an xdist worker), started on first need, closed at exit
+_IDLE: queue.LifoQueue = queue.LifoQueue()
+
+
+@atexit.register
+def _close_runners() -> None:
+    while not _IDLE.empty():
+        _IDLE.get_nowait().close()
+
+
+def _runner_loop(todo: queue.Queue, done: dict, timeout_s: float) -> None:
+    """Take an idle runner (or start one), run jobs off ``todo`` until it is empty, put each Result into
+    ``done``; then give the runner back, unless it died."""
+    try:
+        runner = _IDLE.get_nowait()
+    except queue.Empty:
+        runner = Runner()
+    while True:
+        try:
+            key, (args, cwd) = todo.get_nowait()
+        except queue.Empty:
+            break
+        done[key] = runner.run(args, cwd, timeout_s)
+    _IDLE.put(runner)
 
 
 def gait_many(jobs: dict, *, timeout_s: float = 600.0, workers: int = WORKERS) -> dict:
     """Run several ``gait`` invocations: ``{key: (args, cwd)}`` → ``{key: Result}``.
 
-    ``workers`` processes each import gaitcli once and take the next job when done with one (put the
-    longest first); with ``workers=1`` the jobs run in the order given, one after the other.
+    ``workers`` runner processes (each importing gaitcli once per session, :class:`Runner`) take the next job
+    when done with one (put the longest first); with ``workers=1`` the jobs run in the order given, one after
+    the other. ``timeout_s`` bounds each job.
     """
     todo: queue.Queue = queue.Queue()
     for item in jobs.items():
@@ -200,6 +253,20 @@ def build_once(tmp_path_factory, name: str, build) -> tuple[Path, dict]:
     return root, json.loads(record.read_text())
 
 
+def _stop_a_prediction(root: Path) -> dict:
+    return gait("predict", "--nodes", "6", "--max-iterations", "2", "-o", "pr", cwd=root).to_json()
+
+
+@pytest.fixture(scope="session")
+def stopped_prediction(tmp_path_factory) -> tuple[Path, Result]:
+    """``gait predict --nodes 6 --max-iterations 2 -o pr``: the default prediction stopped after two IPOPT
+    iterations (exit 3, every output written), made once per session for the predict and report tests (a
+    prediction's first IPOPT solver takes most of its 10–20 s). Returns (its ``pr`` folder, the run); copy the
+    folder before writing into it."""
+    root, record = build_once(tmp_path_factory, "stopped_prediction", _stop_a_prediction)
+    return root / "pr", Result.from_json(record)
+
+
 # ------------------------------------------------------------------ a real Dask scheduler and workers
 
 def _free_port() -> int:
@@ -209,22 +276,24 @@ def _free_port() -> int:
 
 
 @pytest.fixture(scope="module")
-def dask_cluster():
-    """``dask scheduler`` and ``dask worker`` (two single-threaded worker processes under their nannies) as
-    separate processes on 127.0.0.1; the scheduler lets a task's worker die once (allowed-failures 1)."""
+def dask_cluster(request):
+    """``dask scheduler`` and ``dask worker`` (single-threaded worker processes under their nannies: the test
+    module's ``DASK_WORKERS``, default two) as separate processes on 127.0.0.1; the scheduler lets a task's
+    worker die once (allowed-failures 1)."""
+    workers = getattr(request.module, "DASK_WORKERS", 2)
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     env = {**ENV, "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1"}
     dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
     scheduler = subprocess.Popen(dask + ["--host", "127.0.0.1", "--port", str(port), "--no-dashboard"], env=env,
                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "2",
+    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", str(workers),
                                "--nthreads", "1", "--no-dashboard"], env=env, stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL, start_new_session=True)
     from distributed import Client
 
     client = Client(address, timeout="30s")
-    client.wait_for_workers(2, timeout=60)
+    client.wait_for_workers(workers, timeout=60)
     try:
         yield address, client
     finally:

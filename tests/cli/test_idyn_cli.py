@@ -80,16 +80,16 @@ def _build(root: Path) -> dict:
     (root / "exact.yaml").write_text(EXACT_PIPELINE)
     jobs["exact"] = [("synth", root / "exact", "--seed", "0", "--noise-mm", "0", "--artefact-mm", "0",
                       "--plate-noise-n", "0"),
-                     ("run", root / "exact", "--pipeline", root / "exact.yaml")]
+                     ("run", root / "exact", "--pipeline", root / "exact.yaml", "--no-plots")]
     _drop_thigh_markers(copy_sample("normal", root / "dropout"))
-    jobs["dropout"] = [("idyn", root / "dropout")]
+    jobs["dropout"] = [("idyn", root / "dropout", "--no-plots")]
     _drop_static_marker(copy_sample("normal", root / "no_lefr"), "LEFr")
-    jobs["no_lefr"] = [("idyn", root / "no_lefr")]
+    jobs["no_lefr"] = [("idyn", root / "no_lefr", "--no-plots")]
     frames = copy_sample("normal", root / "static_frames")
     (frames / "static.c3d").unlink()
     with open(frames / "subject.yaml", "a") as f:
         f.write("static_frames: [5000, 6000]\n")
-    jobs["static_frames"] = [("idyn", frames)]
+    jobs["static_frames"] = [("idyn", frames, "--no-plots")]
 
     synth, run = jobs.pop("exact")
     made = gait(*synth, cwd=root)  # the exact trial first: its `gait run` joins the others

@@ -35,7 +35,7 @@ def test_ctrl_c_during_eid_keeps_the_earlier_converged_result(tmp_path):
     trial = copy_sample("normal", tmp_path / "normal")
     assert gait("idyn", trial, "--no-plots", cwd=tmp_path).returncode == 0
     start = time.perf_counter()
-    first = gait("muscles", trial, "--no-plots", "--nodes", "90", cwd=tmp_path)
+    first = gait("muscles", trial, "--no-plots", "--nodes", "90", cwd=tmp_path, fresh=True)
     wall = time.perf_counter() - start
     assert first.returncode == 0, first.describe()
     eid = trial / "gait_out" / "muscles" / "eid"

@@ -8,6 +8,8 @@ All invocations run once per session (:func:`build_once`), several processes at 
   ``--method so`` run on the same folder (must reuse filter and idyn), ``--method eid`` with each
   objective, ``--method mso``, ``--method eid --validate`` over the swing phase and over the stride,
   ``--phase swing``, ``--side l``, and the muscles run on the corrupted copy (exit 2, nothing written);
+  the runs whose figures no test looks at (the corrupted copy's, Crowninshield–Brand's, the validations')
+  draw none (``--no-plots``: a stage's figures take as long as its solve);
 * ``gait muscles --method eid`` on a ``gait synth`` trial of a 75 kg, 1.78 m subject walking a
   1.20 s cycle, whose moments the Table A.1 muscles cannot follow: exit 3, outputs written with
   ``converged: false``.
@@ -85,7 +87,7 @@ def _corrupt_knee(h5_path: Path, start_s: float) -> dict:
 def _build(root: Path) -> dict:
     normal = copy_sample("normal", root / "normal")
     nan = copy_sample("normal", root / "nan")
-    started = gait_many({"first": (("muscles", normal, "--method", "so"), root), "idyn": (("idyn", nan), root)})
+    started = gait_many({"first": (("muscles", normal, "--method", "so"), root), "idyn": (("idyn", nan, "--no-plots"), root)})
     first, idyn = started["first"], started["idyn"]
     if first.returncode != 0 or idyn.returncode != 0:
         return {"failed": [first.to_json(), idyn.to_json()]}
@@ -105,15 +107,16 @@ def _build(root: Path) -> dict:
         "heavy": (("muscles", root / "heavy", "--method", "eid"), root),
         "eid": (("muscles", root / "eid", "--method", "eid"), root),
         "eid_l": (("muscles", root / "eid_l", "--method", "eid", "--side", "l"), root),
-        "validate": (("muscles", root / "validate", "--method", "eid", "--phase", "swing", "--validate"), root),
-        "validate_cycle": (("muscles", root / "validate_cycle", "--method", "eid", "--validate"), root),
+        "validate": (("muscles", root / "validate", "--method", "eid", "--phase", "swing", "--validate", "--no-plots"),
+                     root),
+        "validate_cycle": (("muscles", root / "validate_cycle", "--method", "eid", "--validate", "--no-plots"), root),
         "mso": (("muscles", root / "mso", "--method", "mso"), root),
         "mso_l": (("muscles", root / "mso_l", "--method", "mso", "--side", "l"), root),
-        "cb": (("muscles", root / "cb", "--method", "eid", "--objective", "crowninshield_brand"), root),
+        "cb": (("muscles", root / "cb", "--method", "eid", "--objective", "crowninshield_brand", "--no-plots"), root),
         "second": (("muscles", normal, "--method", "so"), root),
         "swing": (("muscles", root / "swing", "--method", "so", "--phase", "swing"), root),
         "left": (("muscles", root / "left", "--method", "so", "--side", "l"), root),
-        "nan": (("muscles", nan, "--method", "so"), root),
+        "nan": (("muscles", nan, "--method", "so", "--no-plots"), root),
     })
     return {"first": first.to_json(), "idyn": idyn.to_json(),
             **{key: r.to_json() for key, r in results.items()},

@@ -5,16 +5,20 @@ names the violated constraint groups; ``gait predict TRIAL`` takes that trial's 
 from __future__ import annotations
 
 import json
+import shutil
 import signal
+import time
 
 import h5py
 import numpy as np
 import pandas as pd
 from PIL import Image
 
-from .conftest import copy_sample, gait_many, snapshot
-from .test_interrupts import interrupt_after, start_gait
+from .conftest import Runner, copy_sample, gait_many, snapshot
 
+#: one worker for the study on a cluster: its tasks then share that process's compiled NLPs (gaitcli.predict.nlp
+#: cached_nlp), as a study's tasks on a busy cluster often do; a first IPOPT solver takes 10–20 s to build
+DASK_WORKERS = 1
 PREDICT_FILES = ("motion.csv", "grf.csv", "moments.csv", "muscles.csv", "predict.h5", "summary.json")
 #: DESIGN.md's summary.json keys of the predict stage
 PREDICT_SUMMARY_KEYS = ("speed_m_s", "cost_of_transport_J_per_m", "deviation", "objective", "weights",
@@ -50,11 +54,16 @@ def test_bad_options_and_files_exit_2_naming_them(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
-def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigterm(tmp_path):
+def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigterm(tmp_path, request,
+                                                                                  stopped_prediction):
+    # "default": gait predict --nodes 6 --max-iterations 2 -o pr (conftest), copied to out/
+    prediction, stopped = stopped_prediction
+    shutil.copytree(prediction, tmp_path / "out")
     copy_sample("normal", tmp_path / "normal")
-    runs = gait_many({"default": (("predict", "--nodes", "6", "--max-iterations", "2", "-o", "out"), tmp_path),
-                      "trial": (("predict", "normal", "--nodes", "6", "--max-iterations", "1", "--no-plots"),
-                                tmp_path)}, workers=2)
+    runner = Runner()  # this test's own: the SIGTERM below goes to it
+    request.addfinalizer(runner.close)
+    trial_args = ("predict", "normal", "--nodes", "6", "--no-plots")
+    runs = {"default": stopped, "trial": runner.run((*trial_args, "--max-iterations", "1"), tmp_path)}
     for name, folder in (("default", tmp_path / "out" / "predict"),
                          ("trial", tmp_path / "normal" / "gait_out" / "predict")):
         run = runs[name]
@@ -83,15 +92,19 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
         assert abs(float(h5["result/body_mass_kg"][()]) - 75.0) < 0.5
 
     # SIGTERM inside the next run's IPOPT iterations (issue 9): "gait: interrupted", exit 130, the unconverged
-    # result above untouched and no half-written folder. The first run's solve time (construction and two
-    # iterations) plus the imports is when IPOPT iterates; at 6 nodes it would go on for minutes.
-    # (In CasADi's construction, C++ that does not return to Python, an interrupt waits until it returns.)
-    earlier = snapshot(tmp_path / "out")
-    first_solve_s = json.loads((tmp_path / "out" / "predict" / "summary.json").read_text())["solve_time_s"]
-    process = start_gait("predict", "--nodes", "6", "-o", "out", cwd=tmp_path)
-    stderr = interrupt_after(process, first_solve_s + 6.0, signal.SIGTERM)
-    assert process.returncode == 130 and "gait: interrupted" in stderr, stderr
-    assert snapshot(tmp_path / "out") == earlier
+    # result above untouched and no half-written folder. The same process runs it: its NLP and IPOPT's
+    # derivatives are compiled (gaitcli.predict.nlp cached_nlp), so IPOPT iterates within 2 s of the start
+    # (measured alone: such a run stopped after two iterations takes 1.8 s in all, outputs written); without an
+    # iteration limit it would go on for minutes.
+    earlier = snapshot(tmp_path / "normal" / "gait_out")
+    runner.send(trial_args, tmp_path)
+    time.sleep(6.0)
+    assert runner.proc.poll() is None
+    runner.proc.send_signal(signal.SIGTERM)
+    interrupted = runner.receive(timeout_s=60)
+    assert interrupted.returncode == 130 and interrupted.stderr_lines[-1] == "gait: interrupted", \
+        interrupted.describe()
+    assert snapshot(tmp_path / "normal" / "gait_out") == earlier
 
 
 def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_path, dask_cluster):

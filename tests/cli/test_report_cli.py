@@ -28,7 +28,8 @@ CHECK = ("<script>addEventListener('load', () => { document.body.setAttribute('d
          "requests: performance.getEntriesByType('resource').map(e => e.name)})); });</script>")
 
 
-def _build(root: Path) -> dict:
+def _build(root: Path, prediction: Path) -> dict:
+    shutil.copytree(prediction, root / "pr")
     trial = root / "normal"
     shutil.copytree(sample_trials_dir() / "normal", trial, ignore=shutil.ignore_patterns("gait_out"))
     lab = root / "lab"
@@ -37,7 +38,6 @@ def _build(root: Path) -> dict:
     shutil.copy(trial / "subject.yaml", lab / "broken" / "subject.yaml")
     (lab / "broken" / "trial.c3d").write_text("not a C3D\n")
     made = gait_many({"run": (("run", trial, "--pipeline", "muscles_eid"), root),
-                      "predict": (("predict", "--nodes", "6", "--max-iterations", "1", "-o", "pr"), root),
                       "batch": (("batch", lab, "--workers", "1", "--no-plots"), root)}, workers=3)
     reports = gait_many({"trial": (("report", trial / "gait_out"), root), "predict": (("report", root / "pr"), root),
                          "batch": (("report", lab), root)}, workers=3)
@@ -45,11 +45,12 @@ def _build(root: Path) -> dict:
 
 
 @pytest.fixture(scope="module")
-def reports(tmp_path_factory):
-    root, record = build_once(tmp_path_factory, "cli_report", _build)
-    made = {k: Result.from_json(v) for k, v in record["made"].items()}
+def reports(tmp_path_factory, stopped_prediction):
+    prediction, predicted = stopped_prediction
+    root, record = build_once(tmp_path_factory, "cli_report", lambda root: _build(root, prediction))
+    made = {"predict": predicted, **{k: Result.from_json(v) for k, v in record["made"].items()}}
     assert made["run"].returncode == 0 and made["batch"].returncode == 0, made
-    assert made["predict"].returncode == 3, made["predict"].describe()  # stopped after one iteration
+    assert made["predict"].returncode == 3, made["predict"].describe()  # stopped after two iterations
     for r in record["reports"].values():
         r = Result.from_json(r)
         assert r.returncode == 0, r.describe()

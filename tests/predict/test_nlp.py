@@ -259,22 +259,3 @@ def test_the_cost_stays_finite_where_an_activation_falls_faster_than_any_excitat
     value, gradient = (np.array(v).ravel() for v in cost(w, p))
     assert np.isfinite(value).all() and np.isfinite(gradient).all()
     assert nlp.constraint_values(w)[nlp.groups["excitation"]].min() < 0  # the point is outside the bounds
-
-
-def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(reference):
-    """Another IPOPT option set builds another solver from the first one's ∇J, Jacobian and Hessian of the
-    Lagrangian (not derived anew): from the same start both take the same iterates, as if each had derived
-    its own (a mismatch of CasADi's conventions for them — a triangle, the sign of λ — would show here)."""
-    from gaitcli.predict.layout import DesignLayout
-    from gaitcli.predict.nlp import instant_segments, solve
-
-    small = Transcriber(6)
-    x0 = initial_guess(small, reference, symmetric=True)
-    nlp = build_nlp(small, reference, symmetric=True,
-                    segments=instant_segments(small, DesignLayout.build(6, symmetric=True), x0))
-    settings = PredictSettings(max_iterations=3)
-    first = solve(nlp, x0, settings)
-    assert set(nlp.derivatives) == {"grad_f", "jac_g", "hess_lag"}
-    again = solve(nlp, x0, settings, options={"ipopt.print_frequency_iter": 2})
-    assert len(nlp.solvers) == 2 and again["iterations"] == first["iterations"] == 3
-    np.testing.assert_array_equal(again["w"], first["w"])

@@ -42,6 +42,31 @@ def test_the_result_parts_agree(stopped):
     assert result.excitations.shape == (80, 16) and result.grf_N.shape == (88, 4)
 
 
+def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(stopped):
+    """Another IPOPT option set builds another solver from the first one's ∇J, Jacobian and Hessian of the
+    Lagrangian (not derived anew): from the same start both take the same iterates, as if each had derived
+    its own (a mismatch of CasADi's conventions for them — a triangle, the sign of λ — would show here). The
+    NLP is the stopped prediction's, from this process's cache (its first solver derived them)."""
+    from gaitcli.predict.layout import DesignLayout
+    from gaitcli.predict.model import WalkingModel
+    from gaitcli.predict.nlp import cached_nlp, initial_guess, instant_segments, solve
+    from gaitcli.predict.problem import Transcriber
+    from gaitcli.predict.stage import settings_of, walker_muscles
+
+    cfg = PredictConfig(nodes=6, max_iterations=2)
+    reference, settings = read_reference(bundled_reference()), settings_of(cfg)
+    transcriber = Transcriber(6, model=WalkingModel(cfg.walker_parameters(None)), muscles=walker_muscles(cfg, None))
+    x0 = initial_guess(transcriber, reference, settings, symmetric=True)
+    nlp = cached_nlp(transcriber, reference, settings, symmetric=True,
+                     segments=instant_segments(transcriber, DesignLayout.build(6, symmetric=True), x0))
+    first = solve(nlp, x0, settings)
+    assert set(nlp.derivatives) == {"grad_f", "jac_g", "hess_lag"}
+    solvers = len(nlp.solvers)
+    again = solve(nlp, x0, settings, options={"ipopt.print_frequency_iter": 2})
+    assert len(nlp.solvers) == solvers + 1 and again["iterations"] == first["iterations"] == 2
+    np.testing.assert_array_equal(again["w"], first["w"])
+
+
 def test_a_warm_start_of_another_layout_is_refused():
     with pytest.raises(InputError, match="--init"):
         run_predict(PredictConfig(nodes=6), reference=read_reference(bundled_reference()), init=np.zeros(10))
