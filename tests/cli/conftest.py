@@ -78,8 +78,8 @@ class Result:
 
 def gait(*args, cwd: Path, timeout_s: float = 180.0, fresh: bool = False) -> Result:
     """Run ``gait ARGS`` in ``cwd``: in one of this test process's runner processes (:func:`gait_many`), or with
-    ``fresh`` in a new ``python -m gaitcli.cli`` process (the installed command's code, imports included), as
-    where a test times the run to aim a signal at a later one."""
+    ``fresh`` in a new ``python -m gaitcli.cli`` process (the installed command's code, imports included): for a
+    test that times the run to aim a signal at a later one, itself a new process."""
     args = tuple(str(a) for a in args)
     if not fresh:
         return gait_many({"run": (args, cwd)}, timeout_s=timeout_s, workers=1)["run"]
