@@ -9,9 +9,16 @@ dissertation's Jdev, heel-off (% of the cycle), and the right leg's angles again
 (10–60 %; Winter 10°), the ankle at heel strike (Winter 0°) and each joint's RMS difference (bench_synth_walk's
 :func:`winter_figures`). The shipped walk (made by ``make_walk``) is printed first for comparison.
 ``--joint-sd-scale k``: the second solve tracks the reference's knee and ankle angles with their SDs × k (k < 1:
-a stiffer hold on the kinematics; Jdev is still reported against the reference as it is).
+a stiffer hold on the kinematics; Jdev is still reported against the reference as it is); ``--grf-sd-scale k``
+its ground reactions' (k > 1: a looser hold on the reference's, which come from a 0.88 m/s walk; measured
+2026-12-05, k = 3 with all of WALK_TRACKING: loading knee 35.5°, stance dorsiflexion 22.0°, heel strike −11.1°:
+the reference's slower walk is not why the walk crouches).
+``--mumps-scaling``: MUMPS with its own row/column scaling (IPOPT's defaults 7 and 77; ``gait predict`` turns it
+off, faster on its default problems): without it some of these solves stall in MUMPS's factorization after
+50–125 iterations (measured 2026-12-05: εm 2 N·m with the rest of WALK_TRACKING, and GRF SD × 3, each still
+factorizing after 8–15 minutes; with it the first converged in 190 s, 220 iterations).
 Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip swing moment trunk]
-[--start plain.csv] [--joint-sd-scale 0.5]`` (``--start``: a plain start saved by an earlier run's
+[--start plain.csv] [--joint-sd-scale 0.5] [--grf-sd-scale 3] [--mumps-scaling]`` (``--start``: a plain start saved by an earlier run's
 ``--save-start``; each solve takes 2–10 minutes on one core, some variants longer).
 """
 
@@ -54,12 +61,15 @@ def walk_figures(x: np.ndarray) -> dict:
             "heel strike ankle deg": round(float(angles[0, 2]), 1), **winter_figures(phase, *angles[:, :3].T)}
 
 
-def knee_and_ankle_held(reference: Reference, scale: float) -> Reference:
-    """``reference`` with its knee and ankle angles' SDs × ``scale`` (both legs)."""
+def knee_and_ankle_held(reference: Reference, scale: float, grf_scale: float = 1.0) -> Reference:
+    """``reference`` with its knee and ankle angles' SDs × ``scale`` and its ground reactions' × ``grf_scale``
+    (both legs)."""
     sd = reference.sd.copy()
     for k, name in enumerate(VARIABLES):
         if name.startswith(("knee_", "ankle_")):
             sd[:, k] *= scale
+        elif name.startswith("grf_"):
+            sd[:, k] *= grf_scale
     return dataclasses.replace(reference, sd=sd)
 
 
@@ -71,7 +81,12 @@ def main() -> None:
     parser.add_argument("--save-start", type=Path, help="write the plain start's χ here")
     parser.add_argument("--joint-sd-scale", type=float, default=1.0,
                         help="the second solve's knee and ankle SDs × this (module docstring)")
+    parser.add_argument("--grf-sd-scale", type=float, default=1.0,
+                        help="the second solve's ground-reaction SDs × this (module docstring)")
+    parser.add_argument("--mumps-scaling", action="store_true",
+                        help="MUMPS with its own row/column scaling, IPOPT's defaults (module docstring)")
     args = parser.parse_args()
+    options = {"ipopt.mumps_permuting_scaling": 7, "ipopt.mumps_scaling": 77} if args.mumps_scaling else None
     one_core()
     reference = read_reference(walk.WALK_REFERENCE)
     params = WalkerParameters.from_subject(**walk.WALK_SUBJECT)
@@ -106,18 +121,19 @@ def main() -> None:
         rows_at, rows, _ = DesignLayout.build(walk.WALK_NODES, symmetric=True).blocks["steps"]
         x[rows_at:rows_at + rows] = step_m
         began = time.perf_counter()
-        solved = solve_windowed(transcriber, reference, x, plain, symmetric=True)
+        solved = solve_windowed(transcriber, reference, x, plain, symmetric=True, options=options)
         start = solved["x"]
         show("plain start (F_max × 1, the dissertation's settings)", cfg, start, solved, time.perf_counter() - began)
     if args.save_start is not None:
         np.savetxt(args.save_start, start, fmt="%.17g")
     cfg, transcriber, plain = problem(args.scale)
-    held = knee_and_ankle_held(reference, args.joint_sd_scale)
+    held = knee_and_ankle_held(reference, args.joint_sd_scale, args.grf_sd_scale)
     for name in args.variants:
         settings = dataclasses.replace(plain, **{k: walk.WALK_TRACKING[k] for k in VARIANTS[name]})
         began = time.perf_counter()
-        solved = solve_windowed(transcriber, held, start, settings, symmetric=True)
-        held_by = f", knee and ankle SD × {args.joint_sd_scale:g}" if args.joint_sd_scale != 1.0 else ""
+        solved = solve_windowed(transcriber, held, start, settings, symmetric=True, options=options)
+        held_by = (f", knee and ankle SD × {args.joint_sd_scale:g}" if args.joint_sd_scale != 1.0 else "") + \
+            (f", GRF SD × {args.grf_sd_scale:g}" if args.grf_sd_scale != 1.0 else "")
         show(f"{name}: {', '.join(VARIANTS[name])} (F_max × {args.scale:g}{held_by})", cfg, solved["x"], solved,
              time.perf_counter() - began)
 
