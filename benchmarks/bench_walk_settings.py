@@ -18,8 +18,8 @@ off, faster on its default problems): without it some of these solves stall in M
 50–125 iterations (measured 2026-12-05: εm 2 N·m with the rest of WALK_TRACKING, and GRF SD × 3, each still
 factorizing after 8–15 minutes; with it the first converged in 190 s, 220 iterations).
 Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip swing moment trunk]
-[--start plain.csv] [--joint-sd-scale 0.5] [--grf-sd-scale 3] [--mumps-scaling]`` (``--start``: a plain start saved by an earlier run's
-``--save-start``; each solve takes 2–10 minutes on one core, some variants longer).
+[--start plain.csv] [--joint-sd-scale 0.5] [--grf-sd-scale 3] [--mumps-scaling]`` (``--start``: a plain start
+saved by an earlier run's ``--save-start``; each solve takes 2–10 minutes on one core, some variants longer).
 """
 
 from __future__ import annotations
@@ -61,13 +61,13 @@ def walk_figures(x: np.ndarray) -> dict:
             "heel strike ankle deg": round(float(angles[0, 2]), 1), **winter_figures(phase, *angles[:, :3].T)}
 
 
-def knee_and_ankle_held(reference: Reference, scale: float, grf_scale: float = 1.0) -> Reference:
-    """``reference`` with its knee and ankle angles' SDs × ``scale`` and its ground reactions' × ``grf_scale``
+def sds_scaled(reference: Reference, joint_scale: float, grf_scale: float) -> Reference:
+    """``reference`` with its knee and ankle angles' SDs × ``joint_scale`` and its ground reactions' × ``grf_scale``
     (both legs)."""
     sd = reference.sd.copy()
     for k, name in enumerate(VARIABLES):
         if name.startswith(("knee_", "ankle_")):
-            sd[:, k] *= scale
+            sd[:, k] *= joint_scale
         elif name.startswith("grf_"):
             sd[:, k] *= grf_scale
     return dataclasses.replace(reference, sd=sd)
@@ -127,13 +127,13 @@ def main() -> None:
     if args.save_start is not None:
         np.savetxt(args.save_start, start, fmt="%.17g")
     cfg, transcriber, plain = problem(args.scale)
-    held = knee_and_ankle_held(reference, args.joint_sd_scale, args.grf_sd_scale)
+    held = sds_scaled(reference, args.joint_sd_scale, args.grf_sd_scale)
+    held_by = (f", knee and ankle SD × {args.joint_sd_scale:g}" if args.joint_sd_scale != 1.0 else "") + \
+        (f", GRF SD × {args.grf_sd_scale:g}" if args.grf_sd_scale != 1.0 else "")
     for name in args.variants:
         settings = dataclasses.replace(plain, **{k: walk.WALK_TRACKING[k] for k in VARIANTS[name]})
         began = time.perf_counter()
         solved = solve_windowed(transcriber, held, start, settings, symmetric=True, options=options)
-        held_by = (f", knee and ankle SD × {args.joint_sd_scale:g}" if args.joint_sd_scale != 1.0 else "") + \
-            (f", GRF SD × {args.grf_sd_scale:g}" if args.grf_sd_scale != 1.0 else "")
         show(f"{name}: {', '.join(VARIANTS[name])} (F_max × {args.scale:g}{held_by})", cfg, solved["x"], solved,
              time.perf_counter() - began)
 

@@ -87,7 +87,8 @@ def _corrupt_knee(h5_path: Path, start_s: float) -> dict:
 def _build(root: Path) -> dict:
     normal = copy_sample("normal", root / "normal")
     nan = copy_sample("normal", root / "nan")
-    started = gait_many({"first": (("muscles", normal, "--method", "so"), root), "idyn": (("idyn", nan, "--no-plots"), root)})
+    started = gait_many({"first": (("muscles", normal, "--method", "so"), root),
+                         "idyn": (("idyn", nan, "--no-plots"), root)})
     first, idyn = started["first"], started["idyn"]
     if first.returncode != 0 or idyn.returncode != 0:
         return {"failed": [first.to_json(), idyn.to_json()]}
