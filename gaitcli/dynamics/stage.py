@@ -391,9 +391,8 @@ def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subj
     (Ehrig et al. 2006) puts them from the trial's own hip motion, and each side's RMS residual (mm).
 
     The segments are first tracked with Bell's hip centres; the hip centre is the point fixed in the pelvis and
-    in the thigh (:func:`~gaitcli.kinematics.joint_centres.functional_joint_centre`); the pelvis's reference
-    frame is parallel to the global axes in the reference posture, so there it lies at the pelvis CoM plus its
-    pelvis coordinates.
+    in the thigh (:func:`~gaitcli.kinematics.joint_centres.functional_joint_centre`); in the reference posture
+    it lies at the pelvis CoM plus its pelvis coordinates turned by the pelvis's static orientation.
     """
     first = static_calibration(markers, frames, subject, mass_kg, source=source, hip_method="bell1990",
                                metadata=metadata)
@@ -404,7 +403,7 @@ def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subj
         thigh = BODIES.index(f"thigh_{side}")
         c_pelvis, _, rms, spread = functional_joint_centre(poses.rotation[:, pelvis], poses.com_m[:, pelvis],
                                                            poses.rotation[:, thigh], poses.com_m[:, thigh])
-        added[f"HJC{side}"] = first.com_m[pelvis] + c_pelvis
+        added[f"HJC{side}"] = first.com_m[pelvis] + first.static_rotation @ c_pelvis
         residuals[side] = 1000.0 * rms
         if spread > SCORE_SPREAD_M:
             warnings.warn(f"hip_joint_centre score, {SIDE_NAMES[side]}: the trial's hip motion fixes the centre only "

@@ -49,6 +49,7 @@ from gaitcli.kinematics.markerset import (LANDMARKS, SEGMENT_MARKERS, VIRTUAL_JO
                                           tracking_landmarks)
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
 from gaitcli.kinematics.pose import MIN_MARKERS
+from gaitcli.kinematics.rotations import rot_z
 from gaitcli.core.recording import Markers
 from gaitcli.signal.butterworth import finite_runs
 
@@ -87,6 +88,8 @@ class StaticCalibration:
     ``com_m`` (8, 3): static global CoM positions. ``segments``: mass geometry per body
     in body axes (CoM relative to the de Leva origin landmark).
     ``static_landmarks_m``: the averaged static marker positions used.
+    ``static_rotation``: every body's reference frame in the reference posture (the heading the subject faces
+    there, about the vertical); body-frame quantities are in these axes, positions in the static's own.
     ``chained[body]``: the proximal joint centre (``HJCr``, ...) in that body's cluster that is no marker of the
     trial but placed in each frame by the parent's pose.
     """
@@ -103,6 +106,7 @@ class StaticCalibration:
     static_landmarks_m: dict[str, np.ndarray]
     notes: list[str] = field(default_factory=list)
     chained: dict[str, str] = field(default_factory=dict)
+    static_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
 
     def cluster(self, body: str) -> np.ndarray:
         """Reference cluster (k, 3) of ``body`` in its frame, rows in ``tracking_landmarks[body]`` order."""
@@ -295,6 +299,13 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     else:  # the lab's hip centres are left out of the model and of the clusters
         P = {k: v for k, v in P.items() if k not in ("HJCr", "HJCl")}
     _check_required(P, source, marker_set, widths)
+    measured = P
+    # The reference frames are parallel to the axes the subject faces in the static (3.3.3 takes a subject
+    # facing +x): the static is turned about the vertical until the pelvis faces +x, and turned back below.
+    _, pelvis_axes = jcm.pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
+    heading = float(np.arctan2(pelvis_axes[1, 0], pelvis_axes[0, 0]))
+    facing = rot_z(heading)
+    P = {k: facing.T @ v for k, v in P.items()}
     notes: list[str] = []
     jc = jcm.joint_centres(P, hip_method="bell1990" if hip_method == "from_file" else hip_method,
                            ankle_method=ankle_method, sex=sex, leg_length=leg_length_m, widths=widths, source=source)
@@ -348,11 +359,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
         if not ok:
             notes.append(f"{b}: anatomical frame incomplete (landmarks missing), global axes used instead")
 
-    heading = np.degrees(np.arctan2(anatomical["pelvis"][1, 0], anatomical["pelvis"][0, 0]))
-    if abs(heading) > 45.0:
-        warnings.warn(f"the subject faces {heading:.0f} deg away from +x in the static trial; reference frames "
-                      "are parallel to the global axes there (3.3.3), so angles are measured from that posture",
-                      GaitWarning, stacklevel=2)
+    notes.append(f"the subject faces {np.degrees(heading):.1f}° from +x in the reference posture: the segments' "
+                 "reference frames are parallel to the axes it faces there")
 
     body_segs = {b: rotate_segment(segs[b], rotation[b]) for b in BODIES}
     items = resolve_disturbances(disturbances, body_segs)
@@ -412,6 +420,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
         body=body, landmarks_in_body_m=landmarks_in_body, tracking_landmarks=tracking, locked=tuple(locked),
         reference_to_anatomical=np.array([anatomical[b] for b in BODIES]),
         anatomical_from_landmarks=tuple(from_landmarks[b] for b in BODIES),
-        joint_centres_m={"lumbar": omph, **jc}, com_m=com, segments=body_segs,
-        static_landmarks_m={k: v for k, v in P.items() if k in LANDMARKS or any(k in e for e in extra.values())},
+        joint_centres_m={k: facing @ v for k, v in {"lumbar": omph, **jc}.items()}, com_m=com @ facing.T,
+        segments=body_segs, static_rotation=facing,
+        static_landmarks_m={k: v for k, v in measured.items()
+                            if k in LANDMARKS or any(k in e for e in extra.values())},
         notes=notes, chained=chained)

@@ -12,7 +12,7 @@ from gaitcli.kinematics import joint_centres as jcm
 from gaitcli.kinematics.calibration import calibrate, least_flexed_frames, static_landmarks
 from gaitcli.kinematics.markerset import landmarks_to_markers, marker_set, standing_template
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS
-from gaitcli.kinematics.rotations import cardan_xyz_to_matrix
+from gaitcli.kinematics.rotations import cardan_xyz_to_matrix, rot_z
 from gaitcli.core.recording import Markers
 
 SUBJECT = dict(mass_kg=73.0, stature_m=1.792)
@@ -166,11 +166,22 @@ def test_static_landmarks_average_named_frames_ignoring_nan():
     assert "B" not in out
 
 
-def test_subject_facing_backwards_warns():
+@pytest.mark.parametrize("heading_deg", [90.0, 180.0, 270.0, 21.0, -176.0])
+def test_static_heading_changes_nothing_in_the_body(heading_deg):
+    """A static facing any way calibrates the same body: parameters, clusters and anatomical offsets in body axes
+    equal those of the static facing +x; positions are the static's own, turned."""
     t = standing_template(1.792)
-    flip = np.diag([-1.0, -1.0, 1.0])
-    with pytest.warns(GaitWarning, match="faces"):
-        calibrate(landmarks_to_markers({k: flip @ v for k, v in t.items()}), **SUBJECT)
+    turn = rot_z(np.radians(heading_deg))
+    ahead = calibrate(landmarks_to_markers(t), **SUBJECT)
+    turned = calibrate(landmarks_to_markers({k: turn @ v for k, v in t.items()}), **SUBJECT)
+    for name in ("joint_in_parent_m", "joint_in_child_m", "inertia_kgm2", "mass_kg"):
+        np.testing.assert_allclose(getattr(turned.body, name), getattr(ahead.body, name), atol=1e-12)
+    np.testing.assert_allclose(turned.reference_to_anatomical, ahead.reference_to_anatomical, atol=1e-12)
+    for b in BODIES:
+        np.testing.assert_allclose(turned.cluster(b), ahead.cluster(b), atol=1e-12)
+    np.testing.assert_allclose(turned.com_m, ahead.com_m @ turn.T, atol=1e-12)
+    np.testing.assert_allclose(turned.static_rotation, turn @ ahead.static_rotation, atol=1e-12)
+    assert any(f"faces {heading_deg:.1f}°" in n or f"faces {heading_deg - 360:.1f}°" in n for n in turned.notes)
 
 
 # ------------------------------------------------------------------ static_frames: auto
