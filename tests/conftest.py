@@ -8,6 +8,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 SHARED_C3D = REPO.parent / "shared" / "data" / "c3d"
+SHARED_PIG = REPO.parent / "shared" / "data" / "pig"
 
 
 @pytest.fixture(scope="session")
@@ -16,6 +17,14 @@ def shared_c3d_dir() -> Path:
     if not SHARED_C3D.is_dir():
         pytest.skip("../shared/data/c3d is not present next to this checkout")
     return SHARED_C3D
+
+
+@pytest.fixture(scope="session")
+def shared_pig_dir() -> Path:
+    """``../shared/data/pig`` (a Vicon Plug-in Gait session with Vicon's outputs); skipped where absent."""
+    if not (SHARED_PIG / "Movement_trial.c3d").is_file():
+        pytest.skip("../shared/data/pig is not present next to this checkout")
+    return SHARED_PIG
 
 
 #: the test files that take longest (seconds on 2 cores, measured 2026-12-02), run first and longest first so

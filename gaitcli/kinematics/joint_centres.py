@@ -130,24 +130,31 @@ def regression_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, method: str,
 DAVIS_1991 = {"theta_rad": 0.5, "beta_rad": 0.314, "C": (0.115, -15.3e-3), "X_dis": (0.1288, -48.56e-3)}
 
 
-def davis_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, leg_length_m: float,
-                            marker_radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+def davis_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, leg_length_m: float, marker_radius_m: float,
+                            asis_trochanter_m: tuple[float, float] | None = None,
+                            inter_asis_m: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Right and left hip joint centres (m) by Davis et al. (1991) (Plug-in Gait), from the pelvis markers, the
-    leg length (m) and the ASIS markers' radius (m), in :func:`pelvis_frame` (origin mid-ASIS, x anterior, y left,
-    z up): x = C cos θ sin β − (X_dis + r) cos β, lateral (aa − C sin θ) with aa half the inter-ASIS distance,
-    z = −C cos θ cos β − (X_dis + r) sin β."""
+    leg length (m; Plug-in Gait's mean of both legs) and the ASIS markers' radius (m), in :func:`pelvis_frame`
+    (origin mid-ASIS, x anterior, y left, z up): x = C cos θ sin β − (X_dis + r) cos β, lateral (aa − C sin θ)
+    with aa half the inter-ASIS distance, z = −C cos θ cos β − (X_dis + r) sin β. ``asis_trochanter_m`` (right,
+    left) replaces the regression's X_dis where the lab measured it, ``inter_asis_m`` the markers' distance."""
     origin, R = pelvis_frame(asis_r, asis_l, psis_r, psis_l)
-    aa = np.linalg.norm(np.asarray(asis_l, float) - np.asarray(asis_r, float), axis=-1)[..., None] / 2
+    if inter_asis_m is None:
+        aa = np.linalg.norm(np.asarray(asis_l, float) - np.asarray(asis_r, float), axis=-1)[..., None] / 2
+    else:
+        aa = np.full(origin.shape[:-1] + (1,), inter_asis_m / 2)
     d = DAVIS_1991
     C = d["C"][0] * leg_length_m + d["C"][1]
-    x_dis = d["X_dis"][0] * leg_length_m + d["X_dis"][1]
+    regression = d["X_dis"][0] * leg_length_m + d["X_dis"][1]
     th, be = d["theta_rad"], d["beta_rad"]
-    anterior = C * np.cos(th) * np.sin(be) - (x_dis + marker_radius_m) * np.cos(be)
-    superior = -C * np.cos(th) * np.cos(be) - (x_dis + marker_radius_m) * np.sin(be)
-    lateral = aa - C * np.sin(th)
     x, y, z = R[..., 0], R[..., 1], R[..., 2]
-    base = origin + anterior * x + superior * z
-    return base - lateral * y, base + lateral * y
+    out = []
+    for k, sign in enumerate((-1.0, 1.0)):
+        x_dis = regression if asis_trochanter_m is None else asis_trochanter_m[k]
+        anterior = C * np.cos(th) * np.sin(be) - (x_dis + marker_radius_m) * np.cos(be)
+        superior = -C * np.cos(th) * np.cos(be) - (x_dis + marker_radius_m) * np.sin(be)
+        out.append(origin + anterior * x + superior * z + sign * (aa - C * np.sin(th)) * y)
+    return out[0], out[1]
 
 
 def chord_joint_centre(proximal, wand, lateral, offset_m) -> np.ndarray:
