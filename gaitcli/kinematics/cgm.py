@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gaitcli.kinematics.anatomical import PIG_FOOT_AXES
-from gaitcli.kinematics.joint_centres import chord_joint_centre, davis_hip_joint_centres, pelvis_frame, unit
+from gaitcli.kinematics.joint_centres import (chord_joint_centre, davis_hip_joint_centres, pelvis_frame, shank_frame,
+                                             thigh_frame, unit)
 from gaitcli.kinematics.rotations import rot_x, rot_y, rot_z
 
 SIDES = ("r", "l")
@@ -73,21 +74,11 @@ class FootOffsets:
 
 @dataclass
 class CgmFrames:
-    """Per-frame segment origins (n, 3) and frames (n, 3, 3) by segment name (``pelvis``, ``thigh_r`` …),
-    and the joint centres (n, 3) ``HJCr``, ``KJCr``, ``AJCr`` … they were built on."""
+    """Per-frame segment frames (n, 3, 3) by segment name (``pelvis``, ``thigh_r`` …), and the joint centres
+    (n, 3) ``HJCr``, ``KJCr``, ``AJCr`` … they were built on."""
 
-    origin_m: dict[str, np.ndarray]
     rotation: dict[str, np.ndarray]
     joint_centres_m: dict[str, np.ndarray]
-
-
-def _thigh_or_shank(proximal, distal, lateral, side: str) -> np.ndarray:
-    """z from ``distal`` to ``proximal``; x normal to the plane of the two joint centres and the lateral marker,
-    anterior; y = z × x (left)."""
-    z = unit(proximal - distal)
-    x = np.cross(z, lateral - proximal) if side == "r" else np.cross(lateral - proximal, z)
-    x = unit(x)
-    return np.stack([x, np.cross(z, x), z], axis=-1)
 
 
 def _foot_frame(ankle, toe, flexion_axis) -> np.ndarray:
@@ -101,24 +92,24 @@ def leg_frames(P: Mapping[str, np.ndarray], m: CgmMeasurements) -> CgmFrames:
     """Pelvis, thigh, shank and the uncorrected foot (ankle centre → toe) per frame from Plug-in Gait's markers,
     by model landmark: ``ASISr/l``, ``PSISr/l`` (both the sacrum where there is one), ``LEFr`` (KNE), ``LMr`` (ANK),
     ``MT2r`` (TOE), the wands ``THIr``/``TIBr`` and, optionally, the lab's own hip centres ``HJCr/l``."""
-    pelvis_origin, pelvis = pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
+    _, pelvis = pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
     legs = np.array([m.leg_length_m["r"], m.leg_length_m["l"]], dtype=float)
     trochanter = None if m.asis_trochanter_m is None else (m.asis_trochanter_m["r"], m.asis_trochanter_m["l"])
     hips = davis_hip_joint_centres(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"], leg_length_m=float(legs.mean()),
                                    marker_radius_m=m.marker_radius_m, asis_trochanter_m=trochanter,
                                    inter_asis_m=m.inter_asis_m)
-    origin, rotation, centres = {"pelvis": pelvis_origin}, {"pelvis": pelvis}, {}
+    rotation, centres = {"pelvis": pelvis}, {}
     r = m.marker_radius_m
     for side, hip in zip(SIDES, hips):
         knee = chord_joint_centre(hip, P[f"THI{side}"], P[f"LEF{side}"], m.knee_width_m[side] / 2 + r)
         ankle = chord_joint_centre(knee, P[f"TIB{side}"], P[f"LM{side}"], m.ankle_width_m[side] / 2 + r)
-        shank = _thigh_or_shank(knee, ankle, P[f"LM{side}"], side) @ rot_z(-m.tibial_torsion_rad[side])
-        rotation[f"thigh_{side}"] = _thigh_or_shank(hip, knee, P[f"LEF{side}"], side)
+        # the chord's joint centre stands in for the medial marker: x is normal to the wand's plane
+        shank = shank_frame(knee, ankle, P[f"LM{side}"], ankle, side=side) @ rot_z(-m.tibial_torsion_rad[side])
+        rotation[f"thigh_{side}"] = thigh_frame(hip, knee, P[f"LEF{side}"], knee, side=side)
         rotation[f"shank_{side}"] = shank
         rotation[f"foot_{side}"] = _foot_frame(ankle, P[f"MT2{side}"], shank[..., 1])
-        origin.update({f"thigh_{side}": knee, f"shank_{side}": ankle, f"foot_{side}": np.asarray(P[f"MT2{side}"])})
         centres.update({f"HJC{side}": hip, f"KJC{side}": knee, f"AJC{side}": ankle})
-    return CgmFrames(origin, rotation, centres)
+    return CgmFrames(rotation, centres)
 
 
 def static_foot_offsets(static: Mapping[str, np.ndarray], m: CgmMeasurements) -> FootOffsets:
