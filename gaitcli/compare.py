@@ -36,6 +36,7 @@ force_per_kg    N/kg     0.01       1 N for a 75 kg subject
 moment          N·m      0.5        0.01 N·m/kg for a 50 kg subject (stricter than per kg above 50 kg)
 moment_per_kg   N·m/kg   0.01       under 1 % of the ~1.5 N·m/kg peak sagittal moments
 power           W        1          1 W of muscle metabolic rates of up to a few hundred W
+power_per_kg    W/kg     0.01       under 1 % of the ~1–3 W/kg peak joint powers
 cost            J        1          1 J of a stride's ~200–300 J metabolic cost
 cost_per_m      J/m      1          1 J/m of a cost of transport of ~200–350 J/m
 mass            kg       0.01       10 g of a body or an added mass
@@ -104,6 +105,7 @@ FAMILIES: dict[str, Family] = {f.name: f for f in (
     Family("moment", "N·m", 0.5, "0.01 N·m/kg for a 50 kg subject"),
     Family("moment_per_kg", "N·m/kg", 0.01, "under 1 % of the ~1.5 N·m/kg peak sagittal moments"),
     Family("power", "W", 1.0, "1 W of metabolic rates of up to a few hundred W"),
+    Family("power_per_kg", "W/kg", 0.01, "under 1 % of the ~1–3 W/kg peak joint powers"),
     Family("cost", "J", 1.0, "1 J of a stride's ~200–300 J metabolic cost"),
     Family("cost_per_m", "J/m", 1.0, "1 J/m of a cost of transport of ~200–350 J/m"),
     Family("mass", "kg", 0.01, "10 g of a body or an added mass"),
@@ -123,6 +125,7 @@ UNIT_RULES: tuple[tuple[str, str, str, float], ...] = (
     (r"(_Nm|_moment)$", "moment", "N·m", 1.0),
     (r"_N$", "force", "N", 1.0),
     (r"_J$", "cost", "J", 1.0),
+    (r"_W_per_kg$", "power_per_kg", "W/kg", 1.0),
     (r"_W$", "power", "W", 1.0),
     (r"_m_s$", "speed", "m/s", 1.0),
     (r"_deg$", "angle", "deg", 1.0),
@@ -134,9 +137,10 @@ UNIT_RULES: tuple[tuple[str, str, str, float], ...] = (
     (r"_s$", "time", "s", 1.0),
     (r"_hz$", "frequency", "Hz", 1.0),
     (r"_pct$", "percent", "%", 1.0),
-    # kinematics.csv and gait_cycle.csv name the 27 coordinates without a unit (DESIGN.md): m and deg
+    # kinematics.csv, coordinates.csv and gait_cycle.csv name angles without a unit (DESIGN.md): m and deg
     (r"^pelvis_[xyz]$", "length", "m", 1000.0),
-    (r"(^pelvis_rot_[xyz]|_flexion|_adduction|_rotation|_dorsiflexion)$", "angle", "deg", 1.0),
+    (r"(^pelvis_rot_[xyz]|_flexion|_adduction|_rotation|_dorsiflexion|_tilt|_obliquity|_inversion|_progression)$",
+     "angle", "deg", 1.0),
     (r"(_activation|_excitation)$", "fraction", "", 1.0),
 )
 _RULES = tuple((re.compile(p), fam, unit, factor) for p, fam, unit, factor in UNIT_RULES)

@@ -24,9 +24,12 @@ from gaitcli.core.validate import parameter
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.dynamics.equations import ExternalWrench
 from gaitcli.dynamics.inverse import express_in, inverse_dynamics
+from gaitcli.dynamics.powers import joint_powers, sagittal_powers
 from gaitcli.dynamics.sagittal import SagittalExport, sagittal_export
 from gaitcli.errors import GaitWarning, InputError
-from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames
+from gaitcli.kinematics import cgm
+from gaitcli.kinematics.anatomical import anatomical_angles
+from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames, static_landmarks
 from gaitcli.kinematics.chain_fit import fit_chain
 from gaitcli.kinematics.joint_centres import JointWidths, functional_joint_centre
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
@@ -39,6 +42,8 @@ if TYPE_CHECKING:
     from gaitcli.trial import Subject
 
 FRAMES = ("reference", "anatomical")
+ANGLES = ("anatomical", "posture")
+MOMENT_CONVENTIONS = ("plug_in_gait", "coordinate")
 POSES = ("segment_svd", "chain_lsq")
 POSE_STEPS = {"segment_svd": "SVD poses", "chain_lsq": "SVD poses refined by a least-squares fit of the whole chain"}
 
@@ -51,6 +56,18 @@ class IdynConfig:
                             help="Frames the joint moments are expressed in (default: reference).")
     gravity_m_s2: float = parameter(9.81, low=9.7, high=9.9,
                                     help="Gravitational acceleration, m/s² (Earth's surface: 9.78–9.83).")
+    angles: str = parameter("anatomical", choices=ANGLES,
+                            help="anatomical: joint angles between the segments' anatomical frames, as the lab's "
+                                 "software reports them (Plug-in Gait's for marker_set plug_in_gait, ISB joint "
+                                 "coordinate systems otherwise) in kinematics.csv, gait_cycle.csv and the plots; "
+                                 "posture: the 27 coordinates there instead, zero in the standing posture (3.1). "
+                                 "coordinates.csv always holds the 27 coordinates.")
+    moments: str = parameter("plug_in_gait", choices=MOMENT_CONVENTIONS,
+                             help="plug_in_gait: joint moments as Vicon's Plug-in Gait reports them (internal "
+                                  "moments in the distal segment's anatomical frame; extensor, abductor, external "
+                                  "rotator positive) in joint_moments.csv, gait_cycle.csv and the plots; "
+                                  "coordinate: each component positive in the sense of its angle, in the frames "
+                                  "`frames` names (as OpenSim's inverse dynamics).")
     pose: str = parameter("segment_svd", choices=POSES,
                           help="segment_svd: each segment fitted to its markers by SVD, the chain hung from the "
                                "pelvis (3.3, the dissertation's); chain_lsq: the 27 coordinates fitted to all "
@@ -84,6 +101,9 @@ class IdynResult:
     qd: np.ndarray
     qdd: np.ndarray
     joint_moments_Nm: np.ndarray  # (n, 7, 3) x, y, z components in the distal segment's `frames`
+    joint_moments_anatomical_Nm: np.ndarray  # (n, 7, 3) components in the distal segment's anatomical frame
+    joint_powers_W: np.ndarray  # (n, 7) total: M · (ω_child − ω_parent)
+    joint_powers_sagittal_W: np.ndarray  # (n, 7) about the distal segment's anatomical medio-lateral axis
     joint_moments_global_Nm: np.ndarray  # (n, 7, 3)
     residual_force_N: np.ndarray  # (n, 3) global
     residual_moment_Nm: np.ndarray  # (n, 3) global, about the pelvis CoM
@@ -101,6 +121,10 @@ class IdynResult:
     sagittal: SagittalExport
     notes: list = field(default_factory=list)
     reference_posture: ReferencePosture | None = None
+    anatomical_angles_rad: np.ndarray | None = None  # (n, 23) kinematics.anatomical.ANATOMICAL_ANGLES
+    angle_convention: str = "isb"  # "plug_in_gait" or "isb": how the anatomical frames were built
+    angles: str = "anatomical"  # IdynConfig.angles: which angles the tables for people show
+    moment_convention: str = "plug_in_gait"  # IdynConfig.moments: which moments the tables for people show
 
     @property
     def time_s(self) -> np.ndarray:
@@ -287,8 +311,8 @@ def subject_measurements(subject: Subject, metadata: Mapping[str, float]) -> tup
     def per_side(given, name):
         if given is not None:
             return {s: v / 1000.0 for s, v in given.items()}
-        return {s: metadata[f"PROCESSING:{side}{name}"] / 1000.0
-                for s, side in (("r", "Right"), ("l", "Left")) if f"PROCESSING:{side}{name}" in metadata}
+        values = {s: cgm.processing_value(metadata, s, name) for s in SIDES}
+        return {s: v / 1000.0 for s, v in values.items() if v is not None}
 
     diameter = (subject.marker_diameter_mm / 1000.0 if subject.marker_diameter_mm is not None
                 else metadata.get("PROCESSING:MarkerDiameter", 1000.0 * DEFAULT_MARKER_DIAMETER_M) / 1000.0)
@@ -297,7 +321,7 @@ def subject_measurements(subject: Subject, metadata: Mapping[str, float]) -> tup
                          marker_diameter_m=diameter, wands=dict(subject.markers.wands))
     if subject.leg_length_m is not None:
         return widths, subject.leg_length_m, "subject.yaml"
-    legs = [metadata[k] / 1000.0 for k in ("PROCESSING:RightLegLength", "PROCESSING:LeftLegLength") if k in metadata]
+    legs = [v / 1000.0 for v in (cgm.processing_value(metadata, s, "LegLength") for s in SIDES) if v is not None]
     if legs:
         return widths, float(np.mean(legs)), "the C3D's PROCESSING group"
     return widths, None, "the markers"
@@ -324,9 +348,46 @@ HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "d
               "score": "bell1990"}  # score: Bell first, then functional_hip_centres
 
 
+def plug_in_gait_model(subject: Subject, markers: Markers, frames: np.ndarray | None,
+                       metadata: Mapping[str, float]) -> tuple[cgm.PlugInGait | None, str]:
+    """Plug-in Gait's frames for a ``plug_in_gait`` subject whose measurements and markers are all known (the
+    static foot offsets from the reference posture ``frames`` of ``markers``), and a note saying which frames the
+    anatomical angles use."""
+    if not subject.markers.name.startswith("plug_in_gait"):
+        return None, "anatomical angles: ISB joint coordinate systems on the calibrated anatomical frames"
+    widths, leg_length, _ = subject_measurements(subject, metadata)
+    measurements = cgm.measurements_from(metadata, leg_length_m=leg_length, knee_width_m=widths.knee_m,
+                                         ankle_width_m=widths.ankle_m, marker_diameter_m=widths.marker_diameter_m)
+    wands = dict(subject.markers.wands)
+    P = None if measurements is None else cgm.plug_in_gait_landmarks(static_landmarks(markers, frames), wands)
+    if P is not None:
+        offsets = cgm.static_foot_offsets(P, measurements)
+        shown = ", ".join(f"{SIDE_NAMES[s]} plantarflexion {np.degrees(offsets.plantarflexion_rad[s]):.1f}° "
+                          f"rotation {np.degrees(offsets.rotation_rad[s]):.1f}°" for s in SIDES)
+        return (cgm.PlugInGait(measurements, offsets, wands),
+                f"anatomical angles: Plug-in Gait's (CGM 1.0) frames per frame; static foot offsets {shown}")
+    return None, ("anatomical angles: ISB joint coordinate systems on the calibrated anatomical frames (Plug-in "
+                  "Gait's frames need both legs' lengths, knee and ankle widths and every Plug-in Gait marker)")
+
+
+def anatomical_frames(states, calibration: StaticCalibration, markers: Markers,
+                      plug_in_gait: cgm.PlugInGait | None) -> tuple[dict[str, np.ndarray], str]:
+    """Each segment's anatomical frame per frame (n, 3, 3) and the ankle convention: Plug-in Gait's frames from
+    the markers where the model is given, else the tracked reference frames turned into the anatomical ones
+    (``R_anatomical = R_reference · C``, 3.3)."""
+    if plug_in_gait is not None:
+        frames = plug_in_gait.frames({label: markers.get(label) for label in markers.labels})
+        if frames is not None:
+            return frames, "plug_in_gait"
+    C = calibration.reference_to_anatomical
+    return {b: states.rotation[:, i] @ C[i] for i, b in enumerate(BODIES)}, "isb"
+
+
 def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: IdynConfig, *,
-                           mass_kg: float, mass_source: str) -> IdynResult:
-    """Poses by SVD (3.9–3.15), coordinates (3.17), derivatives, joint moments (3.21) and residuals (3.22)."""
+                           mass_kg: float, mass_source: str,
+                           plug_in_gait: cgm.PlugInGait | None = None) -> IdynResult:
+    """Poses by SVD (3.9–3.15), coordinates (3.17), derivatives, joint moments (3.21) and residuals (3.22), and
+    the anatomical joint angles (Plug-in Gait's frames where ``plug_in_gait`` is given)."""
     markers = trial.markers
     poses = track_segments(markers, calibration)
     for line in missing_frame_messages(poses):
@@ -345,7 +406,11 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
         # R_anatomical = R_reference @ C: components in the anatomical frame are Cᵀ · (reference components)
         C = calibration.reference_to_anatomical[list(JOINT_CHILD)]
         moments = express_in(moments, np.broadcast_to(C, (n,) + C.shape))
-    states = forward_kinematics(q, params)
+    states = forward_kinematics(q, params, qd)
+    frames, convention = anatomical_frames(states, calibration, markers, plug_in_gait)
+    C = calibration.reference_to_anatomical
+    distal = np.stack([frames.get(BODIES[c], states.rotation[:, c] @ C[c]) for c in JOINT_CHILD], axis=1)
+    global_moments = result.joint_moments_global_Nm
     heel_x = {s: markers.get(HEEL[s])[:, 0] for s in SIDES if HEEL[s] in markers}
     features = gait_features(trial.events, heel_x, markers.time_s)
     trial = trial.with_step(f"idyn: calibrated on the standing posture, body mass {mass_kg:.2f} kg "
@@ -353,14 +418,20 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
                             f"moments in {cfg.frames} frames")
     export = sagittal_export(trial, states.joint_centre_m, q, params, body_mass_kg=mass_kg)
     return IdynResult(trial=trial, q=q, qd=qd, qdd=qdd, joint_moments_Nm=moments,
-                      joint_moments_global_Nm=result.joint_moments_global_Nm,
+                      joint_moments_global_Nm=global_moments,
+                      joint_moments_anatomical_Nm=express_in(global_moments, distal),
+                      joint_powers_W=joint_powers(global_moments, states.angular_velocity_rad_s),
+                      joint_powers_sagittal_W=sagittal_powers(global_moments, states.angular_velocity_rad_s,
+                                                              distal[..., 1]),
                       residual_force_N=result.residual_force_N, residual_moment_Nm=result.residual_moment_Nm,
                       frames=cfg.frames, mass_kg=mass_kg, mass_source=mass_source,
                       parameters=params, calibration=calibration, segment_rms_m=segment_rms,
                       joint_centre_gap_m=joint_centre_gaps(states, poses, params),
                       marker_rms_m=marker_residuals(states, markers, calibration),
                       joint_centres_m=states.joint_centre_m, features=features, strides=strides(trial.events),
-                      sagittal=export, notes=list(calibration.notes))
+                      sagittal=export, notes=list(calibration.notes),
+                      anatomical_angles_rad=anatomical_angles(frames, ankle=convention), angle_convention=convention,
+                      angles=cfg.angles, moment_convention=cfg.moments)
 
 
 def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: IdynConfig, *,
@@ -377,7 +448,10 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
                                                     metadata=metadata)
     calibration = static_calibration(markers, frames, subject, mass, source=where,
                                      hip_method="from_file" if residuals else None, metadata=metadata)
-    result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source)
+    plug_in_gait, note = plug_in_gait_model(subject, markers, frames, metadata)
+    result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source,
+                                    plug_in_gait=plug_in_gait)
+    result.notes.append(note)
     first = markers.first_frame
     result.reference_posture = ReferencePosture(
         how, None if frames is None else (int(frames[0]) + first, int(frames[-1]) + first),

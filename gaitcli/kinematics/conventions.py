@@ -42,6 +42,17 @@ def coordinates_to_clinical(q: np.ndarray) -> np.ndarray:
     return out
 
 
+ANATOMICAL_CONVENTION = ("anatomical (Cardan y-x-z between anatomical frames): hip/knee flexion, ankle dorsiflexion, "
+                         "adduction, ankle inversion and internal rotation positive on both sides; pelvis against "
+                         "the direction of progression as Plug-in Gait's right side (anterior tilt, right side up, "
+                         "right side forward positive); foot progression internal positive")
+
+
+def anatomical_to_degrees(angles_rad: np.ndarray) -> np.ndarray:
+    """Anatomical angles (:func:`gaitcli.kinematics.anatomical.anatomical_angles`, rad, clinical senses) → deg."""
+    return np.degrees(np.asarray(angles_rad, dtype=float))
+
+
 def coordinates_from_clinical(table: np.ndarray) -> np.ndarray:
     """Inverse of :func:`coordinates_to_clinical`."""
     out = np.array(table, dtype=float, copy=True)
@@ -65,6 +76,23 @@ def moments_from_clinical(table: np.ndarray) -> np.ndarray:
     """Inverse of :func:`moments_to_clinical`: (n, 21) → (n, 7, 3) x, y, z components."""
     ordered = np.asarray(table, dtype=float).reshape(-1, 7, 3) * SIGNS
     return ordered[:, :, [1, 0, 2]]
+
+
+#: the positive sense of each joint's moment components in the Plug-in Gait convention (flexion, adduction,
+#: rotation axes in that order): the internal moment, the opposite of "positive in the sense of its angle"
+PIG_MOMENT_SENSES = {"lumbar": ("extensor", "right_bender", "right_rotator"),
+                     "hip": ("extensor", "abductor", "external_rotator"),
+                     "knee": ("extensor", "abductor", "external_rotator"),
+                     "ankle": ("plantarflexor", "everter", "external_rotator")}
+PIG_MOMENTS = tuple(f"{j}_{sense}_moment" for j in JOINTS for sense in PIG_MOMENT_SENSES[j.split("_")[0]])
+PIG_CONVENTION = ("Plug-in Gait: internal moments (proximal on distal) in the distal anatomical frame; extensor "
+                  "(ankle plantarflexor), abductor (ankle everter), external rotator positive")
+
+
+def moments_to_plug_in_gait(moments: np.ndarray) -> np.ndarray:
+    """Joint moment vectors (n, 7, 3), x, y, z components in each distal segment's anatomical frame → (n, 21)
+    columns :data:`PIG_MOMENTS` (Vicon's signs: every component opposite to :func:`moments_to_clinical`)."""
+    return -moments_to_clinical(moments)
 
 
 def muscle_path_angles(hip_flexion, knee_flexion, ankle_dorsiflexion):

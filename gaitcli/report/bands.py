@@ -1,9 +1,9 @@
 """Normal bands for figures: mean ± 1 SD over the gait cycle of a reference, drawn grey behind a trial's curves.
 
-A band holds side-free clinical variables over 0–100 % of a stride (both legs alike, clinical signs as in the
-tables): angles ``<joint>_<axis>_deg`` (``hip_flexion_deg``, ``knee_adduction_deg``, ``ankle_flexion_deg`` =
-dorsiflexion, ...), moments ``<joint>_<axis>_moment_per_kg`` (N·m/kg) and the ground reaction
-``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
+A band holds side-free variables over 0–100 % of a stride (both legs alike, in the names and signs of the
+tables it was made from, the side dropped): angles ``<joint>_<sense>_deg`` (``hip_flexion_deg``,
+``ankle_inversion_deg``, ``foot_progression_deg``, ...), moments ``<joint>_<sense>_moment_per_kg`` (N·m/kg:
+``knee_extensor_moment_per_kg`` ...) and the ground reaction ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
 ``<variable>_sd``; ``gait reference ... --band FILE`` writes one from idyn outputs) or from a ``gait reference``
 table, whose right-leg columns give the sagittal angles and forces. The package's band
 (``report/data/normal_band.csv``) comes from ``gait synth``'s normative trial (Winter's curves; the command is in
@@ -14,6 +14,7 @@ floor (3°, 0.1 N·m/kg, 0.3 N/kg, our choice as for the prediction's reference,
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -22,8 +23,9 @@ import numpy as np
 from gaitcli.errors import InputError
 
 CYCLE_PCT = np.arange(101, dtype=float)
-JOINTS = ("hip", "knee", "ankle")
-AXES = ("flexion", "adduction", "rotation")
+#: a gait_cycle.csv column a band pools over both legs: ``<joint>_<side>_<sense>`` (deg) or
+#: ``<joint>_<side>_<sense>_moment_per_kg`` (the pelvis and lumbar columns have no side)
+LEG_COLUMN = re.compile(r"^(hip|knee|ankle|foot)_([rl])_(\w+?)(_moment_per_kg)?$")
 #: SD floors by the variable's unit suffix
 SD_FLOOR = {"_deg": 3.0, "_moment_per_kg": 0.1, "_N_per_kg": 0.3}
 BAND_FILE = Path(__file__).resolve().parent / "data" / "normal_band.csv"
@@ -57,29 +59,23 @@ def floor_of(variable: str) -> float:
     return next((v for suffix, v in SD_FLOOR.items() if variable.endswith(suffix)), 0.0)
 
 
-def band_variables() -> tuple[str, ...]:
-    """Every variable a band from idyn outputs has."""
-    angles = tuple(f"{j}_{a}_deg" for j in JOINTS for a in AXES)
-    moments = tuple(f"{j}_{a}_moment_per_kg" for j in JOINTS for a in AXES)
-    return angles + moments
-
-
 def band_from_gait_cycles(paths, *, source: str = "") -> NormalBand:
     """The band of every stride in idyn's ``gait_cycle.csv`` files (both legs pooled, each over its own cycle;
     at each percentage the strides that give the variable there: a moment where its foot's load is known, NaN
     where none does); each SD raised to its floor."""
     import pandas as pd
 
-    stacks: dict[str, list[np.ndarray]] = {v: [] for v in band_variables()}
+    stacks: dict[str, list[np.ndarray]] = {}
     for path in paths:
         table = pd.read_csv(path, keep_default_na=False, na_values=["NaN"])
         for (side, stride), block in table.groupby(["side", "stride"], sort=True):
             if len(block) != CYCLE_PCT.size:
                 continue
-            for j in JOINTS:
-                for a in AXES:
-                    stacks[f"{j}_{a}_deg"].append(block[f"{j}_{side}_{a}"].to_numpy(float))
-                    stacks[f"{j}_{a}_moment_per_kg"].append(block[f"{j}_{side}_{a}_moment_per_kg"].to_numpy(float))
+            for column in block.columns:
+                leg = LEG_COLUMN.match(column)
+                if leg and leg[2] == side:
+                    name = f"{leg[1]}_{leg[3]}{leg[4] or '_deg'}"
+                    stacks.setdefault(name, []).append(block[column].to_numpy(float))
     mean, sd, strides = {}, {}, {}
     for name, curves in stacks.items():
         if not curves:

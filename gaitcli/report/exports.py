@@ -10,12 +10,11 @@ forward, y left, z up) becomes (x, z, −y), so x stays forward and z points to 
 about the vertical (OpenSim's y). Where a foot's load is unknown (a stance off the plates) its force is what the
 plates gave it (zero) and its point the origin: OpenSim cannot know either.
 
-``c3d`` writes ``gait_out/export/<trial>.c3d``: a copy of the trial's C3D with Plug-in Gait-style points added
-per side — ``RHipAngles``, ``RKneeAngles``, ``RAnkleAngles`` (deg) and ``RHipMoment``, ``RKneeMoment``,
-``RAnkleMoment`` (N·mm/kg, as Vicon writes them), components (flexion, adduction, rotation) in the tables'
-clinical signs (flexion, dorsiflexion, adduction, internal rotation and each moment in the sense of its angle
-positive, both sides alike); POINT:ANGLES, POINT:MOMENTS, POINT:ANGLE_UNITS, POINT:MOMENT_UNITS and
-GAITCLI:CONVENTION say so. Moments where the foot's load is unknown are invalid points.
+``c3d`` writes ``gait_out/export/<trial>.c3d``: a copy of the trial's C3D with Vicon's Plug-in Gait points added
+per side — ``RPelvisAngles``, ``RHipAngles``, ``RKneeAngles``, ``RAnkleAngles``, ``RFootProgressAngles`` (deg),
+``RHipMoment``, ``RKneeMoment``, ``RAnkleMoment`` (N·mm/kg) and ``RHipPower`` … (W/kg in Z), in Vicon's
+components and signs (:func:`c3d_points`); POINT:ANGLES, POINT:MOMENTS, POINT:POWERS, their units and
+GAITCLI:CONVENTION say so. Moments and powers where the foot's load is unknown are invalid points.
 """
 
 from __future__ import annotations
@@ -30,14 +29,12 @@ from gaitcli.errors import InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.h5 import read_record
 from gaitcli.io.opensim import write_motion, write_trc
+from gaitcli.kinematics.conventions import PIG_CONVENTION
 
 FORMATS = ("opensim", "c3d")
 #: model axes (x forward, y left, z up) → OpenSim's (x forward, y up, z right)
 TO_OPENSIM = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 C3D_JOINTS = (("hip", "Hip"), ("knee", "Knee"), ("ankle", "Ankle"))
-CONVENTION = ("clinical: hip/knee flexion, ankle dorsiflexion, adduction and internal rotation positive on both "
-              "sides; components (flexion, adduction, rotation); moments (internal, of the proximal on the distal "
-              "segment) positive in the sense of their angle")
 EXTERNAL_LOADS = """<?xml version="1.0" encoding="UTF-8" ?>
 <OpenSimDocument Version="40000">
   <ExternalLoads name="gaitcli_external_loads">
@@ -66,8 +63,12 @@ def _idyn(folder: Path) -> dict:
                "moments": h5["joint_moments_clinical"][()],
                "moment_columns": str(h5["joint_moments_clinical"].attrs["columns"]).split(","),
                "known": h5["joint_moments_known"][()].astype(bool),
+               "angles": h5["angles"][()], "angle_columns": str(h5["angles"].attrs["columns"]).split(","),
+               "pig_moments": h5["joint_moments_shown"][()],
+               "powers": np.where(h5["joint_moments_known"][()].astype(bool), h5["joint_powers"][()], np.nan),
                "mass_kg": float(h5["segments/mass"].attrs["body_mass_kg"]), "trial": str(h5.attrs.get("trial", ""))}
     out["moments"] = np.where(np.repeat(out["known"], 3, axis=1), out["moments"], np.nan)
+    out["pig_moments"] = np.where(np.repeat(out["known"], 3, axis=1), out["pig_moments"], np.nan)
     return out
 
 
@@ -108,18 +109,34 @@ def export_opensim(out_root: Path) -> list[Path]:
 
 
 def c3d_points(idyn: dict) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """The Plug-in Gait-style points (frames, 3) and their descriptions from idyn's clinical tables."""
+    """Vicon's Plug-in Gait points (frames, 3) and their descriptions, in Vicon's components and signs: angles
+    (deg; AnkleAngles Y about the foot's toe → heel axis, the left pelvis mirrored), moments (N·mm/kg) and the
+    total power in Z (W/kg); the 27 coordinates' angles where idyn ran with ``angles: posture``."""
     points, descriptions = {}, {}
+    anatomical = "pelvis_tilt" in idyn["angle_columns"]
+    column = {c: idyn["angles"][:, k] for k, c in enumerate(idyn["angle_columns"])}
     for s, prefix in (("r", "R"), ("l", "L")):
-        for joint, name in C3D_JOINTS:
-            angles = [idyn["q"][:, idyn["q_columns"].index(f"{joint}_{s}_{a}")] for a in
-                      ("flexion", "adduction", "rotation")]
-            moments = [idyn["moments"][:, idyn["moment_columns"].index(f"{joint}_{s}_{a}_moment")] for a in
-                       ("flexion", "adduction", "rotation")]
+        mirror = 1.0 if s == "r" else -1.0
+        if anatomical:
+            points[f"{prefix}PelvisAngles"] = np.column_stack([column["pelvis_tilt"], mirror * column["pelvis_obliquity"],
+                                                               mirror * column["pelvis_rotation"]])
+            zero = np.zeros_like(column["pelvis_tilt"])
+            points[f"{prefix}FootProgressAngles"] = np.column_stack([zero, zero, column[f"foot_{s}_progression"]])
+            descriptions[f"{prefix}FootProgressAngles"] = "gaitcli foot progression (deg) in Z; X, Y not computed"
+        for j, (joint, name) in enumerate(C3D_JOINTS):
+            second = "inversion" if anatomical and joint == "ankle" else "adduction"
+            angles = [column[f"{joint}_{s}_{a}"] for a in ("flexion", second, "rotation")]
+            if second == "inversion":
+                angles[1] = -angles[1]
+            k = 1 + j + (3 if s == "l" else 0)  # the joint's index in JOINTS
             points[f"{prefix}{name}Angles"] = np.column_stack(angles)
-            points[f"{prefix}{name}Moment"] = 1000.0 * np.column_stack(moments) / idyn["mass_kg"]
-            descriptions[f"{prefix}{name}Angles"] = f"gaitcli {joint} angles (deg), clinical signs"
-            descriptions[f"{prefix}{name}Moment"] = f"gaitcli {joint} moment (Nmm/kg), clinical signs"
+            points[f"{prefix}{name}Moment"] = 1000.0 * idyn["pig_moments"][:, 3 * k:3 * k + 3] / idyn["mass_kg"]
+            power = np.zeros((len(idyn["time"]), 3))
+            power[:, 2] = idyn["powers"][:, k] / idyn["mass_kg"]
+            points[f"{prefix}{name}Power"] = power
+            descriptions[f"{prefix}{name}Angles"] = f"gaitcli {joint} angles (deg), Vicon's components and signs"
+            descriptions[f"{prefix}{name}Moment"] = f"gaitcli {joint} moment (Nmm/kg), Plug-in Gait's signs"
+            descriptions[f"{prefix}{name}Power"] = f"gaitcli {joint} power (W/kg) in Z"
     return points, descriptions
 
 
@@ -136,7 +153,9 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
     target.parent.mkdir(parents=True, exist_ok=True)
     parameters = {"POINT:ANGLES": [lab for lab in labels if lab.endswith("Angles")],
                   "POINT:MOMENTS": [lab for lab in labels if lab.endswith("Moment")],
-                  "POINT:ANGLE_UNITS": "deg", "POINT:MOMENT_UNITS": "Nmm/kg", "GAITCLI:CONVENTION": CONVENTION}
+                  "POINT:POWERS": [lab for lab in labels if lab.endswith("Power")],
+                  "POINT:ANGLE_UNITS": "deg", "POINT:MOMENT_UNITS": "Nmm/kg", "POINT:POWER_UNITS": "W",
+                  "GAITCLI:CONVENTION": PIG_CONVENTION}
     return [add_points(trial_c3d, target, points, descriptions=descriptions, parameters=parameters)]
 
 

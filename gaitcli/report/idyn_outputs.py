@@ -11,30 +11,77 @@ from gaitcli.dynamics.sagittal import sagittal_columns
 from gaitcli.dynamics.stage import IdynResult
 from gaitcli.io.h5 import Dataset, record_datasets, write_h5
 from gaitcli.io.outputs import write_table
-from gaitcli.kinematics.conventions import CONVENTION, coordinates_to_clinical, moments_to_clinical
+from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
+from gaitcli.kinematics.conventions import (ANATOMICAL_CONVENTION, CONVENTION, PIG_CONVENTION, PIG_MOMENTS,
+                                            anatomical_to_degrees, coordinates_to_clinical, moments_to_clinical,
+                                            moments_to_plug_in_gait)
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS
 from gaitcli.signal.cycles import CYCLE_POINTS, normalise
 
 
-def kinematics_columns(result: IdynResult) -> dict:
+def coordinate_columns(result: IdynResult) -> dict:
+    """The 27 coordinates (3.1): m and degrees, clinical signs, zero in the standing posture."""
     table = coordinates_to_clinical(result.q)
     return {"time_s": result.time_s, **{name: table[:, k] for k, name in enumerate(COORDINATES)}}
 
 
-def known_moments_Nm(result: IdynResult) -> np.ndarray:
-    """The joint moments (n, 7, 3) with NaN where the load they depend on is unknown (``moment_known``)."""
-    return np.where(result.moment_known[..., None], result.joint_moments_Nm, np.nan)
+def displayed_angles(result: IdynResult) -> tuple[np.ndarray, tuple[str, ...], str]:
+    """The joint angles the tables and plots for people show (deg), their column names and convention:
+    the anatomical angles, or the 27 coordinates with ``angles: posture``."""
+    if result.angles == "posture" or result.anatomical_angles_rad is None:
+        return coordinates_to_clinical(result.q), COORDINATES, CONVENTION
+    return (anatomical_to_degrees(result.anatomical_angles_rad), ANATOMICAL_ANGLES,
+            f"{ANATOMICAL_CONVENTION}; frames: {result.angle_convention}")
+
+
+def kinematics_columns(result: IdynResult) -> dict:
+    """kinematics.csv: :func:`displayed_angles` in degrees."""
+    table, names, _ = displayed_angles(result)
+    return {"time_s": result.time_s, **{name: table[:, k] for k, name in enumerate(names)}}
+
+
+def displayed_moments(result: IdynResult, moments_Nm: np.ndarray | None = None) -> tuple[np.ndarray, tuple, str]:
+    """The joint moments (n, 21) N·m the tables and plots for people show, their column names and convention:
+    Plug-in Gait's (``moments: plug_in_gait``) or positive in the sense of each angle (``coordinate``).
+    ``moments_Nm`` (n, 7, 3) replaces the result's own (the known ones, say)."""
+    if result.moment_convention == "plug_in_gait":
+        vectors = result.joint_moments_anatomical_Nm if moments_Nm is None else moments_Nm
+        return moments_to_plug_in_gait(vectors), PIG_MOMENTS, PIG_CONVENTION
+    vectors = result.joint_moments_Nm if moments_Nm is None else moments_Nm
+    return moments_to_clinical(vectors), MOMENTS, f"{CONVENTION}; components in {result.frames} frames"
+
+
+def known_shown_moments_Nm(result: IdynResult) -> np.ndarray:
+    """:func:`displayed_moments` (n, 21) with NaN where the load they depend on is unknown."""
+    source = result.joint_moments_anatomical_Nm if result.moment_convention == "plug_in_gait" else result.joint_moments_Nm
+    return displayed_moments(result, np.where(result.moment_known[..., None], source, np.nan))[0]
 
 
 def moment_columns(result: IdynResult) -> dict:
     """21 moments in N·m (``<name>_moment``) then in N·m/kg (``<name>_moment_per_kg``), NaN where the foot load
-    they depend on is unknown."""
-    table = moments_to_clinical(known_moments_Nm(result))
+    they depend on is unknown; names and signs by :func:`displayed_moments`."""
+    table = known_shown_moments_Nm(result)
+    names = displayed_moments(result)[1]
     columns = {"time_s": result.time_s}
-    columns.update({name: table[:, k] for k, name in enumerate(MOMENTS)})
-    columns.update({f"{name}_per_kg": table[:, k] / result.mass_kg for k, name in enumerate(MOMENTS)})
+    columns.update({name: table[:, k] for k, name in enumerate(names)})
+    columns.update({f"{name}_per_kg": table[:, k] / result.mass_kg for k, name in enumerate(names)})
     columns["right_foot_load_known"] = result.foot_measured["r"].astype(int)
     columns["left_foot_load_known"] = result.foot_measured["l"].astype(int)
+    return columns
+
+
+def power_columns(result: IdynResult) -> dict:
+    """Total and sagittal joint powers of hips, knees and ankles in W and W/kg, NaN where the moment is unknown
+    (positive: generated)."""
+    columns = {"time_s": result.time_s}
+    for k, joint in enumerate(JOINTS):
+        if joint == "lumbar":
+            continue
+        known = result.moment_known[:, k]
+        for label, values in (("power", result.joint_powers_W), ("sagittal_power", result.joint_powers_sagittal_W)):
+            shown = np.where(known, values[:, k], np.nan)
+            columns[f"{joint}_{label}_W"] = shown
+            columns[f"{joint}_{label}_W_per_kg"] = shown / result.mass_kg
     return columns
 
 
@@ -51,10 +98,10 @@ def residual_columns(result: IdynResult) -> dict:
 
 def cycle_columns(result: IdynResult) -> dict:
     """Every complete stride of each side normalised to 0–100 % (long format: one block per stride)."""
-    kin = coordinates_to_clinical(result.q)
-    mom = moments_to_clinical(known_moments_Nm(result)) / result.mass_kg
+    kin, angle_names, _ = displayed_angles(result)
+    mom = known_shown_moments_Nm(result) / result.mass_kg
     values = np.column_stack([kin, mom])
-    names = list(COORDINATES) + [f"{m}_per_kg" for m in MOMENTS]
+    names = list(angle_names) + [f"{m}_per_kg" for m in displayed_moments(result)[1]]
     blocks = {"cycle_pct": [], "side": [], "stride": [], "start_s": []}
     rows = []
     for k, stride in enumerate(result.strides):
@@ -91,6 +138,9 @@ def summary(result: IdynResult) -> dict:
         "residual_frames": int(np.sum(m & np.all(np.isfinite(result.residual_force_N), axis=1))),
         "rms_residual_force_all_frames_N": rms(result.residual_force_N),
         **{k: v for k, v in result.features.as_dict().items()},
+        "angles": result.angles,
+        "angle_frames": result.angle_convention,
+        "moment_convention": result.moment_convention,
         "mass_kg": result.mass_kg,
         "mass_source": result.mass_source,
         "moment_frames": result.frames,
@@ -124,11 +174,14 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
     """
     folder = Path(folder)
     write_table(folder / "kinematics.csv", kinematics_columns(result))
+    write_table(folder / "coordinates.csv", coordinate_columns(result))
     write_table(folder / "joint_moments.csv", moment_columns(result))
+    write_table(folder / "joint_powers.csv", power_columns(result))
     write_table(folder / "residuals.csv", residual_columns(result))
     write_table(folder / "sagittal.csv", sagittal_columns(result.sagittal))
     write_table(folder / "gait_cycle.csv", cycle_columns(result))
     p = result.parameters
+    angles, angle_names, angle_convention = displayed_angles(result)
     data = record_datasets("sagittal", result.sagittal)
     data.update(record_datasets("strides", list(result.strides)))
     data.update({
@@ -137,6 +190,7 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
                                                      "convention": "model (3.1): Cardan x-y-z pelvis, y-x-z joints"}),
         "coordinates_clinical": Dataset(coordinates_to_clinical(result.q), "m, deg",
                                         {"columns": ",".join(COORDINATES), "convention": CONVENTION}),
+        "angles": Dataset(angles, "deg", {"columns": ",".join(angle_names), "convention": angle_convention}),
         "velocities": Dataset(result.qd, "m/s, rad/s"),
         "accelerations": Dataset(result.qdd, "m/s^2, rad/s^2"),
         "joint_moments": Dataset(result.joint_moments_Nm, "N*m", {
@@ -145,6 +199,16 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
                           f"segment's {result.frames} frame"}),
         "joint_moments_clinical": Dataset(moments_to_clinical(result.joint_moments_Nm), "N*m",
                                           {"columns": ",".join(MOMENTS), "convention": CONVENTION}),
+        "joint_moments_shown": Dataset(displayed_moments(result)[0], "N*m", {
+            "columns": ",".join(displayed_moments(result)[1]), "convention": displayed_moments(result)[2]}),
+        "joint_moments_anatomical": Dataset(result.joint_moments_anatomical_Nm, "N*m", {
+            "axes": "frames, joints (" + ",".join(JOINTS) + "), xyz",
+            "convention": "moment of the proximal on the distal segment, components in the distal segment's "
+                          f"anatomical frame ({result.angle_convention})"}),
+        "joint_powers": Dataset(result.joint_powers_W, "W", {"joints": ",".join(JOINTS),
+                                                              "meaning": "M · (ω_child − ω_parent), generated +"}),
+        "joint_powers_sagittal": Dataset(result.joint_powers_sagittal_W, "W", {
+            "joints": ",".join(JOINTS), "meaning": "about the distal segment's anatomical medio-lateral axis"}),
         "joint_moments_global": Dataset(result.joint_moments_global_Nm, "N*m", {"frames": "global (model axes)"}),
         "joint_moments_known": Dataset(result.moment_known.astype(np.int8), "1", {
             "joints": ",".join(JOINTS), "meaning": "1 where the foot load the joint's moment depends on is known "

@@ -114,38 +114,55 @@ def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
     return written
 
 
-#: the joints and the axis of each plane's figure: (joint, coordinate axis, band variable prefix, title)
-PLANES = {"sagittal": (("hip", "flexion", "hip flexion"), ("knee", "flexion", "knee flexion"),
-                       ("ankle", "flexion", "ankle dorsiflexion")),
-          "frontal": (("hip", "adduction", "hip adduction"), ("knee", "adduction", "knee adduction (varus)"),
-                      ("ankle", "adduction", "ankle inversion"))}
+#: each plane's figure: (joint, title, the angle's senses, the moment's senses), the first sense the tables have
+#: naming the column (anatomical/Plug-in Gait names first, then the coordinates' of ``angles: posture`` and
+#: ``moments: coordinate``)
+PLANES = {"sagittal": (("hip", "hip flexion", ("flexion",), ("extensor", "flexion")),
+                       ("knee", "knee flexion", ("flexion",), ("extensor", "flexion")),
+                       ("ankle", "ankle dorsiflexion", ("flexion",), ("plantarflexor", "flexion"))),
+          "frontal": (("hip", "hip adduction", ("adduction",), ("abductor", "adduction")),
+                      ("knee", "knee adduction (varus)", ("adduction",), ("abductor", "adduction")),
+                      ("ankle", "ankle inversion", ("inversion", "adduction"), ("everter", "adduction")))}
+
+
+def _column(columns: list[str], joint: str, side: str, senses, suffix: str = "") -> tuple[int, str]:
+    """(index, sense) of the first ``<joint>_<side>_<sense><suffix>`` in ``columns``."""
+    sense = next(s for s in senses if f"{joint}_{side}_{s}{suffix}" in columns)
+    return columns.index(f"{joint}_{side}_{sense}{suffix}"), sense
 
 
 def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", band=None):
     """Angles (deg) and moments (N·m/kg) of hip, knee and ankle in ``plane`` over the gait cycle, mean ± SD of
-    each side's strides (right red, left blue) over the grey normal ``band`` (:mod:`gaitcli.report.bands`);
-    moments blank where the foot's load is unknown. Returns the matplotlib figure."""
-    from gaitcli.kinematics.model import COORDINATES, MOMENTS
+    each side's strides (right red, left blue) over the grey normal ``band`` (:mod:`gaitcli.report.bands`, the
+    variable of the same name); moments blank where the foot's load is unknown. Returns the matplotlib figure."""
     from gaitcli.report.bands import draw_band
     from gaitcli.signal.cycles import Stride, normalise
 
     with h5py.File(h5_path, "r") as h5:
         strides = read_records(h5["strides"], Stride)
-        kin = h5["coordinates_clinical"][()]
-        mom = h5["joint_moments_clinical"][()] / float(h5["segments/mass"].attrs["body_mass_kg"])
+        kin_set = h5["angles"] if "angles" in h5 else h5["coordinates_clinical"]  # older files: coordinates
+        kin, angle_columns = kin_set[()], str(kin_set.attrs["columns"]).split(",")
+        shown = h5["joint_moments_shown"] if "joint_moments_shown" in h5 else h5["joint_moments_clinical"]
+        mom = shown[()] / float(h5["segments/mass"].attrs["body_mass_kg"])
+        moment_columns = str(shown.attrs["columns"]).split(",")
+        convention = str(shown.attrs.get("convention", ""))
         known = h5["joint_moments_known"][()].astype(bool)  # blank where the foot's load is unknown
         mom = np.where(np.repeat(known, 3, axis=1), mom, np.nan)
         time_s = h5["time"][()]
     fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
     pct = np.arange(101)
     banded = False
-    for col, (joint, axis, label) in enumerate(PLANES[plane]):
-        banded |= draw_band(axes[0, col], band, f"{joint}_{axis}_deg")
-        banded |= draw_band(axes[1, col], band, f"{joint}_{axis}_moment_per_kg")
+    for col, (joint, label, angle_senses, moment_senses) in enumerate(PLANES[plane]):
+        angle_sense = _column(angle_columns, joint, "r", angle_senses)[1]
+        moment_sense = _column(moment_columns, joint, "r", moment_senses, "_moment")[1]
+        banded |= draw_band(axes[0, col], band, f"{joint}_{angle_sense}_deg")
+        banded |= draw_band(axes[1, col], band, f"{joint}_{moment_sense}_moment_per_kg")
         for side in ("r", "l"):
             ks = [s for s in strides if s.side == side]
-            a = [normalise(kin[:, COORDINATES.index(f"{joint}_{side}_{axis}")], time_s, s) for s in ks]
-            m = [normalise(mom[:, MOMENTS.index(f"{joint}_{side}_{axis}_moment")], time_s, s) for s in ks]
+            a_col = _column(angle_columns, joint, side, angle_senses)[0]
+            m_col = _column(moment_columns, joint, side, moment_senses, "_moment")[0]
+            a = [normalise(kin[:, a_col], time_s, s) for s in ks]
+            m = [normalise(mom[:, m_col], time_s, s) for s in ks]
             for row, values, count in ((0, a, len(ks)), (1, m, len(ks))):
                 if not values:
                     continue
@@ -158,7 +175,7 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
                 ax.fill_between(pct, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
         axes[0, col].set_title(label, fontsize=10)
         axes[0, col].set_ylabel("angle (deg)")
-        axes[1, col].set_ylabel("moment (N·m/kg)")
+        axes[1, col].set_ylabel(f"{joint} {moment_sense.replace('_', ' ')} moment (N·m/kg)")
         axes[1, col].set_xlabel("gait cycle (%)")
         for row in (0, 1):
             axes[row, col].axhline(0, color="0.7", lw=0.6)
@@ -166,6 +183,9 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
         for ax in axes[row]:
             ax.legend(fontsize=7, loc="best")
     sign = "flexion / dorsiflexion" if plane == "sagittal" else "adduction / varus / inversion"
+    if convention.startswith("Plug-in Gait"):
+        sign += ("; moments + = extensor / plantarflexor (Plug-in Gait)" if plane == "sagittal"
+                 else "; moments + = abductor / everter (Plug-in Gait)")
     normal = "; grey: normal ± 1 SD" if banded else ""
     fig.suptitle(f"{plane.capitalize()} angles and moments over the gait cycle — {title}\nmean ± SD of each side's "
                  f"strides; moments blank where the foot's load is unknown; + = {sign}{normal}", fontsize=9)

@@ -130,7 +130,7 @@ def plug_in_gait_points(template: dict, joint_centres: dict, stature_m: float) -
     thigh's and shank's mid-points in the leg's frontal plane, ANK at the ankle centre plus ``PIG_ANKLE_OFFSET`` ×
     stature laterally (so that the chord method's right angle holds exactly), TOE at the mid-metatarsal heads.
     Returns the points by lab label, the body each tracks, and the subject measurements the C3D's PROCESSING
-    group carries (widths from the marker offsets: width = 2 × offset − marker diameter, mm)."""
+    group carries (widths from the marker offsets: width = 2 × offset − marker diameter, mm; leg lengths)."""
     points, bodies, metadata = {}, {}, {"PROCESSING:MarkerDiameter": 1000.0 * PIG_MARKER_DIAMETER_M}
     for s, side, lateral in (("r", "Right", -1.0), ("l", "Left", 1.0)):
         prefix = s.upper()
@@ -145,6 +145,9 @@ def plug_in_gait_points(template: dict, joint_centres: dict, stature_m: float) -
         knee_offset = float(np.linalg.norm(template[f"LEF{s}"] - kjc))
         metadata[f"PROCESSING:{side}KneeWidth"] = 1000.0 * (2 * knee_offset - PIG_MARKER_DIAMETER_M)
         metadata[f"PROCESSING:{side}AnkleWidth"] = 1000.0 * (2 * PIG_ANKLE_OFFSET * stature_m - PIG_MARKER_DIAMETER_M)
+        # Plug-in Gait's leg length, as a lab measures it: the ASIS to the medial malleolus
+        metadata[f"PROCESSING:{side}LegLength"] = 1000.0 * float(np.linalg.norm(template[f"ASIS{s}"]
+                                                                               - template[f"MM{s}"]))
     return points, bodies, metadata
 
 

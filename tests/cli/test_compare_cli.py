@@ -2,7 +2,7 @@
 ``gait run`` (once per session), copied as the baseline and as today's runs with known changes.
 
 The invocations run once per module: the baseline against an identical copy (exit 0), against a copy whose
-``knee_r_flexion_moment`` is shifted by 1 N·m (default tolerance 0.5 N·m: exit 1 naming trial, file, column and
+``knee_r_extensor_moment`` is shifted by 1 N·m (default tolerance 0.5 N·m: exit 1 naming trial, file, column and
 difference; within a tolerance file's 2 N·m: exit 0; with ``--json``), against copies without one file and
 without one stage (exit 1, reported), and bad input (a missing tree, an unknown family: exit 2, one line).
 """
@@ -20,7 +20,7 @@ from .conftest import build_once, gait_many
 
 TRIAL = "walk01"
 SHIFT_NM = 1.0  # > the moment family's 0.5 N·m
-COLUMN = "knee_r_flexion_moment"
+COLUMN = "knee_r_extensor_moment"
 
 
 def _build(root):

@@ -5,12 +5,14 @@ and the C3D's own markers stay as they were."""
 from __future__ import annotations
 
 import ezc3d
+import h5py
 import numpy as np
 import pandas as pd
 import pytest
 
 from gaitcli.io.c3d import read_c3d
 from gaitcli.io.opensim import read_motion, read_trc
+from gaitcli.kinematics.model import JOINTS, MOMENTS
 
 from .conftest import copy_sample, gait
 
@@ -35,14 +37,15 @@ def test_the_opensim_files_read_back_to_idyns_tables(exported):
     np.testing.assert_allclose(markers[:, 0, 2], -1000 * filtered[f"{lab}_y_m"], atol=0.01)  # z right
     header, motion = read_motion(folder / "coordinates.mot")
     assert header["inDegrees"] == "yes" and header["nColumns"] == "28"
-    kinematics = pd.read_csv(out / "idyn" / "kinematics.csv")
+    kinematics = pd.read_csv(out / "idyn" / "coordinates.csv")  # OpenSim's coordinates: the model's 27
     for name in ("hip_r_flexion", "knee_l_flexion", "pelvis_x"):  # deg; m
         np.testing.assert_allclose(motion[name], kinematics[name], rtol=1e-5, atol=1e-6)
     header, moments = read_motion(folder / "joint_moments.sto")
-    table = pd.read_csv(out / "idyn" / "joint_moments.csv")
+    with h5py.File(out / "idyn" / "idyn.h5", "r") as h5:  # the model's generalized forces' convention
+        knee = h5["joint_moments_clinical"][:, MOMENTS.index("knee_r_flexion_moment")]
+        knee[~h5["joint_moments_known"][:, JOINTS.index("knee_r")].astype(bool)] = np.nan
     assert header["inDegrees"] == "no"
-    np.testing.assert_allclose(moments["knee_r_flexion_moment"], table["knee_r_flexion_moment"], rtol=1e-5,
-                               atol=1e-6, equal_nan=True)
+    np.testing.assert_allclose(moments["knee_r_flexion_moment"], knee, rtol=1e-5, atol=1e-6, equal_nan=True)
     _, grf = read_motion(folder / "grf.mot")
     filter_grf = pd.read_csv(out / "filter" / "grf.csv")
     np.testing.assert_allclose(grf["r_ground_force_vy"], filter_grf["foot_r_force_z_N"].fillna(0), atol=1e-3)
@@ -65,7 +68,7 @@ def test_the_c3d_copy_carries_angles_and_moments_and_the_markers_as_they_were(ex
     np.testing.assert_allclose(knee[0], kinematics["knee_r_flexion"], rtol=1e-6, atol=1e-4)  # float32
     ankle = c["data"]["points"][:3, labels.index("LAnkleMoment")]
     residual = c["data"]["meta_points"]["residuals"][0, labels.index("LAnkleMoment")]
-    want = 1000 * moments["ankle_l_flexion_moment_per_kg"].to_numpy()
+    want = 1000 * moments["ankle_l_plantarflexor_moment_per_kg"].to_numpy()
     known = np.isfinite(want)
     np.testing.assert_allclose(ankle[0, known], want[known], rtol=1e-5, atol=1e-3)
     assert np.all(residual[~known] < 0) and np.all(residual[known] >= 0)

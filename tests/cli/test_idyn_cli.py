@@ -39,13 +39,15 @@ import pytest
 from gaitcli.errors import GaitWarning
 from gaitcli.io.c3d import read_c3d
 from gaitcli.io.c3d_write import write_c3d
+from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
+from gaitcli.kinematics.conventions import PIG_MOMENTS
 from gaitcli.kinematics.model import BODIES, COORDINATES, MOMENTS, RESIDUALS
 from gaitcli.core.recording import Markers
 
 from .conftest import SAMPLES, Result, build_once, copy_sample, gait, gait_many
 
-IDYN_FILES = ("kinematics.csv", "joint_moments.csv", "residuals.csv", "sagittal.csv", "gait_cycle.csv", "idyn.h5",
-              "summary.json")
+IDYN_FILES = ("kinematics.csv", "coordinates.csv", "joint_moments.csv", "joint_powers.csv", "residuals.csv",
+              "sagittal.csv", "gait_cycle.csv", "idyn.h5", "summary.json")
 TABLE_3_1 = ("stride_length_m", "period_s", "speed_m_s", "stance_right_pct", "stance_left_pct", "double_stance_pct")
 EXACT_PIPELINE = "filter: {cutoff_hz: 0, force_cutoff_hz: 0, force_threshold_N: 1.0}\n"
 SKI_BOOT_KG = 2.431  # Table A.3
@@ -109,6 +111,22 @@ def out_dir(root: Path, name: str) -> Path:
     return root / name / "gait_out" / "idyn"
 
 
+def coordinate_moments(folder: Path) -> pd.DataFrame:
+    """The 21 joint moments in the truth's convention (positive in the sense of each angle, N·m, NaN where the
+    load is unknown) from idyn.h5, with the load masks, as the truth's joint_moments.csv names them."""
+    with h5py.File(folder / "idyn.h5", "r") as h5:
+        values = h5["joint_moments_clinical"][()]
+        known = h5["joint_moments_known"][()].astype(bool)
+        time_s = h5["time"][()]
+    values = np.where(np.repeat(known, 3, axis=1), values, np.nan)
+    table = pd.DataFrame(values, columns=list(MOMENTS))
+    table.insert(0, "time_s", time_s)
+    legs = pd.read_csv(folder / "joint_moments.csv")
+    table["right_foot_load_known"] = legs["right_foot_load_known"]
+    table["left_foot_load_known"] = legs["left_foot_load_known"]
+    return table
+
+
 def truth_features(trial: Path, threshold_N: float = 20.0) -> dict:
     """Table 3.1 from the synthetic trial's truth: the period from its events, the speed from the pelvis's
     forward motion, stance where the true vertical force exceeds the plates' threshold (the predicted walk
@@ -140,10 +158,11 @@ def test_idyn_on_every_sample_trial_writes_the_design_files(runs, name):
         assert (folder / file).is_file(), f"{file} missing\n{result.describe()}"
     plots = list((folder / "plots").iterdir())
     assert plots and all(p.suffix == ".png" and p.stat().st_size > 1000 for p in plots)
-    kin = pd.read_csv(folder / "kinematics.csv")
+    assert list(pd.read_csv(folder / "kinematics.csv").columns) == ["time_s", *ANATOMICAL_ANGLES]
+    kin = pd.read_csv(folder / "coordinates.csv")
     assert list(kin.columns) == ["time_s", *COORDINATES]
     moments = pd.read_csv(folder / "joint_moments.csv")
-    assert list(moments.columns) == ["time_s", *MOMENTS, *(f"{m}_per_kg" for m in MOMENTS),
+    assert list(moments.columns) == ["time_s", *PIG_MOMENTS, *(f"{m}_per_kg" for m in PIG_MOMENTS),
                                      "right_foot_load_known", "left_foot_load_known"]
     residuals = pd.read_csv(folder / "residuals.csv")
     assert list(residuals.columns) == ["time_s", *(f"{r}_{u}" for r, u in zip(RESIDUALS, ["N"] * 3 + ["Nm"] * 3)),
@@ -194,7 +213,7 @@ def test_noisy_sample_trial_moments_within_tolerance(runs):
     # noise, seeds 0–9: tests/dynamics/test_stage.py.
     results, root = runs
     assert results["normal"][0].returncode == 0
-    moments = pd.read_csv(out_dir(root, "normal") / "joint_moments.csv")
+    moments = coordinate_moments(out_dir(root, "normal"))
     truth = pd.read_csv(root / "normal" / "truth" / "joint_moments.csv")
     bound = {"hip": 0.1, "knee": 0.1, "ankle": 0.1}
     for side, column in (("r", "right_foot_load_known"), ("l", "left_foot_load_known")):
@@ -250,7 +269,7 @@ def test_run_does_filter_then_idyn(exact):
 
 def test_exact_trial_coordinates(exact):
     _, trial = exact
-    got = pd.read_csv(trial / "gait_out" / "idyn" / "kinematics.csv")
+    got = pd.read_csv(trial / "gait_out" / "idyn" / "coordinates.csv")
     want = pd.read_csv(trial / "truth" / "kinematics.csv")
     np.testing.assert_allclose(got.time_s, want.time_s, atol=1e-9)
     positions, angles = list(COORDINATES[:3]), list(COORDINATES[3:])
@@ -260,7 +279,7 @@ def test_exact_trial_coordinates(exact):
 
 def test_exact_trial_moments(exact):
     _, trial = exact
-    got = pd.read_csv(trial / "gait_out" / "idyn" / "joint_moments.csv")
+    got = coordinate_moments(trial / "gait_out" / "idyn")
     want = pd.read_csv(trial / "truth" / "joint_moments.csv")
     inner = np.zeros(len(got), dtype=bool)
     inner[EDGE:-EDGE] = True
@@ -324,8 +343,8 @@ def test_missing_thigh_markers_give_nan_frames_and_a_warning(runs):
                 "coordinates and moments there are NaN")
     assert warning == [expected], result.stderr
     folder = out_dir(root, "dropout")
-    kin = pd.read_csv(folder / "kinematics.csv")
-    moments = pd.read_csv(folder / "joint_moments.csv")
+    kin = pd.read_csv(folder / "coordinates.csv")
+    moments = coordinate_moments(folder)
     gap = np.zeros(len(kin), dtype=bool)
     gap[GAP[0] - 1:GAP[1]] = True  # rows are 0-based, file frames start at 1
     thigh = [f"{j}_r_{a}" for j in ("hip", "knee") for a in ("flexion", "adduction", "rotation")]
@@ -337,7 +356,7 @@ def test_missing_thigh_markers_give_nan_frames_and_a_warning(runs):
         known = moments[column].to_numpy() == 1
         assert np.isfinite(moments[leg].to_numpy()[~gap & known]).all()
     # frames outside the gap agree with the complete sample trial's
-    complete = pd.read_csv(out_dir(root, "normal") / "kinematics.csv")
+    complete = pd.read_csv(out_dir(root, "normal") / "coordinates.csv")
     away = ~gap
     away[GAP[0] - 1 - 10:GAP[1] + 10] = False  # the filter's and the spline's reach around the gap
     np.testing.assert_allclose(kin[thigh].to_numpy()[away], complete[thigh].to_numpy()[away], atol=0.05)

@@ -20,9 +20,9 @@ leaves 8 loaded frames flagged as all contacts measured (without them the residu
 and the 20 N plate threshold ends the left stance 23 ms before the lab's toe off. Hence the
 tolerances against the lab's events below: period 4 %, stance 5 points.
 
-Signs: clinical, each moment positive in the sense of its angle — hip flexion, knee flexion and
-ankle dorsiflexion moments positive; hip extension, knee extension and ankle plantarflexion
-moments negative.
+Signs: the table above keeps each moment positive in the sense of its angle (hip and knee flexion,
+ankle dorsiflexion); joint_moments.csv has Plug-in Gait's (hip and knee extensor, ankle
+plantarflexor positive), which ``stance_curve`` turns into the table's by one sign.
 """
 
 from __future__ import annotations
@@ -159,7 +159,8 @@ def test_pelvis_residuals_are_reported(qualisys):
 
 
 def stance_curve(qualisys, side: str, joint: str):
-    """(percent of stance, sagittal moment N·m/kg) over the stance this side made on a plate."""
+    """(percent of stance, sagittal moment N·m/kg, flexion/dorsiflexion positive) over the stance this side made
+    on a plate."""
     events = qualisys["events"]
     mine = (events.side == side) & (events.source == "plate")
     strike = events.time_s[mine & (events.event == "heel_strike")].to_numpy()
@@ -170,7 +171,8 @@ def stance_curve(qualisys, side: str, joint: str):
     inside = (t >= strike[0]) & (t <= off[0])
     assert (moments[f"{SIDES[side]}_foot_load_known"].to_numpy()[inside] == 1).all()
     pct = (t[inside] - strike[0]) / (off[0] - strike[0]) * 100
-    return pct, moments[f"{joint}_{side}_flexion_moment_per_kg"].to_numpy()[inside]
+    extensor = "plantarflexor" if joint == "ankle" else "extensor"
+    return pct, -moments[f"{joint}_{side}_{extensor}_moment_per_kg"].to_numpy()[inside]
 
 
 @pytest.mark.parametrize("side", ["l", "r"])

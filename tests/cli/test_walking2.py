@@ -92,7 +92,8 @@ def test_gait_features_are_plausible_and_match_the_pelvis(walking2, shared_c3d_d
 
 
 def right_stance(walking2):
-    """(percent of the loaded stance, {joint: sagittal moment N·m/kg}) over the right foot's frames on plate 1."""
+    """(percent of the loaded stance, {joint: sagittal moment N·m/kg, flexion/dorsiflexion positive}) over the right
+    foot's frames on plate 1 (joint_moments.csv's Plug-in Gait extensor/plantarflexor moments, sign turned)."""
     events, moments = walking2["events"], walking2["moments"]
     off = events.time_s[(events.side == "r") & (events.event == "toe_off") & (events.source == "plate")].to_numpy()
     assert off.size == 1
@@ -107,7 +108,8 @@ def right_stance(walking2):
     assert known[stance][-int(0.75 * stance.sum()):].all()
     loaded = stance & known
     pct = (t[loaded] - strike) / (off[0] - strike) * 100  # percent of the whole stance
-    return pct, {j: moments[f"{j}_r_flexion_moment_per_kg"].to_numpy()[loaded] for j in ("hip", "knee", "ankle")}
+    extensor = {"hip": "extensor", "knee": "extensor", "ankle": "plantarflexor"}
+    return pct, {j: -moments[f"{j}_r_{e}_moment_per_kg"].to_numpy()[loaded] for j, e in extensor.items()}
 
 
 def test_right_stance_moments_have_the_textbook_shapes(walking2):

@@ -116,9 +116,11 @@ def standing_skeleton() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         m[f"TT{s}"] = at(0.045, 0.0, knee[2] - 0.07)
         m[f"LM{s}"] = at(0.0, 0.035, mid_malleoli[2])
         m[f"MM{s}"] = at(0.0, -0.035, mid_malleoli[2])  # mid-malleoli straight below KJC
-        m[f"CA{s}"] = at(-0.06, 0.0, 0.035)
-        m[f"VM{s}"] = at(0.14, 0.035, 0.02)
-        m[f"FM{s}"] = at(0.15, -0.03, 0.02)
+        # a level foot, its long axis along +x: the foot's anatomical frame (CA → mid-metatarsals, y in the
+        # plane of CA, VM, FM) is the global one, so the standing ankle reads 0° in all three planes
+        m[f"CA{s}"] = at(-0.06, 0.0, 0.02)
+        m[f"VM{s}"] = at(0.145, 0.0325, 0.02)
+        m[f"FM{s}"] = at(0.145, -0.0325, 0.02)
         m[f"AC{s}"] = np.array([-0.02, lat * 0.18, 1.42])
     m["C7"] = np.array([-0.08, 0.0, 1.46])
     m["ST"] = np.array([0.08, 0.0, 1.40])

@@ -6,8 +6,9 @@ gaitcli function that calls it): the trials are built by hand from geometry
 (:mod:`tests.kinematics.handmade_trials`), written with the project's C3D writer, and the real
 ``gait idyn`` command runs on them in a subprocess. The expectations are stated physically —
 "the knee moved forward", "the toes went up", "the ground pushes ahead of the ankle" — and
-compared with ``kinematics.csv`` and ``joint_moments.csv``. A sign flipped in ``CLINICAL_SIGN``
-turns a +30° into −30° (or a −69.5 N·m into +69.5 N·m), far outside every tolerance here.
+compared with ``kinematics.csv`` (anatomical angles) and ``joint_moments.csv`` (Plug-in Gait's
+moments: extensor, abductor/everter, external rotator positive). A sign flipped anywhere turns a
++30° into −30° (or a 69.5 N·m into −69.5 N·m), far outside every tolerance here.
 
 Three trial folders, one ``gait idyn`` run each (about 3.5 s each, run two or more at a time):
 
@@ -25,7 +26,9 @@ Three trial folders, one ``gait idyn`` run each (about 3.5 s each, run two or mo
   toes-in twist (free moment), 500 N under the left foot 0.04 m behind and 0.02 m medial of the
   left ankle centre with a 3 N·m toes-in twist.
 
-Not covered: the pelvis and lumbar columns, which keep the model's signs (README).
+The pelvis angles are checked at zero only; the lumbar moments are not covered. Every segment of
+the static is built on the global axes (level pelvis, vertical thigh and shank, level foot), so
+its anatomical angles are zero and each pose's anatomical angles are the pose's own.
 
 Where the joint centres are: the hip centres the model estimates are Bell et al. (1990) from the
 static ASIS/PSIS. The helper computes them by hand with the same published formula (mid-ASIS,
@@ -159,6 +162,11 @@ def runs(tmp_path_factory):
     return out
 
 
+def _angle_column(joint, side, axis):
+    """kinematics.csv's name of a joint angle: the ankle's frontal angle is inversion."""
+    return f"ankle_{side}_inversion" if (joint, axis) == ("ankle", "adduction") else f"{joint}_{side}_{axis}"
+
+
 def _column(table, name) -> np.ndarray:
     values = table[name].to_numpy()
     assert np.all(np.isfinite(values)), name
@@ -197,10 +205,10 @@ def test_both_hips_flexed_30_deg_read_plus_30(runs):
     for side in SIDES:  # knees straight, feet rigid with the shanks, no out-of-plane motion
         for joint in ("hip", "knee", "ankle"):
             for axis in ("adduction", "rotation"):
-                _assert_angle(k, f"{joint}_{side}_{axis}", 0.0)
+                _assert_angle(k, _angle_column(joint, side, axis), 0.0)
         _assert_angle(k, f"knee_{side}_flexion", 0.0)
         _assert_angle(k, f"ankle_{side}_flexion", 0.0)
-    for col in ("pelvis_rot_x", "pelvis_rot_y", "pelvis_rot_z", "lumbar_flexion"):
+    for col in ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation"):
         _assert_angle(k, col, 0.0)
 
 
@@ -223,7 +231,7 @@ def test_adduction_and_internal_rotation_are_positive_on_both_sides(runs):
     for side in SIDES:  # varus knee, tibia turned in, foot inverted with the toes in: all positive
         for joint in ("knee", "ankle"):
             for axis, value in zip(("flexion", "adduction", "rotation"), POSE_DEG[f"{joint}_{side}"]):
-                _assert_angle(k, f"{joint}_{side}_{axis}", value)
+                _assert_angle(k, _angle_column(joint, side, axis), value)
 
 
 # --- 2. moments under a known load ------------------------------------------------------------
@@ -289,7 +297,7 @@ def test_load_ahead_of_the_right_ankle_gives_a_plantarflexion_moment(runs):
     # about +y the foot's toes go down: M_y > 0 is a plantarflexion moment, F·d − m g (x_com − x_ankle)
     plantarflexion = M["ankle"][1]
     assert plantarflexion == pytest.approx(700.0 * 0.10 - 0.959 * G * 0.051, abs=0.01)  # 69.52 N·m
-    _assert_moment(m, "ankle_r_flexion_moment", -plantarflexion)  # dorsiflexion positive → negative
+    _assert_moment(m, "ankle_r_plantarflexor_moment", plantarflexion)
 
 
 def test_load_behind_the_left_ankle_gives_a_dorsiflexion_moment(runs):
@@ -298,7 +306,7 @@ def test_load_behind_the_left_ankle_gives_a_dorsiflexion_moment(runs):
     M = _expected_internal_moments(runs, "l", LEFT_LOAD)
     dorsiflexion = -M["ankle"][1]  # 500 N · 0.04 m + the foot's weight ahead of the ankle: 20.48 N·m
     assert dorsiflexion == pytest.approx(500.0 * 0.04 + 0.959 * G * 0.051, abs=0.01)
-    _assert_moment(m, "ankle_l_flexion_moment", dorsiflexion)
+    _assert_moment(m, "ankle_l_plantarflexor_moment", -dorsiflexion)  # a dorsiflexor moment reads negative
 
 
 def test_knee_and_hip_moments_of_a_straight_leg(runs):
@@ -306,9 +314,9 @@ def test_knee_and_hip_moments_of_a_straight_leg(runs):
 
     The force ahead of a straight knee would hyperextend it (external extension moment); the
     internal moment of the thigh on the shank that balances it is a flexion moment, positive in
-    the tables (moments are the proximal segment's on the distal one, positive in the sense of
-    the angle). At the hip the force ahead would flex the thigh; the balancing internal moment is
-    an extension moment, negative. Behind the joints (left) every sign reverses.
+    Plug-in Gait's tables (extensor positive) as a negative knee extensor moment. At the hip the
+    force ahead would flex the thigh; the balancing internal moment is an extension moment,
+    positive. Behind the joints (left) every sign reverses.
     """
     m = runs["load"]["moments"]
     for side, load in (("r", RIGHT_LOAD), ("l", LEFT_LOAD)):
@@ -319,12 +327,12 @@ def test_knee_and_hip_moments_of_a_straight_leg(runs):
             assert knee_flexion > 60 and hip_flexion < -60
         else:
             assert knee_flexion < -15 and hip_flexion > 15
-        _assert_moment(m, f"knee_{side}_flexion_moment", knee_flexion)
-        _assert_moment(m, f"hip_{side}_flexion_moment", hip_flexion)
+        _assert_moment(m, f"knee_{side}_extensor_moment", -knee_flexion)
+        _assert_moment(m, f"hip_{side}_extensor_moment", -hip_flexion)
 
 
 def test_medial_load_gives_abduction_moments_on_both_sides(runs):
-    """COP 2 cm medial of each leg's joint line: internal abduction moments (negative adduction columns).
+    """COP 2 cm medial of each leg's joint line: internal abduction moments (positive abductor columns).
 
     About +x the distal end of a right segment moves towards +y (medially: adduction), of a left
     one towards +y (laterally: abduction); the mirrored loads must give the same clinical sign.
@@ -335,17 +343,19 @@ def test_medial_load_gives_abduction_moments_on_both_sides(runs):
         for joint in ("hip", "knee", "ankle"):
             adduction = M[joint][0] if side == "r" else -M[joint][0]
             assert adduction < -0.9 * load["force_N"] * load["medial_m"]  # ≈ −14 N·m right, −10 N·m left
-            _assert_moment(m, f"{joint}_{side}_adduction_moment", adduction)
+            abductor = "everter" if joint == "ankle" else "abductor"  # Plug-in Gait's name at the ankle
+            _assert_moment(m, f"{joint}_{side}_{abductor}_moment", -adduction)
 
 
 def test_toes_in_twist_of_the_ground_gives_external_rotation_moments(runs):
     """The ground twists each foot toes-in (free moment): the balancing internal moments at ankle,
-    knee and hip turn the distal segments outwards — external rotation moments, negative on both
-    sides (about +z the front of a segment turns medially on the right, laterally on the left)."""
+    knee and hip turn the distal segments outwards — external rotation moments, positive external rotator
+    columns on both sides (about +z the front of a segment turns medially on the right, laterally on the
+    left)."""
     m = runs["load"]["moments"]
     for side, load in (("r", RIGHT_LOAD), ("l", LEFT_LOAD)):
         M = _expected_internal_moments(runs, side, load)
         for joint in ("hip", "knee", "ankle"):
             internal_rotation = M[joint][2] if side == "r" else -M[joint][2]
             assert internal_rotation == pytest.approx(-load["toes_in_twist_Nm"], abs=1e-9)
-            _assert_moment(m, f"{joint}_{side}_rotation_moment", internal_rotation)
+            _assert_moment(m, f"{joint}_{side}_external_rotator_moment", -internal_rotation)

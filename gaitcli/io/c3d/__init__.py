@@ -177,14 +177,19 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
 
 
 #: subject data some labs' C3D files carry (Vicon's PROCESSING group, the c3d.org SUBJECT(S) groups)
-SUBJECT_PARAMETERS = {"PROCESSING": ("Bodymass", "BodyMass", "Height", "LeftLegLength", "RightLegLength",
-                                     "InterAsisDistance", "LeftKneeWidth", "RightKneeWidth", "LeftAnkleWidth",
-                                     "RightAnkleWidth", "MarkerDiameter"),
+_PIG_SIDED = ("LegLength", "KneeWidth", "AnkleWidth", "AsisTrocanterDistance")
+#: Plug-in Gait's signed subject measurements (offsets and rotations, rad; the sole delta, mm): zero is a value
+_PIG_SIGNED = ("TibialTorsion", "ThighRotation", "ShankRotation", "StaticPlantFlex", "StaticRotOff", "SoleDelta")
+SUBJECT_PARAMETERS = {"PROCESSING": ("Bodymass", "BodyMass", "Height", "InterAsisDistance", "MarkerDiameter")
+                      + tuple(f"{side}{name}" for name in _PIG_SIDED + _PIG_SIGNED
+                              for side in ("Left", "Right", "L", "R")),
                       "SUBJECT": ("WEIGHT", "MASS", "HEIGHT"), "SUBJECTS": ("WEIGHT", "MASS", "HEIGHT")}
+_SIGNED_NAMES = frozenset(f"{side}{name}" for name in _PIG_SIGNED for side in ("Left", "Right", "L", "R"))
 
 
 def subject_metadata(params) -> dict[str, float]:
-    """``{"GROUP:NAME": value}`` of the :data:`SUBJECT_PARAMETERS` a file has, where finite and > 0 (first value)."""
+    """``{"GROUP:NAME": value}`` of the :data:`SUBJECT_PARAMETERS` a file has (first value), where finite and
+    > 0, or finite for Plug-in Gait's signed offsets (Vicon writes both ``RightKneeWidth`` and ``RKneeWidth``)."""
     out = {}
     for group, names in SUBJECT_PARAMETERS.items():
         for name in names:
@@ -193,7 +198,7 @@ def subject_metadata(params) -> dict[str, float]:
                 number = float(np.asarray(value, dtype=float).ravel()[0])
             except (TypeError, ValueError, IndexError):
                 continue
-            if np.isfinite(number) and number > 0:
+            if np.isfinite(number) and (number > 0 or name in _SIGNED_NAMES):
                 out[f"{group}:{name}"] = number
     return out
 
