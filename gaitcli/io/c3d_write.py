@@ -26,19 +26,21 @@ OpenSim's plate extraction) return the input wrench exactly:
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
 import ezc3d
 import numpy as np
 
-from gaitcli.errors import InputError
+from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.c3d import plate_axes
+from gaitcli.io.c3d.header import as_text
 from gaitcli.io.c3d.long import write_frame_count
 from gaitcli.core.recording import ForcePlate, Markers
 
-__all__ = ["write_c3d", "DEFAULT_ORIGIN_MM"]
+__all__ = ["write_c3d", "add_points", "DEFAULT_ORIGIN_MM"]
 
 DEFAULT_ORIGIN_MM = (2.0, -1.5, 40.0)
 """Surface centre → transducer origin (mm, plate axes, z into the floor), AMTI-like."""
@@ -155,10 +157,12 @@ def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions
                parameters: Mapping[str, object] | None = None) -> Path:
     """A copy of the C3D file ``source`` at ``target`` with ``points`` ({label: (frames, 3)}, in the units the
     caller names in ``parameters``) appended after its own points, which, its analogs and its other parameters
-    stay as they were. NaN rows become invalid points (residual −1). ``parameters``: {"GROUP:NAME": value}
-    added or replaced (e.g. ``POINT:ANGLE_UNITS``, ``POINT:ANGLES``). Written atomically."""
+    stay as they were (text parameters in a form the C3D library writes: :func:`writable_text_parameters`).
+    NaN rows become invalid points (residual −1). ``parameters``: {"GROUP:NAME": value} added or replaced
+    (e.g. ``POINT:ANGLE_UNITS``, ``POINT:ANGLES``). Written atomically."""
     source, target = Path(source), Path(target)
     c = ezc3d.c3d(str(source), extract_forceplat_data=False)
+    writable_text_parameters(c, source)
     data = c["data"]["points"]
     n_frames = data.shape[2]
     labels = list(points)
@@ -186,6 +190,28 @@ def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions
         group, name = key.split(":")
         c.add_parameter(group, name, value if isinstance(value, list) else [value])
     return _write_atomically(c, target)
+
+
+def writable_text_parameters(c, source: Path) -> None:
+    """Make every text parameter copied from ``source`` a list of strings the C3D library can write.
+
+    ezc3d hands bytes that are not UTF-8 over as surrogate escapes (a Latin-1 'µ' in "µV" as '\\udcb5'), which
+    it then cannot write back ("Value in parameters ANALOG:UNITS could not be converted to string"): such text
+    is read as Latin-1. A text parameter holding anything else that is not a string is left out (warned).
+    """
+    params = c["parameters"]
+    for group in list(params):
+        for name in [n for n in params[group] if n != "__METADATA__"]:
+            entry = params[group][name]
+            if entry.get("type") != -1:
+                continue
+            value = entry["value"]
+            if isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+                entry["value"] = [as_text(v) for v in value]
+            else:
+                del params[group][name]
+                warnings.warn(f"{source.name}: {group}:{name} left out of the copy (text parameter with values "
+                              f"that are not text: {str(value)[:40]})", GaitWarning, stacklevel=3)
 
 
 def _write_atomically(c, path: Path) -> Path:

@@ -8,7 +8,8 @@ import pytest
 
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.c3d import read_c3d
-from gaitcli.io.c3d_write import DEFAULT_ORIGIN_MM, write_c3d
+from gaitcli.io.c3d.header import check_parameters
+from gaitcli.io.c3d_write import DEFAULT_ORIGIN_MM, add_points, write_c3d
 from gaitcli.core.recording import ForcePlate, Markers
 
 RATE_HZ, SUB, N_FRAMES = 100.0, 10, 60
@@ -112,3 +113,30 @@ def test_bad_rates_and_rotations_are_refused_and_nothing_is_written(tmp_path, tr
     with pytest.raises(InputError, match="proper 3x3 rotation"):
         write_c3d(target, markers, plates, model_to_lab=np.diag([1.0, 1.0, -1.0]))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_latin1_analog_unit_is_copied_as_text(tmp_path):
+    """A unit byte that is not UTF-8 (Latin-1 'µV') comes from ezc3d as a surrogate escape, which ezc3d's writer
+    refuses ("Value in parameters ANALOG:UNITS could not be converted to string"); the copy writes it as 'µV'."""
+    n = 40
+    markers = Markers(("A", "B"), np.tile([[[0.5, 0.1, 1.0], [0.5, -0.1, 1.0]]], (n, 1, 1)), 100.0)
+    c = ezc3d.c3d(str(write_c3d(tmp_path / "a.c3d", markers, [])))
+    c["parameters"]["ANALOG"]["RATE"]["value"] = np.array([200.0])
+    c["parameters"]["ANALOG"]["LABELS"]["value"] = ["EMG1", "EMG2"]
+    c["parameters"]["ANALOG"]["UNITS"]["value"] = ["xV", "V"]
+    c["parameters"]["ANALOG"]["SCALE"]["value"] = np.ones(2)
+    c["parameters"]["ANALOG"]["OFFSET"]["value"] = np.zeros(2, dtype=int)
+    c["data"]["analogs"] = np.zeros((1, 2, 2 * n))
+    path = tmp_path / "emg.c3d"
+    c.write(str(path))
+    data = bytearray(path.read_bytes())
+    offset = (data[0] - 1) * 512
+    units = check_parameters(path, offset, data[offset + 2], len(data))[("ANALOG", "UNITS")]
+    assert data[units.data_offset] == ord("x")
+    data[units.data_offset] = 0xB5  # Latin-1 'µ'
+    path.write_bytes(bytes(data))
+    raw = ezc3d.c3d(str(path))
+    with pytest.raises(ValueError, match="ANALOG:UNITS could not be converted to string"):
+        raw.write(str(tmp_path / "plain.c3d"))
+    copy = add_points(path, tmp_path / "copy.c3d", {"X": np.zeros((n, 3))})
+    assert ezc3d.c3d(str(copy))["parameters"]["ANALOG"]["UNITS"]["value"] == ["\u00b5V", "V"]

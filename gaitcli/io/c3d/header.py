@@ -16,7 +16,7 @@ from pathlib import Path
 
 from gaitcli.errors import GaitWarning, InputError
 
-__all__ = ["check_file", "check_parameters", "data_layout", "one_line", "warn", "param", "strings"]
+__all__ = ["check_file", "check_parameters", "data_layout", "one_line", "warn", "param", "strings", "as_text"]
 
 _MIPS_MESSAGE = (
     "cannot read C3D: MIPS/SGI processor format is not supported; expected Intel or DEC (re-export the file)"
@@ -220,10 +220,10 @@ def strings(params, group: str, name: str) -> list[str]:
     while param(params, group, f"{name}{k}") is not None:
         out += list(param(params, group, f"{name}{k}"))
         k += 1
-    return [_text(s) for s in out]
+    return [as_text(s) for s in out]
 
 
-def _text(value) -> str:
+def as_text(value) -> str:
     """A C3D string as text: ezc3d hands bytes that are not UTF-8 over as surrogate escapes (e.g. a Latin-1
     'é' as '\\udce9'), which no file can be written with; those strings are read as Latin-1."""
     text = str(value)
