@@ -145,10 +145,11 @@ def _config_option(config, name: str, *flags: str, flag: bool = False):
 @gait.command("filter")
 @_trial_options
 @_config_option(FilterConfig, "cutoff_hz", "--cutoff")
+@_config_option(FilterConfig, "events", "--events")
 @click.pass_obj
-def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz):
+def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, events):
     """Fill gaps, zero-lag filter markers and plates, find gait events."""
-    cfg = configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz})
+    cfg = configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz, "events": events})
     console.run(trial, ["filter"], cfg, out=out, plots=not no_plots, show="filter")
 
 
@@ -156,13 +157,14 @@ def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz):
 @_trial_options
 @_config_option(IdynConfig, "frames", "--frames")
 @_config_option(IdynConfig, "pose", "--pose")
+@_config_option(FilterConfig, "events", "--events")
 @click.option("--export", "exports", type=Choice(("opensim", "c3d")), multiple=True,
               help="Also write the results for OpenSim (.trc, .mot, .sto, ExternalLoads) or as a C3D copy of the "
                    "trial with angles and moments, into OUT/export/ (repeatable).")
 @click.pass_obj
-def idyn_command(console: Console, trial, out, pipeline, no_plots, frames, pose, exports):
+def idyn_command(console: Console, trial, out, pipeline, no_plots, frames, pose, events, exports):
     """Segment poses, 27 coordinates, 21 joint moments and the pelvis residuals."""
-    cfg = configure(pipeline, idyn={"frames": frames, "pose": pose})
+    cfg = configure(pipeline, idyn={"frames": frames, "pose": pose}, filter={"events": events})
     console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
     if exports:
         from gaitcli.pipeline import TrialRun

@@ -16,7 +16,7 @@ from gaitcli.errors import InputError
 SIDES = ("r", "l")
 SIDE_NAMES = {"r": "right", "l": "left"}
 KINDS = ("heel_strike", "toe_off")
-SOURCES = ("plate", "kinematics")
+SOURCES = ("plate", "kinematics", "file")
 
 
 @dataclass(frozen=True)
@@ -25,7 +25,7 @@ class Events:
 
     ``frame`` (int, 0-based marker frame nearest to the event), ``time_s``,
     ``side`` (``'r'``/``'l'``), ``kind`` (``'heel_strike'``/``'toe_off'``) and
-    ``source`` (``'plate'``/``'kinematics'``).
+    ``source`` (``'plate'``/``'kinematics'`` detected, ``'file'`` from the trial file's own events).
     """
 
     frame: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))

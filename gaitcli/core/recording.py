@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.events import Events
+
 
 @dataclass
 class Markers:
@@ -74,7 +76,8 @@ class Recording:
     """One trial as read from disk: markers, plates, where it came from and what was noticed.
 
     ``subject_metadata``: numbers the file itself records about the subject, by their C3D
-    parameter (``{"PROCESSING:Bodymass": 73.4}``), in the file's units.
+    parameter (``{"PROCESSING:Bodymass": 73.4}``), in the file's units. ``events``: the gait events the file
+    records (C3D EVENT group; source ``file``), seconds from the first marker frame; empty where it has none.
     """
 
     markers: Markers
@@ -83,3 +86,4 @@ class Recording:
     lab_to_model: np.ndarray = field(default_factory=lambda: np.eye(3))
     notes: list[str] = field(default_factory=list)
     subject_metadata: dict[str, float] = field(default_factory=dict)
+    events: Events = field(default_factory=Events)

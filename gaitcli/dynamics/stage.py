@@ -191,6 +191,8 @@ def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | Non
     For every stance fully recorded on the plates (heel strike and toe off inside a
     loaded run of that foot), ``m = 2 ∫F_z dt / (g T)`` with ``T`` the mean stride
     period; the median over stances is returned (None when no stance qualifies).
+    Stances timed by the trial file's events count where one loaded run of the foot
+    spans them (:func:`file_stances_on_plates`).
     """
     rate = trial.rate_hz
     t = trial.time_s
@@ -201,11 +203,35 @@ def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | Non
     masses = []
     for side, load in trial.feet.items():
         fz = np.nan_to_num(load.force_N[:, 2])
-        for a, b in trial.events.stances(side, "plate", max_s=period):
-            inside = (t >= a - 1.5 / rate) & (t <= b + 1.5 / rate)
+        spans = [(a - 1.5 / rate, b + 1.5 / rate) for a, b in trial.events.stances(side, "plate", max_s=period)]
+        spans += file_stances_on_plates(trial, side, max_s=period)
+        for a, b in spans:
+            inside = (t >= a) & (t <= b)
             impulse = float(np.sum(fz[inside]) / rate)
             masses.append(2 * impulse / (gravity_m_s2 * period))
     return float(np.median(masses)) if masses else None
+
+
+#: how far a lab's event may lie from the plate's threshold crossing of the same contact, s
+FILE_EVENT_TOLERANCE_S = 0.05
+
+
+def file_stances_on_plates(trial: Trial, side: str, *, max_s: float = np.inf) -> list[tuple[float, float]]:
+    """(first, last) times (s) of the loaded runs of ``side``'s foot that make a whole stance timed by the file's
+    events: the run holds the stance's middle, and starts and ends within ``FILE_EVENT_TOLERANCE_S`` of its heel
+    strike and toe off."""
+    t = trial.time_s
+    loaded = np.nan_to_num(trial.feet[side].force_N[:, 2]) > 0
+    out = []
+    for a, b in trial.events.stances(side, "file", max_s=max_s):
+        middle = int(np.argmin(np.abs(t - (a + b) / 2)))
+        if not loaded[middle]:
+            continue
+        first = middle - int(np.argmin(loaded[middle::-1])) + 1 if not loaded[:middle + 1].all() else 0
+        last = middle + int(np.argmin(loaded[middle:])) - 1 if not loaded[middle:].all() else t.size - 1
+        if abs(t[first] - a) <= FILE_EVENT_TOLERANCE_S and abs(t[last] - b) <= FILE_EVENT_TOLERANCE_S:
+            out.append((float(t[first]), float(t[last])))
+    return out
 
 
 def external_wrenches(trial: Trial) -> list[ExternalWrench]:

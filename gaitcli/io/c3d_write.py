@@ -33,14 +33,16 @@ from pathlib import Path
 import ezc3d
 import numpy as np
 
+from gaitcli.core.events import Events
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.c3d import plate_axes
+from gaitcli.io.c3d.events import EVENT_CONTEXTS, EVENT_LABELS
 from gaitcli.io.c3d.header import as_text
 from gaitcli.io.c3d.long import write_frame_count
 from gaitcli.core.recording import ForcePlate, Markers
 
-__all__ = ["write_c3d", "add_points", "DEFAULT_ORIGIN_MM"]
+__all__ = ["write_c3d", "add_points", "set_events", "DEFAULT_ORIGIN_MM"]
 
 DEFAULT_ORIGIN_MM = (2.0, -1.5, 40.0)
 """Surface centre → transducer origin (mm, plate axes, z into the floor), AMTI-like."""
@@ -154,12 +156,13 @@ def _plate_channels(path, plates, R, up_lab, n_frames, point_rate, origin_mm):
 
 
 def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions: Mapping[str, str] | None = None,
-               parameters: Mapping[str, object] | None = None) -> Path:
+               parameters: Mapping[str, object] | None = None, events: Events | None = None) -> Path:
     """A copy of the C3D file ``source`` at ``target`` with ``points`` ({label: (frames, 3)}, in the units the
     caller names in ``parameters``) appended after its own points, which, its analogs and its other parameters
     stay as they were (text parameters in a form the C3D library writes: :func:`writable_text_parameters`).
     NaN rows become invalid points (residual −1). ``parameters``: {"GROUP:NAME": value} added or replaced
-    (e.g. ``POINT:ANGLE_UNITS``, ``POINT:ANGLES``). Written atomically."""
+    (e.g. ``POINT:ANGLE_UNITS``, ``POINT:ANGLES``). ``events`` (times in s from the file's first frame), where
+    given, replace its EVENT group (:func:`set_events`). Written atomically."""
     source, target = Path(source), Path(target)
     c = ezc3d.c3d(str(source), extract_forceplat_data=False)
     writable_text_parameters(c, source)
@@ -189,7 +192,29 @@ def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions
     for key, value in (parameters or {}).items():
         group, name = key.split(":")
         c.add_parameter(group, name, value if isinstance(value, list) else [value])
+    if events is not None:
+        set_events(c, events)
     return _write_atomically(c, target)
+
+
+def set_events(c, events: Events) -> None:
+    """Replace the EVENT group of the ezc3d object ``c`` by ``events`` (times in s from its first frame) as Vicon
+    Nexus writes them: LABELS "Foot Strike"/"Foot Off", CONTEXTS "Right"/"Left", TIMES (2, n) minutes and
+    seconds from the recording's frame 1 (the first frame at ``(first - 1) / rate``), DESCRIPTIONS the source."""
+    rate = float(np.asarray(c["parameters"]["POINT"]["RATE"]["value"]).ravel()[0])
+    start_s = int(c["header"]["points"]["first_frame"]) / rate  # ezc3d's first frame is 0-based
+    if "EVENT" in c["parameters"]:
+        del c["parameters"]["EVENT"]
+    c.add_parameter("EVENT", "USED", len(events))
+    if not len(events):
+        return
+    t = np.asarray(events.time_s, float) + start_s
+    minutes = np.floor(t / 60.0)
+    c.add_parameter("EVENT", "LABELS", [EVENT_LABELS[k] for k in events.kind])
+    c.add_parameter("EVENT", "CONTEXTS", [EVENT_CONTEXTS[s] for s in events.side])
+    c.add_parameter("EVENT", "TIMES", np.vstack([minutes, t - 60.0 * minutes]))
+    c.add_parameter("EVENT", "DESCRIPTIONS", [f"gaitcli ({s})" for s in events.source])
+    c.add_parameter("EVENT", "SUBJECTS", [""] * len(events))
 
 
 def writable_text_parameters(c, source: Path) -> None:

@@ -14,7 +14,10 @@ plates gave it (zero) and its point the origin: OpenSim cannot know either.
 per side — ``RPelvisAngles``, ``RHipAngles``, ``RKneeAngles``, ``RAnkleAngles``, ``RFootProgressAngles`` (deg),
 ``RHipMoment``, ``RKneeMoment``, ``RAnkleMoment`` (N·mm/kg) and ``RHipPower`` … (W/kg in Z), in Vicon's
 components and signs (:func:`c3d_points`); POINT:ANGLES, POINT:MOMENTS, POINT:POWERS, their units and
-GAITCLI:CONVENTION say so. Moments and powers where the foot's load is unknown are invalid points.
+GAITCLI:CONVENTION say so. Moments and powers where the foot's load is unknown are invalid points. Its EVENT group
+holds the gait events the filter used (the file's own or detected), as Vicon Nexus writes them ("Foot Strike"/
+"Foot Off", "Left"/"Right"); the copy's text parameters are made writable
+(:func:`gaitcli.io.c3d_write.add_points`).
 """
 
 from __future__ import annotations
@@ -147,6 +150,8 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
     if trial_c3d.suffix.lower() != ".c3d":
         raise InputError(trial_c3d, "--export", "c3d needs a C3D trial (this trial is a CSV)")
     idyn = _idyn(out_root / "idyn")
+    with h5py.File(out_root / "filter" / "filter.h5", "r") as h5:
+        events = read_record(h5["trial"], Trial).events
     points, descriptions = c3d_points(idyn)
     labels = list(points)
     target = out_root / "export" / f"{idyn['trial'] or trial_c3d.stem}.c3d"
@@ -156,7 +161,8 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
                   "POINT:POWERS": [lab for lab in labels if lab.endswith("Power")],
                   "POINT:ANGLE_UNITS": "deg", "POINT:MOMENT_UNITS": "Nmm/kg", "POINT:POWER_UNITS": "W",
                   "GAITCLI:CONVENTION": PIG_CONVENTION}
-    return [add_points(trial_c3d, target, points, descriptions=descriptions, parameters=parameters)]
+    return [add_points(trial_c3d, target, points, descriptions=descriptions, parameters=parameters,
+                       events=events)]
 
 
 def export_trial(out_root: Path, formats, *, trial_c3d: Path | None = None) -> list[Path]:

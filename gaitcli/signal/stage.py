@@ -1,7 +1,9 @@
 """The ``filter`` stage: gap filling, zero-lag filtering, plate loads, events (3.1.4).
 
 A pure function from a :class:`~gaitcli.core.recording.Recording` (markers and plates
-in model axes, landmark names already mapped) to a :class:`FilterResult`.
+in model axes, landmark names already mapped) to a :class:`FilterResult`. The gait events are
+the trial file's own where it has any (``events: auto``; ``file`` insists, ``detect`` ignores
+them), else detected; the plate contacts are found and given to a foot either way.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from gaitcli.signal.gaps import Gap, fill_gaps
 HEEL = {"r": ("CAr",), "l": ("CAl",)}
 TOE = {"r": ("FMr", "VMr", "MT2r"), "l": ("FMl", "VMl", "MT2l")}
 PELVIS = ("ASISr", "ASISl", "PSISr", "PSISl")
+EVENT_CHOICES = ("auto", "file", "detect")
 
 
 @dataclass(frozen=True)
@@ -42,6 +45,9 @@ class FilterConfig:
     max_gap_frames: int = parameter(10, low=0, help="Longer marker gaps stay NaN.")
     force_threshold_N: float = parameter(20.0, low=0.0, low_open=True,
                                          help="COP and free moment only above this vertical load, N.")
+    events: str = parameter("auto", choices=EVENT_CHOICES,
+                            help="Gait events: the trial file's own (file: its C3D EVENT group), detected from "
+                                 "plates and foot markers (detect), or the file's where it has any (auto).")
 
 
 @dataclass
@@ -219,6 +225,17 @@ def separated_plates(recording: Recording, plates: list[PlateLoad], contacts: li
     return out
 
 
+def use_file_events(recording: Recording, cfg: FilterConfig, path=None) -> bool:
+    """Whether the filter takes the trial file's own gait events (``cfg.events``: file, or auto and the file has
+    some) instead of detecting them; ``file`` without any is an :class:`InputError` naming the file and EVENT."""
+    if cfg.events == "file" and not len(recording.events):
+        where = path if path is not None else recording.source
+        raise InputError(where, "EVENT", "no gait events in the file (expected Foot Strike/Foot Off events with a "
+                                         "Left/Right context, or labels such as LHS, RTO; or filter.events: auto "
+                                         "or detect)")
+    return cfg.events != "detect" and len(recording.events) > 0
+
+
 def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> FilterResult:
     """Run the filter stage on a recording whose labels are model landmarks where mapped.
 
@@ -247,15 +264,18 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
         toe = _first_present(markers, TOE[side])
         if heel is not None and toe is not None:
             feet[side] = (heel, toe)
+    from_file = use_file_events(recording, cfg, path)
     if len(feet) < 2:
-        warnings.warn("no heel (CAr/CAl) and toe (FMr/FMl, VMr/VMl or MT2r/MT2l) landmarks for both feet: no gait events and "
-                      "no plate-to-foot assignment (add a marker_map naming them)", GaitWarning, stacklevel=2)
+        warnings.warn("no heel (CAr/CAl) and toe (FMr/FMl, VMr/VMl or MT2r/MT2l) landmarks for both feet: "
+                      + ("no plate-to-foot assignment" if from_file else "no gait events and no plate-to-foot "
+                         "assignment") + " (add a marker_map naming them)", GaitWarning, stacklevel=2)
         detection = EventDetection(Events(), [], np.full((len(plates), n), "", dtype="<U1"))
     else:
         detection = detect_events(plates, feet, pelvis_centre(markers), rate_hz=rate,
                                   threshold_N=cfg.force_threshold_N, refine=False,
                                   duplicate_s=0.35)  # one foot cannot strike twice within 0.35 s
-    events = calibrate_kinematic_events(detection.events, feet, pelvis_centre(markers), rate)
+    events = recording.events if from_file else \
+        calibrate_kinematic_events(detection.events, feet, pelvis_centre(markers), rate)
     # a plate two feet stood on is split at the (calibrated) events of the foot stepping on and the one stepping off
     owner = plate_owner(detection.contacts, plates, events) if plates else detection.owner
     owner = without_partial_feet(owner, plates, markers, events)
@@ -266,9 +286,9 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
             first, last = (SIDE_NAMES[x] for x in (c.first_side, c.last_side))
             warnings.warn(f"{c.plate_name}: both feet on it in frames {start + markers.first_frame}–"
                           f"{stop - 1 + markers.first_frame} ({start / rate:.2f}–{(stop - 1) / rate:.2f} s): no foot "
-                          f"is given its load there (the loads of both are unknown); the plate times only the {first} "
-                          f"heel strike and the {last} toe off, the steps in between are timed from the foot markers",
-                          GaitWarning, stacklevel=2)
+                          "is given its load there (the loads of both are unknown)" + ("" if from_file else
+                          f"; the plate times only the {first} heel strike and the {last} toe off, the steps in "
+                          "between are timed from the foot markers"), GaitWarning, stacklevel=2)
         elif c.flag:
             warnings.warn(f"{c.plate_name}: contact at {c.on_time_s:.2f}–{c.off_time_s:.2f} s not assigned to a foot "
                           f"({c.flag.replace('_', ' ')}); its load is left out of the per-foot ground reactions",
@@ -283,7 +303,8 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                + (f"order-{cfg.order} Butterworth forward and backward at {design:.3f} Hz "
                   f"(net cut-off {cfg.cutoff_hz:g} Hz)" if design else "not filtered"),
                f"plates: {len(plates)}, filtered at net {cfg.force_cutoff_hz:g} Hz, COP above "
-               f"{cfg.force_threshold_N:g} N; events from plates and foot markers")
+               f"{cfg.force_threshold_N:g} N; events from "
+               + ("the trial file's EVENT group" if from_file else "plates and foot markers"))
     feet_loads = foot_loads(per_foot, detection.events, markers.time_s)
     unknown = np.zeros(n, bool)
     for plate in plates:

@@ -75,3 +75,20 @@ def test_the_c3d_copy_carries_angles_and_moments_and_the_markers_as_they_were(ex
     again, before = read_c3d(copy), read_c3d(exported / "trial.c3d")  # the project's reader takes the copy too,
     assert again.markers.labels == before.markers.labels  # and leaves the model outputs out of the markers
     np.testing.assert_array_equal(again.markers.positions_m, before.markers.positions_m)
+
+
+def test_the_c3d_copy_carries_the_events_the_filter_used(exported):
+    """The sample trial has no EVENT group: its detected events go into the copy as Vicon Nexus writes them."""
+    out = exported / "gait_out"
+    events = pd.read_csv(out / "filter" / "events.csv")
+    c = ezc3d.c3d(str(out / "export" / "normal.c3d"))
+    group = c["parameters"]["EVENT"]
+    assert group["USED"]["value"][0] == len(events) > 0
+    assert group["LABELS"]["value"] == [{"heel_strike": "Foot Strike", "toe_off": "Foot Off"}[k] for k in events.event]
+    assert group["CONTEXTS"]["value"] == [{"r": "Right", "l": "Left"}[s] for s in events.side]
+    times = np.asarray(group["TIMES"]["value"])
+    start = c["header"]["points"]["first_frame"] / c["parameters"]["POINT"]["RATE"]["value"][0]
+    np.testing.assert_allclose(60 * times[0] + times[1] - start, events.time_s, atol=1e-5)
+    again = read_c3d(out / "export" / "normal.c3d").events  # gaitcli reads them back as the file's own
+    np.testing.assert_allclose(again.time_s, events.time_s, atol=1e-5)
+    assert set(again.source) == {"file"}

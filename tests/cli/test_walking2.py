@@ -34,7 +34,8 @@ def _build(shared_c3d_dir: Path, root: Path) -> dict:
     trial.mkdir()
     shutil.copy(shared_c3d_dir / "walking2.c3d", trial / "trial.c3d")
     shutil.copy(EXAMPLE / "subject.yaml", trial / "subject.yaml")
-    runs = gait_many({"filter": (("filter", trial), root), "idyn": (("idyn", trial), root)}, workers=1)
+    runs = gait_many({"filter": (("filter", trial), root), "idyn": (("idyn", trial, "--export", "c3d"), root)},
+                     workers=1)
     return {"results": [runs["filter"].to_json(), runs["idyn"].to_json()]}
 
 

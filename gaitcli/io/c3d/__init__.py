@@ -3,7 +3,8 @@
 :func:`read_c3d` composes the package's parts: :mod:`.header` checks the file
 before ezc3d opens it and reads parameters, :mod:`.markers` converts the points
 (units, labels, missing samples) and :mod:`.plates` the force platforms (ezc3d's
-force-platform module, with the corrections described there); the lab → model
+force-platform module, with the corrections described there), :mod:`.events` the lab's gait events (the
+EVENT group); the lab → model
 rotation comes from :mod:`gaitcli.io.axes`.
 """
 
@@ -27,6 +28,7 @@ except ImportError:  # Windows: no address-space cap
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.errors import InputError
 from gaitcli.io.axes import apply_rotation, infer_lab_to_model
+from gaitcli.io.c3d.events import read_events
 from gaitcli.io.c3d.header import check_file, one_line, param, warn
 from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, frame_count
 from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
@@ -164,8 +166,10 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
     if not plates:
         warn(f"{path.name}: no usable force plates: markers only", notes)
 
+    events = read_events(path, params, rate_hz=markers.rate_hz, first_frame=markers.first_frame,
+                         n_frames=markers.n_frames, notes=notes)
     recording = Recording(markers=markers, plates=plates, source=path, lab_to_model=np.eye(3), notes=notes,
-                          subject_metadata=subject_metadata(params))
+                          subject_metadata=subject_metadata(params), events=events)
     R = infer_lab_to_model(markers.positions_m, plates)
     rows = "; ".join(" ".join(f"{v + 0.0:+.4f}" for v in row) for row in R)
     if to_model_axes:
