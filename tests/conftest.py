@@ -21,7 +21,8 @@ def shared_c3d_dir() -> Path:
 
 @pytest.fixture(scope="session")
 def shared_pig_dir() -> Path:
-    """``../shared/data/pig`` (a Vicon Plug-in Gait session with Vicon's outputs); skipped where absent."""
+    """``../shared/data/pig`` (a Vicon Plug-in Gait session: static and movement C3D with Vicon's outputs,
+    Test.vsk); the test is skipped where it is absent."""
     if not (SHARED_PIG / "Movement_trial.c3d").is_file():
         pytest.skip("../shared/data/pig is not present next to this checkout")
     return SHARED_PIG
