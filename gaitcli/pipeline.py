@@ -63,6 +63,14 @@ def load_recording(trial: TrialFolder) -> Recording:
         recording = read_csv_trial(trial.trial_path, trial.forces_path)
     recording.markers = trial.subject.markers.apply(recording.markers, source=trial.subject_path,
                                                     explicit=trial.subject.marker_map)
+    recording.notes.extend(trial.subject.notes)
+    return with_subject_measurements(recording, trial)
+
+
+def with_subject_measurements(recording: Recording, trial: TrialFolder) -> Recording:
+    """``recording`` with the subject's measurements (the trial folder's .vsk) merged over the subject data its
+    file records: the stages read them as they read the C3D's ``PROCESSING`` group, after subject.yaml's keys."""
+    recording.subject_metadata = {**recording.subject_metadata, **trial.subject.measurements}
     return recording
 
 
@@ -79,7 +87,7 @@ def load_static(trial: TrialFolder, lab_to_model) -> Recording | None:
         static = apply_rotation(read_c3d(trial.static_path, to_model_axes=False), lab_to_model)
     static.markers = trial.subject.markers.apply(static.markers, source=trial.subject_path,
                                                  explicit=trial.subject.marker_map)
-    return static
+    return with_subject_measurements(static, trial)
 
 
 class TrialRun:

@@ -1,13 +1,19 @@
 """Trial folders: discovery of the files, and the ``subject.yaml`` schema.
 
 A trial folder holds ``trial.c3d`` (or the file ``subject.yaml`` names under
-``trial:``, or ``markers.csv`` + ``forces.csv``), an optional ``static.c3d`` and
-``subject.yaml``. Nothing in it is ever modified.
+``trial:``, or ``markers.csv`` + ``forces.csv``), an optional ``static.c3d``,
+``subject.yaml`` and optionally the lab's Vicon subject file (one ``.vsk``, or the
+one ``subject.yaml`` names under ``vsk:``). The ``.vsk``'s parameters are the
+subject's measurements below ``subject.yaml`` and above the C3D's ``PROCESSING``
+group; without ``subject.yaml`` the ``.vsk`` describes the subject alone
+(:func:`subject_from_vsk`). Nothing in the folder is ever modified.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
+import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -15,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from gaitcli.io.vsk import VskSubject, read_vsk
 from gaitcli.io.yamlfile import read_yaml
 from gaitcli.core.validate import known_keys, number, one_of
 from gaitcli.errors import InputError, shown
@@ -46,6 +53,12 @@ class Subject:
     knee_width_mm: dict[str, float] | None = None
     ankle_width_mm: dict[str, float] | None = None
     marker_diameter_mm: float | None = None
+    vsk: str | None = None  # the Vicon subject file subject.yaml names (None: the folder's only .vsk, if any)
+    # the .vsk's parameters {"PROCESSING:<NAME>": value} (mm, kg, rad), merged over the C3D's subject data
+    measurements: dict[str, float] = field(default_factory=dict)
+    measurements_source: str | None = None  # the file they came from (the .vsk's name)
+    mass_source: str = "subject.yaml"  # where mass_kg came from
+    notes: tuple[str, ...] = ()  # where the subject's numbers came from, and what was assumed
 
     @cached_property
     def markers(self) -> MarkerSet:
@@ -55,7 +68,7 @@ class Subject:
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
         "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances", "knee_width_mm",
-        "ankle_width_mm", "marker_diameter_mm")
+        "ankle_width_mm", "marker_diameter_mm", "vsk")
 #: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
 #: (2007); Hara et al. (2016); Davis et al. (1991, Plug-in Gait's); functional (SCORE, Ehrig et al. 2006, from the
 #: trial's hip motion); the lab's points
@@ -116,7 +129,7 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     if data.get("leg_length_m") is not None:
         lengths["leg_length_m"] = _number(path, "leg_length_m", data["leg_length_m"], low=0.3, high=1.5,
                                           expected="a leg length in metres (ASIS to medial malleolus), 0.3–1.5")
-    for key in ("trial", "static"):
+    for key in ("trial", "static", "vsk"):
         if data.get(key) is not None and not isinstance(data[key], str):
             raise InputError(path, key, f"got {shown(data[key])} (expected a file name)")
     frames = data.get("static_frames")
@@ -163,17 +176,89 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
         widths["marker_diameter_mm"] = _number(path, "marker_diameter_mm", data["marker_diameter_mm"], low=0,
                                                high=40, expected="a marker diameter in mm, > 0 and ≤ 40")
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
-                   static_frames=frames, marker_map=dict(marker_map), disturbances=tuple(disturbances),
-                   marker_set=preset, hip_joint_centre=hip, **lengths, **widths)
+                   vsk=data.get("vsk"), static_frames=frames, marker_map=dict(marker_map),
+                   disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, **lengths, **widths)
 
 
 def load_subject(path: str | Path) -> Subject:
     """Read and validate ``subject.yaml``."""
     path = Path(path)
     if not path.is_file():
-        raise InputError(path, None, "file not found (every trial folder needs a subject.yaml)")
+        raise InputError(path, None, "file not found (every trial folder needs a subject.yaml or a Vicon .vsk)")
     data = read_yaml(path)
     return subject_from_dict(data, path)
+
+
+#: the .vsk parameters the stages read (``Recording.subject_metadata`` keys), the subject.yaml key that takes
+#: their place, and the range a value must be in to be used (the .vsk's units: kg, mm)
+VSK_MEASUREMENTS = (
+    (("Bodymass",), "mass_kg", 0, 500, "a body mass in kg, > 0 and ≤ 500"),
+    (("Height",), "stature_m", 400, 2600, "a height in mm, > 400 and ≤ 2600"),
+    (("RightLegLength", "LeftLegLength"), "leg_length_m", 300, 1500, "a leg length in mm, > 300 and ≤ 1500"),
+    (("RightKneeWidth", "LeftKneeWidth"), "knee_width_mm", 40, 200, "a width in mm, > 40 and ≤ 200"),
+    (("RightAnkleWidth", "LeftAnkleWidth"), "ankle_width_mm", 30, 150, "a width in mm, > 30 and ≤ 150"),
+    (("MarkerDiameter",), "marker_diameter_mm", 0, 40, "a marker diameter in mm, > 0 and ≤ 40"),
+)
+
+
+def _is_plug_in_gait(model: str) -> bool:
+    """Whether a .vsk's model name is Vicon's Plug-in Gait ("PlugInGait FullBody Ai", "Plug-in Gait Lower Body")."""
+    return re.sub(r"[^a-z]", "", model.lower()).startswith("plugingait")
+
+
+def _checked_measurements(vsk: VskSubject, given: Subject | None) -> list[str]:
+    """The measurements of :data:`VSK_MEASUREMENTS` the stages will use (those ``given``, subject.yaml's subject,
+    does not give), checked to be in range; each as "NAME value" for the notes."""
+    used = []
+    for names, key, low, high, expected in VSK_MEASUREMENTS:
+        if given is not None and getattr(given, key) is not None:
+            continue
+        for parameter in names:
+            value = vsk.value(parameter)
+            if value is not None:
+                number(value, where=parameter, path=vsk.source, low=low, high=high, low_open=True, expected=expected)
+                used.append(f"{parameter} {value:g}")
+    return used
+
+
+def subject_from_vsk(vsk: VskSubject, name: str) -> Subject:
+    """The subject a .vsk describes when the trial folder has no subject.yaml: mass from Bodymass (kg; absent: as
+    ``mass_kg: auto``), stature from Height (mm → m), Plug-in Gait's marker set and Davis hip joint centres when
+    its model is Plug-in Gait, and sex male (a .vsk records none: de Leva's male tables, said in the notes)."""
+    used = _checked_measurements(vsk, None)
+    height = vsk.value("Height")
+    if height is None:
+        raise InputError(vsk.source, "Height", "missing (expected the subject's height in mm, or a subject.yaml "
+                                               "with stature_m and sex)")
+    mass = vsk.value("Bodymass")
+    pig = _is_plug_in_gait(vsk.model)
+    subject = Subject(mass_kg=mass, stature_m=height / 1000.0, sex="male",
+                      marker_set="plug_in_gait" if pig else None, hip_joint_centre="davis" if pig else "bell",
+                      mass_source=f"{name}'s Bodymass")
+    described = (f"subject: {name}, no subject.yaml: body mass "
+                 + (f"{mass:g} kg from Bodymass" if mass is not None else "not recorded (estimated as mass_kg: auto)")
+                 + f", stature {height / 1000.0:g} m from Height"
+                 + (f"; marker set plug_in_gait and Davis hip joint centres for its model {shown(vsk.model)}"
+                    if pig else f"; its model {shown(vsk.model)} is not Plug-in Gait: the dissertation's marker "
+                                "labels and Bell hip joint centres"))
+    sex = (f"sex: {name} records none, male assumed (de Leva's male segment tables); a subject.yaml with sex "
+           "(and stature_m) says otherwise")
+    return with_measurements(subject, vsk, name, used=used, notes=(described, sex))
+
+
+def with_measurements(subject: Subject, vsk: VskSubject, name: str, *, used: list[str] | None = None,
+                      notes: tuple[str, ...] = ()) -> Subject:
+    """``subject`` (subject.yaml's, or ``used`` and ``notes`` given: :func:`subject_from_vsk`'s) with the .vsk's
+    parameters as its measurements, checked where the stages will use them, and a note saying where they went."""
+    below = used is None
+    if below:
+        used = _checked_measurements(vsk, subject)
+    merged = (f"subject measurements: {name} ({shown(vsk.model)}): {len(vsk.parameters)} parameters as "
+              "PROCESSING:<NAME> (mm, kg, rad), over the C3D files' PROCESSING group"
+              + (", under subject.yaml's keys" if below else "")
+              + (f"; used: {', '.join(used)}" if used else ""))
+    return dataclasses.replace(subject, vsk=name, measurements=dict(vsk.parameters), measurements_source=name,
+                               notes=subject.notes + notes + (merged,))
 
 
 @dataclass(frozen=True)
@@ -181,18 +266,20 @@ class TrialFolder:
     """The files of one trial folder, checked to exist."""
 
     folder: Path
-    subject_path: Path
+    subject_path: Path  # subject.yaml, or the .vsk when the folder has no subject.yaml
     subject: Subject
     trial_path: Path  # the dynamic C3D, or markers.csv
     forces_path: Path | None = None  # forces.csv when the trial is given as CSV
     static_path: Path | None = None
+    vsk_path: Path | None = None  # the Vicon subject file whose parameters are the subject's measurements
 
     @property
     def name(self) -> str:
         return self.folder.name
 
     def input_files(self) -> list[Path]:
-        return [p for p in (self.subject_path, self.trial_path, self.forces_path, self.static_path) if p]
+        paths = (self.subject_path, self.trial_path, self.forces_path, self.static_path, self.vsk_path)
+        return list(dict.fromkeys(p for p in paths if p))
 
 
 def _named_file(folder: Path, name, key: str) -> Path | None:
@@ -213,12 +300,39 @@ def _named_file(folder: Path, name, key: str) -> Path | None:
     return path
 
 
+def _vsk_files(folder: Path) -> list[Path]:
+    """The Vicon subject files (``*.vsk``, any case; hidden files not) directly in ``folder``, sorted."""
+    return sorted(p for p in folder.iterdir() if p.suffix.lower() == ".vsk" and not p.name.startswith(".")
+                  and p.is_file())
+
+
+def _only_vsk(folder: Path, has_yaml: bool) -> Path | None:
+    """The folder's one .vsk (None without); more than one is an error naming them."""
+    found = _vsk_files(folder)
+    if len(found) > 1:
+        names = ", ".join(shown(p.name) for p in found[:4]) + (", …" if len(found) > 4 else "")
+        how = "`vsk:` in subject.yaml naming one" if has_yaml else "a subject.yaml naming one under `vsk:`"
+        raise InputError(folder, "vsk", f"{len(found)} Vicon subject files: {names} (expected one, or {how})")
+    return found[0] if found else None
+
+
 def open_trial(folder: str | Path) -> TrialFolder:
     """Find and validate a trial folder's files; raise :class:`InputError` naming what is missing."""
     folder = Path(folder)
     if not folder.is_dir():
         raise InputError(folder, None, "trial folder not found")
-    subject = load_subject(folder / "subject.yaml")
+    subject_path = folder / "subject.yaml"
+    if subject_path.is_file():
+        subject = load_subject(subject_path)
+        vsk_path = _named_file(folder, subject.vsk, "vsk") or _only_vsk(folder, True)
+        if vsk_path is not None:
+            name = subject.vsk or vsk_path.name
+            subject = with_measurements(subject, read_vsk(vsk_path), name)
+    else:
+        vsk_path = _only_vsk(folder, False)
+        if vsk_path is None:
+            load_subject(subject_path)  # the error: neither subject.yaml nor a .vsk
+        subject, subject_path = subject_from_vsk(read_vsk(vsk_path), vsk_path.name), vsk_path
     forces = None
     trial = _named_file(folder, subject.trial, "trial")
     if trial is None and (folder / "trial.c3d").is_file():
@@ -232,8 +346,8 @@ def open_trial(folder: str | Path) -> TrialFolder:
     static = _named_file(folder, subject.static, "static")
     if static is None and (folder / "static.c3d").is_file():
         static = folder / "static.c3d"
-    return TrialFolder(folder=folder, subject_path=folder / "subject.yaml", subject=subject,
-                       trial_path=trial, forces_path=forces, static_path=static)
+    return TrialFolder(folder=folder, subject_path=subject_path, subject=subject,
+                       trial_path=trial, forces_path=forces, static_path=static, vsk_path=vsk_path)
 
 
 def sha256(path: str | Path) -> str:

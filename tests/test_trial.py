@@ -283,7 +283,7 @@ def test_open_trial_named_files(tmp_path):
     assert t.trial_path == folder / "walk03.c3d" and t.static_path == folder / "stand.c3d"
 
 
-@pytest.mark.parametrize("key", ["trial", "static"])
+@pytest.mark.parametrize("key", ["trial", "static", "vsk"])
 def test_open_trial_named_file_missing(tmp_path, key):
     folder = _folder(tmp_path, "trial.c3d", subject=_with(**{key: "gone.c3d"}))
     with pytest.raises(InputError) as info:
@@ -291,7 +291,7 @@ def test_open_trial_named_file_missing(tmp_path, key):
     assert info.value.path == folder / "subject.yaml" and info.value.field == key and "gone.c3d" in str(info.value)
 
 
-@pytest.mark.parametrize("key", ["trial", "static"])
+@pytest.mark.parametrize("key", ["trial", "static", "vsk"])
 def test_named_files_stay_inside_the_trial_folder(tmp_path, key):
     """``../``, absolute paths and symlinks that lead out of the folder are refused, naming the key; the outside
     file is neither read nor quoted."""
@@ -343,3 +343,173 @@ def test_sha256(tmp_path):
     data = np.random.default_rng(0).bytes(3 << 20)  # more than one 1 MiB block
     path.write_bytes(data)
     assert sha256(path) == hashlib.sha256(data).hexdigest()
+
+
+# ------------------------------------------------------------------------ the Vicon subject file (.vsk)
+
+
+def _vsk(folder, name="Subject.vsk", model="PlugInGait FullBody Ai", **values):
+    """A .vsk in ``folder`` with ``values`` as StaticParameters (Vicon's units: kg, mm) and one fitted Parameter."""
+    values = {"Bodymass": 81.5, "Height": 1745, "RightKneeWidth": 104, "LeftKneeWidth": 106, "RightLegLength": 902,
+              "LeftLegLength": 898, **values}
+    lines = [f'<StaticParameter NAME="{k}" VALUE="{v}" QUANTITY="length"/>' for k, v in values.items() if v is not None]
+    lines += ['<StaticParameter NAME="LeftTibialTorsion" PRIOR="0" QUANTITY="angle"/>',
+              '<Parameter NAME="HipWidth" VALUE="123.8125" PRIOR="98.4" SD="0"/>']
+    path = folder / name
+    path.write_text(f'<?xml version="1.0" encoding="UTF-8"?>\n<KinematicModel MODEL="{model}" VERSION="3.2">\n'
+                    "<Parameters>\n" + "\n".join(lines) + "\n</Parameters>\n</KinematicModel>\n")
+    return path
+
+
+def _vsk_folder(tmp_path, *files, **values):
+    """A trial folder without subject.yaml: trial.c3d, static.c3d and a .vsk."""
+    folder = tmp_path / "session"
+    folder.mkdir()
+    for name in ("trial.c3d", "static.c3d", *files):
+        (folder / name).write_bytes(b"x")
+    _vsk(folder, **values)
+    return folder
+
+
+def test_a_vsk_beside_subject_yaml_gives_the_measurements(tmp_path):
+    """Every numeric parameter under PROCESSING:<NAME>, in the vsk's units; subject.yaml's own keys are untouched;
+    the .vsk is an input (its hash in every output's provenance) and a note says where its values went."""
+    folder = _folder(tmp_path, "trial.c3d", subject=_with(knee_width_mm=[110, 111]))
+    vsk = _vsk(folder)
+    t = open_trial(folder)
+    s = t.subject
+    assert s.measurements == {"PROCESSING:Bodymass": 81.5, "PROCESSING:Height": 1745.0,
+                              "PROCESSING:RightKneeWidth": 104.0, "PROCESSING:LeftKneeWidth": 106.0,
+                              "PROCESSING:RightLegLength": 902.0, "PROCESSING:LeftLegLength": 898.0,
+                              "PROCESSING:HipWidth": 123.8125}
+    assert (s.mass_kg, s.stature_m, s.sex, s.knee_width_mm) == (75.0, 1.78, "male", {"r": 110.0, "l": 111.0})
+    assert (s.mass_source, s.measurements_source, s.vsk) == ("subject.yaml", "Subject.vsk", "Subject.vsk")
+    assert (t.subject_path, t.vsk_path) == (folder / "subject.yaml", vsk)
+    assert t.input_files() == [folder / "subject.yaml", folder / "trial.c3d", vsk]
+    (note,) = s.notes
+    assert note.startswith("subject measurements: Subject.vsk ('PlugInGait FullBody Ai'): 7 parameters as "
+                           "PROCESSING:<NAME>") and "under subject.yaml's keys" in note
+    # what the stages will use: not the knee widths (subject.yaml gives them), nor Bodymass (mass_kg given)
+    assert note.endswith("used: RightLegLength 902, LeftLegLength 898")
+
+
+def test_without_subject_yaml_the_vsk_describes_the_subject(tmp_path):
+    folder = _vsk_folder(tmp_path)
+    t = open_trial(folder)
+    s = t.subject
+    assert (s.mass_kg, s.stature_m, s.sex) == (81.5, 1.745, "male")
+    assert (s.marker_set, s.hip_joint_centre, s.mass_source) == ("plug_in_gait", "davis", "Subject.vsk's Bodymass")
+    assert s.measurements["PROCESSING:RightKneeWidth"] == 104.0 and s.knee_width_mm is None  # read as the C3D's
+    assert (t.trial_path, t.static_path) == (folder / "trial.c3d", folder / "static.c3d")
+    assert t.subject_path == t.vsk_path == folder / "Subject.vsk"
+    assert t.input_files() == [folder / "Subject.vsk", folder / "trial.c3d", folder / "static.c3d"]
+    described, sex, merged = s.notes
+    assert described.startswith("subject: Subject.vsk, no subject.yaml: body mass 81.5 kg from Bodymass, stature "
+                                "1.745 m from Height; marker set plug_in_gait and Davis hip joint centres")
+    assert sex.startswith("sex: Subject.vsk records none, male assumed (de Leva's male segment tables)")
+    assert merged.startswith("subject measurements: Subject.vsk") and "subject.yaml" not in merged
+    assert "Bodymass 81.5, Height 1745" in merged
+
+
+def test_a_vsk_of_another_model_keeps_the_default_marker_set(tmp_path):
+    folder = _vsk_folder(tmp_path, model="MyLab LowerLimb", Bodymass=None)
+    s = open_trial(folder).subject
+    assert (s.marker_set, s.hip_joint_centre) == (None, "bell")
+    assert s.mass_kg is None  # no Bodymass: estimated as with mass_kg: auto
+    assert "not Plug-in Gait" in s.notes[0] and "not recorded" in s.notes[0]
+
+
+def test_without_subject_yaml_the_vsk_needs_a_height(tmp_path):
+    folder = _vsk_folder(tmp_path, Height=None)
+    with pytest.raises(InputError, match=r"Subject.vsk: Height: missing \(expected the subject's height in mm, "
+                                         r"or a subject.yaml with stature_m and sex\)") as info:
+        open_trial(folder)
+    assert info.value.path == folder / "Subject.vsk"
+
+
+@pytest.mark.parametrize("name,value,given", [("Bodymass", 0, {}), ("Height", 17.45, None),
+                                              ("RightKneeWidth", 0, {}), ("LeftLegLength", 8.98, {}),
+                                              ("MarkerDiameter", -14, {})])
+def test_implausible_measurements_the_stages_would_use_are_refused(tmp_path, name, value, given):
+    """A measurement the stages read is checked as subject.yaml's key would be; Height only without
+    subject.yaml (with one, stature_m is required)."""
+    folder = _folder(tmp_path, "trial.c3d", subject=_with(mass_kg=..., **given)) if given is not None else \
+        _vsk_folder(tmp_path)
+    _vsk(folder, **{name: value})
+    with pytest.raises(InputError) as info:
+        open_trial(folder)
+    assert info.value.path == folder / "Subject.vsk" and info.value.field == name
+    assert f"got {value:g} (expected a" in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_measurement_subject_yaml_replaces_is_not_checked(tmp_path):
+    folder = _folder(tmp_path, "trial.c3d", subject=_with(knee_width_mm=100))
+    _vsk(folder, RightKneeWidth=0)
+    assert open_trial(folder).subject.measurements["PROCESSING:RightKneeWidth"] == 0.0
+
+
+@pytest.mark.parametrize("with_yaml", [True, False])
+def test_two_vsk_files_need_subject_yaml_to_name_one(tmp_path, with_yaml):
+    folder = _folder(tmp_path, "trial.c3d") if with_yaml else _vsk_folder(tmp_path)
+    _vsk(folder, "Anna.vsk", Bodymass=61)
+    _vsk(folder, "Ben.VSK", Bodymass=90)
+    if not with_yaml:
+        (folder / "Subject.vsk").unlink()
+    with pytest.raises(InputError) as info:
+        open_trial(folder)
+    message = str(info.value)
+    assert info.value.path == folder and info.value.field == "vsk" and "\n" not in message
+    assert "2 Vicon subject files: 'Anna.vsk', 'Ben.VSK' (expected one, or" in message
+    assert ("`vsk:` in subject.yaml naming one" if with_yaml else "a subject.yaml naming one under `vsk:`") in message
+    (folder / "subject.yaml").write_text(yaml.safe_dump(_with(mass_kg=..., vsk="Ben.VSK")))
+    t = open_trial(folder)
+    assert t.vsk_path == folder / "Ben.VSK" and t.subject.measurements["PROCESSING:Bodymass"] == 90.0
+
+
+def test_a_named_vsk_in_a_subfolder_and_hidden_ones_ignored(tmp_path):
+    folder = _folder(tmp_path, "trial.c3d", subject=_with(vsk="vicon/Subject.vsk"))
+    (folder / "vicon").mkdir()
+    _vsk(folder / "vicon")
+    _vsk(folder, ".Subject.vsk.1234.part")  # a hidden file (e.g. a copy in progress) is not a subject file
+    t = open_trial(folder)
+    assert t.vsk_path == folder / "vicon" / "Subject.vsk" and t.subject.measurements_source == "vicon/Subject.vsk"
+    (folder / "subject.yaml").write_text(yaml.safe_dump(BASE))
+    assert open_trial(folder).vsk_path is None  # only the folder itself is searched
+
+
+def test_a_bad_vsk_is_one_line_naming_it(tmp_path):
+    folder = _vsk_folder(tmp_path)
+    (folder / "Subject.vsk").write_text("<!DOCTYPE x>\n<KinematicModel/>")
+    with pytest.raises(InputError, match=r"Subject.vsk: line 1: has a document type declaration"):
+        open_trial(folder)
+
+
+def test_no_subject_yaml_and_no_vsk(tmp_path):
+    folder = tmp_path / "empty"
+    folder.mkdir()
+    (folder / "trial.c3d").write_bytes(b"x")
+    with pytest.raises(InputError, match="subject.yaml: file not found \(every trial folder needs a subject.yaml "
+                                         "or a Vicon .vsk\)"):
+        open_trial(folder)
+
+
+def test_vsk_is_a_subject_yaml_key():
+    assert "vsk" in KEYS and subject_from_dict(_with(vsk="Test.vsk")).vsk == "Test.vsk"
+    assert _error(_with(vsk=3)).field == "vsk"
+
+
+@pytest.mark.shared
+def test_the_real_session_without_subject_yaml(shared_pig_dir, tmp_path):
+    """Test.vsk beside the session's C3D files (linked, not copied): the README's measurements."""
+    folder = tmp_path / "session"
+    folder.mkdir()
+    (folder / "trial.c3d").symlink_to(shared_pig_dir / "Movement_trial.c3d")
+    (folder / "static.c3d").symlink_to(shared_pig_dir / "Static_trial.c3d")
+    (folder / "Test.vsk").symlink_to(shared_pig_dir / "Test.vsk")
+    s = open_trial(folder).subject
+    assert (s.mass_kg, s.stature_m, s.marker_set, s.hip_joint_centre) == (85.0, 1.679, "plug_in_gait", "davis")
+    m = s.measurements
+    assert (m["PROCESSING:RightKneeWidth"], m["PROCESSING:LeftKneeWidth"]) == (139.0, 144.0)
+    assert (m["PROCESSING:RightAnkleWidth"], m["PROCESSING:LeftAnkleWidth"]) == (89.0, 85.0)
+    assert (m["PROCESSING:RightLegLength"], m["PROCESSING:LeftLegLength"], m["PROCESSING:InterAsisDistance"]) == \
+        (866.0, 877.0, 306.0)

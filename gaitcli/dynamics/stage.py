@@ -277,8 +277,8 @@ def body_mass(trial: Trial, subject: Subject, cfg: IdynConfig, *, static: Record
               source: Path | None) -> tuple[float, str, float | None]:
     """The body mass (kg), where it came from, and the plates' stride estimate (kg, None without one).
 
-    In order: subject.yaml; the C3D's own subject data (:data:`MASS_PARAMETERS`, the
-    trial's then the static trial's); quiet standing on the static trial's plates; the
+    In order: subject.yaml (or the .vsk's Bodymass without one); the subject data (:data:`MASS_PARAMETERS`:
+    the .vsk's, the trial's, then the static trial's); quiet standing on the static trial's plates; the
     stride estimate (:func:`estimate_mass_kg`). The estimate is always computed: a mass
     from elsewhere that differs from it by more than 5 % is warned about with both values.
     """
@@ -287,9 +287,12 @@ def body_mass(trial: Trial, subject: Subject, cfg: IdynConfig, *, static: Record
     from_file = next(((metadata[k], k) for k in MASS_PARAMETERS if k in metadata), None)
     standing = standing_mass_kg(static, gravity_m_s2=cfg.gravity_m_s2)
     if subject.mass_kg is not None:
-        mass, where = float(subject.mass_kg), "subject.yaml"
+        mass, where = float(subject.mass_kg), subject.mass_source
     elif from_file is not None and 0 < from_file[0] <= 500:
-        mass, where = float(from_file[0]), f"the C3D file's {from_file[1]}"
+        key = from_file[1]
+        mass = float(from_file[0])
+        where = (f"{subject.measurements_source}'s {key.partition(':')[2]}" if key in subject.measurements
+                 else f"the C3D file's {key}")
     elif standing is not None:
         mass, where = standing, "quiet standing on the plates of the static trial (median ΣFz / g)"
     else:
@@ -478,6 +481,7 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
     result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source,
                                     plug_in_gait=plug_in_gait)
     result.notes.append(note)
+    result.notes[:0] = subject.notes  # where the subject's numbers came from (a .vsk), what was assumed
     first = markers.first_frame
     result.reference_posture = ReferencePosture(
         how, None if frames is None else (int(frames[0]) + first, int(frames[-1]) + first),

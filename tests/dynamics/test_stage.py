@@ -190,6 +190,17 @@ def test_body_mass_comes_from_subject_yaml_then_the_c3d_then_standing_then_the_s
         assert mass == pytest.approx(MASS_KG, rel=1e-3) and where.startswith("estimated from the force plates")
 
 
+def test_a_body_mass_from_a_vsk_is_said_to_come_from_it(exact):
+    """A .vsk's Bodymass (merged into the trial's subject data, or the mass of a subject made from it alone) is
+    named as the .vsk's, not the C3D's."""
+    _, filtered, _, _ = exact
+    vsk = dataclasses.replace(_subject(), measurements={"PROCESSING:Bodymass": 75.5}, measurements_source="S.vsk")
+    in_file = dataclasses.replace(filtered, subject_metadata={"PROCESSING:Bodymass": 75.5})
+    assert body_mass(in_file, vsk, IdynConfig(), source=None)[:2] == (75.5, "S.vsk's Bodymass")
+    alone = dataclasses.replace(_subject(75.5), mass_source="S.vsk's Bodymass")
+    assert body_mass(filtered, alone, IdynConfig(), source=None)[:2] == (75.5, "S.vsk's Bodymass")
+
+
 def test_a_body_mass_far_from_the_stride_estimate_is_warned_with_both_values(exact):
     _, filtered, _, _ = exact
     in_file = dataclasses.replace(filtered, subject_metadata={"SUBJECT:WEIGHT": 82.7})

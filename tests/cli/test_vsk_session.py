@@ -1,0 +1,137 @@
+"""A Plug-in Gait session with the lab's Vicon subject file and no subject.yaml: ``gait idyn`` on
+../shared/data/pig (Movement_trial.c3d as trial.c3d, Static_trial.c3d as static.c3d, Test.vsk).
+
+Test.vsk gives the mass (85 kg), height (1679 mm), leg lengths (R 866, L 877 mm), knee widths (R 139,
+L 144 mm) and ankle widths (R 89, L 85 mm). The C3D files carry the same numbers in their PROCESSING
+group, but spelled RKneeWidth, RLegLength…, which the C3D reader does not read: without the .vsk the
+chord method has no widths and the leg length is measured from the markers. The trial is a stair
+descent; these tests check where the subject's numbers come from, not the motion.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from gaitcli.dynamics.stage import subject_measurements
+from gaitcli.pipeline import load_recording, load_static
+from gaitcli.trial import open_trial
+
+from .conftest import Result, build_once, gait, gait_many
+
+pytestmark = pytest.mark.shared
+
+#: the session's measurements as its README lists them, typed into a subject.yaml (no .vsk beside it)
+TYPED = {"mass_kg": 85.0, "stature_m": 1.679, "sex": "male", "marker_set": "plug_in_gait", "hip_joint_centre": "davis",
+         "knee_width_mm": [139, 144], "ankle_width_mm": [89, 85], "leg_length_m": (0.866 + 0.877) / 2}
+
+
+def _session(pig: Path, folder: Path, *, vsk: bool = True) -> Path:
+    folder.mkdir(parents=True)
+    shutil.copy(pig / "Movement_trial.c3d", folder / "trial.c3d")
+    shutil.copy(pig / "Static_trial.c3d", folder / "static.c3d")
+    if vsk:
+        shutil.copy(pig / "Test.vsk", folder / "Test.vsk")
+    return folder
+
+
+def _build(pig: Path, root: Path) -> dict:
+    vsk = _session(pig, root / "vsk")
+    typed = _session(pig, root / "typed", vsk=False)
+    (typed / "subject.yaml").write_text(yaml.safe_dump(TYPED))
+    runs = gait_many({k: (("idyn", "--no-plots", folder), root) for k, folder in (("vsk", vsk), ("typed", typed))},
+                     workers=2)
+    return {k: r.to_json() for k, r in runs.items()}
+
+
+@pytest.fixture(scope="module")
+def session(shared_pig_dir, tmp_path_factory):
+    root, record = build_once(tmp_path_factory, "cli_vsk_session", lambda root: _build(shared_pig_dir, root))
+    return root, {k: Result.from_json(v) for k, v in record.items()}
+
+
+def test_gait_idyn_runs_on_the_session_without_subject_yaml(session):
+    root, runs = session
+    for r in runs.values():
+        assert r.returncode == 0, r.describe()
+        assert "Traceback" not in r.stderr
+    out = root / "vsk" / "gait_out"
+    idyn = json.loads((out / "idyn" / "summary.json").read_text())
+    assert (idyn["mass_kg"], idyn["mass_source"]) == (85.0, "Test.vsk's Bodymass")
+    assert (idyn["marker_set"], idyn["hip_joint_centre"]) == ("plug_in_gait", "davis")
+    assert "de Leva (1996) male table; body mass 85.00 kg, stature 1.679 m" in idyn["notes"]
+    # the widths reached the chord method (no medial markers in Plug-in Gait)
+    assert {f"{c}{s}: Plug-in Gait's chord method (no medial marker)" for c in ("KJC", "AJC") for s in "rl"} \
+        <= set(idyn["notes"])
+    filt = json.loads((out / "filter" / "summary.json").read_text())
+    for notes in (idyn["notes"], filt["notes"]):
+        merged = [n for n in notes if n.startswith("subject measurements: Test.vsk ('PlugInGait FullBody Ai'): "
+                                                   "133 parameters as PROCESSING:<NAME>")]
+        assert len(merged) == 1
+        assert merged[0].endswith("used: Bodymass 85, Height 1679, RightLegLength 866, LeftLegLength 877, "
+                                  "RightKneeWidth 139, LeftKneeWidth 144, RightAnkleWidth 89, LeftAnkleWidth 85")
+        assert any(n.startswith("sex: Test.vsk records none, male assumed") for n in notes)
+
+
+def test_the_vsk_gives_what_the_typed_subject_yaml_gives(session):
+    """The outputs equal those of the README's measurements typed into subject.yaml (no .vsk)."""
+    root, runs = session
+    assert all(r.returncode == 0 for r in runs.values())
+    for name in ("kinematics.csv", "joint_moments.csv", "residuals.csv"):
+        a = pd.read_csv(root / "vsk" / "gait_out" / "idyn" / name)
+        b = pd.read_csv(root / "typed" / "gait_out" / "idyn" / name)
+        assert list(a.columns) == list(b.columns)
+        np.testing.assert_array_equal(a.to_numpy(), b.to_numpy(), err_msg=name)
+
+
+def _metadata(folder: Path) -> tuple[dict, dict]:
+    trial = open_trial(folder)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        recording = load_recording(trial)
+        static = load_static(trial, recording.lab_to_model)
+    return recording.subject_metadata, static.subject_metadata
+
+
+def test_the_vsk_is_above_the_c3d_and_below_subject_yaml(shared_pig_dir, tmp_path):
+    """The loaded trials' subject data: the .vsk's numbers over the C3D's (an edited Bodymass wins over the
+    C3D's 85 kg), and subject.yaml's keys over both."""
+    folder = _session(shared_pig_dir, tmp_path / "session")
+    text = (folder / "Test.vsk").read_text(encoding="utf-8")
+    assert text.count('NAME="Bodymass" VALUE="85"') == 1
+    (folder / "Test.vsk").write_text(text.replace('NAME="Bodymass" VALUE="85"', 'NAME="Bodymass" VALUE="83.5"'),
+                                     encoding="utf-8")
+    for metadata in _metadata(folder):
+        assert metadata["PROCESSING:Bodymass"] == 83.5
+        assert metadata["PROCESSING:RightKneeWidth"] == 139.0 and metadata["PROCESSING:LeftAnkleWidth"] == 85.0
+        assert metadata["PROCESSING:InterAsisDistance"] == 306.0
+    (folder / "subject.yaml").write_text(yaml.safe_dump({"stature_m": 1.68, "sex": "female",
+                                                        "marker_set": "plug_in_gait", "knee_width_mm": [120, 121]}))
+    subject = open_trial(folder).subject
+    metadata, _ = _metadata(folder)
+    widths, leg_length, _ = subject_measurements(subject, metadata)
+    assert widths.knee_m == {"r": 0.120, "l": 0.121}  # subject.yaml's
+    assert widths.ankle_m == {"r": 0.089, "l": 0.085}  # the .vsk's
+    assert leg_length == pytest.approx((0.866 + 0.877) / 2)
+    assert (subject.mass_kg, subject.stature_m, subject.sex) == (None, 1.68, "female")  # mass: auto → Bodymass
+    (folder / "Test.vsk").unlink()
+    metadata, _ = _metadata(folder)
+    assert metadata["PROCESSING:Bodymass"] == 85.0 and "PROCESSING:RightKneeWidth" not in metadata  # the C3D's
+
+
+def test_two_vsk_files_exit_2_naming_both(shared_pig_dir, tmp_path):
+    folder = _session(shared_pig_dir, tmp_path / "session")
+    shutil.copy(folder / "Test.vsk", folder / "Other.vsk")
+    before = sorted(p.name for p in folder.iterdir())
+    r = gait("filter", "--no-plots", folder, cwd=tmp_path)
+    assert r.returncode == 2, r.describe()
+    assert len(r.stderr_lines) == 1 and "Traceback" not in r.stderr
+    assert "2 Vicon subject files: 'Other.vsk', 'Test.vsk'" in r.stderr
+    assert sorted(p.name for p in folder.iterdir()) == before  # nothing written
