@@ -62,9 +62,24 @@ def _joint_positions(rotation, com_m, joint_in_parent_m, joint_in_child_m):
     return by_parent, by_child
 
 
+def cluster_complete(current: np.ndarray) -> np.ndarray:
+    """(n,) frames in which every point of a cluster (n, k, 3) that the trial shows at all is seen.
+
+    A pose fitted to fewer points than the rest of the trial's is offset by those points' skin movement and
+    noise: at an unfilled gap's ends it would jump, and its second derivative spike (issue 34: −5.8 N·m/kg at a
+    hip). So a body is untracked (NaN) wherever a point of its cluster is missing; a point the trial never
+    shows does not count.
+    """
+    seen = np.all(np.isfinite(current), axis=-1)  # (n, k)
+    shown = seen.any(axis=0)
+    return np.all(seen[:, shown], axis=1)
+
+
 def track_segments(markers: Markers, calibration: StaticCalibration) -> SegmentPoses:
     """Fit every tracked body's static cluster to each frame by SVD (3.2–3.15); locked bodies follow their parent,
-    and a chained body's proximal joint centre is placed by its parent's fitted pose."""
+    and a chained body's proximal joint centre is placed by its parent's fitted pose. A body is untracked (NaN)
+    in the frames where a point of its cluster that the trial shows elsewhere is missing
+    (:func:`cluster_complete`)."""
     n = markers.n_frames
     nb = len(BODIES)
     R = np.full((n, nb, 3, 3), np.nan)
@@ -87,6 +102,7 @@ def track_segments(markers: Markers, calibration: StaticCalibration) -> SegmentP
             j = JOINT_CHILD.index(i)
             p = JOINT_PARENT[j]
             current[:, labels.index(calibration.chained[b])] = com[:, p] + R[:, p] @ jp[j]
+        current[~cluster_complete(current)] = np.nan
         fit = fit_rigid_pose(calibration.cluster(b), current)
         R[:, i], com[:, i], rms[:, i], used[:, i] = fit.R, fit.d_m, fit.rms_m, fit.markers_used
         missing[b] = fit.invalid_frames
@@ -137,6 +153,6 @@ def missing_frame_messages(poses: SegmentPoses) -> list[str]:
     lines = []
     for b, idx in poses.missing_frames.items():
         if len(idx):
-            lines.append(f"segment {b} has < 3 markers in frames {frame_spans(idx, poses.first_frame)}")
+            lines.append(f"segment {b} misses a tracking marker in frames {frame_spans(idx, poses.first_frame)}")
     return lines
 

@@ -105,6 +105,8 @@ def test_noisy_markers_give_small_errors(cal):
 
 
 def test_missing_markers_give_nan_and_messages(cal):
+    """A body is untracked wherever a marker of its cluster is missing, also when 3 or more remain (issue 34: a
+    smaller cluster's pose jumps at the gap's ends); elsewhere the poses are exact."""
     q = known_q(60)
     markers = markers_from_q(q, cal)
     pos = markers.positions_m.copy()
@@ -112,12 +114,27 @@ def test_missing_markers_give_nan_and_messages(cal):
     pos[30:41, markers.index("TTl")] = np.nan  # shank_l drops to 2 markers
     poses = track_segments(Markers(markers.labels, pos, RATE_HZ, first_frame=1), cal)
     out = poses_to_coordinates(poses)
-    np.testing.assert_allclose(out[10:21], q[10:21], atol=1e-9)
+    np.testing.assert_array_equal(poses.missing_frames["thigh_r"], np.arange(10, 21))
     np.testing.assert_array_equal(poses.missing_frames["shank_l"], np.arange(30, 41))
+    assert np.all(np.isnan(out[10:21, COORDINATES.index("hip_r_flexion")]))
     assert np.all(np.isnan(out[30:41, COORDINATES.index("knee_l_flexion")]))
     assert np.all(np.isnan(out[30:41, COORDINATES.index("ankle_l_rotation")]))
-    np.testing.assert_allclose(out[41:], q[41:], atol=1e-9)  # unwrapping skips the NaN gap
-    assert missing_frame_messages(poses) == ["segment shank_l has < 3 markers in frames 31–41"]
+    tracked = np.ones(60, bool)
+    tracked[10:21] = tracked[30:41] = False
+    np.testing.assert_allclose(out[tracked], q[tracked], atol=1e-9)  # unwrapping skips the NaN gaps
+    assert missing_frame_messages(poses) == ["segment thigh_r misses a tracking marker in frames 11–21",
+                                             "segment shank_l misses a tracking marker in frames 31–41"]
+
+
+def test_a_marker_the_trial_never_shows_leaves_the_cluster_smaller_throughout(cal):
+    """Only a marker the trial shows somewhere makes its absence untrack the body: without GTr at all the thigh
+    is fitted to its other three markers in every frame."""
+    q = known_q(30)
+    markers = markers_from_q(q, cal)
+    pos = markers.positions_m.copy()
+    pos[:, markers.index("GTr")] = np.nan
+    out = poses_to_coordinates(track_segments(Markers(markers.labels, pos, RATE_HZ), cal))
+    np.testing.assert_allclose(out, q, atol=1e-9)
 
 
 def test_locked_hat_follows_the_pelvis():
