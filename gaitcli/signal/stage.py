@@ -249,7 +249,7 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                             f"{g.last_frame + markers.first_frame}" for g in long_gaps[:6])
         more = f" and {len(long_gaps) - 6} more" if len(long_gaps) > 6 else ""
         warnings.warn(f"{len(long_gaps)} marker gap(s) longer than {cfg.max_gap_frames} frames left unfilled "
-                      f"(pose fitting ignores those markers there): {listing}{more}", GaitWarning, stacklevel=2)
+                      f"(the segments they track are NaN there): {listing}{more}", GaitWarning, stacklevel=2)
 
     rate = markers.rate_hz
     n = markers.n_frames
