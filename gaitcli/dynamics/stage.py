@@ -34,7 +34,7 @@ from gaitcli.kinematics.chain_fit import fit_chain
 from gaitcli.kinematics.joint_centres import JointWidths, functional_joint_centre
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
-from gaitcli.kinematics.markerset import with_fixed_points
+from gaitcli.kinematics.markerset import VIRTUAL_JOINT_CENTRES, with_fixed_points
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINTS, BodyParameters
 from gaitcli.signal.cycles import GaitFeatures, Stride, gait_features, strides
 
@@ -358,16 +358,49 @@ def subject_measurements(subject: Subject, metadata: Mapping[str, float]) -> tup
 
 def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Subject, mass_kg: float, *,
                        source: Path | None, hip_method: str | None = None,
-                       metadata: Mapping[str, float] | None = None) -> StaticCalibration:
+                       metadata: Mapping[str, float] | None = None, untracked: tuple[str, ...] = ()
+                       ) -> StaticCalibration:
     """Static calibration (3.2, 3.3) on ``frames`` of ``markers`` with the subject's marker set and hip method
-    (or ``hip_method``); ``metadata``: the C3D files' subject data (widths, leg length)."""
+    (or ``hip_method``); ``metadata``: the C3D files' subject data (widths, leg length); ``untracked``: points
+    that place joint centres but track no body."""
     markers_set = subject.markers
     widths, leg_length, _ = subject_measurements(subject, metadata or {})
     return calibrate(markers, frames=frames, source=source, mass_kg=mass_kg, stature_m=subject.stature_m,
                      sex=subject.sex, thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
                      disturbances=subject.disturbances, extra_tracking_markers=markers_set.tracking,
                      marker_set=markers_set, hip_method=hip_method or HIP_METHOD[subject.hip_joint_centre],
-                     leg_length_m=leg_length, widths=widths)
+                     leg_length_m=leg_length, widths=widths, untracked=untracked)
+
+
+def virtual_centres_only_in_static(static: Markers, frames: np.ndarray | None, trial: Markers) -> tuple[str, ...]:
+    """The lab's virtual joint centres (``HJCr``, ``KJCr``, ``AJCr`` …) the reference posture shows and the walking
+    trial never does: a static processed in Nexus (its FEO/TIO or KJC/AJC points) beside a raw walk."""
+    in_static = static_landmarks(static, frames)
+    return tuple(v for v in VIRTUAL_JOINT_CENTRES if v in in_static
+                 and not (v in trial and np.isfinite(trial.get(v)).all(axis=-1).any()))
+
+
+def without_points(markers: Markers, labels: tuple[str, ...]) -> Markers:
+    """``markers`` without the trajectories ``labels``."""
+    keep = [i for i, lab in enumerate(markers.labels) if lab not in labels]
+    return Markers(tuple(markers.labels[i] for i in keep), markers.positions_m[:, keep], markers.rate_hz,
+                   markers.first_frame)
+
+
+def static_only_note(subject: Subject, absent: tuple[str, ...], hip_from_file: bool) -> str:
+    """One line for the summary's notes and the warning: which virtual points of the static the walk lacks, and
+    what stands in for them."""
+    named = ", ".join(f"{v} ({' or '.join(subject.markers.landmarks.get(v, (v,)))})" for v in absent)
+    own = [v for v in absent if not (v.startswith("HJC") and hip_from_file)]
+    kept = [v for v in absent if v not in own]
+    said = []
+    if own:
+        said.append(f"the tool's own {', '.join(own)} replace them in the calibration")
+    if kept:
+        said.append(f"{', '.join(kept)} stay the static's (hip_joint_centre {subject.hip_joint_centre}) and each "
+                    "thigh is tracked with its hip centre placed by the pelvis")
+    return (f"virtual joint centres in the static trial but not in the walking trial: {named}; "
+            f"{'; '.join(said)}")
 
 
 #: SCORE's uncertainty along its weakest direction above which the result is warned about, m
@@ -472,11 +505,21 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
     where = static_path if static is not None else trial_path
     residuals = {}
     metadata = {**(static.subject_metadata if static is not None else {}), **trial.subject_metadata}
+    absent = virtual_centres_only_in_static(markers, frames, trial.markers)
+    hip_from_file = subject.hip_joint_centre == "from_file"
+    if absent:  # a Nexus-processed static beside a raw walk: a point of the static alone tracks nothing
+        note = static_only_note(subject, absent, hip_from_file)
+        warnings.warn(note, GaitWarning, stacklevel=2)
+        markers = without_points(markers, tuple(v for v in absent if not (v.startswith("HJC") and hip_from_file)))
     if subject.hip_joint_centre == "score":
         markers, residuals = functional_hip_centres(trial, markers, frames, subject, mass, source=where,
                                                     metadata=metadata)
+    untracked = tuple(v for v in ("HJCr", "HJCl") if v in markers and v not in trial.markers) + absent
     calibration = static_calibration(markers, frames, subject, mass, source=where,
-                                     hip_method="from_file" if residuals else None, metadata=metadata)
+                                     hip_method="from_file" if residuals else None, metadata=metadata,
+                                     untracked=untracked)
+    if absent:
+        calibration.notes.append(note)
     plug_in_gait, note = plug_in_gait_model(subject, markers, frames, metadata)
     result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source,
                                     plug_in_gait=plug_in_gait)

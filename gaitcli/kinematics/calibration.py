@@ -272,7 +272,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
               disturbances: Sequence[Disturbance | str] = (), hip_method: str = "bell1990",
               ankle_method: str = "de_leva", extra_tracking_markers: Mapping[str, Sequence[str]] | None = None,
               marker_set: MarkerSet | None = None, leg_length_m: float | None = None,
-              widths: jcm.JointWidths | None = None, source: str | Path | None = None) -> StaticCalibration:
+              widths: jcm.JointWidths | None = None, untracked: Sequence[str] = (),
+              source: str | Path | None = None) -> StaticCalibration:
     """Calibrate the 8-body model on the reference posture ``static`` (averaged over ``frames``).
 
     Thigh and shank lengths are measured (HJC–KJC, KJC–AJC) unless given; other
@@ -283,7 +284,8 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     ``hip_method``: ``"bell1990"`` (the dissertation's), ``"bell1989"``, ``"harrington"``,
     ``"hara"``, ``"davis"`` (these three with ``leg_length_m``, default ASIS to medial malleolus), or
     ``"from_file"`` (the lab's ``HJCr``/``HJCl`` points; otherwise they are ignored). ``widths``:
-    knee/ankle widths, marker diameter and wands for Plug-in Gait's chord method.
+    knee/ankle widths, marker diameter and wands for Plug-in Gait's chord method. ``untracked``: landmarks that
+    place joint centres but track no body (a virtual point the walking trial does not hold).
     Raises :class:`InputError` naming a marker the model's geometry needs (by the
     lab label ``marker_set`` gives it).
     """
@@ -391,7 +393,7 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     locked = []
     for i, b in enumerate(BODIES):
         candidates = tracking_landmarks(b) + tuple(extra.get(b, ()))
-        names = [n for n in dict.fromkeys(candidates) if n in P]
+        names = [n for n in dict.fromkeys(candidates) if n in P and n not in untracked]
         landmarks_in_body[b] = {n: P[n] - com[i] for n in names}
         proximal = _PROXIMAL_CENTRE.get(b[:-2], "") + b[-1]
         if len(names) == MIN_MARKERS - 1 and b not in ("pelvis", "hat") and proximal not in names:

@@ -43,7 +43,7 @@ from gaitcli.dynamics.stage import body_mass, estimate_mass_kg, inverse_dynamics
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
-from gaitcli.kinematics.markerset import marker_set
+from gaitcli.kinematics.markerset import marker_set, with_fixed_points
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, MOMENTS
 from gaitcli.core.recording import ForcePlate, Markers, Recording
@@ -459,3 +459,54 @@ def test_an_unfilled_thigh_marker_gap_leaves_nan_and_no_spike_at_its_ends():
     error = np.abs(holed.joint_moments_anatomical_Nm[outside, hip] - whole.joint_moments_anatomical_Nm[outside, hip])
     assert np.isfinite(error).all()
     assert error.max() / MASS_KG < 0.15, error.max() / MASS_KG
+
+
+# --- a static processed in Nexus beside a raw walk (issue 34) -------------------------------------------
+#: Plug-in Gait's virtual points as Nexus writes them into a processed static: the femur's origin is the knee
+#: centre, the tibia's the ankle centre
+NEXUS_POINTS = {"RFEO": "KJCr", "LFEO": "KJCl", "RTIO": "AJCr", "LTIO": "AJCl", "RHJC": "HJCr", "LHJC": "HJCl"}
+
+
+@pytest.fixture(scope="module")
+def plug_in_gait_walk():
+    """``gait synth --marker-set plug_in_gait``'s walk (seed 2, 2 mm noise) through the filter stage."""
+    trial = simulate_trial(seed=2, marker_set="plug_in_gait", noise_mm=2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        filtered = filter_trial(Recording(marker_set("plug_in_gait").apply(trial.markers), trial.plates,
+                                          subject_metadata=trial.metadata), FilterConfig()).trial
+    return trial, filtered
+
+
+def _nexus_static(trial, offset_m: float):
+    """The synthetic static with Nexus's virtual joint centres added at the true static centres, the knee and
+    ankle centres moved ``offset_m`` forward."""
+    centres = {label: trial.calibration.joint_centres_m[jc] + [0.0 if jc.startswith("HJC") else offset_m, 0.0, 0.0]
+               for label, jc in NEXUS_POINTS.items()}
+    static = with_fixed_points(trial.static, centres)
+    return Recording(marker_set("plug_in_gait").apply(static), [], subject_metadata=trial.metadata)
+
+
+@pytest.mark.parametrize("hip", ["bell", "from_file"])
+def test_a_nexus_static_with_a_raw_walk_falls_back_to_the_tools_own_centres(plug_in_gait_walk, hip):
+    """The static holds RFEO/LFEO/RTIO/LTIO (15 mm off the truth here, so that which centres were used shows)
+    and RHJC/LHJC, the walk none of them. Before issue 34 the virtual points were tracking points of thighs,
+    shanks and feet: all six leg segments NaN in every frame, exit 0. Now the knee and ankle centres are the
+    chord method's (within 0.5 mm of the truth, as without the virtual points), a note says so, and the sagittal
+    moments recover the truth as in the plain Plug-in Gait test (< 0.1 N·m/kg RMS). With ``from_file`` the
+    static's hip centres stay and each thigh is tracked with its hip centre placed by the pelvis."""
+    trial, filtered = plug_in_gait_walk
+    subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
+                      hip_joint_centre=hip)
+    with pytest.warns(GaitWarning, match="virtual joint centres in the static trial but not in the walking trial"):
+        result = run_idyn(filtered, _nexus_static(trial, 0.015), subject, IdynConfig())
+    assert np.isfinite(result.q).all()
+    for jc in ("KJCr", "KJCl", "AJCr", "AJCl"):
+        error = np.linalg.norm(result.calibration.joint_centres_m[jc] - trial.calibration.joint_centres_m[jc])
+        assert error < 5e-4, (jc, error)
+    note = next(n for n in result.notes if n.startswith("virtual joint centres in the static trial"))
+    assert "KJCr (RKJC or RFEO)" in note and "the tool's own" in note
+    assert result.calibration.chained["thigh_r"] == "HJCr"
+    assert ("hip_joint_centre from_file" in note) == (hip == "from_file")
+    rms = sagittal_rms_per_kg(trial, result)
+    assert max(rms.values()) < 0.1, rms
