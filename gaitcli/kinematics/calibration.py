@@ -137,12 +137,14 @@ def static_landmarks(markers: Markers, frames: Sequence[int] | slice | None = No
 
 def chord_and_toe_sides(P: Mapping[str, np.ndarray], widths: jcm.JointWidths | None,
                         marker_set: MarkerSet | None = None) -> tuple[tuple, tuple]:
-    """The knee and ankle centres the chord method places (no medial marker; width and wand known), and the sides
-    whose foot is CA and MT2 alone (no fifth metatarsal in the file, or none in the marker set)."""
+    """The knee and ankle centres the chord method places (no medial marker and no virtual centre of the lab;
+    width and wand known), and the sides whose foot is CA and MT2 alone (no fifth metatarsal in the file, or none
+    in the marker set)."""
     chord = []
     for s in "rl":
         for joint, jc, medial in (("knee", f"KJC{s}", f"MEF{s}"), ("ankle", f"AJC{s}", f"MM{s}")):
-            if medial not in P and widths is not None and widths.chord_inputs(joint, s, P) is not None:
+            if (medial not in P and jc not in P and widths is not None
+                    and widths.chord_inputs(joint, s, P) is not None):
                 chord.append(jc)
     toe = tuple(s for s in "rl" if (f"MT2{s}" in P and not (f"VM{s}" in P and f"FM{s}" in P))
                 or (marker_set is not None and f"MT2{s}" in marker_set.landmarks
@@ -342,9 +344,12 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     _, anatomical["pelvis"] = jcm.pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
     from_landmarks["pelvis"] = True
     for s in "rl":
-        # a chord's joint centre stands in for the medial marker: the frame's y lies in the plane of chord and axis
-        epicondyles = (P.get(f"LEF{s}"), jc[f"KJC{s}"] if f"KJC{s}" in chord else P.get(f"MEF{s}"))
-        malleoli = (P.get(f"LM{s}"), jc[f"AJC{s}"] if f"AJC{s}" in chord else P.get(f"MM{s}"))
+        # without a medial marker the chord's or the lab's joint centre stands in for it: the frame's y lies in the
+        # plane of the lateral marker and the segment's axis
+        epicondyles = (P.get(f"LEF{s}"), P[f"MEF{s}"] if f"MEF{s}" in P
+                       else jc[f"KJC{s}"] if f"KJC{s}" in chord or f"KJC{s}" in P else None)
+        malleoli = (P.get(f"LM{s}"), P[f"MM{s}"] if f"MM{s}" in P
+                    else jc[f"AJC{s}"] if f"AJC{s}" in chord or f"AJC{s}" in P else None)
         rotation[f"thigh_{s}"] = jcm.thigh_frame(jc[f"HJC{s}"], jc[f"KJC{s}"], *epicondyles, side=s)
         rotation[f"shank_{s}"] = jcm.shank_frame(jc[f"KJC{s}"], jc[f"AJC{s}"], *malleoli, side=s)
         rotation[f"foot_{s}"] = (jcm.toe_foot_frame(P[f"CA{s}"], P[f"MT2{s}"], rotation[f"shank_{s}"]) if s in toe
