@@ -186,29 +186,36 @@ def marker_residuals(states, markers: Markers, calibration: StaticCalibration) -
 
 
 def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | None:
-    """Body mass from the plates: over a stride each foot carries half the body's weight on average.
+    """Body mass (kg) from the plates: over a full stride each foot carries half the body's weight on average.
 
-    For every stance fully recorded on the plates (heel strike and toe off inside a
-    loaded run of that foot), ``m = 2 ∫F_z dt / (g T)`` with ``T`` the mean stride
-    period; the median over stances is returned (None when no stance qualifies).
-    Stances timed by the trial file's events count where one loaded run of the foot
-    spans them (:func:`file_stances_on_plates`).
+    For every stride of a foot (its heel strike to its next one) whose stance was recorded on the plates (timed by
+    the plates' events, or by the trial file's where one loaded run of the foot spans them:
+    :func:`file_stances_on_plates`) and whose load is known throughout (but within ``FILE_EVENT_TOLERANCE_S`` of
+    its events, where it is near zero), ``m = 2 ∫F_z dt / (g T)`` with ``T`` that stride's own period; the median
+    over those strides (None when none qualifies). Issue 34: the mean period of every stride in the trial, or a
+    stance part of whose load went unmeasured, made a lab's true mass look 17 % off.
     """
     rate = trial.rate_hz
     t = trial.time_s
-    periods = [s.period_s for s in strides(trial.events)]
-    if not periods:
-        return None
-    period = float(np.mean(periods))
     masses = []
     for side, load in trial.feet.items():
         fz = np.nan_to_num(load.force_N[:, 2])
-        spans = [(a - 1.5 / rate, b + 1.5 / rate) for a, b in trial.events.stances(side, "plate", max_s=period)]
-        spans += file_stances_on_plates(trial, side, max_s=period)
-        for a, b in spans:
-            inside = (t >= a) & (t <= b)
-            impulse = float(np.sum(fz[inside]) / rate)
-            masses.append(2 * impulse / (gravity_m_s2 * period))
+        known = trial.load_known(side)
+        measured = ([(a, b) for a, b in trial.events.stances(side, "plate")]
+                    + file_stances_on_plates(trial, side))
+        for stride in (s for s in strides(trial.events) if s.side == side):
+            start, end = stride.start_s, stride.end_s
+            stance = next(((a, b) for a, b in measured
+                           if abs(a - start) <= FILE_EVENT_TOLERANCE_S and b < end), None)
+            if stance is None:
+                continue
+            events = np.array([start, end, *stance, *trial.events.times(side, "toe_off")])
+            near = np.min(np.abs(t[:, None] - events[None, :]), axis=1) <= FILE_EVENT_TOLERANCE_S
+            if not known[(t >= start) & (t < end) & ~near].all():
+                continue
+            on_plates = (t >= stance[0] - 1.5 / rate) & (t <= stance[1] + 1.5 / rate)  # the swing's load is zero
+            impulse = float(np.sum(fz[on_plates]) / rate)
+            masses.append(2 * impulse / (gravity_m_s2 * (end - start)))
     return float(np.median(masses)) if masses else None
 
 

@@ -51,6 +51,8 @@ from gaitcli.core.events import Events
 from gaitcli.signal.stage import filter_trial
 from gaitcli.synth import simulate_trial
 from gaitcli.trial import Subject
+from tests.signal.conftest import make_walk
+from tests.signal.test_stage import _recording as walk_recording
 
 MASS_KG, STATURE_M = 75.0, 1.78
 EDGE = 2  # frames left out at each end (spline end conditions)
@@ -535,3 +537,24 @@ def test_the_notes_name_one_source_per_joint_centre(plug_in_gait_walk):
         R = with_points.reference_to_anatomical[k].T @ plain.reference_to_anatomical[k]
         angle = np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1)))
         assert angle < 1.0, (BODIES[k], angle)
+
+
+def test_the_mass_estimate_takes_each_measured_stance_with_its_own_stride():
+    """A walk of 1.1 s strides (700 N, one stance per foot on a plate) that began with a slow 1.7 s stride of the
+    right foot (a heel strike 1.7 s before its first, found by the markers). Each foot carries half the weight
+    over its own stride: 2 ∫Fz dt / (g T) with T the stride that stance begins, 70.2 kg either way (the 20 N
+    threshold and the filter take 1.6 % of the impulse). Before issue 34, T was the mean of every stride in the
+    trial, the slow one included: 65.7 kg, 6 % low, and a true body mass of 70 kg was warned about as 7 % off."""
+    walk = make_walk(plates=[("r", 1, 0.0, 0.6, 0.4), ("l", 1, 0.0, 0.6, 0.4)], duration_s=5.0,
+                     first_strike_s={"r": 1.9, "l": 2.45})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        trial = filter_trial(walk_recording(walk), FilterConfig(events="detect")).trial
+    ev = trial.events
+    first = ev.times("r", "heel_strike")[0]
+    slow = Events(frame=[*ev.frame, int(round((first - 1.7) * trial.rate_hz))], time_s=[*ev.time_s, first - 1.7],
+                  side=[*ev.side, "r"], kind=[*ev.kind, "heel_strike"], source=[*ev.source, "kinematics"])
+    began_slowly = dataclasses.replace(trial, events=slow)
+    true_kg = walk.body_weight_N / 9.81
+    assert estimate_mass_kg(trial) == pytest.approx(true_kg, rel=0.03)
+    assert estimate_mass_kg(began_slowly) == pytest.approx(estimate_mass_kg(trial), rel=1e-12)
