@@ -67,9 +67,13 @@ def test_gait_idyn_runs_on_the_session_without_subject_yaml(session):
     assert (idyn["mass_kg"], idyn["mass_source"]) == (85.0, "Test.vsk's Bodymass")
     assert (idyn["marker_set"], idyn["hip_joint_centre"]) == ("plug_in_gait", "davis")
     assert "de Leva (1996) male table; body mass 85.00 kg, stature 1.679 m" in idyn["notes"]
-    # the widths reached the chord method (no medial markers in Plug-in Gait)
-    assert {f"{c}{s}: Plug-in Gait's chord method (no medial marker)" for c in ("KJC", "AJC") for s in "rl"} \
-        <= set(idyn["notes"])
+    # the widths reached Plug-in Gait's frames (its chord method per frame); the model's knee and ankle centres
+    # are Nexus's own (RFEO, RTIO … in both files), and the notes say only that (issue 34)
+    assert idyn["angle_frames"] == "plug_in_gait"
+    assert any(n.startswith("anatomical angles: Plug-in Gait's (CGM 1.0) frames per frame") for n in idyn["notes"])
+    for c in ("KJC", "AJC"):
+        for s in "rl":
+            assert [n for n in idyn["notes"] if n.startswith(f"{c}{s}:")] == [f"{c}{s}: virtual marker from the lab file"]
     filt = json.loads((out / "filter" / "summary.json").read_text())
     for notes in (idyn["notes"], filt["notes"]):
         merged = [n for n in notes if n.startswith("subject measurements: Test.vsk ('PlugInGait FullBody Ai'): "
