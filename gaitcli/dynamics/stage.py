@@ -418,25 +418,39 @@ HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "d
 
 
 def plug_in_gait_model(subject: Subject, markers: Markers, frames: np.ndarray | None,
-                       metadata: Mapping[str, float]) -> tuple[cgm.PlugInGait | None, str]:
+                       metadata: Mapping[str, float]) -> tuple[cgm.PlugInGait | None, str, dict[str, np.ndarray]]:
     """Plug-in Gait's frames for a ``plug_in_gait`` subject whose measurements and markers are all known (the
-    static foot offsets from the reference posture ``frames`` of ``markers``), and a note saying which frames the
-    anatomical angles use."""
+    static foot offsets, and with a knee alignment device the thigh and shank rotation offsets, from the
+    reference posture ``frames`` of ``markers``), a note saying which frames the anatomical angles use, and the
+    points a knee alignment device stands for in the reference posture ({``LEFr``: its hub, ``KJCr``, ``AJCr``:
+    its centres}, m; empty without one)."""
     if not subject.markers.name.startswith("plug_in_gait"):
-        return None, "anatomical angles: ISB joint coordinate systems on the calibrated anatomical frames"
+        return None, "anatomical angles: ISB joint coordinate systems on the calibrated anatomical frames", {}
     widths, leg_length, _ = subject_measurements(subject, metadata)
     measurements = cgm.measurements_from(metadata, leg_length_m=leg_length, knee_width_m=widths.knee_m,
                                          ankle_width_m=widths.ankle_m, marker_diameter_m=widths.marker_diameter_m)
     wands = dict(subject.markers.wands)
-    P = None if measurements is None else cgm.plug_in_gait_landmarks(static_landmarks(markers, frames), wands)
+    standing, kad = cgm.with_kad_hubs(static_landmarks(markers, frames))
+    P = None if measurements is None else cgm.plug_in_gait_landmarks(standing, wands)
     if P is not None:
+        points = {}
+        if kad:
+            measurements = cgm.kad_rotation_offsets(P, kad, measurements)
+            centres = cgm.leg_frames(P, measurements).joint_centres_m
+            for s in (k[-1] for k in kad):
+                points.update({f"LEF{s}": P[f"LEF{s}"], f"KJC{s}": centres[f"KJC{s}"], f"AJC{s}": centres[f"AJC{s}"]})
         offsets = cgm.static_foot_offsets(P, measurements)
         shown = ", ".join(f"{SIDE_NAMES[s]} plantarflexion {np.degrees(offsets.plantarflexion_rad[s]):.1f}° "
                           f"rotation {np.degrees(offsets.rotation_rad[s]):.1f}°" for s in SIDES)
+        if kad:
+            shown += "; knee alignment device: " + ", ".join(
+                f"{SIDE_NAMES[k[-1]]} thigh rotation {np.degrees(measurements.thigh_rotation_rad[k[-1]]):.1f}° "
+                f"shank rotation {np.degrees(measurements.shank_rotation_rad[k[-1]]):.1f}°" for k in kad)
         return (cgm.PlugInGait(measurements, offsets, wands),
-                f"anatomical angles: Plug-in Gait's (CGM 1.0) frames per frame; static foot offsets {shown}")
+                f"anatomical angles: Plug-in Gait's (CGM 1.0) frames per frame; static foot offsets {shown}", points)
+    hubs = {k: v for k, v in standing.items() if k.startswith("LEF") and k not in static_landmarks(markers, frames)}
     return None, ("anatomical angles: ISB joint coordinate systems on the calibrated anatomical frames (Plug-in "
-                  "Gait's frames need both legs' lengths, knee and ankle widths and every Plug-in Gait marker)")
+                  "Gait's frames need both legs' lengths, knee and ankle widths and every Plug-in Gait marker)"), hubs
 
 
 def anatomical_frames(states, calibration: StaticCalibration, markers: Markers,
@@ -514,23 +528,29 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
     metadata = {**(static.subject_metadata if static is not None else {}), **trial.subject_metadata}
     absent = virtual_centres_only_in_static(markers, frames, trial.markers)
     hip_from_file = subject.hip_joint_centre == "from_file"
+    notes = []
     if absent:  # a Nexus-processed static beside a raw walk: a point of the static alone tracks nothing
-        note = static_only_note(subject, absent, hip_from_file)
-        warnings.warn(note, GaitWarning, stacklevel=2)
+        notes.append(static_only_note(subject, absent, hip_from_file))
+        warnings.warn(notes[-1], GaitWarning, stacklevel=2)
         markers = without_points(markers, tuple(v for v in absent if not (v.startswith("HJC") and hip_from_file)))
+    plug_in_gait, pig_note, device = plug_in_gait_model(subject, markers, frames, metadata)
+    if device:  # a knee alignment device's hub is where the walk's knee marker sits; its centres track nothing
+        markers = with_fixed_points(markers, device)
+        absent += tuple(k for k in device if k[:3] in ("KJC", "AJC"))
+        sides = ", ".join(SIDE_NAMES[k[-1]] for k in device if k.startswith("LEF"))
+        notes.append(f"knee alignment device ({sides}): the knee marker at its hub" + (
+            ", the knee and ankle centres Plug-in Gait's from it" if any(k.startswith("KJC") for k in device) else ""))
     if subject.hip_joint_centre == "score":
         markers, residuals = functional_hip_centres(trial, markers, frames, subject, mass, source=where,
-                                                    metadata=metadata)
+                                                    metadata=metadata, untracked=absent)
     untracked = tuple(v for v in ("HJCr", "HJCl") if v in markers and v not in trial.markers) + absent
     calibration = static_calibration(markers, frames, subject, mass, source=where,
                                      hip_method="from_file" if residuals else None, metadata=metadata,
                                      untracked=untracked)
-    if absent:
-        calibration.notes.append(note)
-    plug_in_gait, note = plug_in_gait_model(subject, markers, frames, metadata)
+    calibration.notes.extend(notes)
     result = inverse_dynamics_stage(trial, calibration, cfg, mass_kg=mass, mass_source=source,
                                     plug_in_gait=plug_in_gait)
-    result.notes.append(note)
+    result.notes.append(pig_note)
     result.notes[:0] = subject.notes  # where the subject's numbers came from (a .vsk), what was assumed
     first = markers.first_frame
     result.reference_posture = ReferencePosture(
@@ -540,7 +560,8 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
 
 
 def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subject, mass_kg: float, *,
-                           source, metadata: Mapping[str, float] | None = None) -> tuple[Markers, dict[str, float]]:
+                           source, metadata: Mapping[str, float] | None = None,
+                           untracked: tuple[str, ...] = ()) -> tuple[Markers, dict[str, float]]:
     """``hip_joint_centre: score``: the reference posture's markers with ``HJCr``/``HJCl`` added where SCORE
     (Ehrig et al. 2006) puts them from the trial's own hip motion, and each side's RMS residual (mm).
 
@@ -549,7 +570,7 @@ def functional_hip_centres(trial: Trial, markers: Markers, frames, subject: Subj
     it lies at the pelvis CoM plus its pelvis coordinates turned by the pelvis's static orientation.
     """
     first = static_calibration(markers, frames, subject, mass_kg, source=source, hip_method="bell1990",
-                               metadata=metadata)
+                               metadata=metadata, untracked=untracked)
     poses = track_segments(trial.markers, first)
     pelvis = BODIES.index("pelvis")
     added, residuals = {}, {}

@@ -13,6 +13,7 @@ turned to the common axes, and :func:`~gaitcli.kinematics.anatomical.anatomical_
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -32,7 +33,9 @@ class CgmMeasurements:
     """The subject measurements Plug-in Gait takes (m and rad; per side ``{"r": …, "l": …}``).
 
     ``asis_trochanter_m`` None: Davis's regression 0.1288·LL − 48.56 mm; ``inter_asis_m`` None: measured between
-    the ASIS markers. ``flat_foot``: the foot's long axis in the static is made horizontal (the sole is flat on
+    the ASIS markers. ``thigh_rotation_rad``/``shank_rotation_rad``: Plug-in Gait's rotation offsets, the chord
+    planes of the knee and ankle centres turned about the chord from the wands' to the knee alignment device's
+    (:func:`kad_rotation_offsets`). ``flat_foot``: the foot's long axis in the static is made horizontal (the sole is flat on
     the floor), ``sole_delta_m`` raising the ankle centre for a shoe's heel.
     """
 
@@ -43,6 +46,8 @@ class CgmMeasurements:
     inter_asis_m: float | None = None
     asis_trochanter_m: Mapping[str, float] | None = None
     tibial_torsion_rad: Mapping[str, float] = field(default_factory=lambda: {"r": 0.0, "l": 0.0})
+    thigh_rotation_rad: Mapping[str, float] = field(default_factory=lambda: {"r": 0.0, "l": 0.0})
+    shank_rotation_rad: Mapping[str, float] = field(default_factory=lambda: {"r": 0.0, "l": 0.0})
     flat_foot: bool = False
     sole_delta_m: Mapping[str, float] = field(default_factory=lambda: {"r": 0.0, "l": 0.0})
 
@@ -101,8 +106,10 @@ def leg_frames(P: Mapping[str, np.ndarray], m: CgmMeasurements) -> CgmFrames:
     rotation, centres = {"pelvis": pelvis}, {}
     r = m.marker_radius_m
     for side, hip in zip(SIDES, hips):
-        knee = chord_joint_centre(hip, P[f"THI{side}"], P[f"LEF{side}"], m.knee_width_m[side] / 2 + r)
-        ankle = chord_joint_centre(knee, P[f"TIB{side}"], P[f"LM{side}"], m.ankle_width_m[side] / 2 + r)
+        knee = chord_joint_centre(hip, P[f"THI{side}"], P[f"LEF{side}"], m.knee_width_m[side] / 2 + r,
+                                  m.thigh_rotation_rad[side])
+        ankle = chord_joint_centre(knee, P[f"TIB{side}"], P[f"LM{side}"], m.ankle_width_m[side] / 2 + r,
+                                   m.shank_rotation_rad[side])
         # the chord's joint centre stands in for the medial marker: x is normal to the wand's plane
         shank = shank_frame(knee, ankle, P[f"LM{side}"], ankle, side=side) @ rot_z(-m.tibial_torsion_rad[side])
         rotation[f"thigh_{side}"] = thigh_frame(hip, knee, P[f"LEF{side}"], knee, side=side)
@@ -142,6 +149,71 @@ def anatomical_frames(frames: CgmFrames, offsets: FootOffsets) -> dict[str, np.n
         vicon = frames.rotation[f"foot_{s}"] @ rot_y(offsets.plantarflexion_rad[s]) @ rot_x(offsets.rotation_rad[s])
         out[f"foot_{s}"] = vicon @ PIG_FOOT_AXES.T
     return out
+
+
+#: a knee alignment device's markers per side: KAX on its arm along the knee flexion axis (lateral), KD1 and KD2 on
+#: the two arms orthogonal to it; the three arms are of one length and mutually orthogonal, their hub on the knee
+KAD_MARKERS = {"r": ("RKAX", "RKD1", "RKD2"), "l": ("LKAX", "LKD1", "LKD2")}
+
+
+def kad_hub(kax, kd1, kd2, lateral) -> np.ndarray:
+    """The hub (m) of a knee alignment device, where the knee marker KNE sits: the corner of the cube whose three
+    edges from it end at KAX, KD1 and KD2 (edge L = mean marker distance / √2), at L/√3 from the markers'
+    centroid along the triangle's normal, on the side away from ``lateral`` (a lateral direction of that leg)."""
+    kax, kd1, kd2 = (np.asarray(a, dtype=float) for a in (kax, kd1, kd2))
+    edge = np.mean([np.linalg.norm(a - b, axis=-1) for a, b in ((kax, kd1), (kax, kd2), (kd1, kd2))], axis=0)
+    edge = np.asarray(edge / np.sqrt(2.0))[..., None]
+    normal = unit(np.cross(kd1 - kax, kd2 - kax))
+    normal = normal * np.sign(np.sum(normal * lateral, axis=-1, keepdims=True))  # the lateral one
+    return (kax + kd1 + kd2) / 3 - normal * edge / np.sqrt(3.0)
+
+
+def with_kad_hubs(static: Mapping[str, np.ndarray]) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """``static`` (mean positions by label and landmark) with ``LEFr``/``LEFl`` at the hub of a knee alignment
+    device where one is worn (its three markers present, :data:`KAD_MARKERS`), and the device's ``KAXr``/``KAXl``
+    (empty without a device)."""
+    out, kad = dict(static), {}
+    sides = [s for s in SIDES if all(label in static for label in KAD_MARKERS[s])]
+    if not sides:
+        return out, kad
+    _, pelvis = pelvis_frame(static["ASISr"], static["ASISl"], static["PSISr"], static["PSISl"])
+    for side in sides:
+        kax, kd1, kd2 = (np.asarray(static[label], dtype=float) for label in KAD_MARKERS[side])
+        out[f"LEF{side}"] = kad_hub(kax, kd1, kd2, pelvis[:, 1] * (1.0 if side == "l" else -1.0))
+        kad[f"KAX{side}"] = kax
+    return out, kad
+
+
+def _turn(u, v_from, v_to) -> float:
+    """Signed angle (rad) about the unit ``u`` from ``v_from`` to ``v_to`` (their components normal to u)."""
+    a = v_from - np.dot(v_from, u) * u
+    b = v_to - np.dot(v_to, u) * u
+    return float(np.arctan2(np.dot(u, np.cross(a, b)), np.dot(a, b)))
+
+
+def kad_rotation_offsets(static: Mapping[str, np.ndarray], kad: Mapping[str, np.ndarray],
+                         m: CgmMeasurements) -> CgmMeasurements:
+    """Plug-in Gait's thigh and shank rotation offsets from a knee alignment device in the standing posture.
+
+    ``static``: the mean landmarks (:func:`plug_in_gait_landmarks`, ``LEFr`` at the device's hub); ``kad``:
+    ``KAXr``, ``KAXl`` (the device's axis markers). The device's knee centre is the chord's with KAX as the wand
+    (the knee flexion axis from the hub through KAX), its ankle centre the chord's with KAX too (no tibial torsion
+    in the static); each offset is the angle about the chord from the wand's plane to the device's, which the
+    walk, without the device, applies to the THI and TIB chords (:func:`leg_frames`)."""
+    frames = leg_frames(static, m)
+    thigh, shank = dict(m.thigh_rotation_rad), dict(m.shank_rotation_rad)
+    r = m.marker_radius_m
+    for side in SIDES:
+        if f"KAX{side}" not in kad:
+            continue
+        hip, kax = frames.joint_centres_m[f"HJC{side}"], np.asarray(kad[f"KAX{side}"], dtype=float)
+        hub, ankle_marker = np.asarray(static[f"LEF{side}"], float), np.asarray(static[f"LM{side}"], float)
+        knee = chord_joint_centre(hip, kax, hub, m.knee_width_m[side] / 2 + r)
+        ankle = chord_joint_centre(knee, kax, ankle_marker, m.ankle_width_m[side] / 2 + r)
+        thigh[side] = _turn(unit(hip - hub), hub - np.asarray(static[f"THI{side}"], float), knee - hub)
+        shank[side] = _turn(unit(knee - ankle_marker), ankle_marker - np.asarray(static[f"TIB{side}"], float),
+                            ankle - ankle_marker)
+    return dataclasses.replace(m, thigh_rotation_rad=thigh, shank_rotation_rad=shank)
 
 
 #: Plug-in Gait's markers by model landmark (the marker set maps RASI → ASISr, …) and its wands by segment

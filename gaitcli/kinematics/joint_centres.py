@@ -157,14 +157,17 @@ def davis_hip_joint_centres(asis_r, asis_l, psis_r, psis_l, *, leg_length_m: flo
     return out[0], out[1]
 
 
-def chord_joint_centre(proximal, wand, lateral, offset_m) -> np.ndarray:
+def chord_joint_centre(proximal, wand, lateral, offset_m, rotation_rad=0.0) -> np.ndarray:
     """Plug-in Gait's chord method: the joint centre J in the plane of ``proximal`` (the joint centre above),
     ``wand`` (the segment's wand marker) and ``lateral`` (the marker on the joint's lateral side), at
     ``offset_m`` from the lateral marker (half the joint width plus the marker radius), with the segment axis
-    proximal − J perpendicular to J − lateral, on the far side of the proximal–lateral line from the wand.
+    proximal − J perpendicular to J − lateral, on the far side of the proximal–lateral line from the wand;
+    that plane turned by ``rotation_rad`` about the line (Plug-in Gait's thigh and shank rotation offsets, which
+    a knee alignment device measures in the static trial).
 
     With u the unit vector lateral → proximal (length L) and v the in-plane unit normal to it away from the
-    wand: J = lateral + δ (δ/L · u + √(1 − δ²/L²) · v) (Thales: J lies on the circle over that line).
+    wand, turned about u: J = lateral + δ (δ/L · u + √(1 − δ²/L²) · v) (Thales: J lies on the circle over
+    that line).
     """
     proximal, wand, lateral = (np.asarray(a, dtype=float) for a in (proximal, wand, lateral))
     delta = np.asarray(offset_m, dtype=float)[..., None]
@@ -173,6 +176,8 @@ def chord_joint_centre(proximal, wand, lateral, offset_m) -> np.ndarray:
     u = chord / length
     away = lateral - wand
     v = unit(away - np.sum(away * u, axis=-1, keepdims=True) * u)
+    beta = np.asarray(rotation_rad, dtype=float)[..., None]
+    v = v * np.cos(beta) + np.cross(u, v) * np.sin(beta)  # Rodrigues, v ⟂ u
     ratio = delta / length
     return lateral + delta * (ratio * u + np.sqrt(np.clip(1 - ratio ** 2, 0.0, None)) * v)
 

@@ -30,6 +30,7 @@ ends are least accurate. Pelvis residuals in the frames where every contact is m
 from __future__ import annotations
 
 import dataclasses
+import re
 import warnings
 
 import numpy as np
@@ -45,7 +46,7 @@ from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
 from gaitcli.kinematics.markerset import marker_set, with_fixed_points
 from gaitcli.kinematics.forward import forward_kinematics
-from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, MOMENTS
+from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINTS, MOMENTS
 from gaitcli.core.recording import ForcePlate, Markers, Recording
 from gaitcli.core.events import Events
 from gaitcli.signal.stage import filter_trial
@@ -558,3 +559,96 @@ def test_the_mass_estimate_takes_each_measured_stance_with_its_own_stride():
     true_kg = walk.body_weight_N / 9.81
     assert estimate_mass_kg(trial) == pytest.approx(true_kg, rel=0.03)
     assert estimate_mass_kg(began_slowly) == pytest.approx(estimate_mass_kg(trial), rel=1e-12)
+
+
+# --- a static with a knee alignment device (issue 34) -------------------------------------------------
+THIGH_WAND_TURN, SHANK_WAND_TURN = np.radians(25.0), np.radians(-15.0)
+
+
+def _turned(points, pivot, towards, angle):
+    """``points`` (n, 3) turned by ``angle`` about the line from ``pivot`` towards ``towards`` (Rodrigues)."""
+    u = towards - pivot
+    u = u / np.linalg.norm(u, axis=-1, keepdims=True)
+    v = points - pivot
+    return (pivot + v * np.cos(angle) + np.cross(u, v) * np.sin(angle)
+            + u * np.sum(u * v, axis=-1, keepdims=True) * (1 - np.cos(angle)))
+
+
+def _wands_misplaced(markers, centres):
+    """The thigh wands turned 25° around each thigh (about the knee marker → true hip centre line) and the shank
+    wands −15° around each shank (ankle marker → true knee centre): rigidly, as a wand stuck on off the knee axis's
+    plane would sit."""
+    pos, labels = markers.positions_m.copy(), markers.labels
+    for s, lab in (("r", "R"), ("l", "L")):
+        kne, ank = pos[:, labels.index(f"{lab}KNE")], pos[:, labels.index(f"{lab}ANK")]
+        thi, tib = labels.index(f"{lab}THI"), labels.index(f"{lab}TIB")
+        pos[:, thi] = _turned(pos[:, thi], kne, centres[f"HJC{s}"], THIGH_WAND_TURN)
+        pos[:, tib] = _turned(pos[:, tib], ank, centres[f"KJC{s}"], SHANK_WAND_TURN)
+    return dataclasses.replace(markers, positions_m=pos)
+
+
+def _with_knee_alignment_device(static, centres, arm_m=0.08):
+    """The static with a knee alignment device in place of each knee marker: hub where KNE was, KAX 80 mm along
+    the true knee axis (laterally: KJC → KNE), KD1 and KD2 on the two arms orthogonal to it; no KNE."""
+    pos, labels = static.positions_m, list(static.labels)
+    columns = {lab: pos[:, i] for i, lab in enumerate(labels) if lab not in ("RKNE", "LKNE")}
+    for s, lab in (("r", "R"), ("l", "L")):
+        hub = pos[:, labels.index(f"{lab}KNE")]
+        axis = (hub - centres[f"KJC{s}"]) / np.linalg.norm(hub - centres[f"KJC{s}"], axis=-1, keepdims=True)
+        b = np.cross(axis, [0.0, 0.0, 1.0])
+        b /= np.linalg.norm(b, axis=-1, keepdims=True)
+        b = np.cos(0.6) * b + np.sin(0.6) * np.cross(axis, b)
+        for name, direction in (("KAX", axis), ("KD1", b), ("KD2", np.cross(axis, b))):
+            columns[f"{lab}{name}"] = hub + arm_m * direction
+    return Markers(tuple(columns), np.stack(list(columns.values()), axis=1), static.rate_hz, static.first_frame)
+
+
+def test_a_knee_alignment_device_makes_the_wands_placement_irrelevant():
+    """``gait synth --marker-set plug_in_gait`` without noise, its static with a knee alignment device (no knee
+    marker) built on the true knee axis. The device gives Plug-in Gait's thigh and shank rotation offsets: with the
+    wands turned 25° (thigh) and −15° (shank) around the segments, the offsets change by those turns (the shank's
+    exactly, the thigh's to 3.5°: the chord turns about the line to Davis's hip centre, the wand about the line to
+    the true one) and the anatomical angles stay within 1° of those with the wands where they were (measured
+    0.87°), the sagittal moments within 0.02 N·m/kg (0.014). Without the device the turned wands move knee
+    rotation by 28° and knee adduction by 18° (measured). Before issue 34 a static without its knee markers was
+    refused (exit 2) and the device ignored."""
+    trial = simulate_trial(seed=2, marker_set="plug_in_gait", noise_mm=0.0, artefact_mm=0.0)
+    preset = marker_set("plug_in_gait")
+    subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait")
+    states = forward_kinematics(trial.q, trial.calibration.body)
+    walk_centres = {f"{c}{s}": states.joint_centre_m[:, JOINTS.index(f"{j}_{s}")]
+                    for s in "rl" for c, j in (("HJC", "hip"), ("KJC", "knee"))}
+    static_centres = trial.calibration.joint_centres_m
+
+    def idyn(markers, static):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            filtered = filter_trial(Recording(preset.apply(markers), trial.plates, subject_metadata=trial.metadata),
+                                    FilterConfig(cutoff_hz=0)).trial
+            return run_idyn(filtered, Recording(preset.apply(static), [], subject_metadata=trial.metadata),
+                            subject, IdynConfig())
+
+    kad_static = _with_knee_alignment_device(trial.static, static_centres)
+    placed = idyn(trial.markers, kad_static)
+    turned = idyn(_wands_misplaced(trial.markers, walk_centres),
+                  _with_knee_alignment_device(_wands_misplaced(trial.static, static_centres), static_centres))
+    for result in (placed, turned):
+        assert result.angle_convention == "plug_in_gait"
+        np.testing.assert_allclose(result.calibration.static_landmarks_m["LEFr"],
+                                   trial.static.positions_m[:, trial.static.labels.index("RKNE")].mean(axis=0),
+                                   atol=1e-9)  # the device's hub is where the knee marker was
+
+    def offsets(result):
+        note = next(n for n in result.notes if "knee alignment device:" in n)
+        return np.array([float(x) for x in re.findall(r"(?:thigh|shank) rotation (-?[\d.]+)°", note)])
+
+    thigh_r, shank_r, thigh_l, shank_l = offsets(turned) - offsets(placed)
+    assert shank_r == pytest.approx(-np.degrees(SHANK_WAND_TURN), abs=0.15)
+    assert shank_l == pytest.approx(-np.degrees(SHANK_WAND_TURN), abs=0.15)
+    assert thigh_r == pytest.approx(-np.degrees(THIGH_WAND_TURN), abs=3.5)
+    assert thigh_l == pytest.approx(-np.degrees(THIGH_WAND_TURN), abs=3.5)
+    angles = np.degrees(np.abs(turned.anatomical_angles_rad - placed.anatomical_angles_rad))
+    assert np.nanmax(angles) < 1.0, np.nanmax(angles, axis=0)
+    known = placed.moment_known
+    sagittal = np.abs(turned.joint_moments_anatomical_Nm[..., 1] - placed.joint_moments_anatomical_Nm[..., 1])
+    assert np.nanmax(sagittal[known]) / MASS_KG < 0.02

@@ -167,3 +167,17 @@ def test_vicon_plug_in_gait_angles_and_static_offsets_are_reproduced(shared_pig_
         sign = -1.0 if part[-1] == "inversion" else 1.0  # Vicon's AnkleAngles Y turns about the toe → heel axis
         vicon = sign * points[:, labels.index(side + names[part[0]]), component]
         assert np.max(np.abs(ours[:, k] - vicon)) < 0.01, column
+
+
+def test_the_hub_of_a_knee_alignment_device_is_the_corner_of_its_arms():
+    """Three mutually orthogonal arms of 80 mm from a hub at the right knee marker, KAX along the knee axis
+    (laterally, −y), KD1 and KD2 in the sagittal plane: the hub comes back from the three markers alone,
+    whichever of KD1 and KD2 is which, turned and moved anywhere."""
+    hub = np.array([0.02, -0.11, 0.48])
+    lateral = np.array([0.0, -1.0, 0.0])
+    b = np.array([np.cos(0.6), 0.0, np.sin(0.6)])
+    c = np.cross(lateral, b)
+    for R in (np.eye(3), rot_z(2.5) @ rot_x(0.3)):
+        kax, kd1, kd2 = (R @ (hub + 0.08 * d) for d in (lateral, b, c))
+        np.testing.assert_allclose(cgm.kad_hub(kax, kd1, kd2, R @ lateral), R @ hub, atol=1e-12)
+        np.testing.assert_allclose(cgm.kad_hub(kax, kd2, kd1, R @ lateral), R @ hub, atol=1e-12)

@@ -237,6 +237,22 @@ def test_the_chord_method_recovers_a_knee_centre_of_known_geometry():
     assert abs(np.linalg.norm(j - kne) - 0.055) < 1e-12 and abs(np.dot(hjc - j, kne - j)) < 1e-12
 
 
+def test_a_chord_turned_by_a_rotation_offset_finds_the_centre_of_a_wand_placed_off_its_plane():
+    """A thigh wand placed 25° around the thigh from the knee axis's plane (about the knee marker → hip line):
+    the plain chord misses the knee centre by the chord of a 25° arc of the circle it turns on, radius
+    δ √(1 − δ²/L²) (L the knee marker–hip distance): 21.5 mm; the chord turned back by −25° (Plug-in Gait's
+    thigh rotation offset) finds it."""
+    hjc, thi, kne, kjc = _chord_knee(np.eye(3), np.zeros(3))
+    u = (hjc - kne) / np.linalg.norm(hjc - kne)
+    a = np.radians(25.0)
+    v = thi - kne
+    turned = kne + v * np.cos(a) + np.cross(u, v) * np.sin(a) + u * np.dot(u, v) * (1 - np.cos(a))
+    missed = jcm.chord_joint_centre(hjc, turned, kne, 0.05)
+    radius = 0.05 * np.sqrt(1 - (0.05 / np.linalg.norm(hjc - kne)) ** 2)
+    assert np.linalg.norm(missed - kjc) == pytest.approx(2 * radius * np.sin(a / 2), rel=1e-9)
+    np.testing.assert_allclose(jcm.chord_joint_centre(hjc, turned, kne, 0.05, -a), kjc, atol=1e-12)
+
+
 def test_knee_and_ankle_centres_by_the_chord_method_need_width_and_wand():
     t = standing_template(1.8, with_virtual_joint_centres=True)
     truth = {k: t.pop(k) for k in ("HJCr", "HJCl", "KJCr", "KJCl", "AJCr", "AJCl")}
