@@ -191,9 +191,9 @@ def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | Non
     For every stride of a foot (its heel strike to its next one) whose stance was recorded on the plates (timed by
     the plates' events, or by the trial file's where one loaded run of the foot spans them:
     :func:`file_stances_on_plates`) and whose load is known throughout (but within ``FILE_EVENT_TOLERANCE_S`` of
-    its events, where it is near zero), ``m = 2 ∫F_z dt / (g T)`` with ``T`` that stride's own period; the median
-    over those strides (None when none qualifies). Issue 34: the mean period of every stride in the trial, or a
-    stance part of whose load went unmeasured, made a lab's true mass look 17 % off.
+    its events, where it is near zero), ``m = 2 ∫F_z dt / (g T)`` with ``T`` that stride's period
+    (:func:`stride_period_s`); the median over those strides (None when none qualifies). Issue 34: the mean period
+    of every stride in the trial, or a stance part of whose load went unmeasured, made a true mass look off.
     """
     rate = trial.rate_hz
     t = trial.time_s
@@ -215,8 +215,28 @@ def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | Non
                 continue
             on_plates = (t >= stance[0] - 1.5 / rate) & (t <= stance[1] + 1.5 / rate)  # the swing's load is zero
             impulse = float(np.sum(fz[on_plates]) / rate)
-            masses.append(2 * impulse / (gravity_m_s2 * (end - start)))
+            masses.append(2 * impulse / (gravity_m_s2 * stride_period_s(trial.events, side, start)))
     return float(np.median(masses)) if masses else None
+
+
+def stride_period_s(events: Events, side: str, strike_s: float) -> float:
+    """The period (s) of ``side``'s stride that begins at its heel strike ``strike_s``.
+
+    Heel strikes found by different means (the plate's threshold, the markers, the lab) are offset from each other
+    by up to a tenth of a stride (a stiff knee's heel marker lands late), which a stride from a plate's heel strike
+    to the markers' next one carries whole. So: that stride's own period when both its heel strikes have one
+    source; else half the time from the heel strike before to the one after, where those two share one (the
+    offsets cancel); else the stride as it is.
+    """
+    mine = events.of(side=side, kind="heel_strike")
+    order = np.argsort(mine.time_s)
+    times, sources = np.asarray(mine.time_s)[order], np.asarray(mine.source)[order]
+    k = int(np.argmin(np.abs(times - strike_s)))
+    if k + 1 < times.size and sources[k + 1] == sources[k]:
+        return float(times[k + 1] - times[k])
+    if 0 < k < times.size - 1 and sources[k - 1] == sources[k + 1]:
+        return float(times[k + 1] - times[k - 1]) / 2
+    return float(times[k + 1] - times[k]) if k + 1 < times.size else float("nan")
 
 
 #: how far a lab's event may lie from the plate's threshold crossing of the same contact, s

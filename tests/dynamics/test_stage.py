@@ -40,7 +40,8 @@ from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.core.container import FootLoad, Trial, load_known_frames
-from gaitcli.dynamics.stage import body_mass, estimate_mass_kg, inverse_dynamics_stage, run_idyn, static_calibration
+from gaitcli.dynamics.stage import (body_mass, estimate_mass_kg, inverse_dynamics_stage, run_idyn,
+                                   static_calibration, stride_period_s)
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
@@ -543,7 +544,8 @@ def test_the_notes_name_one_source_per_joint_centre(plug_in_gait_walk):
 def test_the_mass_estimate_takes_each_measured_stance_with_its_own_stride():
     """A walk of 1.1 s strides (700 N, one stance per foot on a plate) that began with a slow 1.7 s stride of the
     right foot (a heel strike 1.7 s before its first, found by the markers). Each foot carries half the weight
-    over its own stride: 2 ∫Fz dt / (g T) with T the stride that stance begins, 70.2 kg either way (the 20 N
+    over its own stride: 2 ∫Fz dt / (g T) with T the stride that stance begins (``stride_period_s``), 70.2 kg
+    either way (the 20 N
     threshold and the filter take 1.6 % of the impulse). Before issue 34, T was the mean of every stride in the
     trial, the slow one included: 65.7 kg, 6 % low, and a true body mass of 70 kg was warned about as 7 % off."""
     walk = make_walk(plates=[("r", 1, 0.0, 0.6, 0.4), ("l", 1, 0.0, 0.6, 0.4)], duration_s=5.0,
@@ -652,3 +654,17 @@ def test_a_knee_alignment_device_makes_the_wands_placement_irrelevant():
     known = placed.moment_known
     sagittal = np.abs(turned.joint_moments_anatomical_Nm[..., 1] - placed.joint_moments_anatomical_Nm[..., 1])
     assert np.nanmax(sagittal[known]) / MASS_KG < 0.02
+
+
+def test_a_stride_from_a_plates_heel_strike_to_the_markers_next_one_is_not_its_period():
+    """Right heel strikes at 1.1 and 3.3 s found by the markers 0.2 s late (a stiff knee's heel marker), and at
+    2.0 s by the plate, in a walk of 1.1 s strides: the stride from the plate's strike would last 1.3 s; half the
+    time between the markers' strikes around it is the period, 1.1 s. A stride between strikes of one source is
+    its own period (the slow first stride of the walk above)."""
+    events = Events(frame=[110, 200, 330, 20], time_s=[1.1, 2.0, 3.3, 0.2], side=["r", "r", "r", "l"],
+                    kind=["heel_strike"] * 4, source=["kinematics", "plate", "kinematics", "plate"])
+    assert stride_period_s(events, "r", 2.0) == pytest.approx(1.1, abs=1e-12)
+    assert stride_period_s(events, "r", 1.1) == pytest.approx(0.9, abs=1e-12)  # 1.1 → 2.0: no source in common
+    slow = Events(frame=[20, 190, 300], time_s=[0.2, 1.9, 3.0], side=["r"] * 3, kind=["heel_strike"] * 3,
+                  source=["kinematics", "kinematics", "plate"])
+    assert stride_period_s(slow, "r", 0.2) == pytest.approx(1.7, abs=1e-12)
