@@ -188,7 +188,11 @@ def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions
     c["data"]["meta_points"]["camera_masks"] = np.concatenate(
         [masks, np.zeros((masks.shape[0], len(labels), n_frames), bool)], axis=1)
     point["LABELS"]["value"] = old_labels + labels
-    point["DESCRIPTIONS"]["value"] = old_descriptions + [(descriptions or {}).get(lab, "") for lab in labels]
+    # beyond 255 points the C3D library splits LABELS into LABELS2 but writes a DESCRIPTIONS it cannot read back
+    # unless the added descriptions are empty: there the added points go undescribed
+    described = len(old_labels) + len(labels) <= 255
+    point["DESCRIPTIONS"]["value"] = old_descriptions + [(descriptions or {}).get(lab, "") if described else ""
+                                                         for lab in labels]
     for key, value in (parameters or {}).items():
         group, name = key.split(":")
         c.add_parameter(group, name, value if isinstance(value, list) else [value])

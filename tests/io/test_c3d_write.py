@@ -140,3 +140,19 @@ def test_a_latin1_analog_unit_is_copied_as_text(tmp_path):
         raw.write(str(tmp_path / "plain.c3d"))
     copy = add_points(path, tmp_path / "copy.c3d", {"X": np.zeros((n, 3))})
     assert ezc3d.c3d(str(copy))["parameters"]["ANALOG"]["UNITS"]["value"] == ["\u00b5V", "V"]
+
+
+def test_points_added_beyond_255_read_back(tmp_path):
+    """A file of 250 points (a full-body Plug-in Gait trial with Vicon's outputs holds 239) given 22 described
+    points: the copy reads back with all 272 labels and the added values (the C3D library splits labels beyond
+    255 into LABELS2; non-empty descriptions there made an unreadable file)."""
+    n = 4
+    labels = tuple(f"M{k:03d}" for k in range(250))
+    source = write_c3d(tmp_path / "many.c3d", Markers(labels, np.ones((n, 250, 3)), 100.0), [])
+    added = {f"P{k:02d}": np.full((n, 3), float(k)) for k in range(22)}
+    copy = add_points(source, tmp_path / "copy.c3d", added, descriptions={k: f"gaitcli {k}" for k in added})
+    c = ezc3d.c3d(str(copy))
+    point = c["parameters"]["POINT"]
+    got = list(point["LABELS"]["value"]) + list(point.get("LABELS2", {}).get("value", []))
+    assert got == list(labels) + list(added)
+    np.testing.assert_allclose(c["data"]["points"][:3, 250 + 21], 21.0)
