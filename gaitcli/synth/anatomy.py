@@ -116,7 +116,8 @@ def standing_frames(template: Mapping[str, np.ndarray], joint_centres_m: Mapping
             F[f"foot_{s}"] = _axes(heads - t[f"CA{s}"], leftward * (t[f"VM{s}"] - t[f"FM{s}"]), "xy")
         else:
             F[f"thigh_{s}"] = _axes(J[f"HJC{s}"] - J[f"KJC{s}"], leftward * (t[f"LEF{s}"] - J[f"KJC{s}"]), "zy")
-            F[f"shank_{s}"] = _axes(J[f"KJC{s}"] - J[f"AJC{s}"], leftward * (plug_in_gait[f"ANK{s}"] - J[f"AJC{s}"]), "zy")
+            F[f"shank_{s}"] = _axes(J[f"KJC{s}"] - J[f"AJC{s}"], leftward * (plug_in_gait[f"ANK{s}"] - J[f"AJC{s}"]),
+                                    "zy")
     return F
 
 
