@@ -170,6 +170,7 @@ def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions
     source, target = Path(source), Path(target)
     c = ezc3d.c3d(str(source), extract_forceplat_data=False)
     writable_text_parameters(c, source)
+    analog_lists_per_channel(c)
     data = c["data"]["points"]
     n_old, n_frames = data.shape[1], data.shape[2]
     point = c["parameters"]["POINT"]
@@ -284,6 +285,30 @@ def writable_text_parameters(c, source: Path) -> None:
                 del params[group][name]
                 warnings.warn(f"{source.name}: {group}:{name} left out of the copy (text parameter with values "
                               f"that are not text: {str(value)[:40]})", GaitWarning, stacklevel=3)
+
+
+#: ANALOG parameters with one entry per channel, and what a missing entry becomes
+ANALOG_CHANNEL_LISTS = {"LABELS": "", "DESCRIPTIONS": "", "UNITS": "", "SCALE": 1.0, "OFFSET": 0, "GAIN": 0}
+
+
+def analog_lists_per_channel(c) -> None:
+    """Cut or pad the ANALOG lists of one entry per channel to the channels the file stores, as the C3D library
+    insists on writing them: the c3d.org samples (Eb015pr.c3d, dec_real.c3d) describe 32 channels and store 16
+    (ANALOG:USED 16). A padded label is ``A<k>`` (1-based)."""
+    analog = c["parameters"].get("ANALOG", {})
+    n = int(c["data"]["analogs"].shape[1])
+    for name, fill in ANALOG_CHANNEL_LISTS.items():
+        if name not in analog:
+            continue
+        value = analog[name]["value"]
+        if len(value) == n or (name == "GAIN" and len(value) == 0):
+            continue
+        if isinstance(value, list):
+            value = value[:n] + [f"A{k + 1}" if name == "LABELS" else fill for k in range(len(value), n)]
+        else:
+            value = np.concatenate([np.asarray(value)[:n], np.full(max(0, n - len(value)), fill,
+                                                                   dtype=np.asarray(value).dtype)])
+        analog[name]["value"] = value
 
 
 def _write_atomically(c, path: Path) -> Path:
