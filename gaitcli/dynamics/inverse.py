@@ -65,6 +65,14 @@ def express_in(vectors_global, rotation):
     return np.einsum("...ji,...j->...i", rotation, vectors_global)
 
 
+def moments_about(moments_global_Nm, forces_global_N, joint_centres_m, points_m):
+    """The joint moments (n, 7, 3) N·m about other points (n, 7, 3) m: ``M_P = M_J + (J − P) × F``, with ``M_J``
+    the moment of the proximal on the distal body about the model's joint centre ``J`` and ``F`` the force it
+    exerts there (global axes). The same force system, its moment taken about ``P`` (a lab's joint centre)."""
+    lever = np.asarray(joint_centres_m, dtype=float) - np.asarray(points_m, dtype=float)
+    return np.asarray(moments_global_Nm, dtype=float) + np.cross(lever, np.asarray(forces_global_N, dtype=float))
+
+
 def solve_axis_projections(axes_columns, projections):
     """Vector ``τ`` (n, 3) with ``axes_columns[:, :, k] · τ = projections[:, k]`` for k = 0, 1, 2.
 

@@ -1,7 +1,8 @@
 """Joint powers: the rate of work of each joint's moment on the relative rotation of its two segments.
 
 ``P = M · (ω_child − ω_parent)`` (W), with ``M`` the moment the proximal segment exerts on the distal one and the
-angular velocities of the 8-body model (global axes, the same vectors the inverse dynamics used). The sagittal
+segments' angular velocities (global axes): the 8-body model's, or those of the lab's own segment frames
+(:func:`frame_angular_velocity`, Plug-in Gait's). The sagittal
 power is the part about the flexion axis: the components of ``M`` and of the relative angular velocity along the
 distal segment's anatomical medio-lateral (y) axis, multiplied. Positive power: the joint's muscles generate
 energy (concentric); negative: they absorb it.
@@ -12,6 +13,15 @@ from __future__ import annotations
 import numpy as np
 
 from gaitcli.kinematics.model import JOINT_CHILD, JOINT_PARENT
+
+
+def frame_angular_velocity(rotation: np.ndarray, rate_hz: float) -> np.ndarray:
+    """(n, 3) rad/s, global axes: the angular velocity of a frame sampled as rotations (n, 3, 3) at ``rate_hz``,
+    ``ω̃ = Ṙ Rᵀ`` with Ṙ by central differences (one-sided at the ends); NaN next to a NaN frame."""
+    R = np.asarray(rotation, dtype=float)
+    skew = np.gradient(R, 1.0 / rate_hz, axis=0) @ np.swapaxes(R, -1, -2)
+    return 0.5 * np.stack([skew[:, 2, 1] - skew[:, 1, 2], skew[:, 0, 2] - skew[:, 2, 0],
+                           skew[:, 1, 0] - skew[:, 0, 1]], axis=-1)
 
 
 def relative_angular_velocity(angular_velocity_rad_s: np.ndarray) -> np.ndarray:

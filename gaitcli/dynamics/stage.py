@@ -23,8 +23,8 @@ from gaitcli.core.numerics import frame_spans
 from gaitcli.core.validate import parameter
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.dynamics.equations import ExternalWrench
-from gaitcli.dynamics.inverse import express_in, inverse_dynamics
-from gaitcli.dynamics.powers import joint_powers, sagittal_powers
+from gaitcli.dynamics.inverse import express_in, inverse_dynamics, moments_about
+from gaitcli.dynamics.powers import frame_angular_velocity, joint_powers, sagittal_powers
 from gaitcli.dynamics.sagittal import SagittalExport, sagittal_export
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import cgm
@@ -473,17 +473,26 @@ def plug_in_gait_model(subject: Subject, markers: Markers, frames: np.ndarray | 
                   "Gait's frames need both legs' lengths, knee and ankle widths and every Plug-in Gait marker)"), hubs
 
 
+#: Plug-in Gait's joint centres by joint index (:data:`gaitcli.kinematics.model.JOINTS`)
+PIG_JOINT_CENTRES = {1: "HJCr", 2: "KJCr", 3: "AJCr", 4: "HJCl", 5: "KJCl", 6: "AJCl"}
+
+
 def anatomical_frames(states, calibration: StaticCalibration, markers: Markers,
-                      plug_in_gait: cgm.PlugInGait | None) -> tuple[dict[str, np.ndarray], str]:
-    """Each segment's anatomical frame per frame (n, 3, 3) and the ankle convention: Plug-in Gait's frames from
-    the markers where the model is given, else the tracked reference frames turned into the anatomical ones
-    (``R_anatomical = R_reference · C``, 3.3)."""
+                      plug_in_gait: cgm.PlugInGait | None) -> tuple[dict[str, np.ndarray], np.ndarray, str]:
+    """Each segment's anatomical frame per frame (n, 3, 3), the joint centres (n, 7, 3) m the lab's moments are
+    taken about, and the ankle convention. Plug-in Gait's frames and joint centres from the markers where the
+    model is given; else the tracked reference frames turned into the anatomical ones (``R_anatomical =
+    R_reference · C``, 3.3) and the model's own joint centres."""
+    centres = states.joint_centre_m
     if plug_in_gait is not None:
-        frames = plug_in_gait.frames({label: markers.get(label) for label in markers.labels})
-        if frames is not None:
-            return frames, "plug_in_gait"
+        segments = plug_in_gait.segments({label: markers.get(label) for label in markers.labels})
+        if segments is not None:
+            centres = centres.copy()
+            for j, name in PIG_JOINT_CENTRES.items():
+                centres[:, j] = segments.joint_centres_m[name]
+            return segments.rotation, centres, "plug_in_gait"
     C = calibration.reference_to_anatomical
-    return {b: states.rotation[:, i] @ C[i] for i, b in enumerate(BODIES)}, "isb"
+    return {b: states.rotation[:, i] @ C[i] for i, b in enumerate(BODIES)}, centres, "isb"
 
 
 def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: IdynConfig, *,
@@ -510,10 +519,17 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
         C = calibration.reference_to_anatomical[list(JOINT_CHILD)]
         moments = express_in(moments, np.broadcast_to(C, (n,) + C.shape))
     states = forward_kinematics(q, params, qd)
-    frames, convention = anatomical_frames(states, calibration, markers, plug_in_gait)
+    frames, lab_centres, convention = anatomical_frames(states, calibration, markers, plug_in_gait)
     C = calibration.reference_to_anatomical
     distal = np.stack([frames.get(BODIES[c], states.rotation[:, c] @ C[c]) for c in JOINT_CHILD], axis=1)
-    global_moments = result.joint_moments_global_Nm
+    # the lab's moments: the same loads about its own joint centres (Plug-in Gait's), not the chain's
+    global_moments = moments_about(result.joint_moments_global_Nm, result.joint_forces_N, states.joint_centre_m,
+                                   lab_centres)
+    omega = states.angular_velocity_rad_s.copy()  # the lab's segments turn as its frames do
+    if convention == "plug_in_gait":
+        for i, body in enumerate(BODIES):
+            if body in frames:
+                omega[:, i] = frame_angular_velocity(frames[body], markers.rate_hz)
     heel_x = {s: markers.get(HEEL[s])[:, 0] for s in SIDES if HEEL[s] in markers}
     features = gait_features(trial.events, heel_x, markers.time_s)
     trial = trial.with_step(f"idyn: calibrated on the standing posture, body mass {mass_kg:.2f} kg "
@@ -521,11 +537,10 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
                             f"moments in {cfg.frames} frames")
     export = sagittal_export(trial, states.joint_centre_m, q, params, body_mass_kg=mass_kg)
     return IdynResult(trial=trial, q=q, qd=qd, qdd=qdd, joint_moments_Nm=moments,
-                      joint_moments_global_Nm=global_moments,
+                      joint_moments_global_Nm=result.joint_moments_global_Nm,
                       joint_moments_anatomical_Nm=express_in(global_moments, distal),
-                      joint_powers_W=joint_powers(global_moments, states.angular_velocity_rad_s),
-                      joint_powers_sagittal_W=sagittal_powers(global_moments, states.angular_velocity_rad_s,
-                                                              distal[..., 1]),
+                      joint_powers_W=joint_powers(global_moments, omega),
+                      joint_powers_sagittal_W=sagittal_powers(global_moments, omega, distal[..., 1]),
                       residual_force_N=result.residual_force_N, residual_moment_Nm=result.residual_moment_Nm,
                       frames=cfg.frames, mass_kg=mass_kg, mass_source=mass_source,
                       parameters=params, calibration=calibration, segment_rms_m=segment_rms,

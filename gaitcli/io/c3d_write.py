@@ -156,45 +156,93 @@ def _plate_channels(path, plates, R, up_lab, n_frames, point_rate, origin_mm):
 
 
 def add_points(source, target, points: Mapping[str, np.ndarray], *, descriptions: Mapping[str, str] | None = None,
-               parameters: Mapping[str, object] | None = None, events: Events | None = None) -> Path:
+               parameters: Mapping[str, object] | None = None, events: Events | None = None,
+               merged: tuple[str, ...] = ()) -> Path:
     """A copy of the C3D file ``source`` at ``target`` with ``points`` ({label: (frames, 3)}, in the units the
-    caller names in ``parameters``) appended after its own points, which, its analogs and its other parameters
-    stay as they were (text parameters in a form the C3D library writes: :func:`writable_text_parameters`).
+    caller names in ``parameters``) in it: a label the file already holds is replaced in place (one label each,
+    warned, naming them), the others appended after its own points. Its other points, analogs and parameters stay
+    as they were (text parameters in a form the C3D library writes: :func:`writable_text_parameters`; more than
+    255 labels or descriptions continue in ``LABELS2``, ``DESCRIPTIONS2``, … as the C3D format has it).
     NaN rows become invalid points (residual −1). ``parameters``: {"GROUP:NAME": value} added or replaced
-    (e.g. ``POINT:ANGLE_UNITS``, ``POINT:ANGLES``). ``events`` (times in s from the file's first frame), where
+    (e.g. ``POINT:ANGLE_UNITS``, ``POINT:ANGLES``); for a key in ``merged`` a list value is appended to the file's
+    own list instead (its entries kept, none twice). ``events`` (times in s from the file's first frame), where
     given, replace its EVENT group (:func:`set_events`). Written atomically."""
     source, target = Path(source), Path(target)
     c = ezc3d.c3d(str(source), extract_forceplat_data=False)
     writable_text_parameters(c, source)
+    analog_lists_per_channel(c)
     data = c["data"]["points"]
-    n_frames = data.shape[2]
-    labels = list(points)
-    added = np.ones((4, len(labels), n_frames))
-    missing = np.zeros((len(labels), n_frames), bool)
-    for j, label in enumerate(labels):
-        values = np.asarray(points[label], float)
-        if values.shape != (n_frames, 3):
-            raise ValueError(f"{label}: {values.shape} values for a file of {n_frames} frames")
-        missing[j] = ~np.isfinite(values).all(axis=1)
-        added[:3, j] = np.where(missing[j][:, None], 0.0, values).T
+    n_old, n_frames = data.shape[1], data.shape[2]
     point = c["parameters"]["POINT"]
-    old_labels = list(point["LABELS"]["value"])
-    old_descriptions = list(point.get("DESCRIPTIONS", {}).get("value", [""] * len(old_labels)))
-    old_descriptions += [""] * (len(old_labels) - len(old_descriptions))
-    residuals = c["data"]["meta_points"]["residuals"]
+    old_labels = [lab.strip() for lab in _point_texts(point, "LABELS")][:n_old]
+    old_labels += [""] * (n_old - len(old_labels))
+    old_descriptions = _point_texts(point, "DESCRIPTIONS")[:n_old]
+    old_descriptions += [""] * (n_old - len(old_descriptions))
+    replaced = [lab for lab in points if lab in old_labels]
+    appended = [lab for lab in points if lab not in old_labels]
+    n = n_old + len(appended)
+    values = np.concatenate([data, np.ones((4, len(appended), n_frames))], axis=1)
+    residuals = np.concatenate([c["data"]["meta_points"]["residuals"], np.zeros((1, len(appended), n_frames))],
+                               axis=1)
     masks = c["data"]["meta_points"]["camera_masks"]
-    c["data"]["points"] = np.concatenate([data, added], axis=1)
-    c["data"]["meta_points"]["residuals"] = np.concatenate([residuals, np.where(missing, -1.0, 0.0)[None]], axis=1)
-    c["data"]["meta_points"]["camera_masks"] = np.concatenate(
-        [masks, np.zeros((masks.shape[0], len(labels), n_frames), bool)], axis=1)
-    point["LABELS"]["value"] = old_labels + labels
-    point["DESCRIPTIONS"]["value"] = old_descriptions + [(descriptions or {}).get(lab, "") for lab in labels]
+    masks = np.concatenate([masks, np.zeros((masks.shape[0], len(appended), n_frames), bool)], axis=1)
+    labels, texts = old_labels + appended, old_descriptions + [""] * len(appended)
+    for label, given in points.items():
+        given = np.asarray(given, float)
+        if given.shape != (n_frames, 3):
+            raise ValueError(f"{label}: {given.shape} values for a file of {n_frames} frames")
+        j = labels.index(label)
+        missing = ~np.isfinite(given).all(axis=1)
+        values[:3, j] = np.where(missing[:, None], 0.0, given).T
+        values[3, j] = 1.0
+        residuals[0, j] = np.where(missing, -1.0, 0.0)
+        masks[:, j] = False
+        texts[j] = (descriptions or {}).get(label, "")
+    c["data"]["points"] = values
+    c["data"]["meta_points"]["residuals"] = residuals
+    c["data"]["meta_points"]["camera_masks"] = masks
+    _set_point_texts(c, "LABELS", labels)
+    _set_point_texts(c, "DESCRIPTIONS", texts)
+    point["USED"]["value"] = np.array([n])
     for key, value in (parameters or {}).items():
         group, name = key.split(":")
-        c.add_parameter(group, name, value if isinstance(value, list) else [value])
+        value = value if isinstance(value, list) else [value]
+        if key in merged and name in c["parameters"].get(group, {}):
+            own = c["parameters"][group][name]["value"]
+            own = [v.strip() for v in own] if isinstance(own, list) else []
+            value = own + [v for v in value if v not in own]
+        c.add_parameter(group, name, value)
     if events is not None:
         set_events(c, events)
+    if replaced:
+        warnings.warn(f"{source.name}: its own points {', '.join(replaced)} are replaced by the new ones in the copy "
+                      f"{target.name} (one label each)", GaitWarning, stacklevel=2)
     return _write_atomically(c, target)
+
+
+#: entries per C3D text parameter: its count is one byte, so more continue in NAME2, NAME3, …
+C3D_MAX_ENTRIES = 255
+
+
+def _point_texts(point, name: str) -> list[str]:
+    """POINT:NAME followed by NAME2, NAME3, … (more than 255 points)."""
+    out, k = list(point.get(name, {}).get("value", [])), 2
+    while f"{name}{k}" in point:
+        out += list(point[f"{name}{k}"]["value"])
+        k += 1
+    return out
+
+
+def _set_point_texts(c, name: str, values: list[str]) -> None:
+    """Write POINT:NAME as NAME, NAME2, … of at most 255 entries each, removing any stale continuation."""
+    point = c["parameters"]["POINT"]
+    k = 2
+    while f"{name}{k}" in point:
+        del point[f"{name}{k}"]
+        k += 1
+    chunks = [values[i:i + C3D_MAX_ENTRIES] for i in range(0, max(len(values), 1), C3D_MAX_ENTRIES)]
+    for k, chunk in enumerate(chunks):
+        c.add_parameter("POINT", name if k == 0 else f"{name}{k + 1}", list(chunk))
 
 
 def set_events(c, events: Events) -> None:
@@ -237,6 +285,30 @@ def writable_text_parameters(c, source: Path) -> None:
                 del params[group][name]
                 warnings.warn(f"{source.name}: {group}:{name} left out of the copy (text parameter with values "
                               f"that are not text: {str(value)[:40]})", GaitWarning, stacklevel=3)
+
+
+#: ANALOG parameters with one entry per channel, and what a missing entry becomes
+ANALOG_CHANNEL_LISTS = {"LABELS": "", "DESCRIPTIONS": "", "UNITS": "", "SCALE": 1.0, "OFFSET": 0, "GAIN": 0}
+
+
+def analog_lists_per_channel(c) -> None:
+    """Cut or pad the ANALOG lists of one entry per channel to the channels the file stores, as the C3D library
+    insists on writing them: the c3d.org samples (Eb015pr.c3d, dec_real.c3d) describe 32 channels and store 16
+    (ANALOG:USED 16). A padded label is ``A<k>`` (1-based)."""
+    analog = c["parameters"].get("ANALOG", {})
+    n = int(c["data"]["analogs"].shape[1])
+    for name, fill in ANALOG_CHANNEL_LISTS.items():
+        if name not in analog:
+            continue
+        value = analog[name]["value"]
+        if len(value) == n or (name == "GAIN" and len(value) == 0):
+            continue
+        if isinstance(value, list):
+            value = value[:n] + [f"A{k + 1}" if name == "LABELS" else fill for k in range(len(value), n)]
+        else:
+            value = np.concatenate([np.asarray(value)[:n], np.full(max(0, n - len(value)), fill,
+                                                                   dtype=np.asarray(value).dtype)])
+        analog[name]["value"] = value
 
 
 def _write_atomically(c, path: Path) -> Path:

@@ -244,10 +244,19 @@ class PlugInGait:
     offsets: FootOffsets
     wands: Mapping[str, tuple[str, ...]]
 
-    def frames(self, positions: Mapping[str, np.ndarray]) -> dict[str, np.ndarray] | None:
-        """Anatomical frames (n, 3, 3) of pelvis, thighs, shanks and feet per frame of ``positions``, or None."""
+    def segments(self, positions: Mapping[str, np.ndarray]) -> CgmFrames | None:
+        """Anatomical frames (n, 3, 3) of pelvis, thighs, shanks and feet per frame of ``positions`` and the joint
+        centres (n, 3) they were built on, or None when a landmark is missing."""
         P = plug_in_gait_landmarks(positions, self.wands)
-        return None if P is None else anatomical_frames(leg_frames(P, self.measurements), self.offsets)
+        if P is None:
+            return None
+        legs = leg_frames(P, self.measurements)
+        return CgmFrames(anatomical_frames(legs, self.offsets), legs.joint_centres_m)
+
+    def frames(self, positions: Mapping[str, np.ndarray]) -> dict[str, np.ndarray] | None:
+        """The anatomical frames of :meth:`segments`, or None."""
+        segments = self.segments(positions)
+        return None if segments is None else segments.rotation
 
 
 def measurements_from(metadata: Mapping[str, float], *, leg_length_m: float | None = None,

@@ -13,8 +13,9 @@ plates gave it (zero) and its point the origin: OpenSim cannot know either.
 ``c3d`` writes ``gait_out/export/<trial>.c3d``: a copy of the trial's C3D with Vicon's Plug-in Gait points added
 per side — ``RPelvisAngles``, ``RHipAngles``, ``RKneeAngles``, ``RAnkleAngles``, ``RFootProgressAngles`` (deg),
 ``RHipMoment``, ``RKneeMoment``, ``RAnkleMoment`` (N·mm/kg) and ``RHipPower`` … (W/kg in Z), in Vicon's
-components and signs (:func:`c3d_points`); POINT:ANGLES, POINT:MOMENTS, POINT:POWERS, their units and
-GAITCLI:CONVENTION say so. Moments and powers where the foot's load is unknown are invalid points. Its EVENT group
+components and signs (:func:`c3d_points`); POINT:ANGLES, POINT:MOMENTS, POINT:POWERS (the file's own lists
+extended), their units and GAITCLI:CONVENTION say so. Points of these names the trial already holds (a Nexus
+trial's own Plug-in Gait outputs) are replaced, one label each, and a warning names them. Moments and powers where the foot's load is unknown are invalid points. Its EVENT group
 holds the gait events the filter used (the file's own or detected), as Vicon Nexus writes them ("Foot Strike"/
 "Foot Off", "Left"/"Right"); the copy's text parameters are made writable
 (:func:`gaitcli.io.c3d_write.add_points`).
@@ -162,7 +163,7 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
                   "POINT:ANGLE_UNITS": "deg", "POINT:MOMENT_UNITS": "Nmm/kg", "POINT:POWER_UNITS": "W",
                   "GAITCLI:CONVENTION": PIG_CONVENTION}
     return [add_points(trial_c3d, target, points, descriptions=descriptions, parameters=parameters,
-                       events=events)]
+                       events=events, merged=("POINT:ANGLES", "POINT:MOMENTS", "POINT:POWERS"))]
 
 
 def export_trial(out_root: Path, formats, *, trial_c3d: Path | None = None) -> list[Path]:

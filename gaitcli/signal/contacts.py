@@ -5,16 +5,23 @@ from the first marker frame; frames are 0-based indices into the marker arrays.
 
 1. :func:`plate_contacts` finds the runs of *unfiltered* vertical force above the
    threshold at the analog rate (the zero-lag filter would spread the loading edge
-   and move the crossing earlier by 1-2 frames), bridges dips shorter than
-   ``min_gap_s``, drops runs shorter than ``min_contact_s``, and times each edge by
-   linear interpolation of F_z across the threshold.
+   and move the crossing earlier by 1-2 frames), drops spikes shorter than
+   ``min_run_s`` (a real plate's noise: on Vicon's stair trial in ``../shared/data/pig``
+   up to 17 N SD, single samples above 20 N every few tens of ms, which bridged
+   would open a contact 125 ms before the heel strike or span the whole trial),
+   bridges dips shorter than ``min_gap_s``, drops runs shorter than ``min_contact_s``,
+   and times each edge by linear interpolation of F_z across the threshold.
 2. :func:`assign_contacts` gives each contact to the foot whose heel-toe segment is
    closest (horizontally) to the contact's COP path, using the frames with at
    least 10 % of the contact's peak vertical force. A contact is flagged instead of
-   assigned when the COP strays from the chosen foot (90th percentile of the
-   distance above ``max_distance_m``: two feet loaded the plate; ``'ambiguous'``
-   if the other foot was not seen) or when the two feet's mean distances differ by
-   less than ``min_margin_m`` (``'ambiguous'``). It also records
+   assigned when the COP strays from the chosen foot (median distance above
+   ``max_distance_m``: two feet loaded the plate; ``'ambiguous'`` if the other foot
+   was not seen), when the COP stays with each foot alone (within ``max_distance_m``
+   of it and farther from the other) for ``min_alone_s`` or longer: two feet loaded
+   the plate one after the other, however short the second's part (a foot stepping
+   onto the far end of a plate the other foot's forefoot still loads), or when the
+   two feet's mean distances differ by less than ``min_margin_m`` (``'ambiguous'``).
+   Only COP inside the plate's outline counts (a COP jump outside it is noise). It also records
    whether the heel marker was over the plate at the onset and the toe marker at the
    offset, so that a foot landing half off a plate does not give a late heel strike.
 3. :func:`plate_owner` tells which foot loads each plate in each frame, for
@@ -75,13 +82,13 @@ class Contact:
 
 
 def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s: float = 0.1,
-                   min_gap_s: float = 0.05) -> list[Contact]:
+                   min_gap_s: float = 0.05, min_run_s: float = 0.01) -> list[Contact]:
     """Contact intervals of every plate from its unfiltered vertical force (see module docstring).
 
     Uses ``raw_vertical_force_N`` at ``raw_rate_hz`` where present, else the (masked,
-    filtered) ``force_N[:, 2]``. Runs above ``threshold_N`` separated by less than
-    ``min_gap_s`` are joined; runs shorter than ``min_contact_s`` are dropped. Ordered
-    by plate, then time.
+    filtered) ``force_N[:, 2]``. Runs above ``threshold_N`` shorter than ``min_run_s``
+    are noise and dropped; the rest, separated by less than ``min_gap_s``, are joined;
+    runs shorter than ``min_contact_s`` are dropped. Ordered by plate, then time.
     """
     if not (np.isfinite(threshold_N) and threshold_N >= 0):
         raise InputError(None, "threshold_N", f"got {shown(threshold_N)} (expected a force >= 0 N)")
@@ -93,6 +100,8 @@ def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s:
             fz, rate = load.force_N[:, 2], load.rate_hz
         fz = np.nan_to_num(fz, nan=0.0)
         starts, stops = finite_runs(fz > threshold_N)
+        lasting = (stops - starts) >= min_run_s * rate
+        starts, stops = starts[lasting], stops[lasting]
         if len(starts) > 1:
             keep = np.concatenate([[True], (starts[1:] - stops[:-1]) >= min_gap_s * rate])
             starts, stops = starts[keep], stops[np.concatenate([keep[1:], [True]])]
@@ -113,7 +122,7 @@ def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s:
 
 def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe_r, heel_l, toe_l, *,
                     max_distance_m: float = 0.1, min_margin_m: float = 0.05,
-                    edge_tolerance_m: float = 0.02) -> list[Contact]:
+                    edge_tolerance_m: float = 0.02, min_alone_s: float = 0.05) -> list[Contact]:
     """Give each contact to the foot whose heel-toe segment is closest to its COP path (see module docstring).
 
     Foot markers are (frames, 3) in model axes, NaN allowed. Returns new
@@ -121,7 +130,9 @@ def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe
     ``heel_inside`` and ``toe_inside`` filled; a flagged contact has ``side = ''``.
     ``edge_tolerance_m`` widens the plate outline for the heel/toe check (markers sit
     a little behind the heel and above the toes); where the marker is not seen, or
-    the plate has no outline, the plate is trusted.
+    the plate has no outline, the plate is trusted. ``min_alone_s``: how long the COP must stay with each foot
+    alone for a plate to count as loaded by both (5 frames at 100 Hz: longer than a COP jump that survives the
+    6 Hz filter, shorter than the last ~60 ms of a heel's load on a plate's far end).
     """
     feet = {"r": (np.asarray(heel_r, float), np.asarray(toe_r, float)),
             "l": (np.asarray(heel_l, float), np.asarray(toe_l, float))}
@@ -132,11 +143,12 @@ def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe
         fz = load.force_N[frames, 2]
         use = load.loaded[frames] & (fz >= 0.1 * fz.max(initial=0.0))
         cop = load.cop_m[frames[use], :2]
-        distances = {}
-        for side, (heel, toe) in feet.items():
-            d = _segment_distance(cop, heel[frames[use], :2], toe[frames[use], :2])
-            distances[side] = d[np.isfinite(d)]
+        per_frame = {side: _segment_distance(cop, heel[frames[use], :2], toe[frames[use], :2])
+                     for side, (heel, toe) in feet.items()}
+        distances = {side: d[np.isfinite(d)] for side, d in per_frame.items()}
         mean = {s: float(d.mean()) if d.size else np.nan for s, d in distances.items()}
+        stood_alone = _stood_alone(per_frame, cop, load.corners_m, max_distance_m=max_distance_m,
+                                   edge_tolerance_m=edge_tolerance_m, min_frames=min_alone_s * load.rate_hz)
         seen = [s for s in SIDES if np.isfinite(mean[s])]
         side, flag, margin = "", "", np.nan
         if not use.any():
@@ -151,7 +163,7 @@ def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe
             other = [s for s in seen if s != best]
             # a COP that strays from the best foot points at two feet only if the other foot comes near it too
             other_near = bool(other) and np.percentile(distances[other[0]], 10) <= max_distance_m
-            if strays and other_near:
+            if (strays and other_near) or all(stood_alone.values()):
                 flag = "both_feet"
             elif strays or (len(seen) == 2 and margin < min_margin_m):
                 flag = "ambiguous"
@@ -176,11 +188,29 @@ def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe
     return out
 
 
-def plate_owner(contacts: list[Contact], loads: list[PlateLoad], events=None) -> np.ndarray:
+def _stood_alone(per_frame: dict, cop: np.ndarray, corners, *, max_distance_m: float, edge_tolerance_m: float,
+                 min_frames: float) -> dict[str, bool]:
+    """side → whether the COP stayed with that foot alone (within ``max_distance_m`` of it, farther from the
+    other) for ``min_frames`` consecutive loaded frames, counting only COP inside the plate's outline."""
+    on_plate = np.ones(cop.shape[0], bool) if corners is None else \
+        _inside_each(cop, corners, edge_tolerance_m) & np.all(np.isfinite(cop), axis=1)
+    out = {}
+    for side, other in (("r", "l"), ("l", "r")):
+        with np.errstate(invalid="ignore"):
+            alone = on_plate & (per_frame[side] <= max_distance_m) & (per_frame[other] > max_distance_m)
+        starts, stops = finite_runs(alone)
+        out[side] = bool(starts.size) and bool(np.max(stops - starts) >= min_frames)
+    return out
+
+
+def plate_owner(contacts: list[Contact], loads: list[PlateLoad], events=None, *, reach_s: float = 0.1) -> np.ndarray:
     """Which foot (``'r'``, ``'l'``, ``''``) loads each plate in each frame, shape (n_plates, n_frames).
 
     Each assigned contact owns its frames, extended over the adjacent frames in which
-    the (filtered) plate is still loaded, up to the neighbouring contact. A ``'both_feet'``
+    the (filtered) plate is still loaded, up to the neighbouring contact and by at most ``reach_s`` (how far the
+    6 Hz filter spreads a loading edge; a noisy plate's filtered baseline can stay above the threshold for
+    seconds: on the stair trial in ``../shared/data/pig`` plate 2 would give the right foot its noise over the
+    whole trial, through the stance on plate 4). A ``'both_feet'``
     contact is split by ``events`` (:class:`~gaitcli.core.events.Events`): its first foot
     owns it until the other foot's heel strike, its last foot from the first foot's toe
     off; in between both feet stand on it and no foot owns it (their loads are unknown).
@@ -197,7 +227,9 @@ def plate_owner(contacts: list[Contact], loads: list[PlateLoad], events=None) ->
             lo, hi = c.first_frame, c.last_frame + 1
             run = np.flatnonzero((starts <= c.last_frame) & (stops > c.first_frame))
             if run.size:
-                lo, hi = min(lo, starts[run[0]]), max(hi, stops[run[-1]])
+                reach = int(round(reach_s * load.rate_hz))
+                lo = min(lo, max(starts[run[0]], c.first_frame - reach))
+                hi = max(hi, min(stops[run[-1]], c.last_frame + 1 + reach))
             if i > 0:
                 lo = max(lo, mine[i - 1].last_frame + 1)
             if i + 1 < len(mine):

@@ -1,9 +1,9 @@
 """A synthetic trial folder (``gait synth``): trial.c3d, static.c3d, subject.yaml and truth/.
 
 The C3D files hold the noisy markers and the two TYPE-2 plates (millimetres);
-``truth/`` the exact kinematics and joint moments (clinical signs), the ground
-reactions of both feet at every contact, the events and which foot each plate
-measured.
+``truth/`` the exact kinematics and joint moments (clinical signs), the body's
+true anatomical angles, the ground reactions of both feet at every contact, the
+events and which foot each plate measured.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import numpy as np
 import yaml
 
 from gaitcli.errors import InputError
+from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
 from gaitcli.kinematics.model import COORDINATES, MOMENTS
 from gaitcli.synth.recording import DEFAULT_NOISE_MM, SyntheticTrial, simulate_trial
 
@@ -30,6 +31,8 @@ def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, statu
     data = {"mass_kg": mass_kg, "stature_m": stature_m, "sex": sex}
     if marker_set != "dissertation":
         data["marker_set"] = marker_set
+    if marker_set == "plug_in_gait":  # the subject's hip centres are Davis's (synth.recording.plug_in_gait_body)
+        data["hip_joint_centre"] = "davis"
     comment = f"# condition: {condition}"
     if condition != "normal":
         comment += f" (disturbed side: {DISTURBED_SIDE})"
@@ -42,7 +45,9 @@ def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, statu
 
 
 def write_truth(out: Path, trial: SyntheticTrial) -> None:
-    """``truth/``: kinematics.csv and joint_moments.csv (clinical signs), grf.csv, events.csv and plates.csv."""
+    """``truth/``: kinematics.csv and joint_moments.csv (clinical signs), grf.csv, events.csv, plates.csv and
+    anatomical_angles.csv (deg, the columns of idyn's kinematics.csv: the body's true anatomical angles by the
+    definitions of its marker set, :mod:`gaitcli.synth.anatomy`)."""
     from gaitcli.io.outputs import write_table
     from gaitcli.kinematics.conventions import coordinates_to_clinical, moments_to_clinical
 
@@ -64,6 +69,10 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
                                      "side": [e[2] for e in ev], "event": [e[3] for e in ev],
                                      "on_plate": [int(e[4]) for e in ev]})
     write_table(out / "plates.csv", {"plate": [p.name for p in trial.plates], "foot": trial.plate_feet})
+    if trial.anatomical_angles_rad is not None:
+        angles = np.degrees(trial.anatomical_angles_rad)
+        write_table(out / "anatomical_angles.csv",
+                    {"time_s": time_s, **{c: angles[:, k] for k, c in enumerate(ANATOMICAL_ANGLES)}})
 
 
 def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = DEFAULT_NOISE_MM,

@@ -61,6 +61,8 @@ class SyntheticTrial:
     joint_moments_Nm: np.ndarray  # (frames, 7, 3) in the distal segment frame
     split_clip: float
     metadata: dict = field(default_factory=dict)  # C3D subject parameters {"PROCESSING:RightKneeWidth": mm, ...} (Plug-in Gait)
+    anatomical_angles_rad: np.ndarray | None = None  # (frames, 23) true anatomical angles (synth.anatomy)
+    angle_convention: str = "isb"  # "plug_in_gait" or "isb": the definition of the anatomical frames
 
 
 def white_noise(rng, rms_mm, shape):
@@ -146,9 +148,51 @@ def plug_in_gait_points(template: dict, joint_centres: dict, stature_m: float) -
         metadata[f"PROCESSING:{side}KneeWidth"] = 1000.0 * (2 * knee_offset - PIG_MARKER_DIAMETER_M)
         metadata[f"PROCESSING:{side}AnkleWidth"] = 1000.0 * (2 * PIG_ANKLE_OFFSET * stature_m - PIG_MARKER_DIAMETER_M)
         # Plug-in Gait's leg length, as a lab measures it: the ASIS to the medial malleolus
-        metadata[f"PROCESSING:{side}LegLength"] = 1000.0 * float(np.linalg.norm(template[f"ASIS{s}"]
-                                                                               - template[f"MM{s}"]))
+        metadata[f"PROCESSING:{side}LegLength"] = 1000.0 * pig_leg_length_m(template, s)
     return points, bodies, metadata
+
+
+def plug_in_gait_body(template: dict) -> tuple[dict, dict]:
+    """A Plug-in Gait subject on which Plug-in Gait's assumptions hold: the hip centres where Davis et al. (1991)
+    put them (the leg length the C3D records, :func:`plug_in_gait_points`, and the marker radius), and the knee
+    markers at right angles to the thigh (:func:`~gaitcli.synth.anatomy.plug_in_gait_template`). Returns the
+    standing template and the calibration options that build that body."""
+    from gaitcli.kinematics.joint_centres import JointWidths
+    from gaitcli.synth.anatomy import davis_hip_centres_m, plug_in_gait_template
+
+    leg_length = pig_leg_length_m(template)
+    hips = davis_hip_centres_m(template, leg_length_m=leg_length, marker_radius_m=PIG_MARKER_DIAMETER_M / 2)
+    return (plug_in_gait_template(template, hip_centres_m=hips),
+            {"hip_method": "davis", "leg_length_m": leg_length,
+             "widths": JointWidths(marker_diameter_m=PIG_MARKER_DIAMETER_M)})
+
+
+def pig_leg_length_m(template: dict, side: str | None = None) -> float:
+    """Plug-in Gait's leg length (m) as a lab measures it, ASIS to medial malleolus: one side's, or both sides'
+    mean (what Plug-in Gait's hip regression takes)."""
+    sides = (side,) if side else ("r", "l")
+    return float(np.mean([np.linalg.norm(template[f"ASIS{s}"] - template[f"MM{s}"]) for s in sides]))
+
+
+def true_anatomical_angles(q, calibration, template: dict, plug_in_gait_points: dict | None) -> np.ndarray:
+    """(frames, 23) rad: the body's true anatomical angles over ``q`` (:mod:`gaitcli.synth.anatomy`) from its own
+    rotations, joint centres and the standing ``template``; Plug-in Gait's definitions when its markers
+    (``RANK``, ``RTOE`` … standing) are given, else ISB's."""
+    from gaitcli.kinematics.forward import forward_kinematics
+    from gaitcli.synth.anatomy import anatomical_angles, anatomical_frames, standing_frames
+
+    centres = calibration.joint_centres_m
+    pig = None
+    if plug_in_gait_points is not None:
+        pig = {}
+        for s in "rl":
+            lab = s.upper()
+            pig.update({f"ANK{s}": plug_in_gait_points[f"{lab}ANK"], f"TOE{s}": plug_in_gait_points[f"{lab}TOE"],
+                        f"HEE{s}": template[f"CA{s}"], f"AJC{s}": centres[f"AJC{s}"]})
+    states = forward_kinematics(q, calibration.body)
+    rotation = {b: states.rotation[:, i] for i, b in enumerate(BODIES)}
+    return anatomical_angles(anatomical_frames(rotation, standing_frames(template, centres, plug_in_gait=pig),
+                                               plug_in_gait=pig))
 
 
 def model_markers(q, calibration, extra: dict[str, tuple[str, ...]] | None = None):
@@ -281,8 +325,11 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
         cond = replace(cond, period_s=float(period_s))
     rng = np.random.default_rng(seed)
     template = {k: v for k, v in standing_template(stature_m).items() if k in MARKER_BODY}
+    body = {}  # how the body's joint centres are placed: the dissertation's (Bell), or Plug-in Gait's subject
+    if marker_set == "plug_in_gait":
+        template, body = plug_in_gait_body(template)
     cal = calibrate(landmarks_to_markers(template, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg, stature_m=stature_m,
-                    sex=sex, disturbances=() if condition == "normal" else (condition,))
+                    sex=sex, disturbances=() if condition == "normal" else (condition,), **body)
     params = cal.body
     if gait == "predicted":
         design = predicted_gait(cond, params, stature_m=stature_m)
@@ -332,7 +379,7 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
         placed = {**template, **clusters}
         markers_cal = calibrate(landmarks_to_markers(placed, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg,
                                 stature_m=stature_m, sex=sex, extra_tracking_markers=extra,
-                                disturbances=() if condition == "normal" else (condition,))
+                                disturbances=() if condition == "normal" else (condition,), **body)
         names, exact, bodies = model_markers(qm, markers_cal, extra)
         dropped = SYNTH_MARKER_SETS[marker_set][0]
         keep = [k for k, nm in enumerate(names) if nm[:-1] not in dropped]
@@ -347,10 +394,12 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
         landmarks = preset(marker_set).landmarks
         names = [landmarks[nm][0] if nm in landmarks else nm for nm in names]
     sub_feet = {s: {k: v[frames] for k, v in feet[s].items()} for s in "rl"}
+    convention = "plug_in_gait" if marker_set == "plug_in_gait" else "isb"
+    truth_angles = true_anatomical_angles(qm, cal, template, placed if convention == "plug_in_gait" else None)
     return SyntheticTrial(markers=Markers(tuple(names), noisy, MARKER_RATE_HZ),
                           static=Markers(tuple(names), static_positions, MARKER_RATE_HZ), plates=plates, q=qm,
                           qd=qd, qdd=qdd, feet=sub_feet,
                           plate_feet=["".join(c[0] for c in chosen)] if shared_plate else [c[0] for c in chosen],
                           events=contact_events(contacts, chosen, t), calibration=cal, design=design,
                           joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip,
-                          metadata=metadata)
+                          metadata=metadata, anatomical_angles_rad=truth_angles, angle_convention=convention)

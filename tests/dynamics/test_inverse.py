@@ -132,3 +132,19 @@ def test_shape_mismatch_is_an_input_error(static_case):
     params, q, zero, _ = static_case
     with pytest.raises(InputError, match="qdd"):
         inverse_dynamics(q, zero, zero[:-1], params)
+
+
+def test_moments_about_another_point_balance_the_same_loads():
+    """A weightless foot held still by the shank against a ground force F at a point C: about any point P the
+    joint moment balances the ground's, M_P + (C − P) × F = 0; so moments_about(M_J, −F, J, P) from the moment
+    about J equals the statics about P directly."""
+    from gaitcli.dynamics.inverse import moments_about
+
+    rng = np.random.default_rng(4)
+    ground, cop = np.array([12.0, -30.0, 700.0]), np.array([0.10, 0.02, 0.0])
+    J, P = rng.normal(size=3) * 0.05 + [0, 0, 0.08], rng.normal(size=3) * 0.05 + [0, 0, 0.08]
+    force_on_foot = -ground  # the shank holds the foot against the ground force (statics, no weight)
+    M_J, M_P = -np.cross(cop - J, ground), -np.cross(cop - P, ground)
+    got = moments_about(M_J[None, None], force_on_foot[None, None], J[None, None], P[None, None])
+    np.testing.assert_allclose(got[0, 0], M_P, atol=1e-12)
+    assert np.linalg.norm(M_P - M_J) > 1.0  # the points differ enough for the shift to matter

@@ -140,3 +140,70 @@ def test_a_latin1_analog_unit_is_copied_as_text(tmp_path):
         raw.write(str(tmp_path / "plain.c3d"))
     copy = add_points(path, tmp_path / "copy.c3d", {"X": np.zeros((n, 3))})
     assert ezc3d.c3d(str(copy))["parameters"]["ANALOG"]["UNITS"]["value"] == ["\u00b5V", "V"]
+
+
+def test_points_added_beyond_255_read_back(tmp_path):
+    """A file of 250 points (a full-body Plug-in Gait trial with Vicon's outputs holds 239) given 22 described
+    points: the copy reads back with all 272 labels and the added values (the C3D library splits labels beyond
+    255 into LABELS2; non-empty descriptions there made an unreadable file)."""
+    n = 4
+    labels = tuple(f"M{k:03d}" for k in range(250))
+    source = write_c3d(tmp_path / "many.c3d", Markers(labels, np.ones((n, 250, 3)), 100.0), [])
+    added = {f"P{k:02d}": np.full((n, 3), float(k)) for k in range(22)}
+    copy = add_points(source, tmp_path / "copy.c3d", added, descriptions={k: f"gaitcli {k}" for k in added})
+    c = ezc3d.c3d(str(copy))
+    point = c["parameters"]["POINT"]
+    got = list(point["LABELS"]["value"]) + list(point.get("LABELS2", {}).get("value", []))
+    assert got == list(labels) + list(added)
+    np.testing.assert_allclose(c["data"]["points"][:3, 250 + 21], 21.0)
+
+
+def test_points_the_file_already_holds_are_replaced_one_label_each(tmp_path):
+    """A C3D holding Vicon's RKneeAngles (and a list POINT:ANGLES naming it and RNeckAngles): the copy holds
+    RKneeAngles once, with the new values, the file's other points and RNeckAngles untouched, the new point
+    appended, POINT:ANGLES extended, and a warning names the replaced point."""
+    n = 30
+    rng = np.random.default_rng(3)
+    old = rng.normal(size=(n, 3, 3))
+    markers = Markers(("LASI", "RKneeAngles", "RNeckAngles"), old, 100.0)
+    c = ezc3d.c3d(str(write_c3d(tmp_path / "vicon.c3d", markers, [])))
+    c.add_parameter("POINT", "ANGLES", ["RKneeAngles", "RNeckAngles"])
+    c.write(str(tmp_path / "vicon.c3d"))
+    knee, hip = rng.normal(size=(n, 3)) * 30, rng.normal(size=(n, 3)) * 30
+    knee[4] = np.nan
+    with pytest.warns(GaitWarning, match=r"vicon.c3d: its own points RKneeAngles are replaced"):
+        add_points(tmp_path / "vicon.c3d", tmp_path / "copy.c3d", {"RKneeAngles": knee, "RHipAngles": hip},
+                   parameters={"POINT:ANGLES": ["RKneeAngles", "RHipAngles"]}, merged=("POINT:ANGLES",))
+    back = ezc3d.c3d(str(tmp_path / "copy.c3d"))
+    labels = back["parameters"]["POINT"]["LABELS"]["value"]
+    assert labels == ["LASI", "RKneeAngles", "RNeckAngles", "RHipAngles"]
+    assert back["parameters"]["POINT"]["ANGLES"]["value"] == ["RKneeAngles", "RNeckAngles", "RHipAngles"]
+    points = back["data"]["points"][:3]
+    fine = np.isfinite(knee).all(axis=1)
+    np.testing.assert_allclose(points[:, 1, fine].T, knee[fine], rtol=1e-6, atol=1e-4)  # float32
+    assert back["data"]["meta_points"]["residuals"][0, 1, 4] < 0
+    np.testing.assert_allclose(points[:, 3].T, hip, rtol=1e-6, atol=1e-4)
+    for j in (0, 2):
+        np.testing.assert_allclose(points[:, j].T, old[:, j] * 1000.0, rtol=1e-6, atol=1e-3)  # stored in mm
+
+
+def test_more_than_255_points_continue_in_labels2_and_descriptions2(tmp_path):
+    """A C3D parameter counts its entries in one byte: 250 points plus 10 described ones are written as LABELS
+    (255) + LABELS2 (5) and DESCRIPTIONS + DESCRIPTIONS2 (ezc3d split the labels but not the descriptions, and
+    wrote a file it could not read back); a copy of that copy keeps all 265."""
+    n = 5
+    markers = Markers(tuple(f"M{k}" for k in range(250)), np.ones((n, 250, 3)), 100.0)
+    source = write_c3d(tmp_path / "many.c3d", markers, [])
+    added = {f"A{k}": np.full((n, 3), float(k)) for k in range(10)}
+    add_points(source, tmp_path / "copy.c3d", added, descriptions={lab: "gaitcli" for lab in added})
+    back = ezc3d.c3d(str(tmp_path / "copy.c3d"))
+    point = back["parameters"]["POINT"]
+    assert back["data"]["points"].shape[1] == 260
+    assert point["LABELS"]["value"] + point["LABELS2"]["value"] == list(markers.labels) + list(added)
+    assert point["DESCRIPTIONS2"]["value"] == ["gaitcli"] * 5
+    with pytest.warns(GaitWarning, match="its own points A9 are replaced"):
+        add_points(tmp_path / "copy.c3d", tmp_path / "again.c3d", {"A9": np.zeros((n, 3)), "B": np.ones((n, 3))})
+    again = ezc3d.c3d(str(tmp_path / "again.c3d"))
+    labels = again["parameters"]["POINT"]["LABELS"]["value"] + again["parameters"]["POINT"]["LABELS2"]["value"]
+    assert labels == list(markers.labels) + list(added) + ["B"]
+    np.testing.assert_array_equal(again["data"]["points"][:3, labels.index("A9")], 0.0)

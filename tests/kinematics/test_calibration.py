@@ -169,7 +169,9 @@ def test_static_landmarks_average_named_frames_ignoring_nan():
 @pytest.mark.parametrize("heading_deg", [90.0, 180.0, 270.0, 21.0, -176.0])
 def test_static_heading_changes_nothing_in_the_body(heading_deg):
     """A static facing any way calibrates the same body: parameters, clusters and anatomical offsets in body axes
-    equal those of the static facing +x; positions are the static's own, turned."""
+    equal those of the static facing +x; positions are the static's own, turned. Plug-in Gait's static foot
+    offsets (cgm.static_foot_offsets) do not turn with it either. (The whole idyn stage with a turned static:
+    tests/dynamics/test_stage.py.)"""
     t = standing_template(1.792)
     turn = rot_z(np.radians(heading_deg))
     ahead = calibrate(landmarks_to_markers(t), **SUBJECT)
@@ -182,6 +184,20 @@ def test_static_heading_changes_nothing_in_the_body(heading_deg):
     np.testing.assert_allclose(turned.com_m, ahead.com_m @ turn.T, atol=1e-12)
     np.testing.assert_allclose(turned.static_rotation, turn @ ahead.static_rotation, atol=1e-12)
     assert any(f"faces {heading_deg:.1f}°" in n or f"faces {heading_deg - 360:.1f}°" in n for n in turned.notes)
+    from gaitcli.kinematics import cgm
+
+    pig = {k: t[k] for k in ("ASISr", "ASISl", "PSISr", "PSISl", "LEFr", "LEFl", "LMr", "LMl", "CAr", "CAl")}
+    for s, lateral in (("r", -1.0), ("l", 1.0)):  # wands lateral and above the knee and ankle markers, the toe
+        pig[f"THI{s}"] = t[f"LEF{s}"] + [0.02, 0.05 * lateral, 0.2]
+        pig[f"TIB{s}"] = t[f"LM{s}"] + [0.01, 0.05 * lateral, 0.2]
+        pig[f"MT2{s}"] = (t[f"FM{s}"] + t[f"VM{s}"]) / 2
+    widths = {"r": 0.1, "l": 0.1}
+    measurements = cgm.CgmMeasurements(leg_length_m={"r": 0.9, "l": 0.9}, knee_width_m=widths,
+                                       ankle_width_m={"r": 0.07, "l": 0.07})
+    offsets = [cgm.static_foot_offsets(P, measurements) for P in (pig, {k: turn @ v for k, v in pig.items()})]
+    for name in ("plantarflexion_rad", "rotation_rad"):
+        for s in "rl":
+            assert getattr(offsets[1], name)[s] == pytest.approx(getattr(offsets[0], name)[s], abs=1e-12)
 
 
 # ------------------------------------------------------------------ static_frames: auto

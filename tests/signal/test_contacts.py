@@ -65,3 +65,47 @@ def test_owner_covers_the_filtered_loaded_frames(walk_factory):
         assert np.all(owner[p][~loads[p].loaded] == "")
     unassigned = [Contact(0, "FP1", 140, 206, 1.4, 2.06)]
     assert np.all(plate_owner(unassigned, loads[:1]) == "")
+
+
+def test_noise_spikes_before_a_loading_do_not_open_the_contact_early():
+    """A real plate's noise (Vicon's stair trial: single samples above 20 N every few tens of ms) is not bridged
+    into the contact: the onset stays the ramp's crossing, 0.52 s, not the first spike's 0.2 s."""
+    t = np.arange(3000) / 1000.0
+    fz = np.clip(1000.0 * (t - 0.5), 0, 400) * (t < 2.0)
+    fz[200:500:30] = 35.0  # 1 ms spikes 30 ms apart, up to the loading
+    (contact,) = plate_contacts([_ramp_load(fz)], threshold_N=EVENT_THRESHOLD_N)
+    assert contact.on_time_s == pytest.approx(0.52, abs=1e-9)
+
+
+def test_owner_reaches_at_most_reach_s_beyond_its_contact():
+    """A plate whose filtered noise stays above the threshold the whole trial gives its foot only the contact
+    and 0.1 s (10 frames) on either side, not the trial."""
+    n = 300
+    load = PlateLoad("FP1", np.zeros((n, 3)), np.zeros((n, 3)), np.zeros(n), np.ones(n, bool), 100.0,
+                     threshold_N=EVENT_THRESHOLD_N)
+    contact = Contact(0, "FP1", 120, 179, 1.2, 1.79, side="r")
+    owner = plate_owner([contact], [load])[0]
+    np.testing.assert_array_equal(np.flatnonzero(owner == "r"), np.arange(110, 190))
+
+
+def _real_like(walk, seed=1):
+    """The walk's feet and plates as a real trial gives them: 2 mm marker noise, heel markers 4 cm higher (above
+    the plate, as a marker on the back of the heel sits), and the plates' COP jumping in some frames."""
+    rng = np.random.default_rng(seed)
+    feet = {s: tuple(m + rng.normal(0, 0.002, m.shape) + [0, 0, 0.04 * (k == 0)] for k, m in enumerate(walk.feet[s]))
+            for s in "rl"}
+    loads = walk_loads(walk)
+    for load in loads:
+        frames = np.flatnonzero(load.loaded & (load.force_N[:, 2] > 0.3 * load.force_N[:, 2].max()))
+        load.cop_m[frames[5:13], 1] += 0.35  # 8 frames 35 cm to the side: off the plate
+        load.cop_m[frames[20:24], 0] += 0.45  # 4 frames 45 cm ahead: on the plate, too short to be a foot
+    return feet, loads
+
+
+def test_a_one_foot_contact_stays_that_foots_in_real_like_data(walk_factory):
+    """Marker noise, a raised heel marker, 10 N of plate noise and COP jumps do not make a plate one foot stands
+    on a two-feet plate."""
+    walk = walk_factory(plates=[("r", 1) + CENTRED_PLATE], noise_N=10.0)
+    feet, loads = _real_like(walk)
+    (contact,) = assign_contacts(plate_contacts(loads, threshold_N=EVENT_THRESHOLD_N), loads, *feet["r"], *feet["l"])
+    assert (contact.side, contact.flag) == ("r", "")

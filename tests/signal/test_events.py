@@ -98,6 +98,37 @@ def test_a_plate_both_feet_stand_on_is_split_at_the_steps_between(walk_factory):
     _assert_all_truth_found_once(events, walk)
 
 
+def test_a_second_foot_on_the_far_end_of_a_real_like_plate_is_found(walk_factory):
+    """A 0.6 m plate under the right forefoot and the left heel (the right heel lands behind it, the left forefoot
+    beyond it), in data as real trials give it (2 mm marker noise, heel markers above the plate, 10 N plate noise,
+    COP jumps): the COP stays with the right foot alone, then with the left alone, so both feet loaded it. The
+    right foot owns it until the left heel strike, nobody while both stand on it, the left foot from the right toe
+    off. Before, its median COP
+    distance to the right foot (3 mm) hid the left foot's 28 frames and the right foot owned it throughout."""
+    from tests.signal.test_contacts import _real_like
+
+    walk = walk_factory(plates=[("r", 1, 0.31, 0.6, 0.4)], noise_N=10.0)
+    assert walk.plate_stances == [{("r", 1), ("l", 1)}]
+    feet, loads = _real_like(walk)
+    pelvis = walk.pelvis
+    detection = detect_events(loads, feet, pelvis, EVENT_RATE_HZ, EVENT_THRESHOLD_N)
+    (contact,) = detection.contacts
+    assert (contact.flag, contact.first_side, contact.last_side) == ("both_feet", "r", "l")
+    events = calibrate_kinematic_events(detection.events, feet, pelvis, EVENT_RATE_HZ)
+    owner = plate_owner(detection.contacts, loads, events)[0]
+    left_strike = walk.heel_strikes["l"][walk.heel_strikes["l"] > contact.first_frame / EVENT_RATE_HZ][0]
+    right_off = walk.toe_offs["r"][walk.toe_offs["r"] > contact.first_frame / EVENT_RATE_HZ][0]
+    frames = np.arange(contact.first_frame, contact.last_frame + 1)
+    nobody = frames[owner[frames] == ""]
+    assert nobody.size and np.all(np.diff(nobody) == 1)
+    # those two steps are timed from the noisy markers: within 4 frames (the 45 ms of the kinematic events), and
+    # never on the unsafe side (the right foot owning it after the left heel strike, or the left before the toe off)
+    assert left_strike * EVENT_RATE_HZ - 4 <= nobody[0] <= left_strike * EVENT_RATE_HZ + 1
+    assert right_off * EVENT_RATE_HZ - 1 <= nobody[-1] <= right_off * EVENT_RATE_HZ + 4
+    assert set(owner[contact.first_frame:nobody[0]]) == {"r"}
+    assert set(owner[nobody[-1] + 1:contact.last_frame + 1]) == {"l"}
+
+
 def test_foot_straddling_two_plates(walk_factory):
     walk = walk_factory(plates=[("r", 1, -0.2, 0.3, 0.4), ("r", 1, 0.1, 0.3, 0.4)])
     detection = detect_events(walk_loads(walk), walk.feet, walk.pelvis, EVENT_RATE_HZ, EVENT_THRESHOLD_N)

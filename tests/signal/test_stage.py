@@ -218,6 +218,30 @@ def test_walk_plate_events_and_feet(walk_factory):
                                                                                           side)[:, None])
 
 
+def test_neither_foots_load_is_known_while_both_stand_on_a_real_sized_plate(walk_factory):
+    """A 0.6 m plate under the right forefoot and then the left heel (10 N of plate noise): from the left heel
+    strike to the right toe off (the truth's frames) both feet load it, so neither foot's load is known there and
+    the stage says so; before, the right foot owned the whole contact and, its heel off the ground from mid-stance
+    (so no longer partly off the plate), its moments stayed known through the left heel strike."""
+    walk = walk_factory(plates=[("r", 1, 0.31, 0.6, 0.4)], noise_N=10.0)
+    for side in "rl":  # the heel rises from mid-stance (heel off) as a real one does, 6 cm by the toe off
+        heel, toe = walk.feet[side]
+        for strike in walk.heel_strikes[side]:
+            phase = (walk.time_s - strike) / walk.stance_s
+            heel[:, 2] += np.where((phase > 0.5) & (phase <= 1.0), 0.12 * (phase - 0.5), 0.0)
+    with pytest.warns(GaitWarning) as said:
+        result = filter_trial(_recording(walk), FilterConfig())
+    contact = max(result.contacts, key=lambda c: c.last_frame - c.first_frame)
+    t = walk.time_s
+    left_strike = walk.heel_strikes["l"][walk.heel_strikes["l"] > contact.on_time_s][0]
+    right_off = walk.toe_offs["r"][walk.toe_offs["r"] > contact.on_time_s][0]
+    both = (t > left_strike) & (t < right_off)
+    assert both.sum() == 10  # double support: stance 0.66 s minus half the 1.1 s stride
+    for side in "rl":
+        assert not result.trial.feet[side].known[both].any(), side
+    assert any("FP1: both feet on it in frames" in str(w.message) for w in said)
+
+
 def test_no_plates_gives_kinematic_events_only(walk_factory):
     walk = walk_factory()
     result = filter_trial(_recording(walk), FilterConfig())

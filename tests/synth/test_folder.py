@@ -15,4 +15,21 @@ def test_subject_yaml_names_the_condition_in_a_comment(tmp_path):
     assert "condition" not in data and "disturbed_side" not in data
     assert [d["segment"] for d in data["disturbances"]] == ["foot_r"]
     assert {p.name for p in (tmp_path / "truth").iterdir()} == {"kinematics.csv", "joint_moments.csv", "grf.csv",
-                                                                "events.csv", "plates.csv"}
+                                                                "events.csv", "plates.csv", "anatomical_angles.csv"}
+
+
+def test_a_plug_in_gait_subject_has_davis_hips_and_its_true_anatomical_angles(tmp_path):
+    """subject.yaml of a Plug-in Gait trial names Davis's hip centres (the subject is built on them);
+    truth/anatomical_angles.csv has the columns of idyn's kinematics.csv, in degrees."""
+    import numpy as np
+    import pandas as pd
+
+    from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
+
+    trial = write_trial(tmp_path, strides=1, marker_set="plug_in_gait")
+    data = yaml.safe_load((tmp_path / "subject.yaml").read_text())
+    assert (data["marker_set"], data["hip_joint_centre"]) == ("plug_in_gait", "davis")
+    table = pd.read_csv(tmp_path / "truth" / "anatomical_angles.csv")
+    assert list(table.columns) == ["time_s", *ANATOMICAL_ANGLES]
+    np.testing.assert_allclose(table[list(ANATOMICAL_ANGLES)].to_numpy(), np.degrees(trial.anatomical_angles_rad),
+                               rtol=5e-6, atol=1e-9)  # 6 significant digits
