@@ -305,3 +305,38 @@ def dask_cluster(request):
                 proc.wait(20)
             except subprocess.TimeoutExpired:
                 os.killpg(proc.pid, signal.SIGKILL)
+
+
+#: ``gait idyn`` with both exports, as the stair-session tests run it
+EXPORTS = ("--no-plots", "--export", "c3d", "--export", "opensim")
+#: the stair session's measurements as its README lists them, typed into a subject.yaml (no .vsk beside it)
+STAIR_TYPED = {"mass_kg": 85.0, "stature_m": 1.679, "sex": "male", "marker_set": "plug_in_gait",
+               "hip_joint_centre": "davis", "knee_width_mm": [139, 144], "ankle_width_mm": [89, 85],
+               "leg_length_m": (0.866 + 0.877) / 2}
+
+
+def _stair_sessions(pig: Path, root: Path) -> dict:
+    """``pig``: Movement_trial.c3d, Static_trial.c3d and Test.vsk alone, idyn with both exports; ``typed``: the
+    C3Ds with :data:`STAIR_TYPED` as subject.yaml, idyn."""
+    import yaml
+
+    folders = {"pig": root / "pig", "typed": root / "typed"}
+    for key, folder in folders.items():
+        folder.mkdir()
+        (folder / "trial.c3d").symlink_to(pig / "Movement_trial.c3d")
+        (folder / "static.c3d").symlink_to(pig / "Static_trial.c3d")
+    (folders["pig"] / "Test.vsk").symlink_to(pig / "Test.vsk")
+    (folders["typed"] / "subject.yaml").write_text(yaml.safe_dump(STAIR_TYPED))
+    runs = gait_many({"pig": (("idyn", folders["pig"], *EXPORTS), root),
+                      "typed": (("idyn", "--no-plots", folders["typed"]), root)}, workers=2)
+    return {k: r.to_json() for k, r in runs.items()}
+
+
+@pytest.fixture(scope="session")
+def stair_sessions(shared_pig_dir, tmp_path_factory):
+    """../shared/data/pig run once per test session (:func:`_stair_sessions`): (root, {"pig": Result, "typed":
+    Result}); the outputs in ``root/pig/gait_out`` and ``root/typed/gait_out``."""
+    root, record = build_once(tmp_path_factory, "cli_stair_sessions", lambda root: _stair_sessions(shared_pig_dir,
+                                                                                                   root))
+    return root, {k: Result.from_json(v) for k, v in record.items()}
+

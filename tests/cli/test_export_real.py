@@ -23,35 +23,31 @@ import pytest
 from gaitcli.io.opensim import read_motion, read_trc
 from tests.conftest import REPO
 
-from .conftest import Result, build_once, gait_many
+from .conftest import EXPORTS, Result, build_once, gait
 
 pytestmark = pytest.mark.shared
-EXPORT = ("--no-plots", "--export", "c3d", "--export", "opensim")
 VICON = [f"{side}{name}" for side in "RL" for name in ("PelvisAngles", "FootProgressAngles", "HipAngles",
                                                        "KneeAngles", "AnkleAngles", "HipMoment", "KneeMoment",
                                                        "AnkleMoment", "HipPower", "KneePower", "AnklePower")]
 
 
 def _build(shared: Path, root: Path) -> dict:
-    pig = root / "pig"
-    pig.mkdir(parents=True)
-    for name, as_name in (("Movement_trial.c3d", "trial.c3d"), ("Static_trial.c3d", "static.c3d"),
-                          ("Test.vsk", "Test.vsk")):
-        (pig / as_name).symlink_to(shared / "pig" / name)
     walking5 = root / "walking5"
     walking5.mkdir()
     (walking5 / "trial.c3d").symlink_to(shared / "c3d" / "walking5.c3d")
     shutil.copy(REPO / "docs" / "examples" / "walking2" / "subject.yaml", walking5)
-    runs = gait_many({"pig": (("idyn", pig, *EXPORT), root), "walking5": (("idyn", walking5, *EXPORT), root)},
-                     workers=2)
-    return {k: r.to_json() for k, r in runs.items()}
+    return {"walking5": gait("idyn", walking5, *EXPORTS, cwd=root).to_json()}
 
 
 @pytest.fixture(scope="module")
-def exported(shared_c3d_dir, shared_pig_dir, tmp_path_factory):
+def exported(shared_c3d_dir, stair_sessions, tmp_path_factory):
+    """{trial: (its folder, Result)}: walking5 run here, the stair session's .vsk-only run shared
+    (tests/cli/conftest.py ``stair_sessions``)."""
     root, record = build_once(tmp_path_factory, "cli_export_real",
                               lambda root: _build(shared_c3d_dir.parent, root))
-    return root, {k: Result.from_json(v) for k, v in record.items()}
+    stair_root, stair = stair_sessions
+    return {"walking5": (root / "walking5", Result.from_json(record["walking5"])),
+            "pig": (stair_root / "pig", stair["pig"])}
 
 
 def _labels(c) -> list[str]:
@@ -61,9 +57,9 @@ def _labels(c) -> list[str]:
 
 @pytest.mark.parametrize("trial", ["pig", "walking5"])
 def test_both_exports_write_files_that_read_back(exported, trial):
-    root, runs = exported
-    assert runs[trial].returncode == 0, runs[trial].describe()
-    out = root / trial / "gait_out"
+    folder, run = exported[trial]
+    assert run.returncode == 0, run.describe()
+    out = folder / "gait_out"
     c = ezc3d.c3d(str(out / "export" / f"{trial}.c3d"))
     labels = _labels(c)
     assert len(labels) == c["data"]["points"].shape[1] == len(set(labels))
@@ -80,11 +76,11 @@ def test_both_exports_write_files_that_read_back(exported, trial):
 
 
 def test_the_stair_sessions_own_vicon_points_are_replaced_and_said(exported, shared_pig_dir):
-    root, runs = exported
-    assert runs["pig"].returncode == 0, runs["pig"].describe()
-    (said,) = [line for line in runs["pig"].stderr_lines if "replaced" in line]
+    folder, run = exported["pig"]
+    assert run.returncode == 0, run.describe()
+    (said,) = [line for line in run.stderr_lines if "replaced" in line]
     assert said.startswith("gait: warning: trial.c3d: its own points ") and all(lab in said for lab in VICON)
-    out = root / "pig" / "gait_out"
+    out = folder / "gait_out"
     c = ezc3d.c3d(str(out / "export" / "pig.c3d"))
     vicon = ezc3d.c3d(str(shared_pig_dir / "Movement_trial.c3d"))
     labels, own = _labels(c), _labels(vicon)
@@ -108,6 +104,7 @@ def test_the_stair_sessions_own_vicon_points_are_replaced_and_said(exported, sha
     for other in ("RNeckAngles", "RAbsAnkleAngle", "RGroundReactionForce", "LHipForce"):  # Nexus's, untouched
         np.testing.assert_array_equal(data[:, labels.index(other)], before[:, own.index(other)])
     events = pd.read_csv(out / "filter" / "events.csv")
+    assert set(events.source) <= {"plate", "kinematics"}  # the file's EVENT group is empty: the events detected
     group = c["parameters"]["EVENT"]
     assert group["USED"]["value"][0] == len(events) > 0
     assert group["LABELS"]["value"] == [{"heel_strike": "Foot Strike", "toe_off": "Foot Off"}[k] for k in events.event]

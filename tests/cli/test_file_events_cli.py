@@ -1,10 +1,9 @@
 """Gait events from the trial file (C3D EVENT group) through the real ``gait`` command: Qualisys.c3d's own
-events by default, ``--events file`` without any refused, and ``gait idyn --export c3d`` on the Vicon Nexus
-Plug-in Gait trial (../shared/data/pig/Movement_trial.c3d), whose copy carries the events the filter used.
+events by default and ``--events file`` without any refused. (The exported C3D's EVENT group: the stair
+session's test in tests/cli/test_export_real.py.)
 
 Measured: Qualisys.c3d holds 7 gait events (LHS, RTO, RHS, LTO, LHS, RTO, RHS at 3.59–5.03 s from its frame 1;
 its first frame 705 at 200 Hz is at 3.52 s): 0.07, 0.165, 0.53, 0.64, 1.015, 1.13, 1.51 s on the trial's axis.
-Movement_trial.c3d's EVENT group is empty: its events are detected.
 """
 
 from __future__ import annotations
@@ -21,9 +20,6 @@ from tests.conftest import SHARED_C3D
 
 from .conftest import copy_sample, gait_many
 
-PIG = SHARED_C3D.parent / "pig" / "Movement_trial.c3d"
-
-
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("file_events")
@@ -36,11 +32,6 @@ def runs(tmp_path_factory):
         shutil.copy(Path(__file__).resolve().parents[2] / "docs" / "examples" / "qualisys" / "subject.yaml",
                     qualisys / "subject.yaml")
         jobs["qualisys"] = (("filter", qualisys, "--no-plots"), root)
-        pig = root / "pig"
-        pig.mkdir()
-        shutil.copy(PIG, pig / "trial.c3d")
-        (pig / "subject.yaml").write_text("marker_set: plug_in_gait\nmass_kg: 85.0\nstature_m: 1.679\nsex: male\n")
-        jobs["pig"] = (("idyn", pig, "--no-plots", "--export", "c3d", "--export", "opensim"), root)
     return root, gait_many(jobs, workers=2)
 
 
@@ -79,24 +70,3 @@ def test_events_file_without_any_is_refused_naming_the_file_and_event(runs):
     assert "Traceback" not in r.stderr
     assert not (root / "normal" / "gait_out" / "filter").exists()
 
-
-@pytest.mark.shared
-def test_the_vicon_trials_c3d_export_carries_the_events_used(runs):
-    root, results = runs
-    r = results["pig"]
-    assert r.returncode == 0, r.describe()
-    out = root / "pig" / "gait_out"
-    events = pd.read_csv(out / "filter" / "events.csv")
-    assert len(events) > 0 and set(events.source) <= {"plate", "kinematics"}  # the file's EVENT group is empty
-    c = ezc3d.c3d(str(out / "export" / "pig.c3d"))
-    group = c["parameters"]["EVENT"]
-    rate = float(c["parameters"]["POINT"]["RATE"]["value"][0])
-    assert group["USED"]["value"][0] == len(events)
-    assert group["LABELS"]["value"] == [{"heel_strike": "Foot Strike", "toe_off": "Foot Off"}[k] for k in events.event]
-    assert group["CONTEXTS"]["value"] == [{"r": "Right", "l": "Left"}[s] for s in events.side]
-    times = np.asarray(group["TIMES"]["value"])
-    # the file's time base: its frame 1 at 0 s; events.csv's frames are the file's frame numbers
-    np.testing.assert_allclose(60 * times[0] + times[1], (events.frame - 1) / rate, atol=0.5 / rate)
-    np.testing.assert_allclose(60 * times[0] + times[1] - c["header"]["points"]["first_frame"] / rate,
-                               events.time_s, atol=1e-5)
-    assert (out / "export" / "opensim" / "grf.mot").is_file()

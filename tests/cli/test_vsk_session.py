@@ -23,14 +23,9 @@ from gaitcli.dynamics.stage import subject_measurements
 from gaitcli.pipeline import load_recording, load_static
 from gaitcli.trial import open_trial
 
-from .conftest import Result, build_once, gait, gait_many
+from .conftest import gait
 
 pytestmark = pytest.mark.shared
-
-#: the session's measurements as its README lists them, typed into a subject.yaml (no .vsk beside it)
-TYPED = {"mass_kg": 85.0, "stature_m": 1.679, "sex": "male", "marker_set": "plug_in_gait", "hip_joint_centre": "davis",
-         "knee_width_mm": [139, 144], "ankle_width_mm": [89, 85], "leg_length_m": (0.866 + 0.877) / 2}
-
 
 def _session(pig: Path, folder: Path, *, vsk: bool = True) -> Path:
     folder.mkdir(parents=True)
@@ -41,19 +36,11 @@ def _session(pig: Path, folder: Path, *, vsk: bool = True) -> Path:
     return folder
 
 
-def _build(pig: Path, root: Path) -> dict:
-    vsk = _session(pig, root / "vsk")
-    typed = _session(pig, root / "typed", vsk=False)
-    (typed / "subject.yaml").write_text(yaml.safe_dump(TYPED))
-    runs = gait_many({k: (("idyn", "--no-plots", folder), root) for k, folder in (("vsk", vsk), ("typed", typed))},
-                     workers=2)
-    return {k: r.to_json() for k, r in runs.items()}
-
-
 @pytest.fixture(scope="module")
-def session(shared_pig_dir, tmp_path_factory):
-    root, record = build_once(tmp_path_factory, "cli_vsk_session", lambda root: _build(shared_pig_dir, root))
-    return root, {k: Result.from_json(v) for k, v in record.items()}
+def session(stair_sessions):
+    """The shared runs (tests/cli/conftest.py ``stair_sessions``): ``vsk`` the .vsk alone, ``typed`` subject.yaml."""
+    root, runs = stair_sessions
+    return root, {"vsk": runs["pig"], "typed": runs["typed"]}
 
 
 def test_gait_idyn_runs_on_the_session_without_subject_yaml(session):
@@ -61,7 +48,7 @@ def test_gait_idyn_runs_on_the_session_without_subject_yaml(session):
     for r in runs.values():
         assert r.returncode == 0, r.describe()
         assert "Traceback" not in r.stderr
-    out = root / "vsk" / "gait_out"
+    out = root / "pig" / "gait_out"
     idyn = json.loads((out / "idyn" / "summary.json").read_text())
     assert (idyn["mass_kg"], idyn["mass_source"]) == (85.0, "Test.vsk's Bodymass")
     assert (idyn["marker_set"], idyn["hip_joint_centre"]) == ("plug_in_gait", "davis")
@@ -88,7 +75,7 @@ def test_the_vsk_gives_what_the_typed_subject_yaml_gives(session):
     root, runs = session
     assert all(r.returncode == 0 for r in runs.values())
     for name in ("kinematics.csv", "joint_moments.csv", "residuals.csv"):
-        a = pd.read_csv(root / "vsk" / "gait_out" / "idyn" / name)
+        a = pd.read_csv(root / "pig" / "gait_out" / "idyn" / name)
         b = pd.read_csv(root / "typed" / "gait_out" / "idyn" / name)
         assert list(a.columns) == list(b.columns)
         np.testing.assert_array_equal(a.to_numpy(), b.to_numpy(), err_msg=name)
@@ -157,7 +144,7 @@ def test_the_session_agrees_with_vicons_own_outputs(session, shared_pig_dir):
     r 0.971–0.998; powers r 0.978–0.998 (benchmarks/bench_pig.py prints every component)."""
     root, runs = session
     assert runs["vsk"].returncode == 0
-    out = root / "vsk" / "gait_out" / "idyn"
+    out = root / "pig" / "gait_out" / "idyn"
     kin, mom, power = (pd.read_csv(out / f"{n}.csv") for n in ("kinematics", "joint_moments", "joint_powers"))
     vicon = _vicon(shared_pig_dir / "Movement_trial.c3d")
     for s, S in (("r", "R"), ("l", "L")):
