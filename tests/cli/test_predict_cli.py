@@ -119,7 +119,7 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     runs = gait_many({**jobs, "dask": (("predict", "--study", "tiny.yaml", "-o", "dask", "--scheduler", address),
                                        tmp_path),
                       "starts": (("predict", "--nodes", "6", "--max-iterations", "1", "--starts", "2", "-o", "starts",
-                                  "--scheduler", address), tmp_path)}, workers=3)
+                                  "--scheduler", address, "--no-plots"), tmp_path)}, workers=3)
     for name in ("dask", "starts"):
         assert runs[name].returncode == 3, runs[name].describe()
     assert len(pd.read_csv(tmp_path / "starts" / "predict" / "starts.csv")) == 2
