@@ -202,8 +202,8 @@ def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, at
             progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
     else:
         with pool(workers) as executor:
-            futures = {executor.submit(run_chain, *a): k for k, a in enumerate(args)}
             try:
+                futures = {executor.submit(run_chain, *a): k for k, a in enumerate(args)}
                 for future in as_completed(futures):
                     rows_by_chain[futures[future]] = future.result()
                     progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))

@@ -11,6 +11,8 @@ and write as its result.
 
 from __future__ import annotations
 
+import ctypes
+import os
 import signal
 import threading
 from contextlib import contextmanager
@@ -58,3 +60,33 @@ def interrupts_raised():
             signal.signal(s, handler)
     if interrupted:
         raise KeyboardInterrupt
+
+
+#: prctl's option that has the kernel signal a process when its parent dies (linux/prctl.h)
+_PR_SET_PDEATHSIG = 1
+
+
+def end_with_parent(parent_pid: int | None = None) -> None:
+    """In a child process: on Linux, have the kernel SIGKILL it when its parent dies (PR_SET_PDEATHSIG), however
+    the parent dies (SIGKILL included), so that no worker or reader is left behind. ``parent_pid``: the parent's
+    pid before the fork; a parent that died before the call ends the child now. Elsewhere nothing."""
+    try:
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):
+        return
+    if parent_pid is not None and os.getppid() != parent_pid:
+        os._exit(1)
+
+
+def _exit_quietly(signum, frame):
+    raise SystemExit(128 + signum)
+
+
+def as_worker(parent_pid: int) -> None:
+    """A worker process's initializer: it ends with its parent (:func:`end_with_parent`) and leaves interrupts
+    to it. Ctrl-C, which reaches the whole process group, is ignored outside a solve (:func:`interrupts_raised`
+    still stops one); SIGTERM, how the parent ends a worker, unwinds it as SystemExit, which neither prints a
+    traceback when the worker is idle nor leaves a temporary folder behind."""
+    end_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit_quietly)

@@ -22,11 +22,13 @@ from __future__ import annotations
 import dataclasses
 import multiprocessing
 import os
+import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from gaitcli.core.interrupts import as_worker
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError, shown
 from gaitcli.predict.layout import DesignLayout
@@ -140,32 +142,34 @@ def _one_start(args) -> PredictResult:
     return run_predict(cfg, params=params, reference=reference, init=init, device=device)
 
 
-def end_with_parent() -> None:
-    """A worker's initializer: on Linux, have the kernel kill the worker when its parent dies (PR_SET_PDEATHSIG),
-    so that a study whose parent was killed leaves no worker solving the rest of its queue. Elsewhere nothing."""
-    try:
-        import ctypes
-        import signal
-
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # 1 = PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
-
-
 def pool(workers: int) -> ProcessPoolExecutor:
     """Worker processes (forked where the platform allows: no re-import, the parent's thread settings) that end
-    with their parent (:func:`end_with_parent`)."""
+    with their parent and leave interrupts to it (:func:`~gaitcli.core.interrupts.as_worker`)."""
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
     return ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context(method),
-                               initializer=end_with_parent)
+                               initializer=as_worker, initargs=(os.getpid(),))
+
+
+#: how long stopped workers get to unwind (remove their temporary folders) before they are killed
+STOP_GRACE_S = 1.0
 
 
 def stop(executor: ProcessPoolExecutor) -> None:
     """Cancel what has not started and end the workers now (an interrupt of the parent: SIGTERM reaches the
-    parent alone). Their outputs are written atomically, so nothing half-written remains."""
+    parent alone): SIGTERM, which unwinds a worker's run (its atomic writes leave nothing half-written), then
+    SIGKILL after :data:`STOP_GRACE_S` for any still running, which a worker that caught the interrupt in
+    a solve and took its next queued task would be."""
+    # no public API ends running workers; shutdown() sets _processes to None, so take them first
+    processes = list((getattr(executor, "_processes", None) or {}).values())
     executor.shutdown(wait=False, cancel_futures=True)
-    for process in list(getattr(executor, "_processes", {}).values()):  # no public API ends running workers
+    for process in processes:
         process.terminate()
+    deadline = time.monotonic() + STOP_GRACE_S
+    for process in processes:
+        process.join(max(0.0, deadline - time.monotonic()))
+        if process.is_alive():
+            process.kill()
+            process.join(1.0)
 
 
 def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | None, reference: Reference,
@@ -193,8 +197,8 @@ def _run_on(executor, jobs, on_done, stopping=None) -> list[PredictResult]:
     """The starts as tasks of ``executor``; on an interrupt what has not started is cancelled (and ``stopping``
     ends the running ones, for a process pool)."""
     results: list = [None] * len(jobs)
-    futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
     try:
+        futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
         for future in as_completed(futures):
             k = futures[future]
             results[k] = future.result()

@@ -12,7 +12,13 @@ import sys
 import time
 from pathlib import Path
 
-from .conftest import ENV, copy_sample, gait, snapshot
+import numpy as np
+import pytest
+
+from gaitcli.core.recording import Markers
+from gaitcli.io.c3d_write import write_c3d
+
+from .conftest import ENV, MINIMAL_SUBJECT, copy_sample, gait, snapshot
 
 
 def start_gait(*args, cwd: Path) -> subprocess.Popen:
@@ -50,3 +56,78 @@ def test_ctrl_c_during_eid_keeps_the_earlier_converged_result(tmp_path):
     assert process.returncode == 130 and stderr.strip().splitlines()[-1] == "gait: interrupted", stderr
     assert "converge" not in stderr and "Traceback" not in stderr, stderr
     assert snapshot(trial / "gait_out") == before  # the converged EID as it was, no .part folder left
+
+
+# ------------------------------------------------------------------- worker and reader processes (issue 35)
+def children(pid: int) -> set[int]:
+    """The pids of ``pid``'s child processes (Linux /proc)."""
+    found = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[1]) == pid:
+            found.add(int(stat.parent.name))
+    return found
+
+
+def wait_for_children(process: subprocess.Popen, count: int, timeout_s: float = 120.0) -> set[int]:
+    """Wait until ``process`` has ``count`` children (its workers or its C3D reader); their pids."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        assert process.poll() is None, process.communicate()[1]
+        found = children(process.pid)
+        if len(found) >= count:
+            return found
+        time.sleep(0.005)
+    raise AssertionError(f"no {count} child processes within {timeout_s} s")
+
+
+def assert_gone(pids: set[int], timeout_s: float = 30.0) -> None:
+    """Every one of ``pids`` has ended (a zombie waiting for its dead parent counts as ended)."""
+    deadline = time.monotonic() + timeout_s
+    alive = pids
+    while alive and time.monotonic() < deadline:
+        alive = {pid for pid in alive if Path(f"/proc/{pid}").exists()
+                 and Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"}
+        time.sleep(0.05)
+    assert not alive, f"processes left behind: {sorted(alive)}"
+
+
+@pytest.mark.parametrize("work", ["starts", "study"])
+def test_sigterm_with_workers_ends_them_exits_130_and_writes_nothing(tmp_path, work):
+    """SIGTERM once the worker processes of ``--starts 2`` or of a two-chain study run: exit 130, the workers
+    ended, nothing written after the signal (once an AttributeError in the stop code, and the workers solving
+    on for ~100 s and writing case folders)."""
+    (tmp_path / "two.yaml").write_text("name: two\nspeeds_m_s: [1.0, 1.2]\nweights: [b]\nconditions: [normal, sach]\n"
+                                       "nodes: 6\n")
+    options = ("--study", "two.yaml") if work == "study" else ("--nodes", "6", "--starts", "2", "--no-plots")
+    process = start_gait("predict", *options, "--workers", "2", "-o", "out", cwd=tmp_path)
+    workers = wait_for_children(process, 2)
+    before = snapshot(tmp_path / "out") if (tmp_path / "out").exists() else {}
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130 and stderr.strip().splitlines()[-1] == "gait: interrupted", stderr
+    assert "Traceback" not in stderr and "internal error" not in stderr, stderr
+    assert_gone(workers)
+    after = snapshot(tmp_path / "out") if (tmp_path / "out").exists() else {}
+    assert after == before
+
+
+def test_a_killed_gait_leaves_no_c3d_reader_behind(tmp_path):
+    """SIGKILL of ``gait`` while its child reads a C3D: the child ends with it (it once blocked for ever sending
+    the recording through a pipe whose read end it held itself)."""
+    trial = tmp_path / "long"
+    trial.mkdir()
+    frames = 60_000  # a read of about 2 s
+    t = np.arange(frames) / 100.0
+    positions = np.stack([np.stack([np.sin(0.1 * t + k), np.cos(0.2 * t), 0.5 + 0 * t], axis=1) for k in range(3)],
+                         axis=1)
+    write_c3d(trial / "trial.c3d", Markers(("A", "B", "C"), positions, 100.0, first_frame=1), [])
+    (trial / "subject.yaml").write_text(MINIMAL_SUBJECT)
+    process = start_gait("filter", str(trial), "--no-plots", cwd=tmp_path)
+    reader = wait_for_children(process, 1)
+    process.kill()
+    process.communicate(timeout=60)
+    assert_gone(reader)

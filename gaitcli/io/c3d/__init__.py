@@ -25,6 +25,7 @@ try:
 except ImportError:  # Windows: no address-space cap
     resource = None
 
+from gaitcli.core.interrupts import end_with_parent
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.errors import InputError
 from gaitcli.io.axes import apply_rotation, infer_lab_to_model
@@ -59,8 +60,8 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
     memory_bytes = READ_MEMORY_BYTES + 40 * size
-    child = context.Process(target=_child_read, args=(path, to_model_axes, header_frames, send, memory_bytes),
-                            daemon=True)
+    child = context.Process(target=_child_read, daemon=True,
+                            args=(path, to_model_axes, header_frames, send, receive, memory_bytes, os.getpid()))
     child.start()
     send.close()
     try:
@@ -91,10 +92,15 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     return recording
 
 
-def _child_read(path: Path, to_model_axes: bool, header_frames, send, memory_bytes: int) -> None:
+def _child_read(path: Path, to_model_axes: bool, header_frames, send, receive, memory_bytes: int,
+                parent_pid: int) -> None:
     """In the child: cap the address space, read, send ("ok", recording, warnings) or what went wrong. The
-    library's own output and a crash report go nowhere: the parent says what happened, in one line."""
+    library's own output and a crash report go nowhere: the parent says what happened, in one line. The child
+    ends with its parent (killed with it, and its pipe's read end closed here, so that a send to a dead parent
+    fails instead of waiting for ever on a reader that is itself)."""
     try:
+        end_with_parent(parent_pid)
+        receive.close()
         faulthandler.disable()
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, 1)
