@@ -257,10 +257,11 @@ def _read_init(path: Path):
     import numpy as np
 
     from gaitcli.errors import InputError
+    from gaitcli.io.h5 import checked
 
     try:
         with h5py.File(path, "r") as h5:
-            return np.asarray(h5["result/design"][()], float)
+            return np.asarray(checked(h5["result/design"])[()], float)
     except FileNotFoundError:
         raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)") from None
     except (OSError, KeyError):

@@ -29,6 +29,7 @@ import h5py
 import numpy as np
 
 from gaitcli import __version__
+from gaitcli.errors import InputError
 from gaitcli.io.atomic import atomic_path
 
 #: field-name suffix → unit (longest match first); fields without one are dimensionless ("1")
@@ -84,9 +85,26 @@ def write_h5(path: str | Path, datasets: dict[str, Dataset], root_attrs: dict) -
     return Path(path)
 
 
+#: the most bytes one HDF5 dataset may hold, decompressed, for gaitcli to read it: above any dataset it writes
+#: (a trial at the C3D ceiling of 40 million numbers is at most 320 MB of float64); a few kB of compressed
+#: chunks can otherwise claim gigabytes
+H5_MAX_BYTES = 512 * 2**20
+
+
+def checked(dataset: h5py.Dataset) -> h5py.Dataset:
+    """``dataset`` when its decompressed size (shape × item size, from the metadata) is within
+    :data:`H5_MAX_BYTES`; else an :class:`InputError` naming the file and the dataset, before any reading."""
+    size = int(np.prod(dataset.shape, dtype=object)) * dataset.dtype.itemsize if dataset.shape else 0
+    if size > H5_MAX_BYTES:
+        raise InputError(dataset.file.filename, dataset.name.lstrip("/"),
+                         f"dataset of shape {dataset.shape} and {dataset.dtype.itemsize}-byte items holds "
+                         f"{size} bytes decompressed, more than gaitcli reads ({H5_MAX_BYTES})")
+    return dataset
+
+
 def strings(dataset: h5py.Dataset) -> np.ndarray:
     """A string dataset as an array of ``str``."""
-    return np.asarray(dataset.asstr()[()], dtype=str)
+    return np.asarray(checked(dataset).asstr()[()], dtype=str)
 
 
 # ----------------------------------------------------------------------------------- records
@@ -135,7 +153,7 @@ def _read_untyped(node):
         return {name: _read_untyped(node[name]) for name in node if not name.startswith(".")}
     if node.dtype.kind == "O":
         return str(node.asstr()[()]) if node.shape == () else strings(node)
-    value = node[()]
+    value = checked(node)[()]
     return value.item() if isinstance(value, np.generic) else value
 
 
@@ -170,7 +188,7 @@ def _read_value(node, hint):
     if origin is tuple:
         args = typing.get_args(hint)
         item = args[0] if args else float
-        values = strings(node) if node.dtype.kind == "O" else node[()]
+        values = strings(node) if node.dtype.kind == "O" else checked(node)[()]
         return tuple(item(v) if item in (str, float, int, bool) else v for v in np.atleast_1d(values))
     if hint is str:
         return str(node.asstr()[()])
@@ -178,7 +196,7 @@ def _read_value(node, hint):
         return hint(node[()])
     if node.dtype.kind == "O":
         return strings(node)
-    return node[()]
+    return checked(node)[()]
 
 
 def read_record(group: h5py.Group, cls):

@@ -2,8 +2,9 @@
 
 The 512-byte header and the start of the parameter section are validated
 before ezc3d opens the file (a cut parameter section makes ezc3d hang):
-missing or non-C3D files, MIPS/SGI processor format and truncated parameter or
-data sections are :class:`~gaitcli.errors.InputError`s of one line.
+missing or non-C3D files, MIPS/SGI processor format, truncated parameter or
+data sections and a data section above :data:`C3D_MAX_NUMBERS` are :class:`~gaitcli.errors.InputError`s of
+one line.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from pathlib import Path
 
 from gaitcli.errors import GaitWarning, InputError
 
-__all__ = ["check_file", "check_parameters", "data_layout", "one_line", "warn", "param", "strings", "as_text"]
+__all__ = ["C3D_MAX_NUMBERS", "check_file", "check_parameters", "data_layout", "one_line", "warn", "param", "strings", "as_text"]
 
 _MIPS_MESSAGE = (
     "cannot read C3D: MIPS/SGI processor format is not supported; expected Intel or DEC (re-export the file)"
@@ -72,9 +73,10 @@ def check_file(path: Path) -> int | None:
             f"cannot read C3D: file is truncated ({size} bytes, the parameter section needs "
             f"{param_offset + 512 * n_param_blocks})",
         )
-    check_parameters(path, param_offset, n_param_blocks, size)
+    records = check_parameters(path, param_offset, n_param_blocks, size)
     first, last = struct.unpack("<2H", head[6:10])
     data_start, frame_bytes = data_layout(head, processor)
+    check_ceiling(path, head, records, processor)
     if data_start < param_block * 512:
         raise InputError(path, "header", f"not a C3D file: data block {data_start // 512 + 1} is not after the "
                                          "parameters")
@@ -88,6 +90,53 @@ def check_file(path: Path) -> int | None:
             f"cannot read C3D: file is truncated ({size} bytes, the header's {n_frames} frames need {need})",
         )
     return n_frames
+
+
+#: the most numbers a C3D data section may hold for gaitcli to read it: frames × (4 per marker + analog
+#: channels × analog samples per frame). 10 minutes at 100 Hz of 60 markers and two 1 kHz plates of 8 channels
+#: are 24 million; the C3D library takes ~130 bytes of memory per number, so the ceiling keeps a read under ~5 GB
+C3D_MAX_NUMBERS = 40_000_000
+
+
+def check_ceiling(path: Path, head: bytes, records: dict, processor: int) -> None:
+    """Refuse a file whose data section announces more than :data:`C3D_MAX_NUMBERS` numbers, from the header
+    and the long-trial frame counts (TRIAL:ACTUAL_START/END_FIELD, POINT:FRAMES, POINT:LONG_FRAMES), before
+    any data are read."""
+    n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
+    first, last = struct.unpack("<2H", head[6:10])
+    frames = max(last - first + 1, *_long_frame_counts(path, records, processor), 0)
+    per_frame = 4 * n_points + analog_per_frame
+    if frames * per_frame > C3D_MAX_NUMBERS:
+        raise InputError(path, "data", f"{frames} frames of {n_points} markers and {analog_per_frame} analog "
+                                       f"samples each: {frames * per_frame} numbers, more than gaitcli reads "
+                                       f"({C3D_MAX_NUMBERS}; split the trial)")
+
+
+def _long_frame_counts(path: Path, records: dict, processor: int) -> list[int]:
+    """The frame counts a long trial's parameters announce (see :mod:`.long`), read from the file's bytes."""
+    def values(group, name):
+        record = records.get((group, name))
+        if record is None or record.kind not in (2, 4):
+            return []
+        count = max(1, min(2, record.dims[0] if record.dims else 1))
+        with open(path, "rb") as f:
+            f.seek(record.data_offset)
+            raw = f.read(4 * count)
+        if record.kind == 2:
+            return [w for (w,) in struct.iter_unpack("<H", raw[:2 * count])]
+        if processor == 2:  # DEC F-float: IEEE with its 16-bit words swapped, four times as large
+            raw = b"".join(raw[k + 2:k + 4] + raw[k:k + 2] for k in range(0, len(raw), 4))
+            return [int(v / 4) for (v,) in struct.iter_unpack("<f", raw[:4 * count]) if v == v and abs(v) < 2**40]
+        return [int(v) for (v,) in struct.iter_unpack("<f", raw[:4 * count]) if v == v and abs(v) < 2**40]
+
+    counts = []
+    start, end = values("TRIAL", "ACTUAL_START_FIELD"), values("TRIAL", "ACTUAL_END_FIELD")
+    if len(start) == 2 and len(end) == 2:
+        low_high = [[w & 0xFFFF for w in words] for words in (start, end)]  # words maybe stored signed
+        counts.append((low_high[1][0] | low_high[1][1] << 16) - (low_high[0][0] | low_high[0][1] << 16) + 1)
+    for name in ("LONG_FRAMES", "FRAMES"):
+        counts += values("POINT", name)[:1]
+    return counts
 
 
 #: parameter types (C3D: −1 text, 1 byte, 2 16-bit integer, 4 float) and the most dimensions a parameter has
