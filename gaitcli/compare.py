@@ -71,7 +71,7 @@ import json
 import math
 import re
 from collections.abc import Iterable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -408,11 +408,26 @@ def _missing(paths: list[str], side: str, other: Path) -> list[Finding]:
 
 # -- CSV tables -------------------------------------------------------------------------------------------------
 
-def _read_csv(path: Path) -> pd.DataFrame:
+#: cells of one table read at a time (per side): memory stays flat in the tables' length
+CHUNK_CELLS = 500_000
+
+
+def _csv_chunks(path: Path) -> Iterable[pd.DataFrame]:
+    """The table in chunks of about :data:`CHUNK_CELLS` cells, as text (an empty file: one empty table); the
+    row index runs on across chunks."""
     try:
-        return pd.read_csv(path, dtype=str, keep_default_na=False)
-    except pd.errors.EmptyDataError:
-        return pd.DataFrame()
+        try:
+            columns = pd.read_csv(path, dtype=str, keep_default_na=False, nrows=0).columns
+        except pd.errors.EmptyDataError:
+            yield pd.DataFrame()
+            return
+        rows = max(1, CHUNK_CELLS // max(1, len(columns)))
+        empty = True
+        for chunk in pd.read_csv(path, dtype=str, keep_default_na=False, chunksize=rows):
+            empty = False
+            yield chunk
+        if empty:
+            yield pd.DataFrame(columns=columns)
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
         raise InputError(path, None, f"not a readable CSV table ({str(exc).splitlines()[0][:80]})") from None
 
@@ -428,23 +443,57 @@ def _numeric(cells: pd.Series) -> np.ndarray | None:
 
 def _where(table: pd.DataFrame, row: int) -> str:
     labels = [f"{c}={table[c].iloc[row]}" for c in WHERE_COLUMNS if c in table.columns]
-    return f"{' '.join(labels)} (line {row + 2})".strip()
+    return f"{' '.join(labels)} (line {table.index[row] + 2})".strip()
 
 
 def _compare_csv(path_a: Path, path_b: Path, rel: str, tol: Tolerances) -> list[Finding]:
-    ta, tb = _read_csv(path_a), _read_csv(path_b)
+    """Two tables compared chunk by chunk (:func:`_csv_chunks`); each column's findings over the chunks merged
+    (:func:`_merged`). A column is compared as text in the chunks where a cell of it is not a number."""
+    chunks_a, chunks_b = _csv_chunks(path_a), _csv_chunks(path_b)
+    ta, tb = next(chunks_a), next(chunks_b)
     out = [Finding(rel, c, f"column_only_in_{side}", detail=f"only in {side.upper()}")
            for side, cols, others in (("a", ta.columns, tb.columns), ("b", tb.columns, ta.columns))
            for c in cols if c not in others and not tol.ignored(c)]
-    if len(ta) != len(tb):
-        return [Finding(rel, "", "rows", difference=float(abs(len(ta) - len(tb))), detail=f"{len(ta)} rows in A, "
-                        f"{len(tb)} in B")] + out
-    for column in (c for c in ta.columns if c in tb.columns and not tol.ignored(c)):
-        xa, xb = _numeric(ta[column]), _numeric(tb[column])
-        if xa is None or xb is None:
-            out += _text_finding(rel, column, ta[column].to_numpy(), tb[column].to_numpy(), ta)
+    columns = [c for c in ta.columns if c in tb.columns and not tol.ignored(c)]
+    found: dict[str, list[Finding]] = {}
+    rows_a = rows_b = 0
+    while ta is not None or tb is not None:
+        rows_a += 0 if ta is None else len(ta)
+        rows_b += 0 if tb is None else len(tb)
+        if ta is not None and tb is not None and rows_a == rows_b:  # the same rows on both sides
+            for column in columns:
+                xa, xb = _numeric(ta[column]), _numeric(tb[column])
+                if xa is None or xb is None:
+                    new = _text_finding(rel, column, ta[column].to_numpy(), tb[column].to_numpy(), ta)
+                else:
+                    new = _number_findings(rel, column, xa, xb, tol.rule(column), ta)
+                found.setdefault(column, []).extend(new)
         else:
-            out += _number_findings(rel, column, xa, xb, tol.rule(column), ta)
+            found = {}  # the row counts differ: that is the finding, counted to the end
+        ta, tb = next(chunks_a, None), next(chunks_b, None)
+    if rows_a != rows_b:
+        return [Finding(rel, "", "rows", difference=float(abs(rows_a - rows_b)), detail=f"{rows_a} rows in A, "
+                        f"{rows_b} in B")] + out
+    return out + [merged for column in columns for merged in _merged(found.get(column, []), rows_a)]
+
+
+#: the count a table finding's detail ends with: "(N rows)" or "(N of M rows beyond tolerance)"
+_COUNT = re.compile(r" \((\d+)( of \d+)?( rows[^)]*)\)$")
+
+
+def _merged(findings: list[Finding], rows: int) -> list[Finding]:
+    """One finding per problem from one column's findings over the chunks of a ``rows``-row table: the first NaN
+    or text difference, the largest value difference, each with the rows counted over all chunks."""
+    out = []
+    for problem in dict.fromkeys(f.problem for f in findings):
+        same = [f for f in findings if f.problem == problem]
+        chosen = max(same, key=lambda f: f.difference) if problem == "value" else same[0]
+        match = _COUNT.search(chosen.detail)
+        if match and len(same) > 1:
+            total = sum(int(m.group(1)) for f in same if (m := _COUNT.search(f.detail)))
+            of = f" of {rows}" if match.group(2) else ""
+            chosen = replace(chosen, detail=chosen.detail[:match.start()] + f" ({total}{of}{match.group(3)})")
+        out.append(chosen)
     return out
 
 
