@@ -4,7 +4,9 @@ Run from the repository root: ``python benchmarks/bench_long_trial.py [--strides
 synthetic walker: about 100,000 frames at 100 Hz, two plates at 1 kHz). Prints, for ``gait synth``,
 ``gait filter`` and ``gait idyn`` (each a new process, one core): wall time, peak resident memory of the
 process and of the C3D reader's child, the frame count the stage's summary.json reports against the file's,
-and the peak memory per byte of trial.c3d. Asserts nothing.
+and the peak memory per byte of trial.c3d. ``--compare-mb 25 100`` instead prints the peak memory of
+``gait compare`` on two identical trees with a joint_moments.csv of about that many MB each (flat in the size:
+the tables are read in chunks); ``--ceilings`` prints the documented ceilings. Asserts nothing.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 from timing import gait_argv, one_core
 
 
@@ -33,11 +36,44 @@ def _run(*args) -> tuple[float, float]:
     return time.perf_counter() - start, int(out.stdout.split()[-1]) / 1024
 
 
+def compare_memory(sizes_mb: list[float]) -> None:
+    """Peak memory of ``gait compare`` on two identical trees whose joint_moments.csv is ``size`` MB."""
+    print(f"{'CSV MB':>8} {'wall s':>8} {'peak MB':>8}  gait compare A B")
+    for size_mb in sizes_mb:
+        with tempfile.TemporaryDirectory() as folder:
+            rows = int(size_mb * 1e6 / (21 * 11))  # 21 columns of ~11 characters
+            table = np.round(np.random.default_rng(0).normal(size=(rows, 21)), 6)
+            for side in ("a", "b"):
+                path = Path(folder) / side / "trial" / "gait_out" / "idyn" / "joint_moments.csv"
+                path.parent.mkdir(parents=True)
+                header = "time_s," + ",".join(f"joint{k}_moment" for k in range(20))
+                np.savetxt(path, table, fmt="%.6g", delimiter=",", header=header, comments="")
+            size = path.stat().st_size
+            wall, peak = _run("-q", "compare", Path(folder) / "a", Path(folder) / "b")
+            print(f"{size / 1e6:8.0f} {wall:8.1f} {peak:8.0f}")
+
+
+def ceilings() -> None:
+    from gaitcli.compare import CHUNK_CELLS
+    from gaitcli.io.c3d.header import C3D_MAX_NUMBERS
+    from gaitcli.io.h5 import H5_MAX_BYTES
+
+    print(f"C3D data section: {C3D_MAX_NUMBERS} numbers (frames x (4 x markers + analog samples per frame))")
+    print(f"HDF5 dataset: {H5_MAX_BYTES} bytes decompressed")
+    print(f"gait compare: tables read {CHUNK_CELLS} cells at a time per side")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--strides", type=int, default=833)
+    parser.add_argument("--compare-mb", type=float, nargs="+")
+    parser.add_argument("--ceilings", action="store_true")
     args = parser.parse_args()
     one_core()
+    if args.ceilings:
+        return ceilings()
+    if args.compare_mb:
+        return compare_memory(args.compare_mb)
     with tempfile.TemporaryDirectory() as folder:
         trial = Path(folder) / "long"
         print(f"{'step':<8} {'wall s':>8} {'peak MB':>8}  frames")
