@@ -71,13 +71,25 @@ _PLATE_FIELDS = ("force_x_N", "force_y_N", "force_z_N", "cop_x_m", "cop_y_m", "f
 # ----------------------------------------------------------------- CSV trial
 
 
+#: the most cells (rows × columns) of a markers.csv or forces.csv gaitcli reads: as many as 20 minutes of 60
+#: markers at 100 Hz and 1 kHz plates hold; read as text first, each cell takes ~100 bytes (~2 GB here)
+CSV_MAX_CELLS = 20_000_000
+
+
 def _read_numeric_csv(path: Path) -> tuple[list[str], np.ndarray]:
     """Header names and a float array (rows, columns) of a comma-separated file; empty cells are NaN."""
     if not path.is_file():
         raise InputError(path, None, "file not found")
     try:
         with open(path, newline="") as f:
-            rows = [row for row in csv.reader(f) if any(cell.strip() for cell in row)]
+            rows = []
+            for row in csv.reader(f):
+                if any(cell.strip() for cell in row):
+                    rows.append(row)
+                    if len(rows) * len(rows[0]) > CSV_MAX_CELLS:  # checked as read: memory stays bounded
+                        raise InputError(path, None, f"more than {CSV_MAX_CELLS // len(rows[0])} rows of "
+                                                     f"{len(rows[0])} columns, more than gaitcli reads "
+                                                     f"({CSV_MAX_CELLS} cells; split the trial)")
     except (UnicodeDecodeError, csv.Error) as exc:
         raise InputError(path, None, f"not a readable CSV file ({' '.join(str(exc).split())[:80]})") from None
     except PermissionError:

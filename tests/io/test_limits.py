@@ -11,6 +11,7 @@ import pytest
 
 from gaitcli.core.recording import Markers
 from gaitcli.errors import InputError
+from gaitcli.io import tables
 from gaitcli.io.c3d import read_c3d
 from gaitcli.io.c3d.header import C3D_MAX_NUMBERS
 from gaitcli.io.c3d.long import write_frame_count
@@ -72,3 +73,12 @@ def test_the_record_reader_checks_every_dataset(tmp_path):
         h5.create_dataset("result/x", shape=(80_000, 1000), dtype="f8", chunks=(1000, 1000), compression="gzip")
     with h5py.File(tmp_path / "bomb.h5", "r") as h5, pytest.raises(InputError, match="result/x"):
         _read_untyped(h5["result/x"])
+
+
+def test_a_csv_beyond_its_cell_ceiling_is_refused_as_it_is_read(tmp_path, monkeypatch):
+    monkeypatch.setattr(tables, "CSV_MAX_CELLS", 40)
+    path = tmp_path / "markers.csv"
+    path.write_text("time_s,A_x,A_y,A_z\n" + "".join(f"{k / 100},0,0,1\n" for k in range(20)))
+    with pytest.raises(InputError, match="more than 10 rows of 4 columns") as caught:
+        tables.read_markers_csv(path)
+    assert "markers.csv" in str(caught.value) and "40 cells" in str(caught.value)
