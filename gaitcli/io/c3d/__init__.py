@@ -30,7 +30,7 @@ from gaitcli.core.recording import Markers, Recording
 from gaitcli.errors import InputError
 from gaitcli.io.axes import apply_rotation, infer_lab_to_model
 from gaitcli.io.c3d.events import read_events
-from gaitcli.io.c3d.header import check_file, one_line, param, warn
+from gaitcli.io.c3d.header import C3D_MAX_NUMBERS, check_file, one_line, param, warn
 from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, frame_count
 from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
 from gaitcli.io.c3d.plates import plate_axes, read_plates
@@ -40,7 +40,8 @@ __all__ = ["read_c3d", "read_c3d_here", "MODEL_OUTPUT_GROUPS", "plate_axes"]
 
 #: limits of one C3D read in its child process: wall time (plus a second per 2 MB: ezc3d's force-platform
 #: module takes ~17 µs per analog sample) and address space above the parent's (plus 40 bytes per byte of
-#: file: a 67 MB trial of 72 000 frames with two 1 kHz plates peaks at 2.2 GB)
+#: file: a 67 MB trial of 72 000 frames with two 1 kHz plates peaks at 2.2 GB); the file's bytes counted up to
+#: what C3D_MAX_NUMBERS allows, so at most ~90 s and ~7.5 GB
 READ_TIME_S = 10.0
 READ_MEMORY_BYTES = 1 << 30
 
@@ -56,7 +57,8 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     # above, then in-process
     if "fork" not in multiprocessing.get_all_start_methods() or multiprocessing.current_process().daemon:
         return read_c3d_here(path, to_model_axes=to_model_axes, header_frames=header_frames)
-    size = path.stat().st_size
+    # the limits grow with the data, which the ceiling bounds, not with whatever the file holds after them
+    size = min(path.stat().st_size, 4 * C3D_MAX_NUMBERS + (1 << 20))
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
     memory_bytes = READ_MEMORY_BYTES + 40 * size
