@@ -21,8 +21,15 @@ from contextlib import contextmanager
 INTERRUPTS = (signal.SIGINT, signal.SIGTERM)
 
 
-def _raise_interrupt(signum, frame):
-    raise KeyboardInterrupt
+def _interrupt_in(owner_pid: int):
+    """A handler raising KeyboardInterrupt in process ``owner_pid``; in a process forked from it (a worker
+    signalled before :func:`as_worker` set its own handlers) it ends that process at once, printing nothing."""
+    def handler(signum, frame):
+        if os.getpid() != owner_pid:
+            os._exit(128 + signum)
+        raise KeyboardInterrupt
+
+    return handler
 
 
 @contextmanager
@@ -32,7 +39,7 @@ def terminate_as_interrupt():
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
+    previous = signal.signal(signal.SIGTERM, _interrupt_in(os.getpid()))
     try:
         yield
     finally:
@@ -87,6 +94,6 @@ def as_worker(parent_pid: int) -> None:
     to it. Ctrl-C, which reaches the whole process group, is ignored outside a solve (:func:`interrupts_raised`
     still stops one); SIGTERM, how the parent ends a worker, unwinds it as SystemExit, which neither prints a
     traceback when the worker is idle nor leaves a temporary folder behind."""
-    end_with_parent(parent_pid)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # first: an exception in an initializer is logged
     signal.signal(signal.SIGTERM, _exit_quietly)
+    end_with_parent(parent_pid)
