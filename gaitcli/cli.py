@@ -155,6 +155,8 @@ def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, 
 
 @gait.command("idyn")
 @_trial_options
+@_config_option(IdynConfig, "angles", "--angles")
+@_config_option(IdynConfig, "moments", "--moments")
 @_config_option(IdynConfig, "frames", "--frames")
 @_config_option(IdynConfig, "pose", "--pose")
 @_config_option(FilterConfig, "events", "--events")
@@ -162,9 +164,11 @@ def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, 
               help="Also write the results for OpenSim (.trc, .mot, .sto, ExternalLoads) or as a C3D copy of the "
                    "trial with angles and moments, into OUT/export/ (repeatable).")
 @click.pass_obj
-def idyn_command(console: Console, trial, out, pipeline, no_plots, frames, pose, events, exports):
-    """Segment poses, 27 coordinates, 21 joint moments and the pelvis residuals."""
-    cfg = configure(pipeline, idyn={"frames": frames, "pose": pose}, filter={"events": events})
+def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, moments, frames, pose, events, exports):
+    """Anatomical joint angles, moments and powers; segment poses, 27 coordinates, 21 joint moments and the pelvis
+    residuals."""
+    cfg = configure(pipeline, idyn={"angles": angles, "moments": moments, "frames": frames, "pose": pose},
+                    filter={"events": events})
     console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
     if exports:
         from gaitcli.pipeline import TrialRun
