@@ -124,9 +124,11 @@ def trial_body(root: Path, name: str, band: NormalBand | None, work: Path) -> st
         figures = idyn_figures(root / "idyn" / "idyn.h5", work / "idyn", title=name, band=band)
         band_text = f"the grey band is the normal mean ± 1 SD ({band.source})" if band else "no normal band given"
         captions = {
-            "cycle.png": f"Sagittal hip, knee and ankle angles (deg) and joint moments (N·m/kg, internal, positive "
-                         f"as the angle) over the gait cycle from heel strike to heel strike: mean ± SD of each "
-                         f"side's strides; {band_text}. Moments are blank where the foot's load was not measured.",
+            "cycle.png": f"Sagittal hip, knee and ankle angles (deg), joint moments (N·m/kg, internal; signs as the "
+                         f"axis labels and joint_moments.csv say: by default Plug-in Gait's, extensor and "
+                         f"plantarflexor positive) and joint powers (W/kg, generated positive) over the gait cycle "
+                         f"from heel strike to heel strike: mean ± SD of each side's strides; {band_text}. Moments "
+                         f"and powers are blank where the foot's load was not measured.",
             "cycle_frontal.png": f"Frontal angles (deg) and moments (N·m/kg) over the gait cycle: hip adduction, knee "
                                  f"varus, ankle inversion positive; {band_text}.",
             "residuals.png": "Pelvis residual force (N) and moment (N·m): what the model and the measured ground "

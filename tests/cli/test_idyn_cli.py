@@ -407,3 +407,22 @@ def test_the_coordinates_and_their_moments_by_option(runs):
         compared += 1
     assert compared == 18
 
+
+
+def test_the_sagittal_figure_draws_the_powers_of_gait_cycle_csv(runs):
+    """cycle.png's third row: each joint's total power (W/kg) over the cycle, the mean of the side's strides — the
+    same curve as the mean of gait_cycle.csv's ``<joint>_<side>_power_W_per_kg`` strides."""
+    from gaitcli.report.plots import cycle_figure
+
+    _, root = runs
+    folder = out_dir(root, "normal")
+    figure = cycle_figure(folder / "idyn.h5", "sagittal")
+    axes = np.array(figure.axes).reshape(3, 3)
+    cycles = pd.read_csv(folder / "gait_cycle.csv")
+    for col, joint in enumerate(("hip", "knee", "ankle")):
+        assert "power" in axes[2, col].get_ylabel()
+        right = cycles[cycles.side == "r"]
+        expected = right.groupby("cycle_pct")[f"{joint}_r_power_W_per_kg"].mean().to_numpy()
+        drawn = next(line for line in axes[2, col].get_lines() if line.get_label().startswith("right"))
+        np.testing.assert_allclose(drawn.get_ydata(), expected, rtol=1e-5, atol=1e-4)
+    assert len(cycle_figure(folder / "idyn.h5", "frontal").axes) == 6  # no power row in the frontal plane
