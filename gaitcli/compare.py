@@ -15,8 +15,8 @@ times, versions, dates, hashes), which differ between two runs of the same input
 
 Values. Numbers are compared within the tolerance of their unit family (below); NaN (``null`` in
 ``summary.json``) equals NaN, and NaN on one side only is a difference; an infinity equals only the same
-infinity. Text (events, sides, notes, booleans) must be equal. A table whose row count differs, a column or key on one side only, a list of another length or a value
-of another type is a finding.
+infinity. Text (events, sides, notes, booleans) must be equal. A table whose row count differs, a column or key
+on one side only, a list of another length or a value of another type is a finding.
 
 Unit families. A column's or key's family comes from its name, whose suffix carries the unit (:data:`UNIT_RULES`,
 first match wins; a reference table's ``_mean``/``_sd`` suffix is dropped first, and a summary key without a unit
