@@ -14,9 +14,9 @@ a finding. HDF5 files (binary; their numbers are in the CSVs), figures and hidde
 times, versions, dates, hashes), which differ between two runs of the same inputs.
 
 Values. Numbers are compared within the tolerance of their unit family (below); NaN (``null`` in
-``summary.json``) equals NaN, and NaN on one side only is a difference. Text (events, sides, notes, booleans) must
-be equal. A table whose row count differs, a column or key on one side only, a list of another length or a value
-of another type is a finding.
+``summary.json``) equals NaN, and NaN on one side only is a difference; an infinity equals only the same
+infinity. Text (events, sides, notes, booleans) must be equal. A table whose row count differs, a column or key
+on one side only, a list of another length or a value of another type is a finding.
 
 Unit families. A column's or key's family comes from its name, whose suffix carries the unit (:data:`UNIT_RULES`,
 first match wins; a reference table's ``_mean``/``_sd`` suffix is dropped first, and a summary key without a unit
@@ -481,7 +481,8 @@ def _number_findings(rel: str, column: str, a: np.ndarray, b: np.ndarray, rule: 
             allowed = np.maximum(rule.tolerance * np.maximum(np.abs(a), np.abs(b)), RELATIVE_FLOOR)
         else:
             allowed = np.full(a.shape, rule.tolerance)
-    beyond = both & (diff > allowed * (1 + 1e-9))
+    # an infinity differs from any other value: a tolerance relative to it would be infinite too
+    beyond = both & ((diff > allowed * (1 + 1e-9)) | ~(np.isfinite(a) & np.isfinite(b)))
     if beyond.any():
         k = int(np.flatnonzero(beyond)[np.argmax(diff[beyond])])
         count = f" ({int(beyond.sum())} of {a.size} rows beyond tolerance)" if table is not None else ""

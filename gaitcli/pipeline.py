@@ -25,6 +25,7 @@ from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
 from gaitcli.errors import GaitWarning, InputError
+from gaitcli.io.atomic import check_replaceable
 from gaitcli.io.h5 import provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
@@ -206,6 +207,8 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
         handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path
         computed.append((name, result, time.perf_counter() - started))
 
+    for name, _, _ in computed:  # before the first write: a user's file in any folder to replace stops them all
+        check_replaceable(run.output_folder(name))
     for name, result, elapsed in computed:
         st = stage(name)
         target = run.output_folder(name)

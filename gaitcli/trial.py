@@ -300,6 +300,15 @@ def _named_file(folder: Path, name, key: str) -> Path | None:
     return path
 
 
+def _found_file(folder: Path, path: Path | None) -> Path | None:
+    """``path``, a file found in ``folder`` by its usual name, when it resolves (symlinks followed) inside the
+    folder, as a file that ``subject.yaml`` names must."""
+    if path is not None and not path.resolve().is_relative_to(folder.resolve()):
+        raise InputError(path, None, f"links to {shown(str(path.resolve()))}, which is outside the trial folder "
+                                     f"{folder} (expected a file inside it: copy the file in)")
+    return path
+
+
 def _vsk_files(folder: Path) -> list[Path]:
     """The Vicon subject files (``*.vsk``, any case; hidden files not) directly in ``folder``, sorted."""
     return sorted(p for p in folder.iterdir() if p.suffix.lower() == ".vsk" and not p.name.startswith(".")
@@ -313,7 +322,7 @@ def _only_vsk(folder: Path, has_yaml: bool) -> Path | None:
         names = ", ".join(shown(p.name) for p in found[:4]) + (", …" if len(found) > 4 else "")
         how = "`vsk:` in subject.yaml naming one" if has_yaml else "a subject.yaml naming one under `vsk:`"
         raise InputError(folder, "vsk", f"{len(found)} Vicon subject files: {names} (expected one, or {how})")
-    return found[0] if found else None
+    return _found_file(folder, found[0]) if found else None
 
 
 def open_trial(folder: str | Path) -> TrialFolder:
@@ -336,16 +345,16 @@ def open_trial(folder: str | Path) -> TrialFolder:
     forces = None
     trial = _named_file(folder, subject.trial, "trial")
     if trial is None and (folder / "trial.c3d").is_file():
-        trial = folder / "trial.c3d"
+        trial = _found_file(folder, folder / "trial.c3d")
     elif trial is None and (folder / "markers.csv").is_file():
-        trial = folder / "markers.csv"
-        forces = folder / "forces.csv" if (folder / "forces.csv").is_file() else None
+        trial = _found_file(folder, folder / "markers.csv")
+        forces = _found_file(folder, folder / "forces.csv" if (folder / "forces.csv").is_file() else None)
     elif trial is None:
         raise InputError(folder / "trial.c3d", None, "file not found (expected trial.c3d, markers.csv, "
                                                      "or `trial:` in subject.yaml)")
     static = _named_file(folder, subject.static, "static")
     if static is None and (folder / "static.c3d").is_file():
-        static = folder / "static.c3d"
+        static = _found_file(folder, folder / "static.c3d")
     return TrialFolder(folder=folder, subject_path=subject_path, subject=subject,
                        trial_path=trial, forces_path=forces, static_path=static, vsk_path=vsk_path)
 

@@ -89,17 +89,40 @@ def atomic_path(target: str | Path):
             tmp.unlink()
 
 
+#: what gait writes into a folder it replaces whole: tables, HDF5 records, summaries and figures
+TOOL_SUFFIXES = (".csv", ".h5", ".json", ".png", ".gif")
+
+
+def check_replaceable(target: str | Path) -> None:
+    """Raise :class:`InputError` naming the first file below the folder ``target`` that gait does not write
+    (another suffix than :data:`TOOL_SUFFIXES`, or a link): replacing the folder whole would delete it."""
+    target = Path(target)
+    if not target.is_dir() or target.is_symlink():
+        return
+    for top, folders, files in os.walk(target):
+        folders.sort()
+        for name in sorted(files) + [f for f in folders if Path(top, f).is_symlink()]:
+            path = Path(top, name)
+            leftover = name.startswith(".") and name.endswith(".part")
+            if path.is_symlink() or not (leftover or path.suffix.lower() in TOOL_SUFFIXES):
+                raise InputError(path, None, "is not an output of gait, and the run would replace its folder "
+                                             "(expected only gait's outputs there: move the file, or choose "
+                                             "another -o)")
+
+
 @contextmanager
 def atomic_folder(target: str | Path):
     """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole.
 
-    A file (not a folder) at ``target`` is the user's: an InputError, and nothing is moved. Leftovers of
-    killed runs are removed first (:func:`remove_stale`).
+    A file (not a folder) at ``target``, or a file in it that gait does not write (:func:`check_replaceable`),
+    is the user's: an InputError, and nothing is moved. Leftovers of killed runs are removed first
+    (:func:`remove_stale`).
     """
     target = Path(target)
     make_parent(target)
     if target.exists() and not target.is_dir():
         raise InputError(target, None, "is a file (expected the output folder; move or rename the file)")
+    check_replaceable(target)
     remove_stale(target)
     tmp = Path(tempfile.mkdtemp(prefix=_prefix(target), suffix=".part", dir=target.parent))
     try:

@@ -24,8 +24,9 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from gaitcli import __version__
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import atomic_path
+from gaitcli.io.outputs import plain_text
 from gaitcli.report.bands import NormalBand
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
@@ -201,8 +202,11 @@ def study_body(folder: Path) -> str:
                 "curves.png": "The optimal prostheses' spring moment (N·m) against ankle angle (rad) beside the "
                               "commercial feet (as Fig. 5.16)."}
     for name, caption in captions.items():
-        if (folder / name).is_file():
-            parts.append(_figure(folder / name, caption))
+        path = folder / name
+        if path.is_file():
+            if not path.resolve().is_relative_to(folder.resolve()):
+                raise InputError(path, None, "links outside the study folder (expected the figure the study drew)")
+            parts.append(_figure(path, caption))
     return "".join(parts)
 
 
@@ -258,7 +262,12 @@ def write_report(out_dir: Path, band: NormalBand | None) -> list[Page]:
         if kind == "trial":
             name = _trial_name(root)
             return [Page(write_page(root / "report.html", name, trial_body(root, name, band, work)), name)]
-        rows = list(csv.DictReader((root / "batch_summary.csv").open()))
+        rows = [{**r, "trial": plain_text(r["trial"]), "reason": plain_text(r["reason"])}
+                for r in csv.DictReader((root / "batch_summary.csv").open())]
+        for r in rows:  # every page stays in the lab folder
+            if Path(r["trial"]).is_absolute() or not (root / r["trial"] / "gait_out").resolve().is_relative_to(root):
+                raise InputError(root / "batch_summary.csv", "trial", f"got {shown(r['trial'])}, outside the lab "
+                                                                      "folder (expected a trial folder below it)")
         status: dict[str, str] = {}
         for r in rows:
             order = ("failed", "unconverged", "ok", "skipped")
