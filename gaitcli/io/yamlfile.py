@@ -82,7 +82,12 @@ def read_yaml(path: str | Path):
         raise InputError(path, None, "cannot be read (permission denied)") from None
     except IsADirectoryError:
         raise InputError(path, None, "is a folder (expected a YAML file)") from None
-    loader = _Loader(text)
+    try:
+        loader = _Loader(text)
+    except yaml.reader.ReaderError as exc:  # PyYAML's own message spans two lines
+        line = text.count("\n", 0, exc.position) + 1
+        raise InputError(path, f"line {line}", f"control character U+{exc.character:04X} "
+                                                 "(expected printable text)") from None
     try:
         node = loader.get_single_node()
         if node is not None and _expanded_size(node, {}, MAX_EXPANDED_NODES) > MAX_EXPANDED_NODES:
