@@ -290,12 +290,19 @@ def _named_file(folder: Path, name, key: str) -> Path | None:
     subject = folder / "subject.yaml"
     if not isinstance(name, str):
         raise InputError(subject, key, f"got {shown(name)} (expected a file name inside the trial folder)")
+    if "\0" in name:
+        raise InputError(subject, key, f"got {shown(name)} (expected a file name without NUL characters)")
     path = folder / name
-    inside = folder.resolve()
-    if Path(name).is_absolute() or not path.resolve().is_relative_to(inside):
-        raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
-                                       "(expected a file inside it)")
-    if not path.is_file():
+    try:
+        inside = folder.resolve()
+        if Path(name).is_absolute() or not path.resolve().is_relative_to(inside):
+            raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
+                                           "(expected a file inside it)")
+        found = path.is_file()
+    except OSError as exc:  # a name longer than the system allows (ENAMETOOLONG), a loop of links
+        raise InputError(subject, key, f"names {shown(name)}, which cannot be a file here ({exc.strerror}; "
+                                       "expected a file inside the trial folder)") from None
+    if not found:
         raise InputError(subject, key, f"names {shown(name)}, which is not in {folder}")
     return path
 
