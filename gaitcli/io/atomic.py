@@ -7,6 +7,7 @@ writing process's id (``.<target>.<pid>.<random>.part``), so that the next run c
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import shutil
@@ -55,17 +56,36 @@ def usual_permissions(path: Path, *, folder: bool) -> None:
     os.chmod(path, (0o777 if folder else 0o666) & ~umask)
 
 
+#: errors of writing an output that are the machine's or the user's, not gaitcli's: a full disk or quota, a
+#: read-only file system, a file too large (exit 2 naming the output; the earlier results stay in place)
+WRITE_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG, errno.ENAMETOOLONG, errno.EACCES, errno.EPERM)
+
+
 def make_parent(target: Path) -> None:
     """Create ``target``'s folder; a file in the way or a folder that cannot be written is an InputError."""
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        blocking = next((p for p in reversed(target.parents) if p.is_file()), target.parent)
+    except (FileExistsError, NotADirectoryError):  # a file (or /dev/null) where a folder should be
+        blocking = next((p for p in reversed(target.parents) if p.exists() and not p.is_dir()), target.parent)
         raise InputError(blocking, None, "is a file (expected an output folder)") from None
     except PermissionError:
         raise InputError(target.parent, None, "cannot be created (permission denied)") from None
+    except OSError as exc:  # a name too long, a path under /proc, a read-only file system
+        raise InputError(target.parent, None, f"cannot be created ({exc.strerror}; expected an output folder)") \
+            from None
     if not os.access(target.parent, os.W_OK | os.X_OK):
         raise InputError(target.parent, None, "is not writable (expected an output folder you can write)")
+
+
+@contextmanager
+def write_errors(target: Path):
+    """Make an OSError of writing ``target`` (:data:`WRITE_ERRNOS`) an InputError naming it."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.errno not in WRITE_ERRNOS:
+            raise
+        raise InputError(target, None, f"cannot be written ({exc.strerror}); nothing was replaced") from None
 
 
 @contextmanager
@@ -77,13 +97,15 @@ def atomic_path(target: str | Path):
     target = Path(target)
     make_parent(target)
     remove_stale(target)
-    fd, tmp = tempfile.mkstemp(prefix=_prefix(target), suffix=".part", dir=target.parent)
+    with write_errors(target):
+        fd, tmp = tempfile.mkstemp(prefix=_prefix(target), suffix=".part", dir=target.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:
-        yield tmp
-        usual_permissions(tmp, folder=False)
-        os.replace(tmp, target)
+        with write_errors(target):
+            yield tmp
+            usual_permissions(tmp, folder=False)
+            os.replace(tmp, target)
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -101,15 +123,17 @@ def atomic_folder(target: str | Path):
     if target.exists() and not target.is_dir():
         raise InputError(target, None, "is a file (expected the output folder; move or rename the file)")
     remove_stale(target)
-    tmp = Path(tempfile.mkdtemp(prefix=_prefix(target), suffix=".part", dir=target.parent))
+    with write_errors(target):
+        tmp = Path(tempfile.mkdtemp(prefix=_prefix(target), suffix=".part", dir=target.parent))
     try:
-        yield tmp
-        usual_permissions(tmp, folder=True)
-        old = None
-        if target.exists():
-            old = target.with_name(f".{target.name}.old-{tmp.name}")
-            target.rename(old)
-        tmp.rename(target)
+        with write_errors(target):
+            yield tmp
+            usual_permissions(tmp, folder=True)
+            old = None
+            if target.exists():
+                old = target.with_name(f".{target.name}.old-{tmp.name}")
+                target.rename(old)
+            tmp.rename(target)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
     finally:
