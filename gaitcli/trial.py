@@ -360,7 +360,10 @@ def open_trial(folder: str | Path) -> TrialFolder:
 def sha256(path: str | Path) -> str:
     """SHA-256 of a file's bytes (provenance in HDF5 attributes)."""
     digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+    except OSError as exc:  # the first read of every input file: permission denied, an I/O error
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
     return digest.hexdigest()
