@@ -63,6 +63,7 @@ WRITE_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG, errno.ENAM
 
 def make_parent(target: Path) -> None:
     """Create ``target``'s folder; a file in the way or a folder that cannot be written is an InputError."""
+    _check_length(target)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
     except (FileExistsError, NotADirectoryError):  # a file (or /dev/null) where a folder should be
@@ -75,6 +76,23 @@ def make_parent(target: Path) -> None:
             from None
     if not os.access(target.parent, os.W_OK | os.X_OK):
         raise InputError(target.parent, None, "is not writable (expected an output folder you can write)")
+
+
+def _check_length(target: Path) -> None:
+    """Refuse a path the system would refuse only after creating its first folders (PATH_MAX, NAME_MAX)."""
+    try:
+        path_max, name_max = os.pathconf("/", "PC_PATH_MAX"), os.pathconf("/", "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):  # no pathconf (Windows)
+        return
+    long_name = next((part for part in target.parts if len(os.fsencode(part)) > name_max), None)
+    if long_name is not None:
+        named = target if long_name == target.name else target.parent
+        raise InputError(named, None, f"a name of {len(os.fsencode(long_name))} bytes is too long "
+                                              f"(expected at most {name_max})")
+    length = len(os.fsencode(os.path.abspath(target))) + 40  # the temporary name's suffix
+    if length >= path_max:
+        raise InputError(target.parent, None, f"the path is too long ({length} bytes with the file name; "
+                                              f"expected less than {path_max})")
 
 
 @contextmanager
