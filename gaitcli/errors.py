@@ -15,7 +15,8 @@ def shown(value) -> str:
     if type(value).__module__ == "numpy" and hasattr(value, "item") and getattr(value, "ndim", 1) == 0:
         value = value.item()  # 'abc', not np.str_('abc')
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10 ** SHOWN_CHARACTERS:
-        return f"a {math.floor(math.log10(abs(value))) + 1}-digit integer"  # str() refuses > 4300 digits
+        digits = len(str(abs(value))) if value.bit_length() < 14_000 else math.floor(math.log10(abs(value))) + 1
+        return f"a {digits}-digit integer"  # str() refuses more than 4300 digits
     text = repr(value)
     return text if len(text) <= SHOWN_CHARACTERS else text[:SHOWN_CHARACTERS - 1] + "…"
 

@@ -25,6 +25,7 @@ from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
 from gaitcli.errors import GaitWarning, InputError
+from gaitcli.io.atomic import check_output_folder
 from gaitcli.io.h5 import provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
@@ -176,6 +177,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     written); an unconverged optimization is written and reported in its outcome.
     """
     run = TrialRun(trial, out, cfg)
+    check_output_folder(run.out_root)
     names = tuple(names)
     needed = needed_stages(names)
     handoffs, sources, outcomes, computed = {}, {}, [], []
@@ -382,6 +384,8 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     params, reference, inputs, folder = predict_inputs(trial, out=out, reference_path=reference_path,
                                                        subject_path=subject_path, progress=progress,
                                                        pipeline=pipeline)
+    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
+    check_output_folder(root)  # before the solve, which may take minutes
     for p in (init_path, None if cfg.prosthesis in PROSTHESIS_CHOICES else Path(cfg.prosthesis)):
         if p is not None:
             inputs[str(p)] = sha256(p)
@@ -402,7 +406,6 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
         result = predict_optimal(cfg, params=params, reference=reference, init=init, report=iteration)
     else:
         result = run_predict(cfg, params=params, reference=reference, init=init, report=iteration, device=device)
-    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
     target = root / "predict"
     attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs, result.history)
     attrs["predict_config"] = json.dumps(dataclasses.asdict(cfg))

@@ -95,6 +95,18 @@ def _check_length(target: Path) -> None:
                                               f"expected less than {path_max})")
 
 
+def check_output_folder(folder: str | Path) -> None:
+    """Before any work, without creating anything: ``folder`` can be created and written, as far as can be
+    told (the first folder of it that exists is a folder, writable; no name or path too long)."""
+    folder = Path(os.path.abspath(folder))
+    _check_length(folder / "summary.json")
+    existing = next(p for p in (folder, *folder.parents) if os.path.lexists(p))
+    if not existing.is_dir():
+        raise InputError(existing, None, "is a file (expected an output folder)")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise InputError(existing, None, "is not writable (expected an output folder you can write)")
+
+
 @contextmanager
 def write_errors(target: Path):
     """Make an OSError of writing ``target`` (:data:`WRITE_ERRNOS`) an InputError naming it."""
