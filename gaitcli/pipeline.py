@@ -265,7 +265,7 @@ def _read_init(path: Path):
             return np.asarray(h5["result/design"][()], float)
     except FileNotFoundError:
         raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)") from None
-    except (OSError, KeyError, ValueError, TypeError):  # not HDF5, no design, or text where numbers belong
+    except (OSError, KeyError, ValueError, TypeError, RuntimeError):  # not HDF5, no design, text, a link loop
         raise InputError(path, "--init", "not a predict.h5 (expected result/design, the solution of an earlier "
                                          "gait predict)") from None
 

@@ -216,7 +216,7 @@ def open_h5(path: str | Path, what: str = "gaitcli"):
     try:
         with h5:
             yield h5
-    except (KeyError, ValueError, TypeError, IndexError, OSError) as exc:
+    except (KeyError, ValueError, TypeError, IndexError, OSError, RuntimeError) as exc:  # RuntimeError: link loops
         raise InputError(path, None, f"not an HDF5 file of {what} ({type(exc).__name__}: {_first_line(exc)})") \
             from None
 
