@@ -88,7 +88,7 @@ def _check_length(target: Path) -> None:
     if long_name is not None:
         named = target if long_name == target.name else target.parent
         raise InputError(named, None, f"a name of {len(os.fsencode(long_name))} bytes is too long "
-                                              f"(expected at most {name_max})")
+                                      f"(expected at most {name_max})")
     length = len(os.fsencode(os.path.abspath(target))) + 40  # the temporary name's suffix
     if length >= path_max:
         raise InputError(target.parent, None, f"the path is too long ({length} bytes with the file name; "

@@ -19,8 +19,8 @@ from __future__ import annotations
 import dataclasses
 import json
 import types
-from contextlib import contextmanager
 import typing
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path

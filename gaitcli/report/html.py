@@ -89,7 +89,7 @@ def _summary(folder: Path, numbers: tuple[str, ...]) -> dict:
         return {}
     try:
         summary = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError, ValueError) as exc:
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError, UnicodeDecodeError; nested too deeply
         raise InputError(path, None, f"not valid JSON ({type(exc).__name__}; expected a stage's summary)") from None
     except OSError as exc:
         raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
