@@ -299,9 +299,12 @@ def _named_file(folder: Path, name, key: str) -> Path | None:
             raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
                                            "(expected a file inside it)")
         found = path.is_file()
-    except OSError as exc:  # a name longer than the system allows (ENAMETOOLONG), a loop of links
+    except OSError as exc:  # a name longer than the system allows (ENAMETOOLONG)
         raise InputError(subject, key, f"names {shown(name)}, which cannot be a file here ({exc.strerror}; "
                                        "expected a file inside the trial folder)") from None
+    except RuntimeError:  # Path.resolve on a loop of symbolic links (Python < 3.13)
+        raise InputError(subject, key, f"names {shown(name)}, a loop of symbolic links (expected a file inside "
+                                       "the trial folder)") from None
     if not found:
         raise InputError(subject, key, f"names {shown(name)}, which is not in {folder}")
     return path

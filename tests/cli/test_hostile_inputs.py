@@ -10,6 +10,7 @@ with ``open`` or the write refusing, as the operating system would.
 from __future__ import annotations
 
 import errno
+import hashlib
 import io
 import os
 import shutil
@@ -77,6 +78,11 @@ def _h5(**datasets) -> Callable[[Path], None]:
     return write
 
 
+def _link_loop(case: Path) -> None:
+    _trial(SUBJECT + "trial: loop.c3d\n")(case)
+    (case / "trial" / "loop.c3d").symlink_to("loop.c3d")
+
+
 def _out_below_a_file(case: Path) -> None:
     _trial()(case)
     (case / "results.txt").write_text("the user's own file\n")
@@ -104,6 +110,7 @@ CASES = {
                            ("trial", "too long")),
     "trial_name_5000": Case(_trial(SUBJECT + f"trial: {'w' * 4996}.c3d\n"), FILTER, "subject.yaml",
                             ("trial", "too long")),
+    "trial_a_link_loop": Case(_link_loop, FILTER, "subject.yaml", ("trial", "loop")),
     "out_below_a_file": Case(_out_below_a_file, (*FILTER, "-o", "results.txt/out"), "results.txt", ("is a file",)),
     "out_under_dev_null": Case(_trial(), (*FILTER, "-o", "/dev/null/out"), "/dev/null", ("is a file",)),
     "out_under_proc": Case(_trial(), (*FILTER, "-o", "/proc/gait_out"), "/proc/gait_out", ("cannot be created",)),
@@ -145,17 +152,27 @@ CASES = {
 }
 
 
+def _snapshot(folder: Path) -> dict[str, str]:
+    """:func:`snapshot`, with symbolic links as where they point (a loop cannot be read)."""
+    out = {}
+    for path in sorted(folder.rglob("*")):
+        rel = path.relative_to(folder).as_posix()
+        out[rel] = (f"-> {os.readlink(path)}" if path.is_symlink() else "<dir>" if path.is_dir()
+                    else hashlib.sha256(path.read_bytes()).hexdigest())
+    return out
+
+
 def _build(root: Path) -> dict:
     jobs, before = {}, {}
     for name, case in CASES.items():
         folder = root / name
         folder.mkdir()
         case.build(folder)
-        before[name] = snapshot(folder)
+        before[name] = _snapshot(folder)
         jobs[name] = (case.args, folder)
     results = gait_many(jobs)
     return {"results": {k: r.to_json() for k, r in results.items()}, "before": before,
-            "after": {name: snapshot(root / name) for name in jobs}}
+            "after": {name: _snapshot(root / name) for name in jobs}}
 
 
 @pytest.fixture(scope="module")
