@@ -29,6 +29,8 @@ from gaitcli.kinematics.disturbances import Disturbance
 from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
 
 SEXES = ("male", "female")
+#: the largest frame number a subject file may name (a C3D counts frames in 32 bits)
+MAX_FRAME = 2**31 - 1
 SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")
 
 
@@ -135,10 +137,11 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     frames = data.get("static_frames")
     if frames is not None and frames != "auto":
         ok = (isinstance(frames, (list, tuple)) and len(frames) == 2
-              and all(isinstance(f, int) and not isinstance(f, bool) for f in frames) and 1 <= frames[0] <= frames[1])
+              and all(isinstance(f, int) and not isinstance(f, bool) for f in frames)
+              and 1 <= frames[0] <= frames[1] <= MAX_FRAME)
         if not ok:
             raise InputError(path, "static_frames", f"got {shown(frames)} (expected [first, last] frame numbers, "
-                                                    "1-based, or auto)")
+                                                    f"1-based and at most {MAX_FRAME:,}, or auto)")
         frames = (int(frames[0]), int(frames[1]))
     marker_map = data.get("marker_map") or {}
     if not isinstance(marker_map, dict) or not all(isinstance(k, str) and isinstance(v, str)

@@ -105,6 +105,8 @@ CASES = {
                                 (*FILTER, "--pipeline", "p.yaml"), "p.yaml", ("filter.cutoff_hz", "400-digit")),
     "static_frames_1e40": Case(_trial(SUBJECT + "static_frames: [1, 1e40]\n"), ("idyn", "--no-plots", "trial"),
                                "subject.yaml", ("static_frames",)),
+    "static_frames_400_digits": Case(_trial(SUBJECT + f"static_frames: [1, {DIGITS_400}]\n"),
+                                     ("idyn", "--no-plots", "trial"), "subject.yaml", ("static_frames", "at most")),
     "trial_name_nul": Case(_trial(SUBJECT + 'trial: "walk\\0.c3d"\n'), FILTER, "subject.yaml", ("trial", "NUL")),
     "trial_name_300": Case(_trial(SUBJECT + f"trial: {'w' * 296}.c3d\n"), FILTER, "subject.yaml",
                            ("trial", "too long")),
