@@ -348,6 +348,7 @@ def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = No
                                                   subject_path=subject_path, progress=progress, pipeline=pipeline)
     inputs[str(study_path)] = sha256(study_path)
     root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
+    check_output_folder(root)
     attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs)
     return run_study(spec, root, params=params, reference=reference, subject=repr(params), attrs=attrs,
                      workers=workers, force=force, scheduler=scheduler, progress=progress)

@@ -116,6 +116,10 @@ CASES = {
     "out_below_a_file": Case(_out_below_a_file, (*FILTER, "-o", "results.txt/out"), "results.txt", ("is a file",)),
     "out_under_dev_null": Case(_trial(), (*FILTER, "-o", "/dev/null/out"), "/dev/null", ("is a file",)),
     "out_under_proc": Case(_trial(), (*FILTER, "-o", "/proc/gait_out"), "/proc/gait_out", ("cannot be created",)),
+    "study_out_under_dev_null": Case(_files({"s.yaml": "name: s\nspeeds_m_s: [1.2]\nweights: [a]\n"
+                                                       "conditions: [normal]\n"}),
+                                     ("predict", "--study", "s.yaml", "-o", "/dev/null/out"), "/dev/null",
+                                     ("is a file",)),
     "out_256_characters": Case(_trial(), (*FILTER, "-o", "o" * 256), "ooo", ("too long",)),
     "out_near_path_max": Case(_trial(), (*FILTER, "-o", "/".join(["p" * 200] * 20)), "ppp", ("too long",)),
     "compare_100000_deep": Case(_files({"a/summary.json": "[" * 100_000 + "]" * 100_000, "b/summary.json": "[]"}),
