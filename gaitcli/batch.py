@@ -123,9 +123,12 @@ def input_key(folder: Path, cfg: PipelineConfig) -> str:
     digest = hashlib.sha256(to_yaml(cfg).encode())
     for path in sorted(p for p in folder.iterdir() if p.is_file()):
         digest.update(path.name.encode())
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                digest.update(block)
+        try:
+            with open(path, "rb") as f:
+                for block in iter(lambda: f.read(1 << 20), b""):
+                    digest.update(block)
+        except OSError as exc:  # an unreadable file: the trial's run says so in its own row (exit 2)
+            digest.update(f"unreadable: {exc.errno}".encode())
     return digest.hexdigest()
 
 
@@ -210,7 +213,7 @@ def read_summary(path: Path) -> dict[str, list[BatchRow]]:
                 row = BatchRow(plain_text(r["trial"]), r["stage"], r["status"], int(r["exit_code"] or 0),
                                plain_text(r["reason"]), float(r["wall_time_s"] or 0), r["input_key"])
                 rows.setdefault(row.trial, []).append(row)
-    except (KeyError, ValueError, csv.Error):
+    except (KeyError, ValueError, csv.Error, OSError):  # UnicodeDecodeError is a ValueError
         return {}
     return rows
 

@@ -415,6 +415,8 @@ def _read_csv(path: Path) -> pd.DataFrame:
         return pd.DataFrame()
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
         raise InputError(path, None, f"not a readable CSV table ({str(exc).splitlines()[0][:80]})") from None
+    except OSError as exc:  # unreadable (permission denied), a folder by that name
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
 
 
 def _numeric(cells: pd.Series) -> np.ndarray | None:
@@ -494,11 +496,43 @@ def _number_findings(rel: str, column: str, a: np.ndarray, b: np.ndarray, rule: 
 
 # -- summary.json ---------------------------------------------------------------------------------------------
 
+#: the deepest nesting and the longest integer a summary.json may hold (gaitcli's own are 3 deep, 20 digits)
+MAX_JSON_DEPTH = 50
+MAX_JSON_DIGITS = 300
+
+
 def _read_json(path: Path):
+    def parse_int(digits: str) -> int:
+        if len(digits.lstrip("-")) > MAX_JSON_DIGITS:
+            raise InputError(path, None, f"a {len(digits.lstrip('-'))}-digit integer (expected at most "
+                                         f"{MAX_JSON_DIGITS} digits)")
+        return int(digits)
+
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
         raise InputError(path, None, f"not valid JSON ({exc.__class__.__name__})") from None
+    except OSError as exc:
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
+    if _depth(text) > MAX_JSON_DEPTH:  # before parsing: json and _walk recurse once per level
+        raise InputError(path, None, f"nested more than {MAX_JSON_DEPTH} levels deep (expected a summary)")
+    try:
+        return json.loads(text, parse_int=parse_int)
+    except json.JSONDecodeError as exc:
+        raise InputError(path, None, f"not valid JSON ({exc.__class__.__name__})") from None
+
+
+def _depth(text: str) -> int:
+    """The deepest nesting of brackets and braces outside strings in JSON ``text``."""
+    depth = deepest = 0
+    for match in re.finditer(r'"(?:[^"\\]|\\.)*"|[\[{]|[\]}]', text):
+        token = match.group()
+        if token in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif token in "]}":
+            depth -= 1
+    return deepest
 
 
 def _compare_json(path_a: Path, path_b: Path, rel: str, tol: Tolerances) -> list[Finding]:

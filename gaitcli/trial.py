@@ -29,6 +29,8 @@ from gaitcli.kinematics.disturbances import Disturbance
 from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
 
 SEXES = ("male", "female")
+#: the largest frame number a subject file may name (a C3D counts frames in 32 bits)
+MAX_FRAME = 2**31 - 1
 SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")
 
 
@@ -135,10 +137,11 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     frames = data.get("static_frames")
     if frames is not None and frames != "auto":
         ok = (isinstance(frames, (list, tuple)) and len(frames) == 2
-              and all(isinstance(f, int) and not isinstance(f, bool) for f in frames) and 1 <= frames[0] <= frames[1])
+              and all(isinstance(f, int) and not isinstance(f, bool) for f in frames)
+              and 1 <= frames[0] <= frames[1] <= MAX_FRAME)
         if not ok:
             raise InputError(path, "static_frames", f"got {shown(frames)} (expected [first, last] frame numbers, "
-                                                    "1-based, or auto)")
+                                                    f"1-based and at most {MAX_FRAME:,}, or auto)")
         frames = (int(frames[0]), int(frames[1]))
     marker_map = data.get("marker_map") or {}
     if not isinstance(marker_map, dict) or not all(isinstance(k, str) and isinstance(v, str)
@@ -290,12 +293,22 @@ def _named_file(folder: Path, name, key: str) -> Path | None:
     subject = folder / "subject.yaml"
     if not isinstance(name, str):
         raise InputError(subject, key, f"got {shown(name)} (expected a file name inside the trial folder)")
+    if "\0" in name:
+        raise InputError(subject, key, f"got {shown(name)} (expected a file name without NUL characters)")
     path = folder / name
-    inside = folder.resolve()
-    if Path(name).is_absolute() or not path.resolve().is_relative_to(inside):
-        raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
-                                       "(expected a file inside it)")
-    if not path.is_file():
+    try:
+        inside = folder.resolve()
+        if Path(name).is_absolute() or not path.resolve().is_relative_to(inside):
+            raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
+                                           "(expected a file inside it)")
+        found = path.is_file()
+    except OSError as exc:  # a name longer than the system allows (ENAMETOOLONG)
+        raise InputError(subject, key, f"names {shown(name)}, which cannot be a file here ({exc.strerror}; "
+                                       "expected a file inside the trial folder)") from None
+    except RuntimeError:  # Path.resolve on a loop of symbolic links (Python < 3.13)
+        raise InputError(subject, key, f"names {shown(name)}, a loop of symbolic links (expected a file inside "
+                                       "the trial folder)") from None
+    if not found:
         raise InputError(subject, key, f"names {shown(name)}, which is not in {folder}")
     return path
 
@@ -362,7 +375,10 @@ def open_trial(folder: str | Path) -> TrialFolder:
 def sha256(path: str | Path) -> str:
     """SHA-256 of a file's bytes (provenance in HDF5 attributes)."""
     digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+    except OSError as exc:  # the first read of every input file: permission denied, an I/O error
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
     return digest.hexdigest()

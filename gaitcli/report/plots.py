@@ -9,7 +9,6 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
@@ -21,7 +20,7 @@ import numpy as np  # noqa: E402
 from gaitcli.core.container import Trial  # noqa: E402
 from gaitcli.core.events import SIDE_NAMES  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
-from gaitcli.io.h5 import read_record, read_records  # noqa: E402
+from gaitcli.io.h5 import open_h5, read_record, read_records  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
 
@@ -52,7 +51,7 @@ def mark_events(ax, events, *, sides=("r", "l")) -> None:
 
 def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     """``markers.png`` (raw vs filtered, a few foot and pelvis landmarks) and ``grf.png`` (per foot, events)."""
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait filter") as h5:
         trial = read_record(h5["trial"], Trial)
         raw = h5["markers/raw"][()]
         cutoff_hz = float(h5["trial/markers/positions_m"].attrs["cutoff_hz"])
@@ -139,7 +138,7 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
     from gaitcli.report.bands import draw_band
     from gaitcli.signal.cycles import Stride, normalise
 
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait idyn") as h5:
         strides = read_records(h5["strides"], Stride)
         kin_set = h5["angles"] if "angles" in h5 else h5["coordinates_clinical"]  # older files: coordinates
         kin, angle_columns = kin_set[()], str(kin_set.attrs["columns"]).split(",")
@@ -214,7 +213,7 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "", band="default"
     from gaitcli.report.bands import default_band
 
     band = default_band() if band == "default" else band
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait idyn") as h5:
         export = read_record(h5["sagittal"], SagittalExport)
         residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]
         time_s = h5["time"][()]
@@ -250,7 +249,7 @@ def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
     offs of the analysed side marked), and ``metabolic_cost.png``: the metabolic energy of each muscle."""
     from gaitcli.muscles.stage import MuscleResult
 
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait muscles") as h5:
         result = read_record(h5["result"], MuscleResult)
     folder = Path(folder)
     written = []
