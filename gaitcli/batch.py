@@ -32,6 +32,7 @@ from gaitcli.core.registry import stage_names
 from gaitcli.cluster import dask_client
 from gaitcli.errors import GaitError, InputError
 from gaitcli.io.atomic import atomic_path, remove_stale
+from gaitcli.io.outputs import plain_text, spreadsheet_text
 from gaitcli.pipeline import needed_stages
 
 BATCH_SUMMARY = "batch_summary.csv"
@@ -122,9 +123,12 @@ def input_key(folder: Path, cfg: PipelineConfig) -> str:
     digest = hashlib.sha256(to_yaml(cfg).encode())
     for path in sorted(p for p in folder.iterdir() if p.is_file()):
         digest.update(path.name.encode())
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                digest.update(block)
+        try:
+            with open(path, "rb") as f:
+                for block in iter(lambda: f.read(1 << 20), b""):
+                    digest.update(block)
+        except OSError as exc:  # an unreadable file: the trial's run says so in its own row (exit 2)
+            digest.update(f"unreadable: {exc.errno}".encode())
     return digest.hexdigest()
 
 
@@ -206,10 +210,10 @@ def read_summary(path: Path) -> dict[str, list[BatchRow]]:
     try:
         with open(path, newline="") as f:
             for r in csv.DictReader(f):
-                row = BatchRow(r["trial"], r["stage"], r["status"], int(r["exit_code"] or 0), r["reason"],
-                               float(r["wall_time_s"] or 0), r["input_key"])
+                row = BatchRow(plain_text(r["trial"]), r["stage"], r["status"], int(r["exit_code"] or 0),
+                               plain_text(r["reason"]), float(r["wall_time_s"] or 0), r["input_key"])
                 rows.setdefault(row.trial, []).append(row)
-    except (KeyError, ValueError, csv.Error):
+    except (KeyError, ValueError, csv.Error, OSError):  # UnicodeDecodeError is a ValueError
         return {}
     return rows
 
@@ -223,7 +227,8 @@ def write_summary(path: Path, rows: Sequence[BatchRow]) -> Path:
     writer.writeheader()
     for r in sorted(rows, key=lambda r: (r.trial, stage_names().index(r.stage) if r.stage in stage_names() else 99)):
         data = {k: v for k, v in asdict(r).items() if k != "figures"}
-        writer.writerow({**data, **r.figures})
+        row = {**data, **r.figures}
+        writer.writerow({k: spreadsheet_text(v) if isinstance(v, str) else v for k, v in row.items()})
     with atomic_path(path) as tmp:
         tmp.write_text(buffer.getvalue())
     return path

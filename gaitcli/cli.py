@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import sys
 import traceback
 import warnings
@@ -103,6 +104,18 @@ def gait(ctx, quiet, as_json):
     ctx.obj = Console(quiet=quiet, as_json=as_json)
 
 
+class FiniteFloat(click.FloatRange):
+    """click's FloatRange that refuses NaN and ±inf (which every range comparison lets through)."""
+
+    name = "finite float"
+
+    def convert(self, value, param, ctx):
+        number = click.FLOAT.convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"got {value!r} (expected a finite number)", param, ctx)
+        return super().convert(number, param, ctx)
+
+
 class Choice(click.Choice):
     """click's Choice with the validators' message: "got …, expected one of …; did you mean …?"."""
 
@@ -138,7 +151,7 @@ def _config_option(config, name: str, *flags: str, flag: bool = False):
     elif isinstance(f.default, int):
         kind = click.IntRange(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
     else:
-        kind = click.FloatRange(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
+        kind = FiniteFloat(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
     return click.option(*flags, name, type=kind, default=None, help=spec["help"])
 
 
@@ -155,6 +168,8 @@ def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, 
 
 @gait.command("idyn")
 @_trial_options
+@_config_option(IdynConfig, "angles", "--angles")
+@_config_option(IdynConfig, "moments", "--moments")
 @_config_option(IdynConfig, "frames", "--frames")
 @_config_option(IdynConfig, "pose", "--pose")
 @_config_option(FilterConfig, "events", "--events")
@@ -162,9 +177,11 @@ def filter_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, 
               help="Also write the results for OpenSim (.trc, .mot, .sto, ExternalLoads) or as a C3D copy of the "
                    "trial with angles and moments, into OUT/export/ (repeatable).")
 @click.pass_obj
-def idyn_command(console: Console, trial, out, pipeline, no_plots, frames, pose, events, exports):
-    """Segment poses, 27 coordinates, 21 joint moments and the pelvis residuals."""
-    cfg = configure(pipeline, idyn={"frames": frames, "pose": pose}, filter={"events": events})
+def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, moments, frames, pose, events, exports):
+    """Anatomical joint angles, moments and powers; segment poses, 27 coordinates, 21 joint moments and the pelvis
+    residuals."""
+    cfg = configure(pipeline, idyn={"angles": angles, "moments": moments, "frames": frames, "pose": pose},
+                    filter={"events": events})
     console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
     if exports:
         from gaitcli.pipeline import TrialRun
@@ -284,21 +301,21 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
 @click.option("--condition", type=Choice(tuple(CONDITIONS)), default="normal", show_default=True,
               help="Experiment of 3.1.1 (added masses, locked joints).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the marker noise and artefact.")
-@click.option("--noise-mm", type=click.FloatRange(min=0), default=DEFAULT_NOISE_MM, show_default=True,
+@click.option("--noise-mm", type=FiniteFloat(min=0), default=DEFAULT_NOISE_MM, show_default=True,
               help="White marker noise: RMS of the 3-D position error, mm (each axis gets noise/√3).")
-@click.option("--artefact-mm", type=click.FloatRange(min=0), default=10.0, show_default=True,
+@click.option("--artefact-mm", type=FiniteFloat(min=0), default=10.0, show_default=True,
               help="Low-frequency skin artefact: peak 3-D displacement of a marker, mm.")
-@click.option("--plate-noise-n", "plate_noise_N", type=click.FloatRange(min=0), default=1.0, show_default=True,
+@click.option("--plate-noise-n", "plate_noise_N", type=FiniteFloat(min=0), default=1.0, show_default=True,
               help="White noise on the force-plate channels, N (N·mm/20 on moments).")
 @click.option("--strides", type=click.IntRange(min=1, max=1000), default=3, show_default=True,
               help="Gait cycles in the trial.")
-@click.option("--mass-kg", type=click.FloatRange(min=0, max=500, min_open=True), default=75.0, show_default=True,
+@click.option("--mass-kg", type=FiniteFloat(min=0, max=500, min_open=True), default=75.0, show_default=True,
               help="Body mass of the subject, kg.")
-@click.option("--stature-m", type=click.FloatRange(min=0.5, max=2.5, min_open=True, max_open=True), default=1.78,
+@click.option("--stature-m", type=FiniteFloat(min=0.5, max=2.5, min_open=True, max_open=True), default=1.78,
               show_default=True, help="Stature of the subject, m.")
 @click.option("--sex", type=Choice(SEXES), default="male", show_default=True,
               help="Selects de Leva's segment tables.")
-@click.option("--period-s", type=click.FloatRange(min=0.5, max=3.0), default=None,
+@click.option("--period-s", type=FiniteFloat(min=0.5, max=3.0), default=None,
               help="Gait cycle, s (default: the gait's: the prediction's scaled by √stature, or the condition's "
                    "for the normative curves).")
 @click.option("--marker-set", type=Choice(tuple(SYNTH_MARKER_SETS)), default="dissertation", show_default=True,

@@ -14,9 +14,9 @@ a finding. HDF5 files (binary; their numbers are in the CSVs), figures and hidde
 times, versions, dates, hashes), which differ between two runs of the same inputs.
 
 Values. Numbers are compared within the tolerance of their unit family (below); NaN (``null`` in
-``summary.json``) equals NaN, and NaN on one side only is a difference. Text (events, sides, notes, booleans) must
-be equal. A table whose row count differs, a column or key on one side only, a list of another length or a value
-of another type is a finding.
+``summary.json``) equals NaN, and NaN on one side only is a difference; an infinity equals only the same
+infinity. Text (events, sides, notes, booleans) must be equal. A table whose row count differs, a column or key
+on one side only, a list of another length or a value of another type is a finding.
 
 Unit families. A column's or key's family comes from its name, whose suffix carries the unit (:data:`UNIT_RULES`,
 first match wins; a reference table's ``_mean``/``_sd`` suffix is dropped first, and a summary key without a unit
@@ -430,6 +430,8 @@ def _csv_chunks(path: Path) -> Iterable[pd.DataFrame]:
             yield pd.DataFrame(columns=columns)
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
         raise InputError(path, None, f"not a readable CSV table ({str(exc).splitlines()[0][:80]})") from None
+    except OSError as exc:  # unreadable (permission denied), a folder by that name
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
 
 
 def _numeric(cells: pd.Series) -> np.ndarray | None:
@@ -530,7 +532,8 @@ def _number_findings(rel: str, column: str, a: np.ndarray, b: np.ndarray, rule: 
             allowed = np.maximum(rule.tolerance * np.maximum(np.abs(a), np.abs(b)), RELATIVE_FLOOR)
         else:
             allowed = np.full(a.shape, rule.tolerance)
-    beyond = both & (diff > allowed * (1 + 1e-9))
+    # an infinity differs from any other value: a tolerance relative to it would be infinite too
+    beyond = both & ((diff > allowed * (1 + 1e-9)) | ~(np.isfinite(a) & np.isfinite(b)))
     if beyond.any():
         k = int(np.flatnonzero(beyond)[np.argmax(diff[beyond])])
         count = f" ({int(beyond.sum())} of {a.size} rows beyond tolerance)" if table is not None else ""
@@ -542,11 +545,43 @@ def _number_findings(rel: str, column: str, a: np.ndarray, b: np.ndarray, rule: 
 
 # -- summary.json ---------------------------------------------------------------------------------------------
 
+#: the deepest nesting and the longest integer a summary.json may hold (gaitcli's own are 3 deep, 20 digits)
+MAX_JSON_DEPTH = 50
+MAX_JSON_DIGITS = 300
+
+
 def _read_json(path: Path):
+    def parse_int(digits: str) -> int:
+        if len(digits.lstrip("-")) > MAX_JSON_DIGITS:
+            raise InputError(path, None, f"a {len(digits.lstrip('-'))}-digit integer (expected at most "
+                                         f"{MAX_JSON_DIGITS} digits)")
+        return int(digits)
+
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
         raise InputError(path, None, f"not valid JSON ({exc.__class__.__name__})") from None
+    except OSError as exc:
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
+    if _depth(text) > MAX_JSON_DEPTH:  # before parsing: json and _walk recurse once per level
+        raise InputError(path, None, f"nested more than {MAX_JSON_DEPTH} levels deep (expected a summary)")
+    try:
+        return json.loads(text, parse_int=parse_int)
+    except json.JSONDecodeError as exc:
+        raise InputError(path, None, f"not valid JSON ({exc.__class__.__name__})") from None
+
+
+def _depth(text: str) -> int:
+    """The deepest nesting of brackets and braces outside strings in JSON ``text``."""
+    depth = deepest = 0
+    for match in re.finditer(r'"(?:[^"\\]|\\.)*"|[\[{]|[\]}]', text):
+        token = match.group()
+        if token in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif token in "]}":
+            depth -= 1
+    return deepest
 
 
 def _compare_json(path_a: Path, path_b: Path, rel: str, tol: Tolerances) -> list[Finding]:

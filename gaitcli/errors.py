@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 
@@ -13,8 +14,21 @@ def shown(value) -> str:
     """``repr(value)`` for an error message, cut to ``SHOWN_CHARACTERS`` (an input is never echoed whole)."""
     if type(value).__module__ == "numpy" and hasattr(value, "item") and getattr(value, "ndim", 1) == 0:
         value = value.item()  # 'abc', not np.str_('abc')
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10 ** SHOWN_CHARACTERS:
+        digits = len(str(abs(value))) if value.bit_length() < 14_000 else math.floor(math.log10(abs(value))) + 1
+        return f"a {digits}-digit integer"  # str() refuses more than 4300 digits
     text = repr(value)
     return text if len(text) <= SHOWN_CHARACTERS else text[:SHOWN_CHARACTERS - 1] + "…"
+
+
+#: the longest path an error message repeats whole (PATH_MAX is 4096)
+SHOWN_PATH = 200
+
+
+def _shown_path(path: Path) -> str:
+    """``path`` for a message: its start and its end around "…" when longer than ``SHOWN_PATH``."""
+    text = str(path)
+    return text if len(text) <= SHOWN_PATH else text[:SHOWN_PATH // 2 - 1] + "…" + text[-SHOWN_PATH // 2:]
 
 
 class GaitError(Exception):
@@ -38,7 +52,7 @@ class InputError(GaitError):
             field = field[:SHOWN_CHARACTERS - 1] + "…"
         self.field = field
         self.problem = problem
-        parts = [str(p) for p in (self.path, field) if p]
+        parts = [_shown_path(p) if p is self.path else p for p in (self.path, field) if p]
         super().__init__(": ".join(parts + [problem]))
 
 

@@ -25,6 +25,7 @@ from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
 from gaitcli.errors import GaitWarning, InputError
+from gaitcli.io.atomic import check_output_folder, check_replaceable
 from gaitcli.io.h5 import provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
@@ -176,6 +177,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     written); an unconverged optimization is written and reported in its outcome.
     """
     run = TrialRun(trial, out, cfg)
+    check_output_folder(run.out_root)
     names = tuple(names)
     needed = needed_stages(names)
     handoffs, sources, outcomes, computed = {}, {}, [], []
@@ -206,6 +208,8 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
         handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path
         computed.append((name, result, time.perf_counter() - started))
 
+    for name, _, _ in computed:  # before the first write: a user's file in any folder to replace stops them all
+        check_replaceable(run.output_folder(name))
     for name, result, elapsed in computed:
         st = stage(name)
         target = run.output_folder(name)
@@ -264,7 +268,7 @@ def _read_init(path: Path):
             return np.asarray(checked(h5["result/design"])[()], float)
     except FileNotFoundError:
         raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)") from None
-    except (OSError, KeyError):
+    except (OSError, KeyError, ValueError, TypeError, RuntimeError):  # not HDF5, no design, text, a link loop
         raise InputError(path, "--init", "not a predict.h5 (expected result/design, the solution of an earlier "
                                          "gait predict)") from None
 
@@ -347,6 +351,7 @@ def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = No
                                                   subject_path=subject_path, progress=progress, pipeline=pipeline)
     inputs[str(study_path)] = sha256(study_path)
     root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
+    check_output_folder(root)
     attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs)
     return run_study(spec, root, params=params, reference=reference, subject=repr(params), attrs=attrs,
                      workers=workers, force=force, scheduler=scheduler, progress=progress)
@@ -383,6 +388,8 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     params, reference, inputs, folder = predict_inputs(trial, out=out, reference_path=reference_path,
                                                        subject_path=subject_path, progress=progress,
                                                        pipeline=pipeline)
+    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
+    check_output_folder(root)  # before the solve, which may take minutes
     for p in (init_path, None if cfg.prosthesis in PROSTHESIS_CHOICES else Path(cfg.prosthesis)):
         if p is not None:
             inputs[str(p)] = sha256(p)
@@ -403,7 +410,6 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
         result = predict_optimal(cfg, params=params, reference=reference, init=init, report=iteration)
     else:
         result = run_predict(cfg, params=params, reference=reference, init=init, report=iteration, device=device)
-    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
     target = root / "predict"
     attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs, result.history)
     attrs["predict_config"] = json.dumps(dataclasses.asdict(cfg))

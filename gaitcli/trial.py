@@ -29,6 +29,8 @@ from gaitcli.kinematics.disturbances import Disturbance
 from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
 
 SEXES = ("male", "female")
+#: the largest frame number a subject file may name (a C3D counts frames in 32 bits)
+MAX_FRAME = 2**31 - 1
 SEGMENTS = ("pelvis", "hat", "thigh_r", "shank_r", "foot_r", "thigh_l", "shank_l", "foot_l")
 
 
@@ -135,10 +137,11 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     frames = data.get("static_frames")
     if frames is not None and frames != "auto":
         ok = (isinstance(frames, (list, tuple)) and len(frames) == 2
-              and all(isinstance(f, int) and not isinstance(f, bool) for f in frames) and 1 <= frames[0] <= frames[1])
+              and all(isinstance(f, int) and not isinstance(f, bool) for f in frames)
+              and 1 <= frames[0] <= frames[1] <= MAX_FRAME)
         if not ok:
             raise InputError(path, "static_frames", f"got {shown(frames)} (expected [first, last] frame numbers, "
-                                                    "1-based, or auto)")
+                                                    f"1-based and at most {MAX_FRAME:,}, or auto)")
         frames = (int(frames[0]), int(frames[1]))
     marker_map = data.get("marker_map") or {}
     if not isinstance(marker_map, dict) or not all(isinstance(k, str) and isinstance(v, str)
@@ -290,13 +293,32 @@ def _named_file(folder: Path, name, key: str) -> Path | None:
     subject = folder / "subject.yaml"
     if not isinstance(name, str):
         raise InputError(subject, key, f"got {shown(name)} (expected a file name inside the trial folder)")
+    if "\0" in name:
+        raise InputError(subject, key, f"got {shown(name)} (expected a file name without NUL characters)")
     path = folder / name
-    inside = folder.resolve()
-    if Path(name).is_absolute() or not path.resolve().is_relative_to(inside):
-        raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
-                                       "(expected a file inside it)")
-    if not path.is_file():
+    try:
+        inside = folder.resolve()
+        if Path(name).is_absolute() or not path.resolve().is_relative_to(inside):
+            raise InputError(subject, key, f"names {shown(name)}, which is outside the trial folder {folder} "
+                                           "(expected a file inside it)")
+        found = path.is_file()
+    except OSError as exc:  # a name longer than the system allows (ENAMETOOLONG)
+        raise InputError(subject, key, f"names {shown(name)}, which cannot be a file here ({exc.strerror}; "
+                                       "expected a file inside the trial folder)") from None
+    except RuntimeError:  # Path.resolve on a loop of symbolic links (Python < 3.13)
+        raise InputError(subject, key, f"names {shown(name)}, a loop of symbolic links (expected a file inside "
+                                       "the trial folder)") from None
+    if not found:
         raise InputError(subject, key, f"names {shown(name)}, which is not in {folder}")
+    return path
+
+
+def _found_file(folder: Path, path: Path | None) -> Path | None:
+    """``path``, a file found in ``folder`` by its usual name, when it resolves (symlinks followed) inside the
+    folder, as a file that ``subject.yaml`` names must."""
+    if path is not None and not path.resolve().is_relative_to(folder.resolve()):
+        raise InputError(path, None, f"links to {shown(str(path.resolve()))}, which is outside the trial folder "
+                                     f"{folder} (expected a file inside it: copy the file in)")
     return path
 
 
@@ -313,7 +335,7 @@ def _only_vsk(folder: Path, has_yaml: bool) -> Path | None:
         names = ", ".join(shown(p.name) for p in found[:4]) + (", …" if len(found) > 4 else "")
         how = "`vsk:` in subject.yaml naming one" if has_yaml else "a subject.yaml naming one under `vsk:`"
         raise InputError(folder, "vsk", f"{len(found)} Vicon subject files: {names} (expected one, or {how})")
-    return found[0] if found else None
+    return _found_file(folder, found[0]) if found else None
 
 
 def open_trial(folder: str | Path) -> TrialFolder:
@@ -336,16 +358,16 @@ def open_trial(folder: str | Path) -> TrialFolder:
     forces = None
     trial = _named_file(folder, subject.trial, "trial")
     if trial is None and (folder / "trial.c3d").is_file():
-        trial = folder / "trial.c3d"
+        trial = _found_file(folder, folder / "trial.c3d")
     elif trial is None and (folder / "markers.csv").is_file():
-        trial = folder / "markers.csv"
-        forces = folder / "forces.csv" if (folder / "forces.csv").is_file() else None
+        trial = _found_file(folder, folder / "markers.csv")
+        forces = _found_file(folder, folder / "forces.csv" if (folder / "forces.csv").is_file() else None)
     elif trial is None:
         raise InputError(folder / "trial.c3d", None, "file not found (expected trial.c3d, markers.csv, "
                                                      "or `trial:` in subject.yaml)")
     static = _named_file(folder, subject.static, "static")
     if static is None and (folder / "static.c3d").is_file():
-        static = folder / "static.c3d"
+        static = _found_file(folder, folder / "static.c3d")
     return TrialFolder(folder=folder, subject_path=subject_path, subject=subject,
                        trial_path=trial, forces_path=forces, static_path=static, vsk_path=vsk_path)
 
@@ -353,7 +375,10 @@ def open_trial(folder: str | Path) -> TrialFolder:
 def sha256(path: str | Path) -> str:
     """SHA-256 of a file's bytes (provenance in HDF5 attributes)."""
     digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+    except OSError as exc:  # the first read of every input file: permission denied, an I/O error
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
     return digest.hexdigest()

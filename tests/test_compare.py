@@ -257,3 +257,17 @@ def test_empty_cells_are_nan_and_a_number_against_text_differs(tmp_path):
     other = write_tree(tmp_path / "c", moments="time_s,plate1_foot,grf_z_N\n0,,1.0\n0.01,r,heavy\n")
     (f,) = compare_trees(a, other).findings
     assert (f.column, f.problem, f.where) == ("grf_z_N", "text", "time_s=0.01 (line 3)")
+
+
+def test_an_infinity_equals_only_the_same_infinity(tmp_path):
+    """A unit-less value's tolerance is relative to its size, so an infinity would allow anything; the
+    summary's NaN and Infinity tokens (json.dumps writes them) are numbers like the CSV's."""
+    a = write_tree(tmp_path / "a", moments="time_s,ratio,grf_z_N\n0,inf,inf\n0.01,2.5,-inf\n",
+                   summary={"objective": math.inf, "ratio": math.inf, "same": -math.inf, "missing": math.nan})
+    b = write_tree(tmp_path / "b", moments="time_s,ratio,grf_z_N\n0,2.5,inf\n0.01,2.5,inf\n",
+                   summary={"objective": 2.5, "ratio": -math.inf, "same": -math.inf, "missing": math.nan})
+    found = {(f.file, f.column): (f.problem, f.detail) for f in compare_trees(a, b).findings}
+    assert found == {("joint_moments.csv", "ratio"): ("value", "inf in A, 2.5 in B (1 of 2 rows beyond tolerance)"),
+                     ("joint_moments.csv", "grf_z_N"): ("value", "-inf in A, inf in B (1 of 2 rows beyond tolerance)"),
+                     ("summary.json", "objective"): ("value", "inf in A, 2.5 in B"),
+                     ("summary.json", "ratio"): ("value", "inf in A, -inf in B")}

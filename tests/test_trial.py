@@ -316,6 +316,26 @@ def test_named_files_inside_the_folder_by_subfolder_or_symlink(tmp_path):
     assert t.trial_path == folder / "raw" / "walk.c3d" and t.static_path == folder / "stand.c3d"
 
 
+@pytest.mark.parametrize("name", ["trial.c3d", "static.c3d", "markers.csv", "Test.vsk"])
+def test_files_found_by_name_that_link_out_of_the_folder_are_refused(tmp_path, name):
+    """The rule of `trial:` for the files found by their usual names: a link out of the folder is not read."""
+    outside = tmp_path / "secret"
+    outside.write_bytes(b"top secret")
+    folder = _folder(tmp_path, *(() if name in ("trial.c3d", "markers.csv") else ("trial.c3d",)))
+    (folder / name).symlink_to(outside)
+    with pytest.raises(InputError, match="outside the trial folder") as info:
+        open_trial(folder)
+    assert info.value.path == folder / name and "top secret" not in str(info.value)
+
+
+def test_files_found_by_name_may_link_inside_the_folder(tmp_path):
+    folder = _folder(tmp_path, "raw.c3d", "stand.c3d")
+    (folder / "trial.c3d").symlink_to("raw.c3d")
+    (folder / "static.c3d").symlink_to(folder / "stand.c3d")
+    t = open_trial(folder)
+    assert (t.trial_path, t.static_path) == (folder / "trial.c3d", folder / "static.c3d")
+
+
 def test_open_trial_missing_files(tmp_path):
     with pytest.raises(InputError, match="trial folder not found"):
         open_trial(tmp_path / "nowhere")
@@ -500,12 +520,13 @@ def test_vsk_is_a_subject_yaml_key():
 
 @pytest.mark.shared
 def test_the_real_session_without_subject_yaml(shared_pig_dir, tmp_path):
-    """Test.vsk beside the session's C3D files (linked, not copied): the README's measurements."""
+    """Test.vsk beside the session's C3D files (copies: links out of the folder are refused): the README's
+    measurements."""
     folder = tmp_path / "session"
     folder.mkdir()
-    (folder / "trial.c3d").symlink_to(shared_pig_dir / "Movement_trial.c3d")
-    (folder / "static.c3d").symlink_to(shared_pig_dir / "Static_trial.c3d")
-    (folder / "Test.vsk").symlink_to(shared_pig_dir / "Test.vsk")
+    shutil.copy(shared_pig_dir / "Movement_trial.c3d", folder / "trial.c3d")
+    shutil.copy(shared_pig_dir / "Static_trial.c3d", folder / "static.c3d")
+    shutil.copy(shared_pig_dir / "Test.vsk", folder / "Test.vsk")
     s = open_trial(folder).subject
     assert (s.mass_kg, s.stature_m, s.marker_set, s.hip_joint_centre) == (85.0, 1.679, "plug_in_gait", "davis")
     m = s.measurements

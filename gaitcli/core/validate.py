@@ -72,7 +72,10 @@ def number(value: Any, *, where: str | None, path: Where = None, low: float | No
     expected = expected or default
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise InputError(path, where, f"got {shown(value)} (expected {expected})")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise InputError(path, where, f"got {shown(value)} (expected {expected})") from None
     too_low = low is not None and (value <= low if low_open else value < low)
     if not math.isfinite(value) or too_low or (high is not None and value > high):
         raise InputError(path, where, f"got {value:g} (expected {expected})")

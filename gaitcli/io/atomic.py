@@ -7,6 +7,7 @@ writing process's id (``.<target>.<pid>.<random>.part``), so that the next run c
 
 from __future__ import annotations
 
+import errno
 import os
 import re
 import shutil
@@ -55,17 +56,66 @@ def usual_permissions(path: Path, *, folder: bool) -> None:
     os.chmod(path, (0o777 if folder else 0o666) & ~umask)
 
 
+#: errors of writing an output that are the machine's or the user's, not gaitcli's: a full disk or quota, a
+#: read-only file system, a file too large (exit 2 naming the output; the earlier results stay in place)
+WRITE_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG, errno.ENAMETOOLONG, errno.EACCES, errno.EPERM)
+
+
 def make_parent(target: Path) -> None:
     """Create ``target``'s folder; a file in the way or a folder that cannot be written is an InputError."""
+    _check_length(target)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        blocking = next((p for p in reversed(target.parents) if p.is_file()), target.parent)
+    except (FileExistsError, NotADirectoryError):  # a file (or /dev/null) where a folder should be
+        blocking = next((p for p in reversed(target.parents) if p.exists() and not p.is_dir()), target.parent)
         raise InputError(blocking, None, "is a file (expected an output folder)") from None
     except PermissionError:
         raise InputError(target.parent, None, "cannot be created (permission denied)") from None
+    except OSError as exc:  # a name too long, a path under /proc, a read-only file system
+        raise InputError(target.parent, None, f"cannot be created ({exc.strerror}; expected an output folder)") \
+            from None
     if not os.access(target.parent, os.W_OK | os.X_OK):
         raise InputError(target.parent, None, "is not writable (expected an output folder you can write)")
+
+
+def _check_length(target: Path) -> None:
+    """Refuse a path the system would refuse only after creating its first folders (PATH_MAX, NAME_MAX)."""
+    try:
+        path_max, name_max = os.pathconf("/", "PC_PATH_MAX"), os.pathconf("/", "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):  # no pathconf (Windows)
+        return
+    long_name = next((part for part in target.parts if len(os.fsencode(part)) > name_max), None)
+    if long_name is not None:
+        named = target if long_name == target.name else target.parent
+        raise InputError(named, None, f"a name of {len(os.fsencode(long_name))} bytes is too long "
+                                      f"(expected at most {name_max})")
+    length = len(os.fsencode(os.path.abspath(target))) + 40  # the temporary name's suffix
+    if length >= path_max:
+        raise InputError(target.parent, None, f"the path is too long ({length} bytes with the file name; "
+                                              f"expected less than {path_max})")
+
+
+def check_output_folder(folder: str | Path) -> None:
+    """Before any work, without creating anything: ``folder`` can be created and written, as far as can be
+    told (the first folder of it that exists is a folder, writable; no name or path too long)."""
+    folder = Path(os.path.abspath(folder))
+    _check_length(folder / "summary.json")
+    existing = next(p for p in (folder, *folder.parents) if os.path.lexists(p))
+    if not existing.is_dir():
+        raise InputError(existing, None, "is a file (expected an output folder)")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise InputError(existing, None, "is not writable (expected an output folder you can write)")
+
+
+@contextmanager
+def write_errors(target: Path):
+    """Make an OSError of writing ``target`` (:data:`WRITE_ERRNOS`) an InputError naming it."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.errno not in WRITE_ERRNOS:
+            raise
+        raise InputError(target, None, f"cannot be written ({exc.strerror}); nothing was replaced") from None
 
 
 @contextmanager
@@ -77,39 +127,66 @@ def atomic_path(target: str | Path):
     target = Path(target)
     make_parent(target)
     remove_stale(target)
-    fd, tmp = tempfile.mkstemp(prefix=_prefix(target), suffix=".part", dir=target.parent)
+    with write_errors(target):
+        fd, tmp = tempfile.mkstemp(prefix=_prefix(target), suffix=".part", dir=target.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:
-        yield tmp
-        usual_permissions(tmp, folder=False)
-        os.replace(tmp, target)
+        with write_errors(target):
+            yield tmp
+            usual_permissions(tmp, folder=False)
+            os.replace(tmp, target)
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+#: what gait writes into a folder it replaces whole: tables, HDF5 records, summaries and figures
+TOOL_SUFFIXES = (".csv", ".h5", ".json", ".png", ".gif")
+
+
+def check_replaceable(target: str | Path) -> None:
+    """Raise :class:`InputError` naming the first file below the folder ``target`` that gait does not write
+    (another suffix than :data:`TOOL_SUFFIXES`, or a link): replacing the folder whole would delete it."""
+    target = Path(target)
+    if not target.is_dir() or target.is_symlink():
+        return
+    for top, folders, files in os.walk(target):
+        folders.sort()
+        for name in sorted(files) + [f for f in folders if Path(top, f).is_symlink()]:
+            path = Path(top, name)
+            leftover = name.startswith(".") and name.endswith(".part")
+            if path.is_symlink() or not (leftover or path.suffix.lower() in TOOL_SUFFIXES):
+                raise InputError(path, None, "is not an output of gait, and the run would replace its folder "
+                                             "(expected only gait's outputs there: move the file, or choose "
+                                             "another -o)")
 
 
 @contextmanager
 def atomic_folder(target: str | Path):
     """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole.
 
-    A file (not a folder) at ``target`` is the user's: an InputError, and nothing is moved. Leftovers of
-    killed runs are removed first (:func:`remove_stale`).
+    A file (not a folder) at ``target``, or a file in it that gait does not write (:func:`check_replaceable`),
+    is the user's: an InputError, and nothing is moved. Leftovers of killed runs are removed first
+    (:func:`remove_stale`).
     """
     target = Path(target)
     make_parent(target)
     if target.exists() and not target.is_dir():
         raise InputError(target, None, "is a file (expected the output folder; move or rename the file)")
+    check_replaceable(target)
     remove_stale(target)
-    tmp = Path(tempfile.mkdtemp(prefix=_prefix(target), suffix=".part", dir=target.parent))
+    with write_errors(target):
+        tmp = Path(tempfile.mkdtemp(prefix=_prefix(target), suffix=".part", dir=target.parent))
     try:
-        yield tmp
-        usual_permissions(tmp, folder=True)
-        old = None
-        if target.exists():
-            old = target.with_name(f".{target.name}.old-{tmp.name}")
-            target.rename(old)
-        tmp.rename(target)
+        with write_errors(target):
+            yield tmp
+            usual_permissions(tmp, folder=True)
+            old = None
+            if target.exists():
+                old = target.with_name(f".{target.name}.old-{tmp.name}")
+                target.rename(old)
+            tmp.rename(target)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
     finally:

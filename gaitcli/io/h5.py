@@ -20,6 +20,7 @@ import dataclasses
 import json
 import types
 import typing
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
@@ -29,7 +30,7 @@ import h5py
 import numpy as np
 
 from gaitcli import __version__
-from gaitcli.errors import InputError
+from gaitcli.errors import SHOWN_CHARACTERS, InputError
 from gaitcli.io.atomic import atomic_path
 
 #: field-name suffix → unit (longest match first); fields without one are dimensionless ("1")
@@ -216,6 +217,30 @@ def read_record(group: h5py.Group, cls):
 def read_records(group: h5py.Group, cls) -> list:
     """The list of ``cls`` records :func:`record_datasets` wrote for a list under ``group``."""
     return _read_value(group, list[cls])
+
+
+@contextmanager
+def open_h5(path: str | Path, what: str = "gaitcli"):
+    """``h5py.File(path, "r")`` for reading an output back: a damaged file, or one that lacks what the block
+    reads (KeyError) or holds it in another shape or type, is an InputError naming it (``what``: whose file
+    was expected, e.g. ``"gait idyn"``)."""
+    try:
+        h5 = h5py.File(path, "r")
+    except FileNotFoundError:
+        raise InputError(path, None, f"file not found (expected the HDF5 file of {what})") from None
+    except OSError as exc:  # not HDF5, truncated, unreadable
+        raise InputError(path, None, f"not a readable HDF5 file ({_first_line(exc)}; expected {what}'s)") from None
+    try:
+        with h5:
+            yield h5
+    except (KeyError, ValueError, TypeError, IndexError, OSError, RuntimeError) as exc:  # RuntimeError: link loops
+        raise InputError(path, None, f"not an HDF5 file of {what} ({type(exc).__name__}: {_first_line(exc)})") \
+            from None
+
+
+def _first_line(exc: BaseException) -> str:
+    lines = str(exc).strip().splitlines() or [""]
+    return lines[0][:SHOWN_CHARACTERS]
 
 
 def read_result(path: str | Path, cls, prefix: str = "result"):

@@ -31,6 +31,21 @@ def write_table(path: str | Path, columns: dict[str, np.ndarray], *, float_forma
     return Path(path)
 
 
+#: a cell's first characters that make a spreadsheet read it as a formula (OWASP's list for CSV injection)
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_text(text: str) -> str:
+    """``text`` as a CSV cell a spreadsheet shows as text, not a formula: a ``'`` before a formula's first
+    character, as spreadsheets themselves do (and before a leading ``'``, so :func:`plain_text` undoes it exactly)."""
+    return "'" + text if text.startswith((*FORMULA_START, "'")) else text
+
+
+def plain_text(cell: str) -> str:
+    """The text :func:`spreadsheet_text` made ``cell`` of."""
+    return cell[1:] if cell.startswith("'") else cell
+
+
 def _jsonable(value):
     if isinstance(value, dict):
         return {str(k): _jsonable(v) for k, v in value.items()}

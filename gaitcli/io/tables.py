@@ -44,6 +44,7 @@ import numpy as np
 from gaitcli.errors import GaitWarning, InputError, shown
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.axes import LOAD_THRESHOLD_N, apply_rotation, infer_lab_to_model
+from gaitcli.io.c3d.markers import LAB_REACH_M
 from gaitcli.core.recording import ForcePlate, Markers, Recording
 
 __all__ = [
@@ -162,7 +163,12 @@ def read_markers_csv(path) -> Markers:
     rate = _uniform_rate(path, values[:, 0])
     idx = np.array([[where[label][a] for a in "xyz"] for label in labels], dtype=int).reshape(-1, 3)
     positions = values[:, idx] if labels else np.zeros((values.shape[0], 0, 3))
-    positions[~np.isfinite(positions).all(axis=2)] = np.nan
+    far = (np.abs(np.nan_to_num(positions)) > LAB_REACH_M).any(axis=2)
+    if far.any():
+        named = ", ".join(dict.fromkeys(labels[m] for m in np.nonzero(far)[1]))
+        warnings.warn(f"{path.name}: {far.sum()} marker samples beyond {LAB_REACH_M:g} m of the lab origin read as "
+                      f"gaps ({named})", GaitWarning, stacklevel=2)
+    positions[~np.isfinite(positions).all(axis=2) | far] = np.nan
     return Markers(tuple(labels), positions, rate, first_frame=int(round(values[0, 0] * rate)) + 1)
 
 
@@ -313,7 +319,12 @@ def read_trc(path) -> Markers:
     if not rows:
         raise InputError(path, None, "no data rows")
     positions = np.array(rows, dtype=float).reshape(len(rows), n_markers, 3) * _LENGTH_M[unit]
-    positions[~np.isfinite(positions).all(axis=2)] = np.nan
+    far = (np.abs(np.nan_to_num(positions)) > LAB_REACH_M).any(axis=2)
+    if far.any():
+        named = ", ".join(dict.fromkeys(labels[m] for m in np.nonzero(far)[1]))
+        warnings.warn(f"{path.name}: {far.sum()} marker samples beyond {LAB_REACH_M:g} m of the lab origin read as "
+                      f"gaps ({named})", GaitWarning, stacklevel=2)
+    positions[~np.isfinite(positions).all(axis=2) | far] = np.nan
     return Markers(tuple(labels), positions, rate, first_frame=first_frame)
 
 

@@ -6,6 +6,8 @@ Untrusted files are read with bounded cost and without surprises:
 - aliases may expand the document to at most ``MAX_EXPANDED_NODES`` nodes (an "alias bomb" of 300 bytes
   expands to billions);
 - a key given twice in one mapping is an error (PyYAML silently keeps the last);
+- control characters (NUL, ESC, BEL, form feed) and integers of more than ``MAX_INTEGER_CHARACTERS`` are
+  errors naming the line;
 - numbers as YAML 1.2 reads them: ``1e12`` and ``1.0e12`` are floats (YAML 1.1 wants ``1.0e+12``).
 """
 
@@ -20,6 +22,8 @@ from gaitcli.errors import InputError, shown
 
 MAX_YAML_BYTES = 1_000_000
 MAX_EXPANDED_NODES = 10_000
+#: the longest integer read (Python converts at most 4300 digits; a validator says more about shorter ones)
+MAX_INTEGER_CHARACTERS = 1000
 
 # YAML 1.2 core-schema floats that YAML 1.1 reads as strings: an exponent without a sign or without a dot
 _FLOAT_1_2 = re.compile(r"^[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+$")
@@ -38,8 +42,21 @@ class _Loader(yaml.SafeLoader):
                 seen.add(key)
         return super().construct_mapping(node, deep=deep)
 
+    def construct_yaml_int(self, node):
+        if len(node.value) > MAX_INTEGER_CHARACTERS:  # int() refuses more than 4300 digits (ValueError)
+            raise _TooLong(node.value, node.start_mark)
+        return super().construct_yaml_int(node)
+
+
+_Loader.add_constructor("tag:yaml.org,2002:int", _Loader.construct_yaml_int)
+
 
 _Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT_1_2, list("-+0123456789."))
+
+
+class _TooLong(Exception):
+    def __init__(self, value, mark):
+        self.value, self.mark = value, mark
 
 
 class _Duplicate(Exception):
@@ -82,7 +99,12 @@ def read_yaml(path: str | Path):
         raise InputError(path, None, "cannot be read (permission denied)") from None
     except IsADirectoryError:
         raise InputError(path, None, "is a folder (expected a YAML file)") from None
-    loader = _Loader(text)
+    try:
+        loader = _Loader(text)
+    except yaml.reader.ReaderError as exc:  # PyYAML's own message spans two lines
+        line = text.count("\n", 0, exc.position) + 1
+        raise InputError(path, f"line {line}", f"control character U+{exc.character:04X} "
+                                                 "(expected printable text)") from None
     try:
         node = loader.get_single_node()
         if node is not None and _expanded_size(node, {}, MAX_EXPANDED_NODES) > MAX_EXPANDED_NODES:
@@ -92,6 +114,9 @@ def read_yaml(path: str | Path):
     except _Duplicate as dup:
         raise InputError(path, f"line {dup.mark.line + 1}",
                          f"key {shown(dup.key)} given twice (expected each key once)") from None
+    except _TooLong as long:
+        raise InputError(path, f"line {long.mark.line + 1}", f"an integer of {len(long.value):,} characters "
+                                                             f"(expected at most {MAX_INTEGER_CHARACTERS:,})") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         raise InputError(path, f"line {mark.line + 1}" if mark else None, "not valid YAML") from None

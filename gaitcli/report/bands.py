@@ -3,12 +3,13 @@
 A band holds side-free variables over 0–100 % of a stride (both legs alike, in the names and signs of the
 tables it was made from, the side dropped): angles ``<joint>_<sense>_deg`` (``hip_flexion_deg``,
 ``ankle_inversion_deg``, ``foot_progression_deg``, ...), moments ``<joint>_<sense>_moment_per_kg`` (N·m/kg:
-``knee_extensor_moment_per_kg`` ...) and the ground reaction ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
+``knee_extensor_moment_per_kg`` ...), total joint powers ``<joint>_power_W_per_kg`` (W/kg) and the ground
+reaction ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
 ``<variable>_sd``; ``gait reference ... --band FILE`` writes one from idyn outputs) or from a ``gait reference``
 table, whose right-leg columns give the sagittal angles and forces. The package's band
 (``report/data/normal_band.csv``) comes from ``gait synth``'s normative trial (Winter's curves; the command is in
 sample_trials/README.md); one subject's strides vary far less than between subjects, so each SD is raised to a
-floor (3°, 0.1 N·m/kg, 0.3 N/kg, our choice as for the prediction's reference,
+floor (3°, 0.1 N·m/kg, 0.2 W/kg, 0.3 N/kg, our choice as for the prediction's reference,
 :data:`gaitcli.predict.reference.SD_FLOOR`).
 """
 
@@ -23,11 +24,12 @@ import numpy as np
 from gaitcli.errors import InputError
 
 CYCLE_PCT = np.arange(101, dtype=float)
-#: a gait_cycle.csv column a band pools over both legs: ``<joint>_<side>_<sense>`` (deg) or
-#: ``<joint>_<side>_<sense>_moment_per_kg`` (the pelvis and lumbar columns have no side)
-LEG_COLUMN = re.compile(r"^(hip|knee|ankle|foot)_([rl])_(\w+?)(_moment_per_kg)?$")
+#: a gait_cycle.csv column a band pools over both legs: ``<joint>_<side>_<sense>`` (deg),
+#: ``<joint>_<side>_<sense>_moment_per_kg`` or ``<joint>_<side>_power_W_per_kg`` (the pelvis and lumbar columns
+#: have no side)
+LEG_COLUMN = re.compile(r"^(hip|knee|ankle|foot)_([rl])_(\w+?)(_moment_per_kg|_W_per_kg)?$")
 #: SD floors by the variable's unit suffix
-SD_FLOOR = {"_deg": 3.0, "_moment_per_kg": 0.1, "_N_per_kg": 0.3}
+SD_FLOOR = {"_deg": 3.0, "_moment_per_kg": 0.1, "_W_per_kg": 0.2, "_N_per_kg": 0.3}
 BAND_FILE = Path(__file__).resolve().parent / "data" / "normal_band.csv"
 #: a gait reference table's right-leg columns → band variables
 REFERENCE_COLUMNS = {"hip_r_flexion_deg": "hip_flexion_deg", "knee_r_flexion_deg": "knee_flexion_deg",

@@ -24,8 +24,9 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from gaitcli import __version__
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import atomic_path
+from gaitcli.io.outputs import plain_text
 from gaitcli.report.bands import NormalBand
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
@@ -81,13 +82,54 @@ def _page(title: str, body: str) -> str:
             f'<p class="meta">gaitcli {__version__}, {stamp}</p></body></html>')
 
 
-def _summary(folder: Path) -> dict:
+def _summary(folder: Path, numbers: tuple[str, ...]) -> dict:
+    """A stage's summary.json (empty without one) whose keys ``numbers`` (those the page shows) are numbers or
+    absent; damaged or foreign is an InputError naming it."""
     path = folder / "summary.json"
-    return json.loads(path.read_text()) if path.is_file() else {}
+    if not path.is_file():
+        return {}
+    try:
+        summary = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError, UnicodeDecodeError; nested too deeply
+        raise InputError(path, None, f"not valid JSON ({type(exc).__name__}; expected a stage's summary)") from None
+    except OSError as exc:
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
+    if not isinstance(summary, dict):
+        raise InputError(path, None, f"holds a {type(summary).__name__} (expected a mapping: a stage's summary)")
+    for key in numbers:  # NaN is allowed: a feature that could not be measured
+        value = summary.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                  or abs(value) > 1e300):
+            raise InputError(path, key, f"got {shown(value)} (expected a number)")
+    return summary
 
 
 def _number(value, digits: int) -> str:
     return "—" if value is None else f"{float(value):.{digits}f}"
+
+
+def _rows(path: Path, columns: tuple[str, ...], numbers: tuple[str, ...] = ()) -> list[dict]:
+    """The rows of a CSV table gaitcli wrote (batch_summary.csv, study.csv): every one of ``columns`` present,
+    ``numbers`` numeric or empty; anything else is an InputError naming the file, the row and the column."""
+    try:
+        with path.open(encoding="utf-8", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(path, None, f"not a CSV table ({type(exc).__name__})") from None
+    except OSError as exc:
+        raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
+    for k, row in enumerate(rows, start=2):  # line 1 is the header
+        for column in columns:
+            if row.get(column) is None:
+                raise InputError(path, f"line {k}: {column}", f"missing (expected the columns "
+                                                              f"{', '.join(columns)})")
+        for column in numbers:
+            try:
+                float(row[column] or 0)
+            except ValueError:
+                raise InputError(path, f"line {k}: {column}", f"got {shown(row[column])} (expected a number)") \
+                    from None
+    return rows
 
 
 def _subject(trial_folder: Path | None) -> str:
@@ -110,7 +152,7 @@ def trial_body(root: Path, name: str, band: NormalBand | None, work: Path) -> st
 
     trial_folder = root.parent if root.name == "gait_out" else None
     subject = _subject(trial_folder)
-    idyn = _summary(root / "idyn")
+    idyn = _summary(root / "idyn", ("mass_kg", *(key for key, *_ in FEATURES)))
     if not subject and idyn.get("mass_kg"):
         subject = f"body mass {float(idyn['mass_kg']):.1f} kg"
     parts = [f"<h1>{html.escape(name)}</h1>",
@@ -124,9 +166,11 @@ def trial_body(root: Path, name: str, band: NormalBand | None, work: Path) -> st
         figures = idyn_figures(root / "idyn" / "idyn.h5", work / "idyn", title=name, band=band)
         band_text = f"the grey band is the normal mean ± 1 SD ({band.source})" if band else "no normal band given"
         captions = {
-            "cycle.png": f"Sagittal hip, knee and ankle angles (deg) and joint moments (N·m/kg, internal, positive "
-                         f"as the angle) over the gait cycle from heel strike to heel strike: mean ± SD of each "
-                         f"side's strides; {band_text}. Moments are blank where the foot's load was not measured.",
+            "cycle.png": f"Sagittal hip, knee and ankle angles (deg), joint moments (N·m/kg, internal; signs as the "
+                         f"axis labels and joint_moments.csv say: by default Plug-in Gait's, extensor and "
+                         f"plantarflexor positive) and joint powers (W/kg, generated positive) over the gait cycle "
+                         f"from heel strike to heel strike: mean ± SD of each side's strides; {band_text}. Moments "
+                         f"and powers are blank where the foot's load was not measured.",
             "cycle_frontal.png": f"Frontal angles (deg) and moments (N·m/kg) over the gait cycle: hip adduction, knee "
                                  f"varus, ankle inversion positive; {band_text}.",
             "residuals.png": "Pelvis residual force (N) and moment (N·m): what the model and the measured ground "
@@ -145,7 +189,7 @@ def trial_body(root: Path, name: str, band: NormalBand | None, work: Path) -> st
         parts.append("<h2>Signals</h2>" + "".join(_figure(p, captions.get(p.name, p.stem)) for p in figures))
     for h5 in sorted((root / "muscles").glob("*/muscles.h5")) if (root / "muscles").is_dir() else ():
         method = h5.parent.name
-        summary = _summary(h5.parent)
+        summary = _summary(h5.parent, ("metabolic_cost_J", "cost_of_transport_J_per_m"))
         figures = muscle_figures(h5, work / "muscles" / method, title=name)
         cost = summary.get("metabolic_cost_J")
         state = "" if summary.get("converged", True) else ' <span class="bad">(did not converge)</span>'
@@ -166,7 +210,7 @@ def predict_section(folder: Path, name: str, work: Path) -> str:
     muscles, the prosthesis curve) and key figures."""
     from gaitcli.report.predict_plots import predict_figures
 
-    summary = _summary(folder)
+    summary = _summary(folder, ("speed_m_s", "cost_of_transport_J_per_m", "deviation", "objective"))
     figures = predict_figures(folder / "predict.h5", work, title=name)
     state = "" if summary.get("converged", True) else ' <span class="bad">(did not converge)</span>'
     rows = [("speed", _number(summary.get("speed_m_s"), 2), "m/s"),
@@ -188,7 +232,9 @@ def predict_section(folder: Path, name: str, work: Path) -> str:
 
 def study_body(folder: Path) -> str:
     """A predict study's page: its table and its figures (study.png, curves.png)."""
-    rows = list(csv.DictReader((folder / "study.csv").open()))
+    rows = _rows(folder / "study.csv", ("case", "speed_m_s", "weights", "condition", "objective",
+                                        "cost_of_transport_J_per_m", "deviation", "converged"),
+                 ("objective", "cost_of_transport_J_per_m", "deviation"))
     header = ("case", "speed (m/s)", "weights", "condition", "J", "Et (J/m)", "Jdev", "converged")
     table = [(r["case"], r["speed_m_s"], r["weights"], r["condition"], _number(r["objective"] or None, 3),
               _number(r["cost_of_transport_J_per_m"] or None, 1), _number(r["deviation"] or None, 2),
@@ -199,8 +245,11 @@ def study_body(folder: Path) -> str:
                 "curves.png": "The optimal prostheses' spring moment (N·m) against ankle angle (rad) beside the "
                               "commercial feet (as Fig. 5.16)."}
     for name, caption in captions.items():
-        if (folder / name).is_file():
-            parts.append(_figure(folder / name, caption))
+        path = folder / name
+        if path.is_file():
+            if not path.resolve().is_relative_to(folder.resolve()):
+                raise InputError(path, None, "links outside the study folder (expected the figure the study drew)")
+            parts.append(_figure(path, caption))
     return "".join(parts)
 
 
@@ -256,7 +305,12 @@ def write_report(out_dir: Path, band: NormalBand | None) -> list[Page]:
         if kind == "trial":
             name = _trial_name(root)
             return [Page(write_page(root / "report.html", name, trial_body(root, name, band, work)), name)]
-        rows = list(csv.DictReader((root / "batch_summary.csv").open()))
+        rows = [{**r, "trial": plain_text(r["trial"]), "reason": plain_text(r["reason"])}
+                for r in _rows(root / "batch_summary.csv", ("trial", "status", "reason"))]
+        for r in rows:  # every page stays in the lab folder
+            if Path(r["trial"]).is_absolute() or not (root / r["trial"] / "gait_out").resolve().is_relative_to(root):
+                raise InputError(root / "batch_summary.csv", "trial", f"got {shown(r['trial'])}, outside the lab "
+                                                                      "folder (expected a trial folder below it)")
         status: dict[str, str] = {}
         for r in rows:
             order = ("failed", "unconverged", "ok", "skipped")

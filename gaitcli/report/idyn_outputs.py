@@ -97,11 +97,14 @@ def residual_columns(result: IdynResult) -> dict:
 
 
 def cycle_columns(result: IdynResult) -> dict:
-    """Every complete stride of each side normalised to 0–100 % (long format: one block per stride)."""
+    """Every complete stride of each side normalised to 0–100 % (long format: one block per stride): the angles,
+    moments (N·m/kg) and total joint powers (W/kg) of the tables."""
     kin, angle_names, _ = displayed_angles(result)
     mom = known_shown_moments_Nm(result) / result.mass_kg
-    values = np.column_stack([kin, mom])
-    names = list(angle_names) + [f"{m}_per_kg" for m in displayed_moments(result)[1]]
+    powers = {name: values for name, values in power_columns(result).items()
+              if name.endswith("_power_W_per_kg") and "sagittal" not in name}
+    values = np.column_stack([kin, mom, *powers.values()])
+    names = list(angle_names) + [f"{m}_per_kg" for m in displayed_moments(result)[1]] + list(powers)
     blocks = {"cycle_pct": [], "side": [], "stride": [], "start_s": []}
     rows = []
     for k, stride in enumerate(result.strides):

@@ -9,7 +9,6 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
@@ -21,7 +20,7 @@ import numpy as np  # noqa: E402
 from gaitcli.core.container import Trial  # noqa: E402
 from gaitcli.core.events import SIDE_NAMES  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
-from gaitcli.io.h5 import read_record, read_records  # noqa: E402
+from gaitcli.io.h5 import open_h5, read_record, read_records  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
 
@@ -52,7 +51,7 @@ def mark_events(ax, events, *, sides=("r", "l")) -> None:
 
 def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     """``markers.png`` (raw vs filtered, a few foot and pelvis landmarks) and ``grf.png`` (per foot, events)."""
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait filter") as h5:
         trial = read_record(h5["trial"], Trial)
         raw = h5["markers/raw"][()]
         cutoff_hz = float(h5["trial/markers/positions_m"].attrs["cutoff_hz"])
@@ -132,13 +131,14 @@ def _column(columns: list[str], joint: str, side: str, senses, suffix: str = "")
 
 
 def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", band=None):
-    """Angles (deg) and moments (N·m/kg) of hip, knee and ankle in ``plane`` over the gait cycle, mean ± SD of
-    each side's strides (right red, left blue) over the grey normal ``band`` (:mod:`gaitcli.report.bands`, the
-    variable of the same name); moments blank where the foot's load is unknown. Returns the matplotlib figure."""
+    """Angles (deg), moments (N·m/kg) and, in the sagittal figure, total joint powers (W/kg) of hip, knee and
+    ankle in ``plane`` over the gait cycle, mean ± SD of each side's strides (right red, left blue) over the grey
+    normal ``band`` (:mod:`gaitcli.report.bands`, the variable of the same name); moments and powers blank where
+    the foot's load is unknown. Returns the matplotlib figure."""
     from gaitcli.report.bands import draw_band
     from gaitcli.signal.cycles import Stride, normalise
 
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait idyn") as h5:
         strides = read_records(h5["strides"], Stride)
         kin_set = h5["angles"] if "angles" in h5 else h5["coordinates_clinical"]  # older files: coordinates
         kin, angle_columns = kin_set[()], str(kin_set.attrs["columns"]).split(",")
@@ -148,8 +148,13 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
         convention = str(shown.attrs.get("convention", ""))
         known = h5["joint_moments_known"][()].astype(bool)  # blank where the foot's load is unknown
         mom = np.where(np.repeat(known, 3, axis=1), mom, np.nan)
+        power = None
+        if plane == "sagittal" and "joint_powers" in h5:  # total joint power (W/kg), generated positive
+            power = np.where(known, h5["joint_powers"][()], np.nan) / float(h5["segments/mass"].attrs["body_mass_kg"])
+            power_joints = str(h5["joint_powers"].attrs["joints"]).split(",")
         time_s = h5["time"][()]
-    fig, axes = plt.subplots(2, 3, figsize=(12, 6), sharex=True)
+    rows = 2 if power is None else 3
+    fig, axes = plt.subplots(rows, 3, figsize=(12, 3 * rows), sharex=True)
     pct = np.arange(101)
     banded = False
     for col, (joint, label, angle_senses, moment_senses) in enumerate(PLANES[plane]):
@@ -157,13 +162,17 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
         moment_sense = _column(moment_columns, joint, "r", moment_senses, "_moment")[1]
         banded |= draw_band(axes[0, col], band, f"{joint}_{angle_sense}_deg")
         banded |= draw_band(axes[1, col], band, f"{joint}_{moment_sense}_moment_per_kg")
+        if power is not None:
+            banded |= draw_band(axes[2, col], band, f"{joint}_power_W_per_kg")
         for side in ("r", "l"):
             ks = [s for s in strides if s.side == side]
             a_col = _column(angle_columns, joint, side, angle_senses)[0]
             m_col = _column(moment_columns, joint, side, moment_senses, "_moment")[0]
-            a = [normalise(kin[:, a_col], time_s, s) for s in ks]
-            m = [normalise(mom[:, m_col], time_s, s) for s in ks]
-            for row, values, count in ((0, a, len(ks)), (1, m, len(ks))):
+            curves = [[normalise(kin[:, a_col], time_s, s) for s in ks], [normalise(mom[:, m_col], time_s, s) for s in ks]]
+            if power is not None:
+                p_col = power_joints.index(f"{joint}_{side}")
+                curves.append([normalise(power[:, p_col], time_s, s) for s in ks])
+            for row, values in enumerate(curves):
                 if not values:
                     continue
                 values = np.array(values)
@@ -171,15 +180,17 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
                     warnings.simplefilter("ignore", RuntimeWarning)
                     mean, sd = np.nanmean(values, axis=0), np.nanstd(values, axis=0)
                 ax = axes[row, col]
-                ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAMES[side]} (n={count})")
+                ax.plot(pct, mean, color=SIDE_COLOUR[side], label=f"{SIDE_NAMES[side]} (n={len(ks)})")
                 ax.fill_between(pct, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
         axes[0, col].set_title(label, fontsize=10)
         axes[0, col].set_ylabel("angle (deg)")
         axes[1, col].set_ylabel(f"{joint} {moment_sense.replace('_', ' ')} moment (N·m/kg)")
-        axes[1, col].set_xlabel("gait cycle (%)")
-        for row in (0, 1):
+        if power is not None:
+            axes[2, col].set_ylabel(f"{joint} power (W/kg, + generated)")
+        axes[rows - 1, col].set_xlabel("gait cycle (%)")
+        for row in range(rows):
             axes[row, col].axhline(0, color="0.7", lw=0.6)
-    for row in (0, 1):
+    for row in range(rows):
         for ax in axes[row]:
             ax.legend(fontsize=7, loc="best")
     sign = "flexion / dorsiflexion" if plane == "sagittal" else "adduction / varus / inversion"
@@ -187,8 +198,9 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
         sign += ("; moments + = extensor / plantarflexor (Plug-in Gait)" if plane == "sagittal"
                  else "; moments + = abductor / everter (Plug-in Gait)")
     normal = "; grey: normal ± 1 SD" if banded else ""
-    fig.suptitle(f"{plane.capitalize()} angles and moments over the gait cycle — {title}\nmean ± SD of each side's "
-                 f"strides; moments blank where the foot's load is unknown; + = {sign}{normal}", fontsize=9)
+    shown = "angles, moments and powers" if power is not None else "angles and moments"
+    fig.suptitle(f"{plane.capitalize()} {shown} over the gait cycle — {title}\nmean ± SD of each side's strides; "
+                 f"moments blank where the foot's load is unknown; + = {sign}{normal}", fontsize=9)
     fig.subplots_adjust(left=0.07, right=0.98, top=0.88, bottom=0.09, hspace=0.12, wspace=0.3)
     return fig
 
@@ -201,7 +213,7 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "", band="default"
     from gaitcli.report.bands import default_band
 
     band = default_band() if band == "default" else band
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait idyn") as h5:
         export = read_record(h5["sagittal"], SagittalExport)
         residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]
         time_s = h5["time"][()]
@@ -237,7 +249,7 @@ def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
     offs of the analysed side marked), and ``metabolic_cost.png``: the metabolic energy of each muscle."""
     from gaitcli.muscles.stage import MuscleResult
 
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait muscles") as h5:
         result = read_record(h5["result"], MuscleResult)
     folder = Path(folder)
     written = []

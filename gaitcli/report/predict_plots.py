@@ -6,10 +6,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-import h5py
 import numpy as np
 
-from gaitcli.io.h5 import read_record
+from gaitcli.io.h5 import open_h5, read_record
 from gaitcli.report.plots import SIDE_COLOUR, plt, save
 
 ANGLE_LABELS = ("hip flexion (°)", "knee flexion (°)", "ankle dorsiflexion (°)")
@@ -63,7 +62,7 @@ def predict_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Pat
     animated walk.gif."""
     from gaitcli.predict.stage import PredictResult
 
-    with h5py.File(h5_path, "r") as h5:
+    with open_h5(h5_path, "gait predict") as h5:
         r = read_record(h5["result"], PredictResult)
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)

@@ -323,9 +323,9 @@ def _stair_sessions(pig: Path, root: Path) -> dict:
     folders = {"pig": root / "pig", "typed": root / "typed"}
     for key, folder in folders.items():
         folder.mkdir()
-        (folder / "trial.c3d").symlink_to(pig / "Movement_trial.c3d")
-        (folder / "static.c3d").symlink_to(pig / "Static_trial.c3d")
-    (folders["pig"] / "Test.vsk").symlink_to(pig / "Test.vsk")
+        shutil.copy(pig / "Movement_trial.c3d", folder / "trial.c3d")  # links out of the folder are refused
+        shutil.copy(pig / "Static_trial.c3d", folder / "static.c3d")
+    shutil.copy(pig / "Test.vsk", folders["pig"] / "Test.vsk")
     (folders["typed"] / "subject.yaml").write_text(yaml.safe_dump(STAIR_TYPED))
     runs = gait_many({"pig": (("idyn", folders["pig"], *EXPORTS), root),
                       "typed": (("idyn", "--no-plots", folders["typed"]), root)}, workers=2)

@@ -20,6 +20,10 @@ from gaitcli.resources import sample_trials_dir
 
 from .conftest import ENV, SAMPLES, Result, build_once, gait
 
+#: a trial whose trial.c3d has mode 000 (root reads it anyway: tests/test_batch.py simulates that case)
+UNREADABLE = os.geteuid() != 0
+#: the trials that fail: broken, invalid, huge_mass (and unreadable)
+BAD = 3 + UNREADABLE
 LINE = re.compile(r"^(\d+) ok, (\d+) failed, (\d+) skipped \(([\d.]+) s\)$", re.M)
 
 
@@ -33,6 +37,11 @@ def _lab(root: Path, samples=SAMPLES) -> Path:
     (lab / "broken" / "trial.c3d").write_text("exported as text by mistake\n")
     shutil.copytree(sample_trials_dir() / "normal", lab / "invalid", ignore=shutil.ignore_patterns("gait_out"))
     (lab / "invalid" / "subject.yaml").write_text("mass_kg: 70\nstature_m: 170\nsex: male\n")
+    shutil.copytree(sample_trials_dir() / "normal", lab / "huge_mass", ignore=shutil.ignore_patterns("gait_out"))
+    (lab / "huge_mass" / "subject.yaml").write_text(f"mass_kg: {'9' * 400}\nstature_m: 1.7\nsex: male\n")
+    if UNREADABLE:
+        shutil.copytree(sample_trials_dir() / "normal", lab / "unreadable", ignore=shutil.ignore_patterns("gait_out"))
+        (lab / "unreadable" / "trial.c3d").chmod(0)
     return lab
 
 
@@ -56,17 +65,21 @@ def _counts(result: Result) -> tuple[int, int, int, float]:
     return int(match[1]), int(match[2]), int(match[3]), float(match[4])
 
 
-def test_every_good_trial_runs_and_the_two_bad_ones_fail_with_their_reasons(batch):
+def test_every_good_trial_runs_and_the_bad_ones_fail_with_their_reasons(batch):
     lab, first, _, rows_text = batch
     assert first.returncode == 0, first.describe()
-    assert _counts(first)[:3] == (len(SAMPLES), 2, 0)
+    assert _counts(first)[:3] == (len(SAMPLES), BAD, 0)
     rows = list(csv.DictReader(rows_text.splitlines()))
-    assert len(rows) == 2 * (len(SAMPLES) + 2)  # filter and idyn per trial
+    assert len(rows) == 2 * (len(SAMPLES) + BAD)  # filter and idyn per trial
     by = {(r["trial"], r["stage"]): r for r in rows}
     assert all(by[(f"walks/{s}", st)]["status"] == "ok" for s in SAMPLES for st in ("filter", "idyn"))
     assert by[("broken", "filter")]["status"] == "failed" and by[("broken", "filter")]["exit_code"] == "2"
     assert "trial.c3d" in by[("broken", "filter")]["reason"] and "not a C3D file" in by[("broken", "filter")]["reason"]
     assert "stature_m" in by[("invalid", "idyn")]["reason"] and "centimetres" in by[("invalid", "idyn")]["reason"]
+    assert by[("huge_mass", "filter")]["exit_code"] == "2" and "400-digit" in by[("huge_mass", "filter")]["reason"]
+    if UNREADABLE:
+        assert by[("unreadable", "filter")]["exit_code"] == "2"
+        assert "trial.c3d: cannot be read" in by[("unreadable", "filter")]["reason"]
     assert float(by[("walks/normal", "idyn")]["speed_m_s"]) == pytest.approx(1.30, abs=0.01)
     assert "broken: failed:" in first.stderr and "Traceback" not in first.stderr
     for s in SAMPLES:  # the outputs are the stages' own
@@ -78,7 +91,7 @@ def test_a_second_run_skips_everything_current_in_a_tenth_of_the_time(batch):
     _, first, second, _ = batch
     assert second.returncode == 0, second.describe()
     ok, failed, skipped, elapsed = _counts(second)
-    assert (ok, failed, skipped) == (0, 2, len(SAMPLES))
+    assert (ok, failed, skipped) == (0, BAD, len(SAMPLES))
     assert elapsed < _counts(first)[3] / 10, (first.stdout, second.stdout)
     assert "Dask dashboard" not in second.stderr  # nothing to run: no cluster started
 
@@ -97,7 +110,7 @@ def test_a_batch_on_an_existing_scheduler(dask_cluster, tmp_path):
     lab = _lab(tmp_path, samples=("normal", "ankle_weight"))
     r = gait("batch", lab, "--scheduler", address, "--no-plots", cwd=tmp_path, timeout_s=300)
     assert r.returncode == 0, r.describe()
-    assert _counts(r)[:3] == (2, 2, 0)
+    assert _counts(r)[:3] == (2, BAD, 0)
 
 
 def test_a_worker_killed_mid_trial_leaves_no_half_written_output(dask_cluster, tmp_path):

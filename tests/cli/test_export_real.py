@@ -34,7 +34,7 @@ VICON = [f"{side}{name}" for side in "RL" for name in ("PelvisAngles", "FootProg
 def _build(shared: Path, root: Path) -> dict:
     walking5 = root / "walking5"
     walking5.mkdir()
-    (walking5 / "trial.c3d").symlink_to(shared / "c3d" / "walking5.c3d")
+    shutil.copy(shared / "c3d" / "walking5.c3d", walking5 / "trial.c3d")
     shutil.copy(REPO / "docs" / "examples" / "walking2" / "subject.yaml", walking5)
     return {"walking5": gait("idyn", walking5, *EXPORTS, cwd=root).to_json()}
 

@@ -49,7 +49,7 @@ def _lab_events(path: Path):
 
 
 @pytest.mark.shared
-def test_qualisys_takes_the_labs_events_by_default(runs):
+def test_qualisys_takes_the_labs_events_by_default(runs, shared_c3d_dir):
     root, results = runs
     assert results["qualisys"].returncode == 0, results["qualisys"].describe()
     events = pd.read_csv(root / "qualisys" / "gait_out" / "filter" / "events.csv")

@@ -92,6 +92,8 @@ def _build(root: Path) -> dict:
     with open(frames / "subject.yaml", "a") as f:
         f.write("static_frames: [5000, 6000]\n")
     jobs["static_frames"] = [("idyn", frames, "--no-plots")]
+    jobs["coordinate"] = [("idyn", copy_sample("normal", root / "coordinate"), "--angles", "posture", "--moments",
+                           "coordinate", "--frames", "anatomical", "--no-plots")]
 
     synth, run = jobs.pop("exact")
     made = gait(*synth, cwd=root)  # the exact trial first: its `gait run` joins the others
@@ -380,3 +382,47 @@ def test_static_frames_out_of_range_is_exit_2_before_anything_is_written(runs):
     assert len(result.stderr_lines) == 1 and "static_frames" in result.stderr and "1–428" in result.stderr, \
         result.stderr
     assert not (root / "static_frames" / "gait_out").exists()
+
+
+def test_the_coordinates_and_their_moments_by_option(runs):
+    """``--angles posture --moments coordinate --frames anatomical``: kinematics.csv holds the 27 coordinates
+    (coordinates.csv of the default run), joint_moments.csv each moment in its angle's sense; in the anatomical
+    frames (the ISB ones of this marker set) that is Plug-in Gait's moment with the opposite sign."""
+    results, root = runs
+    (run,) = results["coordinate"]
+    assert run.returncode == 0, run.describe()
+    default, option = out_dir(root, "normal"), out_dir(root, "coordinate")
+    pd.testing.assert_frame_equal(pd.read_csv(option / "kinematics.csv"), pd.read_csv(default / "coordinates.csv"))
+    ours, pig = pd.read_csv(option / "joint_moments.csv"), pd.read_csv(default / "joint_moments.csv")
+    senses = {"flexion": ("extensor", "plantarflexor"), "adduction": ("abductor", "everter"),
+              "rotation": ("external_rotator",)}
+    compared = 0
+    for column in ours.columns:
+        joint, side, axis, *_ = (column.split("_") + [""] * 3)[:4]
+        if joint not in ("hip", "knee", "ankle") or not column.endswith("_moment_per_kg"):
+            continue
+        sense = senses[axis][1] if joint == "ankle" and axis in ("flexion", "adduction") else senses[axis][0]
+        theirs = pig[f"{joint}_{side}_{sense}_moment_per_kg"].to_numpy()
+        np.testing.assert_allclose(ours[column].to_numpy(), -theirs, rtol=1e-5, atol=1e-6, err_msg=column)
+        compared += 1
+    assert compared == 18
+
+
+
+def test_the_sagittal_figure_draws_the_powers_of_gait_cycle_csv(runs):
+    """cycle.png's third row: each joint's total power (W/kg) over the cycle, the mean of the side's strides — the
+    same curve as the mean of gait_cycle.csv's ``<joint>_<side>_power_W_per_kg`` strides."""
+    from gaitcli.report.plots import cycle_figure
+
+    _, root = runs
+    folder = out_dir(root, "normal")
+    figure = cycle_figure(folder / "idyn.h5", "sagittal")
+    axes = np.array(figure.axes).reshape(3, 3)
+    cycles = pd.read_csv(folder / "gait_cycle.csv")
+    for col, joint in enumerate(("hip", "knee", "ankle")):
+        assert "power" in axes[2, col].get_ylabel()
+        right = cycles[cycles.side == "r"]
+        expected = right.groupby("cycle_pct")[f"{joint}_r_power_W_per_kg"].mean().to_numpy()
+        drawn = next(line for line in axes[2, col].get_lines() if line.get_label().startswith("right"))
+        np.testing.assert_allclose(drawn.get_ydata(), expected, rtol=1e-5, atol=1e-4)
+    assert len(cycle_figure(folder / "idyn.h5", "frontal").axes) == 6  # no power row in the frontal plane

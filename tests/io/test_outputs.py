@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
@@ -81,6 +82,24 @@ def test_stage_folder_failure_without_previous_outputs_leaves_nothing(tmp_path):
             raise Boom()
     assert not target.exists()
     assert list(target.parent.iterdir()) == []
+
+
+@pytest.mark.parametrize("code", [errno.ENOSPC, errno.EDQUOT, errno.EROFS])
+def test_a_full_disk_is_an_input_error_naming_the_output_and_keeps_old_outputs(tmp_path, code):
+    target = tmp_path / "out" / "filter"
+    old = _old_outputs(target)
+    with pytest.raises(InputError, match=f"filter: cannot be written \\({os.strerror(code)}\\)"):
+        with stage_folder(target) as tmp:
+            write_json(tmp / "summary.json", {"frames": 20})
+            raise OSError(code, os.strerror(code))
+    assert _tree(target) == old
+    assert sorted(p.name for p in target.parent.iterdir()) == ["filter"]
+
+
+def test_other_os_errors_while_writing_stay_internal(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        with stage_folder(tmp_path / "filter"):
+            raise FileNotFoundError(errno.ENOENT, "an input vanished")
 
 
 def test_stage_folder_keyboard_interrupt_also_cleans_up(tmp_path):

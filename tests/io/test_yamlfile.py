@@ -80,3 +80,18 @@ def test_not_text_and_not_yaml(tmp_path):
         read_yaml(path)
     with pytest.raises(InputError, match="line 2: not valid YAML"):
         read_yaml(_write(tmp_path, "a: 1\n  b: [\n"))
+
+
+@pytest.mark.parametrize("char", ["\0", "\x1b", "\x07", "\x0c"])
+def test_a_control_character_is_one_line_naming_its_line(tmp_path, char):
+    path = _write(tmp_path, f"a: 1\nb: x{char}y\n")
+    with pytest.raises(InputError) as info:
+        read_yaml(path)
+    assert str(info.value) == f"{path}: line 2: control character U+{ord(char):04X} (expected printable text)"
+
+
+def test_an_integer_of_thousands_of_digits_is_refused_by_line(tmp_path):
+    path = _write(tmp_path, "a: 1\nb: " + "9" * 5000 + "\n")
+    with pytest.raises(InputError, match=r"line 2: an integer of 5,000 characters"):
+        read_yaml(path)
+    assert read_yaml(_write(tmp_path, "b: " + "9" * 400 + "\n"))["b"] == int("9" * 400)  # the validators' turn

@@ -1,7 +1,8 @@
 """C3D markers: point units, labels and the marker array.
 
 POINT:UNITS (mm, cm, m) → metres; a sample is missing (NaN) where
-ezc3d's residual is negative or the stored point is exactly (0, 0, 0). Points
+ezc3d's residual is negative or the stored point is exactly (0, 0, 0), and
+(warned) where a coordinate lies beyond ±LAB_REACH_M of the lab origin. Points
 listed in POINT:ANGLES/FORCES/MOMENTS/POWERS/SCALARS/REACTIONS (model outputs
 of Plug-in Gait style exports) are dropped. Labels are stripped of surrounding
 whitespace (inner spaces, as in BTS files, are kept) and of a Vicon subject
@@ -19,10 +20,15 @@ from gaitcli.core.recording import Markers
 from gaitcli.errors import InputError
 from gaitcli.io.c3d.header import param, strings, warn
 
-__all__ = ["MODEL_OUTPUT_GROUPS", "LENGTH_M", "point_length_m", "read_markers"]
+__all__ = ["MODEL_OUTPUT_GROUPS", "LAB_REACH_M", "LENGTH_M", "point_length_m", "read_markers"]
 
 MODEL_OUTPUT_GROUPS = ("ANGLES", "FORCES", "MOMENTS", "POWERS", "SCALARS", "REACTIONS")
 """POINT parameters that list model outputs stored as points (not markers)."""
+
+LAB_REACH_M = 100.0
+"""No capture volume reaches this far from its lab origin (the longest instrumented walkways and tracks span a
+few tens of metres): a marker coordinate beyond ±100 m is a damaged sample, read as a gap, not a position whose
+moments would be astronomical."""
 
 LENGTH_M = {
     "mm": 1e-3, "millimeter": 1e-3, "millimeters": 1e-3, "millimetre": 1e-3, "millimetres": 1e-3,
@@ -121,9 +127,16 @@ def read_markers(path: Path, c, length_m: float, notes: list[str]) -> Markers:
     missing = ~np.isfinite(positions).all(axis=2) | np.all(positions == 0.0, axis=2)
     if residuals.size:
         missing |= residuals[0][keep, :].T < 0
+    far = ~missing & (np.abs(np.nan_to_num(positions)) > LAB_REACH_M).any(axis=2)
+    missing |= far
     positions[missing] = np.nan
 
     labels, changes = _unique_labels([labels[i] for i in keep])
+    if far.any():
+        frames, markers = np.nonzero(far)
+        named = ", ".join(dict.fromkeys(labels[m] for m in markers))
+        warn(f"{path.name}: {far.sum()} marker samples beyond {LAB_REACH_M:g} m of the lab origin read as gaps "
+             f"({named}; first at frame {int(frames.min()) + int(c['header']['points']['first_frame']) + 1})", notes)
     if changes:
         warn(f"{path.name}: duplicate marker labels; kept the first, renamed the others: {'; '.join(changes)}", notes)
     never = [lab for lab, m in zip(labels, missing.all(axis=0)) if m]
