@@ -95,6 +95,8 @@ H5_MAX_BYTES = 512 * 2**20
 def checked(dataset: h5py.Dataset) -> h5py.Dataset:
     """``dataset`` when its decompressed size (shape × item size, from the metadata) is within
     :data:`H5_MAX_BYTES`; else an :class:`InputError` naming the file and the dataset, before any reading."""
+    if not isinstance(dataset, h5py.Dataset):  # a damaged or foreign file: a group where a dataset belongs
+        raise InputError(dataset.file.filename, dataset.name.lstrip("/"), "a group (expected a dataset)")
     size = int(np.prod(dataset.shape, dtype=object)) * dataset.dtype.itemsize if dataset.shape else 0
     if size > H5_MAX_BYTES:
         raise InputError(dataset.file.filename, dataset.name.lstrip("/"),

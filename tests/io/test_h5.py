@@ -84,3 +84,15 @@ def test_the_trial_container_round_trips(tmp_path):
     np.testing.assert_array_equal(back.load_known("r"), [True, False, True, True])
     np.testing.assert_array_equal(back.all_loads_known, [True, False, True, True])
     assert list(back.events.side) == ["r", "l"] and list(back.events.source) == ["plate", "kinematics"]
+
+
+def test_a_group_where_a_dataset_belongs_is_an_input_error(tmp_path):
+    """A damaged or foreign file holding a group under a dataset's name: an InputError naming it, no crash."""
+    from gaitcli.errors import InputError
+    from gaitcli.io.h5 import checked
+
+    path = tmp_path / "foreign.h5"
+    with h5py.File(path, "w") as h5:
+        h5.create_group("result/design")
+    with h5py.File(path, "r") as h5, pytest.raises(InputError, match="result/design.*a group"):
+        checked(h5["result/design"])
