@@ -32,11 +32,12 @@ def shared_pig_dir() -> Path:
 #: first so that ``pytest -n 2`` (pyproject: ``--dist loadfile --no-loadscope-reorder``, whole files in this order)
 #: ends with short files on both workers rather than one long file on one
 HEAVY_FILES = {
-    "tests/cli/test_predict_cli.py": 81, "tests/cli/test_muscles_cli.py": 29, "tests/cli/test_muscles_samples.py": 21,
-    "tests/cli/test_idyn_cli.py": 20, "tests/io/test_c3d_fuzz.py": 19, "tests/predict/test_stage.py": 18,
-    "tests/cli/test_batch_cli.py": 18, "tests/cli/test_report_cli.py": 17, "tests/muscles/test_methods.py": 13,
-    "tests/cli/test_interrupts.py": 12, "tests/cli/test_regression_baseline.py": 12, "tests/dynamics/test_stage.py": 11,
-    "tests/predict/test_nlp.py": 7, "tests/cli/test_marker_set_presets.py": 6, "tests/cli/test_vsk_session.py": 5,
+    "tests/cli/test_predict_cli.py": 95, "tests/cli/test_muscles_cli.py": 33, "tests/cli/test_muscles_samples.py": 33,
+    "tests/io/test_c3d_fuzz.py": 27, "tests/predict/test_stage.py": 24, "tests/cli/test_interrupts.py": 22,
+    "tests/cli/test_batch_cli.py": 21, "tests/cli/test_report_cli.py": 19, "tests/muscles/test_methods.py": 15,
+    "tests/cli/test_idyn_cli.py": 12, "tests/dynamics/test_stage.py": 12, "tests/cli/test_regression_baseline.py": 10,
+    "tests/predict/test_nlp.py": 10, "tests/cli/test_vsk_session.py": 7, "tests/io/test_c3d.py": 5,
+    "tests/cli/test_marker_set_presets.py": 5, "tests/cli/test_qualisys.py": 5,
 }
 
 
