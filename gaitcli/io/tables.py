@@ -163,13 +163,20 @@ def read_markers_csv(path) -> Markers:
     rate = _uniform_rate(path, values[:, 0])
     idx = np.array([[where[label][a] for a in "xyz"] for label in labels], dtype=int).reshape(-1, 3)
     positions = values[:, idx] if labels else np.zeros((values.shape[0], 0, 3))
+    positions = _gaps_beyond_reach(path, labels, positions)
+    return Markers(tuple(labels), positions, rate, first_frame=int(round(values[0, 0] * rate)) + 1)
+
+
+def _gaps_beyond_reach(path: Path, labels, positions: np.ndarray) -> np.ndarray:
+    """``positions`` (frames, markers, 3) m with non-finite samples and those beyond ±LAB_REACH_M of the lab
+    origin as NaN (the latter warned, naming the markers)."""
     far = (np.abs(np.nan_to_num(positions)) > LAB_REACH_M).any(axis=2)
     if far.any():
         named = ", ".join(dict.fromkeys(labels[m] for m in np.nonzero(far)[1]))
         warnings.warn(f"{path.name}: {far.sum()} marker samples beyond {LAB_REACH_M:g} m of the lab origin read as "
-                      f"gaps ({named})", GaitWarning, stacklevel=2)
+                      f"gaps ({named})", GaitWarning, stacklevel=3)
     positions[~np.isfinite(positions).all(axis=2) | far] = np.nan
-    return Markers(tuple(labels), positions, rate, first_frame=int(round(values[0, 0] * rate)) + 1)
+    return positions
 
 
 def _csv_corners(centre: np.ndarray) -> np.ndarray:
@@ -319,12 +326,7 @@ def read_trc(path) -> Markers:
     if not rows:
         raise InputError(path, None, "no data rows")
     positions = np.array(rows, dtype=float).reshape(len(rows), n_markers, 3) * _LENGTH_M[unit]
-    far = (np.abs(np.nan_to_num(positions)) > LAB_REACH_M).any(axis=2)
-    if far.any():
-        named = ", ".join(dict.fromkeys(labels[m] for m in np.nonzero(far)[1]))
-        warnings.warn(f"{path.name}: {far.sum()} marker samples beyond {LAB_REACH_M:g} m of the lab origin read as "
-                      f"gaps ({named})", GaitWarning, stacklevel=2)
-    positions[~np.isfinite(positions).all(axis=2) | far] = np.nan
+    positions = _gaps_beyond_reach(path, labels, positions)
     return Markers(tuple(labels), positions, rate, first_frame=first_frame)
 
 
