@@ -192,8 +192,8 @@ def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | Non
     the plates' events, or by the trial file's where one loaded run of the foot spans them:
     :func:`file_stances_on_plates`) and whose load is known throughout (but within ``FILE_EVENT_TOLERANCE_S`` of
     its events, where it is near zero), ``m = 2 ∫F_z dt / (g T)`` with ``T`` that stride's period
-    (:func:`stride_period_s`); the median over those strides (None when none qualifies). Issue 34: the mean period
-    of every stride in the trial, or a stance part of whose load went unmeasured, made a true mass look off.
+    (:func:`stride_period_s`); the median over those strides (None when none qualifies). The mean period of every
+    stride in the trial, or a stance part of whose load went unmeasured, would make a true mass look off.
     """
     rate = trial.rate_hz
     t = trial.time_s

@@ -66,9 +66,9 @@ def cluster_complete(current: np.ndarray) -> np.ndarray:
     """(n,) frames in which every point of a cluster (n, k, 3) that the trial shows at all is seen.
 
     A pose fitted to fewer points than the rest of the trial's is offset by those points' skin movement and
-    noise: at an unfilled gap's ends it would jump, and its second derivative spike (issue 34: −5.8 N·m/kg at a
-    hip). So a body is untracked (NaN) wherever a point of its cluster is missing; a point the trial never
-    shows does not count.
+    noise: at an unfilled gap's ends it would jump, and its second derivative spike (several N·m/kg at a hip).
+    So a body is untracked (NaN) wherever a point of its cluster is missing; a point the trial never shows does
+    not count.
     """
     seen = np.all(np.isfinite(current), axis=-1)  # (n, k)
     shown = seen.any(axis=0)

@@ -4,7 +4,7 @@ A marker that no camera pair sees has no 3-D position in that frame (NaN). Short
 interior gaps are estimated by interpolation; the dissertation notes that this is
 only meaningful for short periods, so gaps longer than a limit, and gaps at the
 start or end of the trial (which would need extrapolation), stay NaN, and the body
-the marker tracks is untracked there (NaN; issue 34: a smaller cluster would jump).
+the marker tracks is untracked there (NaN: a smaller cluster would jump).
 """
 
 from __future__ import annotations
