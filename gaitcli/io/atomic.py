@@ -8,6 +8,7 @@ writing process's id (``.<target>.<pid>.<random>.part``), so that the next run c
 from __future__ import annotations
 
 import errno
+import json
 import os
 import re
 import shutil
@@ -144,19 +145,59 @@ def atomic_path(target: str | Path):
 #: what gait writes into a folder it replaces whole: tables, HDF5 records, summaries and figures
 TOOL_SUFFIXES = (".csv", ".h5", ".json", ".png", ".gif")
 
+#: the list of the files gait wrote into a folder (JSON, POSIX paths relative to the folder), written with the
+#: folder by :func:`atomic_folder`; hidden, so that ``gait compare`` and the regression baselines pass it by
+MANIFEST = ".gait_files"
+
+#: a manifest larger than this is not gait's (a stage folder lists a few dozen files)
+MANIFEST_MAX_BYTES = 1 << 20
+
+
+def _tree_files(folder: Path) -> list[str]:
+    """The relative POSIX paths of every file below ``folder`` but the manifest, sorted."""
+    out = []
+    for top, _, files in os.walk(folder):
+        for name in files:
+            rel = Path(top, name).relative_to(folder).as_posix()
+            if rel != MANIFEST:
+                out.append(rel)
+    return sorted(out)
+
+
+def read_manifest(folder: Path) -> set[str] | None:
+    """The names gait recorded writing into ``folder``; None without a readable manifest (an older gaitcli's
+    folder, or a manifest that is not gait's: a link, too large, not a JSON list of names)."""
+    path = folder / MANIFEST
+    if path.is_symlink() or not path.is_file():
+        return None
+    try:
+        if path.stat().st_size > MANIFEST_MAX_BYTES:
+            return None
+        names = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        return None
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        return None
+    return set(names)
+
 
 def check_replaceable(target: str | Path) -> None:
-    """Raise :class:`InputError` naming the first file below the folder ``target`` that gait does not write
-    (another suffix than :data:`TOOL_SUFFIXES`, or a link): replacing the folder whole would delete it."""
+    """Raise :class:`InputError` naming the first file below the folder ``target`` that gait did not write:
+    one not in the folder's manifest (:data:`MANIFEST`), or, in a folder without one (written by an older
+    gaitcli), one of another suffix than :data:`TOOL_SUFFIXES`; and any link. Replacing the folder whole
+    would delete it."""
     target = Path(target)
     if not target.is_dir() or target.is_symlink():
         return
+    written = read_manifest(target)
     for top, folders, files in os.walk(target):
         folders.sort()
         for name in sorted(files) + [f for f in folders if Path(top, f).is_symlink()]:
             path = Path(top, name)
-            leftover = name.startswith(".") and name.endswith(".part")
-            if path.is_symlink() or not (leftover or path.suffix.lower() in TOOL_SUFFIXES):
+            rel = path.relative_to(target).as_posix()
+            ours = (name.startswith(".") and name.endswith(".part")) or rel == MANIFEST  # a leftover, the list
+            ours = ours or (path.suffix.lower() in TOOL_SUFFIXES if written is None else rel in written)
+            if path.is_symlink() or not ours:
                 raise InputError(path, None, "is not an output of gait, and the run would replace its folder "
                                              "(expected only gait's outputs there: move the file, or choose "
                                              "another -o)")
@@ -166,8 +207,9 @@ def check_replaceable(target: str | Path) -> None:
 def atomic_folder(target: str | Path):
     """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole.
 
-    A file (not a folder) at ``target``, or a file in it that gait does not write (:func:`check_replaceable`),
-    is the user's: an InputError, and nothing is moved. Leftovers of killed runs are removed first
+    A file (not a folder) at ``target``, or a file in it that gait did not write (:func:`check_replaceable`),
+    is the user's: an InputError, and nothing is moved. The names of the files written go into the folder's
+    manifest (:data:`MANIFEST`), so that the next run replaces only those. Leftovers of killed runs are removed first
     (:func:`remove_stale`).
     """
     target = Path(target)
@@ -181,6 +223,9 @@ def atomic_folder(target: str | Path):
     try:
         with write_errors(target):
             yield tmp
+            manifest = tmp / MANIFEST
+            manifest.write_text(json.dumps(_tree_files(tmp), indent=0) + "\n", encoding="utf-8")
+            usual_permissions(manifest, folder=False)
             usual_permissions(tmp, folder=True)
             old = None
             if target.exists():

@@ -19,6 +19,7 @@ import yaml
 from gaitcli import __version__
 from gaitcli.errors import InputError
 from gaitcli.io.h5 import Dataset, provenance, write_h5
+from gaitcli.io.atomic import MANIFEST, check_replaceable
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 
 
@@ -152,6 +153,31 @@ def test_a_file_at_the_output_folder_is_refused_and_kept(tmp_path):
         (tmp_path / "gait_out").write_text("x")
         with stage_folder(tmp_path / "gait_out" / "filter"):
             raise AssertionError("not reached")
+
+
+def test_a_run_replaces_only_the_files_its_manifest_names(tmp_path):
+    """A folder gait wrote lists its files (``.gait_files``); any other file, even with one of gait's suffixes,
+    is the user's: refused before anything moves. A folder without a manifest keeps the suffix rule."""
+    target = tmp_path / "out" / "filter"
+    with stage_folder(target) as tmp:
+        write_json(tmp / "summary.json", {"frames": 20})
+        (tmp / "plots").mkdir()
+        (tmp / "plots" / "grf.png").write_bytes(b"png")
+    assert json.loads((target / MANIFEST).read_text()) == ["plots/grf.png", "summary.json"]
+    check_replaceable(target)  # only gait's files: replaceable
+    (target / "my.csv").write_text("time_s\n0\n")
+    before = _tree(target)
+    with pytest.raises(InputError, match=r"my\.csv: is not an output of gait"):
+        with stage_folder(target):
+            pytest.fail("the user's file must stop the run before it starts")
+    assert _tree(target) == before
+    (target / MANIFEST).unlink()  # as an older gaitcli left it: gait's suffixes are taken as gait's
+    check_replaceable(target)
+    (target / MANIFEST).write_text("not json")  # a damaged manifest is not gait's: the suffix rule again
+    check_replaceable(target)
+    (target / "notes.txt").write_text("mine\n")
+    with pytest.raises(InputError, match=r"notes\.txt: is not an output of gait"):
+        check_replaceable(target)
 
 
 def test_outputs_get_the_usual_permissions(tmp_path):
