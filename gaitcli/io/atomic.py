@@ -90,6 +90,10 @@ def _check_length(target: Path) -> None:
         named = target if long_name == target.name else target.parent
         raise InputError(named, None, f"a name of {len(os.fsencode(long_name))} bytes is too long "
                                       f"(expected at most {name_max})")
+    extra = len(_prefix(target)) - len(target.name) + len("12345678.part")  # mkstemp's 8 letters
+    if len(os.fsencode(target.name)) + extra > name_max:  # the temporary name it is written under first
+        raise InputError(target, None, f"a name of {len(os.fsencode(target.name))} bytes is too long "
+                                       f"(expected at most {name_max - extra}, for its temporary name)")
     length = len(os.fsencode(os.path.abspath(target))) + 40  # the temporary name's suffix
     if length >= path_max:
         raise InputError(target.parent, None, f"the path is too long ({length} bytes with the file name; "
@@ -106,6 +110,14 @@ def check_output_folder(folder: str | Path) -> None:
         raise InputError(existing, None, "is a file (expected an output folder)")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise InputError(existing, None, "is not writable (expected an output folder you can write)")
+
+
+def check_output_file(target: str | Path) -> None:
+    """Before any work, without creating anything: the file ``target`` (and its temporary name) can be written
+    in its folder, as far as can be told (:func:`check_output_folder`)."""
+    target = Path(os.path.abspath(target))
+    _check_length(target)
+    check_output_folder(target.parent)
 
 
 @contextmanager

@@ -36,6 +36,8 @@ from gaitcli.io.opensim import write_motion, write_trc
 from gaitcli.kinematics.conventions import PIG_CONVENTION
 
 FORMATS = ("opensim", "c3d")
+#: the files of ``export/opensim/``
+OPENSIM_FILES = ("markers.trc", "coordinates.mot", "grf.mot", "joint_moments.sto", "external_loads.xml")
 #: model axes (x forward, y left, z up) → OpenSim's (x forward, y up, z right)
 TO_OPENSIM = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 C3D_JOINTS = (("hip", "Hip"), ("knee", "Knee"), ("ankle", "Ankle"))
@@ -164,6 +166,17 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
                   "GAITCLI:CONVENTION": PIG_CONVENTION}
     return [add_points(trial_c3d, target, points, descriptions=descriptions, parameters=parameters,
                        events=events, merged=("POINT:ANGLES", "POINT:MOMENTS", "POINT:POWERS"))]
+
+
+def export_targets(out_root: Path, formats, *, trial_name: str) -> list[Path]:
+    """The files the exports ``formats`` of the trial (its folder's name) will write below ``out_root``: for
+    checking their names before any stage runs (:func:`gaitcli.io.atomic.check_output_file`)."""
+    targets = []
+    if "opensim" in formats:
+        targets += [out_root / "export" / "opensim" / name for name in OPENSIM_FILES]
+    if "c3d" in formats:
+        targets.append(out_root / "export" / f"{trial_name}.c3d")
+    return targets
 
 
 def export_trial(out_root: Path, formats, *, trial_c3d: Path | None = None) -> list[Path]:

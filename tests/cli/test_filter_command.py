@@ -99,7 +99,10 @@ def test_writes_every_file_of_the_stage(runs, which):
         assert (out / "plots" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
     # the stage folder was swapped in whole: no temporary or old folders next to it
     assert sorted(p.name for p in out.parent.iterdir()) == ["filter"]
-    assert not [p for p in out.rglob(".*")]
+    assert [p.name for p in out.rglob(".*")] == [".gait_files"]  # no temporary file; the list of gait's files
+    listed = json.loads((out / ".gait_files").read_text())
+    files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
+    assert listed == [f for f in files if f != ".gait_files"]
 
 
 def test_default_output_folders(runs):

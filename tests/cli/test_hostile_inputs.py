@@ -284,13 +284,3 @@ def test_a_full_disk_is_exit_2_and_keeps_the_earlier_results(tmp_path, monkeypat
     result = _gait_here(monkeypatch, capsys, tmp_path, "report", "st")
     _one_line_exit_2(result, "report.html", ("No space left on device",))
     assert snapshot(tmp_path) == before  # the earlier page, no temporary file
-
-
-def test_an_export_name_too_long_is_exit_2_and_exports_nothing(tmp_path):
-    """A trial folder of 252 characters: ``export/<folder>.c3d`` and its temporary name exceed NAME_MAX."""
-    trial = tmp_path / ("t" * 252)
-    shutil.copytree(SAMPLE, trial, ignore=shutil.ignore_patterns("gait_out", "truth"))
-    result = gait_many({"run": (("-q", "idyn", "--no-plots", "--export", "c3d", trial.name), tmp_path)})["run"]
-    _one_line_exit_2(result, "t.c3d", ("too long",))
-    assert not list((trial / "gait_out" / "export").glob("*"))
-    assert (trial / "gait_out" / "idyn" / "summary.json").is_file()  # the stage's own results stay

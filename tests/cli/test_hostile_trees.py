@@ -1,5 +1,6 @@
 """Hostile input, round two (issue 35, items 4–6): reports and inputs stay inside their trees, non-finite options
-are refused, impossible marker values are gaps, and a run replaces only what gait wrote.
+are refused, impossible marker values are gaps, a run replaces only what gait wrote, and an export whose name
+is too long is refused before any stage runs.
 
 Every case is built under its own folder and run once, all in one :func:`gait_many` call.
 """
@@ -63,6 +64,18 @@ def _build(root: Path) -> dict:
     (root / "users_file" / "out" / "filter" / "notes.txt").write_text("my notes\n")
     jobs["users_file"] = (("filter", "--no-plots", "trial", "-o", "out"), root / "users_file")
 
+    # a file of the user's with one of gait's suffixes, in a stage folder whose manifest does not list it
+    _trial(root / "users_csv" / "trial")
+    (root / "users_csv" / "out" / "filter").mkdir(parents=True)
+    (root / "users_csv" / "out" / "filter" / ".gait_files").write_text('["summary.json"]\n')
+    (root / "users_csv" / "out" / "filter" / "summary.json").write_text("{}\n")
+    (root / "users_csv" / "out" / "filter" / "my.csv").write_text("time_s\n0\n")
+    jobs["users_csv"] = (("filter", "--no-plots", "trial", "-o", "out"), root / "users_csv")
+
+    # a trial folder whose name fits, but not as export/<name>.c3d with its temporary name: refused before idyn
+    shutil.copytree(SAMPLE, root / "long_export" / ("t" * 240), ignore=shutil.ignore_patterns("gait_out", "truth"))
+    jobs["long_export"] = (("idyn", "--no-plots", "--export", "c3d", "t" * 240), root / "long_export")
+
     for name in ("trial.c3d", "static.c3d"):  # found by their usual names, linking out of the folder
         trial = _trial(root / f"link_{name}" / "trial")
         (trial / name).unlink(missing_ok=True)
@@ -109,6 +122,8 @@ def outcomes(tmp_path_factory):
 
 
 REFUSED = {"users_file": ("notes.txt", "not an output of gait"),
+           "users_csv": ("my.csv", "not an output of gait"),
+           "long_export": ("t.c3d", "too long"),
            "link_trial.c3d": ("trial.c3d", "outside the trial folder"),
            "link_static.c3d": ("static.c3d", "outside the trial folder"),
            "report_climbs": ("batch_summary.csv: trial", "'../victim', outside the lab folder"),
@@ -141,6 +156,7 @@ def test_an_impossible_marker_sample_is_a_gap_and_only_gaits_own_files_are_repla
     assert abs(z[100] - (z[99] + z[101]) / 2) < 1e-3  # the gap filled from its neighbours, to 1 mm
     left = {p.relative_to(root / "far" / "out").as_posix() for p in (root / "far" / "out").rglob("*")}
     assert "filter/old.csv" not in left and "filter/plots/old.png" not in left
+    assert "filter/.gait_files" in left and "filter/markers_filtered.csv" in left  # the next run's list
 
 
 def test_formula_folder_names_are_escaped_in_batch_summary_and_read_back(outcomes, tmp_path):
