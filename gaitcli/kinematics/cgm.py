@@ -253,11 +253,6 @@ class PlugInGait:
         legs = leg_frames(P, self.measurements)
         return CgmFrames(anatomical_frames(legs, self.offsets), legs.joint_centres_m)
 
-    def frames(self, positions: Mapping[str, np.ndarray]) -> dict[str, np.ndarray] | None:
-        """The anatomical frames of :meth:`segments`, or None."""
-        segments = self.segments(positions)
-        return None if segments is None else segments.rotation
-
 
 def measurements_from(metadata: Mapping[str, float], *, leg_length_m: float | None = None,
                       knee_width_m: Mapping[str, float] | None = None, ankle_width_m: Mapping[str, float] | None = None,

@@ -185,6 +185,7 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
     write_table(folder / "gait_cycle.csv", cycle_columns(result))
     p = result.parameters
     angles, angle_names, angle_convention = displayed_angles(result)
+    shown_moments, shown_names, shown_convention = displayed_moments(result)
     data = record_datasets("sagittal", result.sagittal)
     data.update(record_datasets("strides", list(result.strides)))
     data.update({
@@ -202,8 +203,8 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
                           f"segment's {result.frames} frame"}),
         "joint_moments_clinical": Dataset(moments_to_clinical(result.joint_moments_Nm), "N*m",
                                           {"columns": ",".join(MOMENTS), "convention": CONVENTION}),
-        "joint_moments_shown": Dataset(displayed_moments(result)[0], "N*m", {
-            "columns": ",".join(displayed_moments(result)[1]), "convention": displayed_moments(result)[2]}),
+        "joint_moments_shown": Dataset(shown_moments, "N*m", {"columns": ",".join(shown_names),
+                                                               "convention": shown_convention}),
         "joint_moments_anatomical": Dataset(result.joint_moments_anatomical_Nm, "N*m", {
             "axes": "frames, joints (" + ",".join(JOINTS) + "), xyz",
             "convention": "moment of the proximal on the distal segment, components in the distal segment's "
