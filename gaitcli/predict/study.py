@@ -159,11 +159,12 @@ def stop(executor: ProcessPoolExecutor) -> None:
     parent alone): SIGTERM, which unwinds a worker's run (its atomic writes leave nothing half-written), then
     SIGKILL after :data:`STOP_GRACE_S` for any still running, which a worker that caught the interrupt in
     a solve and took its next queued task would be."""
-    # no public API ends running workers; shutdown() sets _processes to None, so take them first
+    # no public API ends running workers; shutdown() sets _processes to None, so take them first. SIGTERM before
+    # shutdown(): shutdown closes the task queue, and an idle worker reading it would die of EOFError, loudly
     processes = list((getattr(executor, "_processes", None) or {}).values())
-    executor.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         process.terminate()
+    executor.shutdown(wait=False, cancel_futures=True)
     deadline = time.monotonic() + STOP_GRACE_S
     for process in processes:
         process.join(max(0.0, deadline - time.monotonic()))
