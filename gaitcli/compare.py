@@ -434,13 +434,24 @@ def _csv_chunks(path: Path) -> Iterable[pd.DataFrame]:
         raise InputError(path, None, f"cannot be read ({exc.strerror})") from None
 
 
-def _numeric(cells: pd.Series) -> np.ndarray | None:
-    """The column as floats (empty cells NaN), or None when a cell is not a number (a text column)."""
+def _numeric(cells: pd.Series, path: Path) -> np.ndarray | None:
+    """The column as floats (empty cells NaN), or None when a cell is not a number (a text column). A number
+    beyond the range of a double (``1e400``) is an error: read as infinity it would equal every other."""
     text = cells.to_numpy(dtype=str)
     try:
-        return np.where(text == "", "nan", text).astype(float)
+        values = np.where(text == "", "nan", text).astype(float)
     except ValueError:
         return None
+    beyond = np.flatnonzero(np.isinf(values) & ~np.isin(np.char.lower(np.char.strip(text)), _INFINITIES))
+    if beyond.size:
+        k = beyond[0]
+        raise InputError(path, str(cells.name), f"{text[k][:40]} on line {cells.index[k] + 2} is beyond the range "
+                                                f"of a double (expected a finite number, inf or -inf)")
+    return values
+
+
+#: how an infinity is spelled in a table (numpy and pandas write ``inf``)
+_INFINITIES = ("inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
 
 
 def _where(table: pd.DataFrame, row: int) -> str:
@@ -464,7 +475,7 @@ def _compare_csv(path_a: Path, path_b: Path, rel: str, tol: Tolerances) -> list[
         rows_b += 0 if tb is None else len(tb)
         if ta is not None and tb is not None and rows_a == rows_b:  # the same rows on both sides
             for column in columns:
-                xa, xb = _numeric(ta[column]), _numeric(tb[column])
+                xa, xb = _numeric(ta[column], path_a), _numeric(tb[column], path_b)
                 if xa is None or xb is None:
                     new = _text_finding(rel, column, ta[column].to_numpy(), tb[column].to_numpy(), ta)
                 else:
@@ -557,6 +568,13 @@ def _read_json(path: Path):
                                          f"{MAX_JSON_DIGITS} digits)")
         return int(digits)
 
+    def parse_float(digits: str) -> float:
+        value = float(digits)
+        if math.isinf(value):  # JSON writes an infinity as Infinity, which parse_constant reads
+            raise InputError(path, None, f"{digits[:40]} is beyond the range of a double (expected a finite "
+                                         f"number or Infinity)")
+        return value
+
     try:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
@@ -566,7 +584,7 @@ def _read_json(path: Path):
     if _depth(text) > MAX_JSON_DEPTH:  # before parsing: json and _walk recurse once per level
         raise InputError(path, None, f"nested more than {MAX_JSON_DEPTH} levels deep (expected a summary)")
     try:
-        return json.loads(text, parse_int=parse_int)
+        return json.loads(text, parse_int=parse_int, parse_float=parse_float)
     except json.JSONDecodeError as exc:
         raise InputError(path, None, f"not valid JSON ({exc.__class__.__name__})") from None
 

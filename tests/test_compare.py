@@ -271,3 +271,17 @@ def test_an_infinity_equals_only_the_same_infinity(tmp_path):
                      ("joint_moments.csv", "grf_z_N"): ("value", "-inf in A, inf in B (1 of 2 rows beyond tolerance)"),
                      ("summary.json", "objective"): ("value", "inf in A, 2.5 in B"),
                      ("summary.json", "ratio"): ("value", "inf in A, -inf in B")}
+
+
+@pytest.mark.parametrize("cell, summary", [("1e400", "1e400"), ("-2.5e999", "-2.5e999"), ("9" * 400 + ".0", None)])
+def test_a_number_beyond_a_double_is_an_input_error_not_infinity(tmp_path, cell, summary):
+    """Read as a float, 1e400 becomes inf and would equal inf, 1e401 and every other overflow."""
+    a = write_tree(tmp_path / "a", moments="time_s,grf_z_N\n0,inf\n")
+    b = write_tree(tmp_path / "b", moments=f"time_s,grf_z_N\n0,{cell}\n")
+    with pytest.raises(InputError, match=r"grf_z_N.*on line 2 is beyond the range of a double"):
+        compare_trees(a, b)
+    if summary is not None:
+        c = write_tree(tmp_path / "c")
+        (c / "normal" / "gait_out" / "idyn" / "summary.json").write_text(f'{{"objective": {summary}}}')
+        with pytest.raises(InputError, match="is beyond the range of a double"):
+            compare_trees(write_tree(tmp_path / "d"), c)
