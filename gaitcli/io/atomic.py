@@ -8,6 +8,7 @@ writing process's id (``.<target>.<pid>.<random>.part``), so that the next run c
 from __future__ import annotations
 
 import errno
+import hashlib
 import json
 import os
 import re
@@ -101,8 +102,8 @@ def _check_length(target: Path) -> None:
 
 
 def check_output_folder(folder: str | Path) -> None:
-    """Before any work, without creating anything: ``folder`` can be created and written, as far as can be
-    told (the first folder of it that exists is a folder, writable; no name or path too long)."""
+    """Before any work, leaving nothing behind: ``folder`` can be created and written, as far as can be told
+    (the first folder of it that exists is a folder in which a folder can be made; no name or path too long)."""
     folder = Path(os.path.abspath(folder))
     _check_length(folder / "summary.json")
     existing = next(p for p in (folder, *folder.parents) if os.path.lexists(p))
@@ -110,10 +111,16 @@ def check_output_folder(folder: str | Path) -> None:
         raise InputError(existing, None, "is a file (expected an output folder)")
     if not os.access(existing, os.W_OK | os.X_OK):
         raise InputError(existing, None, "is not writable (expected an output folder you can write)")
+    try:  # the permission bits do not tell for root, /proc or /sys, or a read-only mount: try it
+        os.rmdir(tempfile.mkdtemp(prefix=".gait-probe-", dir=existing))
+    except OSError as exc:
+        first = next((p for p in (folder, *folder.parents) if p.parent == existing), folder)
+        raise InputError(first, None, f"cannot be created ({exc.strerror}; expected an output folder you can "
+                                       f"write)") from None
 
 
 def check_output_file(target: str | Path) -> None:
-    """Before any work, without creating anything: the file ``target`` (and its temporary name) can be written
+    """Before any work, leaving nothing behind: the file ``target`` (and its temporary name) can be written
     in its folder, as far as can be told (:func:`check_output_folder`)."""
     target = Path(os.path.abspath(target))
     _check_length(target)
@@ -157,8 +164,9 @@ def atomic_path(target: str | Path):
 #: what gait writes into a folder it replaces whole: tables, HDF5 records, summaries and figures
 TOOL_SUFFIXES = (".csv", ".h5", ".json", ".png", ".gif")
 
-#: the list of the files gait wrote into a folder (JSON, POSIX paths relative to the folder), written with the
-#: folder by :func:`atomic_folder`; hidden, so that ``gait compare`` and the regression baselines pass it by
+#: the files gait wrote into a folder with the SHA-256 of each (JSON: POSIX path relative to the folder → hex
+#: digest), written with the folder by :func:`atomic_folder`; hidden, so that ``gait compare`` and the regression
+#: baselines pass it by
 MANIFEST = ".gait_files"
 
 #: a manifest larger than this is not gait's (a stage folder lists a few dozen files)
@@ -176,28 +184,39 @@ def _tree_files(folder: Path) -> list[str]:
     return sorted(out)
 
 
-def read_manifest(folder: Path) -> set[str] | None:
-    """The names gait recorded writing into ``folder``; None without a readable manifest (an older gaitcli's
-    folder, or a manifest that is not gait's: a link, too large, not a JSON list of names)."""
+def _digest(path: Path) -> str:
+    digest = hashlib.sha256()
+    with path.open("rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def read_manifest(folder: Path) -> dict[str, str | None] | None:
+    """The files gait recorded writing into ``folder``, each with its SHA-256 (None where the manifest gives
+    names only, as an older gaitcli wrote it); None without a readable manifest (an older gaitcli's folder, or a
+    manifest that is not gait's: a link, too large, not JSON of names)."""
     path = folder / MANIFEST
     if path.is_symlink() or not path.is_file():
         return None
     try:
         if path.stat().st_size > MANIFEST_MAX_BYTES:
             return None
-        names = json.loads(path.read_text(encoding="utf-8"))
+        written = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):  # UnicodeDecodeError and JSONDecodeError are ValueErrors
         return None
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
-        return None
-    return set(names)
+    if isinstance(written, list) and all(isinstance(n, str) for n in written):
+        return dict.fromkeys(written)
+    if isinstance(written, dict) and all(isinstance(d, str) for d in written.values()):
+        return written
+    return None
 
 
 def check_replaceable(target: str | Path) -> None:
     """Raise :class:`InputError` naming the first file below the folder ``target`` that gait did not write:
-    one not in the folder's manifest (:data:`MANIFEST`), or, in a folder without one (written by an older
-    gaitcli), one of another suffix than :data:`TOOL_SUFFIXES`; and any link. Replacing the folder whole
-    would delete it."""
+    one not in the folder's manifest (:data:`MANIFEST`) or changed since (its SHA-256 differs: the user saved
+    their own file under gait's name), or, in a folder without a manifest (written by an older gaitcli), one
+    of another suffix than :data:`TOOL_SUFFIXES`; and any link. Replacing the folder whole would delete it."""
     target = Path(target)
     if not target.is_dir() or target.is_symlink():
         return
@@ -213,6 +232,9 @@ def check_replaceable(target: str | Path) -> None:
                 raise InputError(path, None, "is not an output of gait, and the run would replace its folder "
                                              "(expected only gait's outputs there: move the file, or choose "
                                              "another -o)")
+            if written is not None and written.get(rel) is not None and _digest(path) != written[rel]:
+                raise InputError(path, None, "was changed since gait wrote it, and the run would replace its "
+                                             "folder (move the file, or choose another -o)")
 
 
 @contextmanager
@@ -220,8 +242,8 @@ def atomic_folder(target: str | Path):
     """Yield a temporary folder; on success it replaces ``target`` (the previous run's outputs) whole.
 
     A file (not a folder) at ``target``, or a file in it that gait did not write (:func:`check_replaceable`),
-    is the user's: an InputError, and nothing is moved. The names of the files written go into the folder's
-    manifest (:data:`MANIFEST`), so that the next run replaces only those. Leftovers of killed runs are removed first
+    is the user's: an InputError, and nothing is moved. The files written go into the folder's manifest
+    (:data:`MANIFEST`) with their digests, so that the next run replaces only those, unchanged. Leftovers of killed runs are removed first
     (:func:`remove_stale`).
     """
     target = Path(target)
@@ -236,7 +258,8 @@ def atomic_folder(target: str | Path):
         with write_errors(target):
             yield tmp
             manifest = tmp / MANIFEST
-            manifest.write_text(json.dumps(_tree_files(tmp), indent=0) + "\n", encoding="utf-8")
+            digests = {rel: _digest(tmp / rel) for rel in _tree_files(tmp)}
+            manifest.write_text(json.dumps(digests, indent=0) + "\n", encoding="utf-8")
             usual_permissions(manifest, folder=False)
             usual_permissions(tmp, folder=True)
             old = None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import errno
+import hashlib
 import json
 import math
 import os
@@ -19,7 +20,7 @@ import yaml
 from gaitcli import __version__
 from gaitcli.errors import InputError
 from gaitcli.io.h5 import Dataset, provenance, write_h5
-from gaitcli.io.atomic import MANIFEST, check_replaceable
+from gaitcli.io.atomic import MANIFEST, check_output_folder, check_replaceable
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 
 
@@ -156,21 +157,32 @@ def test_a_file_at_the_output_folder_is_refused_and_kept(tmp_path):
 
 
 def test_a_run_replaces_only_the_files_its_manifest_names(tmp_path):
-    """A folder gait wrote lists its files (``.gait_files``); any other file, even with one of gait's suffixes,
-    is the user's: refused before anything moves. A folder without a manifest keeps the suffix rule."""
+    """A folder gait wrote lists its files with their digests (``.gait_files``); any other file, even with one
+    of gait's suffixes, or one of its files changed since, is the user's: refused before anything moves. A folder without a manifest keeps the suffix rule."""
     target = tmp_path / "out" / "filter"
     with stage_folder(target) as tmp:
         write_json(tmp / "summary.json", {"frames": 20})
         (tmp / "plots").mkdir()
         (tmp / "plots" / "grf.png").write_bytes(b"png")
-    assert json.loads((target / MANIFEST).read_text()) == ["plots/grf.png", "summary.json"]
+    digests = json.loads((target / MANIFEST).read_text())
+    assert digests == {"plots/grf.png": hashlib.sha256(b"png").hexdigest(),
+                       "summary.json": hashlib.sha256((target / "summary.json").read_bytes()).hexdigest()}
     check_replaceable(target)  # only gait's files: replaceable
+    (target / "plots" / "grf.png").write_bytes(b"my own figure")  # the user's file under gait's name
+    with pytest.raises(InputError, match=r"grf\.png: was changed since gait wrote it"):
+        with stage_folder(target):
+            pytest.fail("the user's file must stop the run before it starts")
+    assert (target / "plots" / "grf.png").read_bytes() == b"my own figure"
+    (target / "plots" / "grf.png").write_bytes(b"png")
     (target / "my.csv").write_text("time_s\n0\n")
     before = _tree(target)
     with pytest.raises(InputError, match=r"my\.csv: is not an output of gait"):
         with stage_folder(target):
             pytest.fail("the user's file must stop the run before it starts")
     assert _tree(target) == before
+    (target / MANIFEST).write_text('["plots/grf.png", "summary.json", "my.csv"]')  # names only: no digests
+    (target / "summary.json").write_text("{}")
+    check_replaceable(target)
     (target / MANIFEST).unlink()  # as an older gaitcli left it: gait's suffixes are taken as gait's
     check_replaceable(target)
     (target / MANIFEST).write_text("not json")  # a damaged manifest is not gait's: the suffix rule again
@@ -189,6 +201,15 @@ def test_outputs_get_the_usual_permissions(tmp_path):
         os.umask(previous)
     assert stat.S_IMODE((tmp_path / "filter").stat().st_mode) == 0o755
     assert stat.S_IMODE((tmp_path / "filter" / "summary.json").stat().st_mode) == 0o644
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux /proc")
+def test_a_folder_that_cannot_be_made_is_refused_before_any_work_even_for_root(tmp_path):
+    """/proc's permission bits say writable to root, yet no folder can be made there: the check tries one."""
+    with pytest.raises(InputError, match="gait_out: cannot be created"):
+        check_output_folder("/proc/gait_out/filter")
+    check_output_folder(tmp_path / "new" / "filter")
+    assert list(tmp_path.iterdir()) == []  # the probe leaves nothing behind
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root may write anywhere")
