@@ -147,7 +147,7 @@ def test_an_impossible_marker_sample_is_a_gap_and_only_gaits_own_files_are_repla
     root, record = outcomes
     result = record["results"]["far_marker"]
     assert result.returncode == 0, result.describe()
-    assert ("gait: warning: trial.c3d: 1 marker samples beyond 100 m of the lab origin read as gaps (ASISr; first "
+    assert ("gait: warning: trial.c3d: 1 marker samples beyond 10000 m of the lab origin read as gaps (ASISr; first "
             "at frame 101)") in result.stderr_lines, result.stderr
     markers = pd.read_csv(root / "far" / "out" / "filter" / "markers_filtered.csv")
     metres = markers.filter(regex="_m$").to_numpy()

@@ -38,8 +38,8 @@ def _read_mutated(source: Path, tmp_path: Path, seed: int, count: int, chunk: in
 
     data = bytearray(source.read_bytes())
     # the bounds exactly: 10 s and 1 GB per read (the reader's limits grow with the file's size)
-    monkeypatch.setattr(c3d_module, "READ_TIME_S", LIMIT_S - len(data) / 2e6)
-    monkeypatch.setattr(c3d_module, "READ_MEMORY_BYTES", (1 << 30) - 40 * len(data))
+    monkeypatch.setattr(c3d_module, "READ_TIME_S", LIMIT_S - len(data) / 1e6)
+    monkeypatch.setattr(c3d_module, "READ_MEMORY_BYTES", (1 << 30) - c3d_module.READ_BYTES_PER_BYTE * len(data))
     outcomes = {"read": 0, "refused": 0}
     for offset, value in _mutations(source, seed, count)[chunk::CHUNKS]:
         mutated = bytearray(data)

@@ -13,7 +13,7 @@ import pytest
 from gaitcli.core.recording import ForcePlate, Markers
 from gaitcli.errors import GaitWarning
 from gaitcli.io.c3d import read_c3d
-from gaitcli.io.c3d.long import HEADER_FRAMES, frame_count
+from gaitcli.io.c3d.long import HEADER_FRAMES, planned_frames
 from gaitcli.io.c3d_write import write_c3d
 
 FRAMES = HEADER_FRAMES + 4465  # 70 000: a second part of 4 465 frames
@@ -60,17 +60,43 @@ def test_every_frame_and_sample_is_read_back(long_trial):
     assert any("read in parts" in note for note in recording.notes)
 
 
-@pytest.mark.parametrize("params,read,expected", [
-    ({"TRIAL": {"ACTUAL_START_FIELD": [1, 0], "ACTUAL_END_FIELD": [4464, 1]}}, 65535, 70000),
-    ({"TRIAL": {"ACTUAL_START_FIELD": [1, 0], "ACTUAL_END_FIELD": [-1, 1]}}, 65535, 131071),  # a signed low word
-    ({"POINT": {"FRAMES": [100000.0]}}, 65535, 100000),  # the specification's float POINT:FRAMES
-    ({"POINT": {"LONG_FRAMES": [80000.0], "FRAMES": [65535]}}, 65535, 80000),
-    ({"POINT": {"FRAMES": [560]}}, 560, 560),
-    ({}, 300, 300),
+@pytest.mark.parametrize("params,expected", [
+    ({"TRIAL": {"ACTUAL_START_FIELD": [1, 0], "ACTUAL_END_FIELD": [4464, 1]}}, 70000),
+    ({"TRIAL": {"ACTUAL_START_FIELD": [1, 0], "ACTUAL_END_FIELD": [-1, 1]}}, 131071),  # a signed low word
+    ({"POINT": {"LONG_FRAMES": [80000.0]}}, 80000),
+    ({"POINT": {"LONG_FRAMES": [100.0]}}, 300),  # fewer than the header's: the header's
+    ({}, 300),
 ])
-def test_frame_count_from_the_parameters(params, read, expected):
-    wrapped = {g: {k: {"value": np.asarray(v)} for k, v in group.items()} for g, group in params.items()}
-    assert frame_count(wrapped, read) == expected
+def test_the_frame_count_is_read_from_the_bytes_before_the_data(tmp_path, params, expected):
+    c = ezc3d.c3d()
+    c["parameters"]["POINT"]["RATE"]["value"] = [100.0]
+    c["parameters"]["POINT"]["LABELS"]["value"] = ["A", "B"]
+    c["data"]["points"] = np.ones((4, 2, 300))
+    for group, values in params.items():
+        for name, value in values.items():
+            c.add_parameter(group, name, value)
+    c.write(str(tmp_path / "t.c3d"))
+    assert planned_frames(tmp_path / "t.c3d") == (expected, 8)
+
+
+@pytest.mark.parametrize("part_numbers", [6500, 2 * 10**6])
+def test_a_trial_read_in_parts_equals_the_trial_read_whole(long_trial, monkeypatch, part_numbers):
+    """Parts of 500 and (for the 70 000 frames) 65 535 frames: the same markers, plates and notes, the
+    FORCE_PLATFORM baseline taken once over the file's own frames."""
+    import gaitcli.io.c3d as reader
+
+    path, _, _ = long_trial
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", GaitWarning)
+        whole = read_c3d(path, to_model_axes=False)
+        monkeypatch.setattr(reader, "PART_NUMBERS", part_numbers)
+        parts = reader.read_c3d_here(path, to_model_axes=False)
+    assert parts.markers.labels == whole.markers.labels and parts.markers.first_frame == whole.markers.first_frame
+    np.testing.assert_array_equal(parts.markers.positions_m, whole.markers.positions_m)
+    for a, b in zip(parts.plates, whole.plates, strict=True):
+        np.testing.assert_array_equal(a.force_N, b.force_N)
+        np.testing.assert_array_equal(a.moment_Nm, b.moment_Nm)
+    assert [n for n in parts.notes if "read in parts" not in n] == [n for n in whole.notes if "read in parts" not in n]
 
 
 def test_a_long_file_whose_data_are_cut_is_refused(long_trial, tmp_path):

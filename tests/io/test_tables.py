@@ -194,8 +194,8 @@ def test_markers_beyond_the_labs_reach_are_gaps(tmp_path):
     """A coordinate of 3·10³⁵ m is a damaged sample, not a position: a gap, warned, the rest kept."""
     path = _csv(tmp_path / "markers.csv", ["time_s", "A_x_m", "A_y_m", "A_z_m", "B_x_m", "B_y_m", "B_z_m"],
                 [["0", "1", "2", "0.9", "1", "2", "1"], ["0.01", "1", "3e35", "0.9", "1", "2", "1"],
-                 ["0.02", "1", "2", "0.9", "-99.9", "2", "1"]])
-    with pytest.warns(GaitWarning, match=r"markers\.csv: 1 marker samples beyond 100 m .* read as gaps \(A\)"):
+                 ["0.02", "1", "2", "0.9", "-9999.9", "2", "1"]])
+    with pytest.warns(GaitWarning, match=r"markers\.csv: 1 marker samples beyond 10000 m .* read as gaps \(A\)"):
         markers = read_markers_csv(path)
     assert np.isnan(markers.positions_m[1, 0]).all() and np.isfinite(markers.positions_m[[0, 2]]).all()
-    assert markers.positions_m[2, 1, 0] == pytest.approx(-99.9)
+    assert markers.positions_m[2, 1, 0] == pytest.approx(-9999.9)

@@ -10,7 +10,6 @@ rotation comes from :mod:`gaitcli.io.axes`.
 
 from __future__ import annotations
 
-import dataclasses
 import faulthandler
 import multiprocessing
 import os
@@ -26,24 +25,25 @@ except ImportError:  # Windows: no address-space cap
     resource = None
 
 from gaitcli.core.interrupts import end_with_parent
-from gaitcli.core.recording import Markers, Recording
+from gaitcli.core.recording import Recording
 from gaitcli.errors import InputError
 from gaitcli.io.axes import apply_rotation, infer_lab_to_model
 from gaitcli.io.c3d.events import read_events
 from gaitcli.io.c3d.header import C3D_MAX_NUMBERS, check_file, one_line, param, warn
-from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, frame_count
+from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, planned_frames
 from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
-from gaitcli.io.c3d.plates import plate_axes, read_plates
+from gaitcli.io.c3d.plates import PLATFORM_SAMPLES, plate_axes, plates_from, platform_outputs
 
 __all__ = ["read_c3d", "read_c3d_here", "MODEL_OUTPUT_GROUPS", "plate_axes"]
 
 
-#: limits of one C3D read in its child process: wall time (plus a second per 2 MB: ezc3d's force-platform
-#: module takes ~17 µs per analog sample) and address space above the parent's (plus 40 bytes per byte of
-#: file: a 67 MB trial of 72 000 frames with two 1 kHz plates peaks at 2.2 GB); the file's bytes counted up to
-#: what C3D_MAX_NUMBERS allows, so at most ~90 s and ~7.5 GB
+#: limits of one C3D read in its child process: wall time (plus a second per MB: the library's Python layer
+#: converts frame by frame, ~0.4 s per MB of a trial with two 1 kHz plates) and address space above the
+#: parent's (plus READ_BYTES_PER_BYTE of file: the library's objects for one part at most, PART_NUMBERS, and the
+#: trial's arrays twice, as built and as sent); the file's bytes counted up to what C3D_MAX_NUMBERS allows
 READ_TIME_S = 10.0
 READ_MEMORY_BYTES = 1 << 30
+READ_BYTES_PER_BYTE = 24
 
 
 def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
@@ -61,15 +61,15 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     size = min(path.stat().st_size, 4 * C3D_MAX_NUMBERS + (1 << 20))
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
-    memory_bytes = READ_MEMORY_BYTES + 40 * size
+    memory_bytes = READ_MEMORY_BYTES + READ_BYTES_PER_BYTE * size
     child = context.Process(target=_child_read, daemon=True,
                             args=(path, to_model_axes, header_frames, send, receive, memory_bytes, os.getpid()))
     child.start()
     send.close()
     try:
-        if not receive.poll(READ_TIME_S + size / 2e6):
+        if not receive.poll(READ_TIME_S + size / 1e6):
             raise InputError(path, None, f"cannot read C3D: reading it took longer than "
-                                         f"{READ_TIME_S + size / 2e6:.0f} s (a damaged parameter section?)")
+                                         f"{READ_TIME_S + size / 1e6:.0f} s (a damaged parameter section?)")
         try:
             kind, *payload = receive.recv()
         except EOFError:
@@ -151,26 +151,29 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
     path = Path(path)
     if header_frames is _UNCHECKED:
         header_frames = check_file(path)
-    try:
-        c = ezc3d.c3d(str(path))
-    except Exception as exc:  # ezc3d raises RuntimeError/OSError/ValueError with multi-line text
-        text = one_line(exc)
-        if "ignoreBadFormatting" in text:  # the library's advice to its own callers, an option gait lacks
-            text = "its parameters break the C3D format (a damaged or non-standard file)"
-        raise InputError(path, None, f"cannot read C3D: {text}") from None
-    n_frames = c["data"]["points"].shape[2]
-    if header_frames is not None and n_frames < header_frames:
-        raise InputError(path, "data", f"cannot read C3D: file is truncated ({n_frames} of {header_frames} frames)")
-
-    params = c["parameters"]
+    total, per_frame = planned_frames(path)
+    part_frames = min(HEADER_FRAMES, max(1, PART_NUMBERS // max(per_frame, 1)))
+    if total is None or total <= part_frames:
+        c = _open(path)
+        n_frames = c["data"]["points"].shape[2]
+        if header_frames is not None and n_frames < header_frames:
+            raise InputError(path, "data", f"cannot read C3D: file is truncated ({n_frames} of {header_frames} "
+                                           "frames)")
+        params, header = c["parameters"], c["header"]["points"]
+        points, residuals, platforms = _part_arrays(c)
+        del c
+    else:
+        params, header, points, residuals, platforms = _read_in_parts(path, total, part_frames)
     notes: list[str] = []
-    length_m = point_length_m(path, params, c["data"]["points"], notes)
-    markers = read_markers(path, c, length_m, notes)
-    plates = read_plates(path, c, length_m, markers, notes)
-    total = frame_count(params, n_frames)
-    if total > n_frames:
-        markers, plates = _read_beyond_header(path, total, length_m, markers, plates)
-        notes.append(f"{total} frames (more than the header's {n_frames}), read in parts of {HEADER_FRAMES}")
+    if total is not None and total > part_frames:
+        notes.append(f"{total} frames read in parts of {part_frames}"
+                     + (f" (more than the header's {HEADER_FRAMES})" if total > HEADER_FRAMES else ""))
+    length_m = point_length_m(path, params, points, notes)
+    markers = read_markers(path, {"parameters": params, "header": {"points": header},
+                                  "data": {"points": points, "meta_points": {"residuals": residuals}}}, length_m, notes)
+    del points, residuals
+    plates = plates_from(path, params, platforms, frame_rate_hz=float(header["frame_rate"]),
+                         n_frames=markers.n_frames, length_m=length_m, markers=markers, notes=notes)
     if not plates:
         warn(f"{path.name}: no usable force plates: markers only", notes)
 
@@ -215,27 +218,56 @@ def subject_metadata(params) -> dict[str, float]:
     return out
 
 
-def _read_beyond_header(path: Path, total: int, length_m: float, markers, plates) -> tuple:
-    """``markers`` and ``plates`` (the first 65 535 frames) with the rest of a long trial appended
-    (:mod:`.long`). The parts' own warnings are not repeated (the first part's were given)."""
-    positions = [markers.positions_m]
-    forces = {p.name: ([p.force_N], [p.moment_Nm]) for p in plates}
-    with chunk_files(path, total) as parts:
+#: the most numbers the C3D library holds at once: a larger trial is read in parts of about this many (the
+#: library keeps ~130 bytes per number, so a part costs ~260 MB, while the trial itself is kept as arrays)
+PART_NUMBERS = 2_000_000
+
+
+def _open(path: Path):
+    """ezc3d's reading of ``path``, its errors an :class:`InputError` of one line."""
+    try:
+        return ezc3d.c3d(str(path))
+    except Exception as exc:  # ezc3d raises RuntimeError/OSError/ValueError with multi-line text
+        text = one_line(exc)
+        if "ignoreBadFormatting" in text:  # the library's advice to its own callers, an option gait lacks
+            text = "its parameters break the C3D format (a damaged or non-standard file)"
+        raise InputError(path, None, f"cannot read C3D: {text}") from None
+
+
+def _part_arrays(c) -> tuple[np.ndarray, np.ndarray, list]:
+    """The points (4, markers, frames), their residuals (1, markers, frames) and the force-platform outputs
+    (:func:`~.plates.platform_outputs`) of ezc3d's ``c``, as arrays that outlive it."""
+    points = np.asarray(c["data"]["points"], dtype=float)
+    residuals = np.asarray(c["data"]["meta_points"]["residuals"], dtype=float)
+    return points, residuals, platform_outputs(c)
+
+
+def _read_in_parts(path: Path, total: int, part_frames: int) -> tuple:
+    """(parameters, point header, points, residuals, platform outputs) of a trial of ``total`` frames read
+    ``part_frames`` at a time (:func:`~.long.chunk_files`): the library's objects for one part at a time, the
+    trial's arrays joined. The parameters and the first frame are the file's own, not the parts'."""
+    points, residuals, platforms = [], [], []
+    params = header = None
+    with chunk_files(path, total, part_frames, start_frame=0) as parts:
         for part, count in parts:
-            c = ezc3d.c3d(str(part))
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                more = read_markers(path, c, length_m, [])
-                more_plates = read_plates(path, c, length_m, more, [])
-            if more.labels != markers.labels or more.n_frames != count:
-                raise InputError(path, "data", f"cannot read C3D: frames beyond {HEADER_FRAMES} do not match "
-                                               "the first ones")
-            positions.append(more.positions_m)
-            for p in more_plates:
-                if p.name in forces:
-                    forces[p.name][0].append(p.force_N)
-                    forces[p.name][1].append(p.moment_Nm)
-    merged = Markers(markers.labels, np.concatenate(positions), markers.rate_hz, markers.first_frame)
-    merged_plates = [dataclasses.replace(p, force_N=np.concatenate(forces[p.name][0]),
-                                         moment_Nm=np.concatenate(forces[p.name][1])) for p in plates]
-    return merged, merged_plates
+            c = _open(part)
+            if params is None:
+                params, header = c["parameters"], dict(c["header"]["points"])
+            more = _part_arrays(c)
+            del c
+            if more[0].shape[1:] != (points[0].shape[1] if points else more[0].shape[1], count) or (
+                    platforms and [isinstance(p, str) for p in more[2]] != [isinstance(p, str) for p in platforms[0]]):
+                raise InputError(path, "data", "cannot read C3D: its parts do not match (a damaged file?)")
+            for whole, new in zip((points, residuals, platforms), more):
+                whole.append(new)
+    header["first_frame"] = _first_frame(path)
+    joined = [{k: (np.concatenate([p[i][k] for p in platforms], axis=1) if k in PLATFORM_SAMPLES else v)
+               for k, v in plate.items()} if not isinstance(plate, str) else plate
+              for i, plate in enumerate(platforms[0])]
+    return params, header, np.concatenate(points, axis=2), np.concatenate(residuals, axis=2), joined
+
+
+def _first_frame(path: Path) -> int:
+    """The header's first frame, counted from 0 as ezc3d counts it."""
+    with open(path, "rb") as f:
+        return int.from_bytes(f.read(8)[6:8], "little") - 1

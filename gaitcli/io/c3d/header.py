@@ -104,7 +104,7 @@ def check_ceiling(path: Path, head: bytes, records: dict, processor: int) -> Non
     any data are read."""
     n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
     first, last = struct.unpack("<2H", head[6:10])
-    frames = max(last - first + 1, *_long_frame_counts(path, records, processor), 0)
+    frames = max(last - first + 1, *long_frame_counts(path, records, processor), 0)
     per_frame = 4 * n_points + analog_per_frame
     if frames * per_frame > C3D_MAX_NUMBERS:
         raise InputError(path, "data", f"{frames} frames of {n_points} markers and {analog_per_frame} analog "
@@ -112,7 +112,7 @@ def check_ceiling(path: Path, head: bytes, records: dict, processor: int) -> Non
                                        f"({C3D_MAX_NUMBERS}; split the trial)")
 
 
-def _long_frame_counts(path: Path, records: dict, processor: int) -> list[int]:
+def long_frame_counts(path: Path, records: dict, processor: int) -> list[int]:
     """The frame counts a long trial's parameters announce (see :mod:`.long`), read from the file's bytes."""
     def values(group, name):
         record = records.get((group, name))

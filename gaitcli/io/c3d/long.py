@@ -1,14 +1,14 @@
-"""Trials longer than 65 535 frames: the C3D header counts frames in 16 bits, and ezc3d reads no more.
+"""Trials read in parts: longer than the C3D header's 65 535 frames (ezc3d reads no more), or too large for the
+library's per-sample objects to hold at once.
 
-Such files say how long they are in TRIAL:ACTUAL_START_FIELD / ACTUAL_END_FIELD (two 16-bit words each, low
+Long files say how long they are in TRIAL:ACTUAL_START_FIELD / ACTUAL_END_FIELD (two 16-bit words each, low
 word first: Vicon) or in POINT:FRAMES stored as a float (the C3D specification's advice); POINT:LONG_FRAMES
-(a float) is read too. :func:`frame_count` reads them; :func:`chunk_files` writes the frames beyond the
-first 65 535 as short C3D files, each the original's header and parameters with the frame range, the data
-start and the frame count rewritten and the next stretch of data behind them, so that ezc3d (and its
-force-platform module) reads every part as it reads any file. FORCE_PLATFORM:ZERO is then applied per part,
-over that part's own frames. :func:`write_frame_count` marks a long file gaitcli writes the way Vicon does.
+(a float) is read too. :func:`planned_frames` reads them from the file's bytes; :func:`chunk_files` writes a
+stretch of frames as a short C3D file at a time, the original's header and parameters with the frame range,
+the data start and the frame count rewritten and that stretch of data behind them, so that ezc3d (and its
+force-platform module) reads every part as it reads any file. :func:`write_frame_count` marks a long file
+gaitcli writes the way Vicon does.
 """
-
 from __future__ import annotations
 
 import struct
@@ -20,39 +20,36 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.errors import InputError
-from gaitcli.io.c3d.header import ParameterRecord, check_parameters, data_layout, param
+from gaitcli.io.c3d.header import ParameterRecord, check_parameters, data_layout, long_frame_counts
 
 #: the most frames a C3D header (and ezc3d) counts
 HEADER_FRAMES = 65535
 
 
-def _words(value) -> int | None:
-    """A 32-bit count from two 16-bit words (low first), each maybe stored as a signed int16."""
-    words = np.asarray(value, dtype=float).ravel()
-    if words.size < 2 or not np.all(np.isfinite(words)):
-        return None
-    low, high = (int(w) & 0xFFFF for w in words[:2])
-    return low | (high << 16)
-
-
-def frame_count(params, frames_read: int) -> int:
-    """The trial's frame count: the TRIAL fields', POINT:LONG_FRAMES' or a float POINT:FRAMES' where they say
-    more than ``frames_read`` (what ezc3d read), else ``frames_read``."""
-    start, end = _words(param(params, "TRIAL", "ACTUAL_START_FIELD")), _words(param(params, "TRIAL",
-                                                                                   "ACTUAL_END_FIELD"))
-    counts = [end - start + 1] if start is not None and end is not None and end >= start else []
-    for name in ("LONG_FRAMES", "FRAMES"):
-        value = np.asarray(param(params, "POINT", name, []), dtype=float).ravel()
-        if value.size and np.isfinite(value[0]):
-            counts.append(int(value[0]))
-    longer = [n for n in counts if n > frames_read]
-    return max(longer) if longer else frames_read
+def planned_frames(path: Path) -> tuple[int | None, int]:
+    """(frames, numbers per frame) of the C3D file ``path`` from its header and parameter bytes, before any data
+    are read: the header's count, or more where the long-trial fields say so (TRIAL:ACTUAL_START/END_FIELD,
+    POINT:LONG_FRAMES, a float POINT:FRAMES); frames None where the header's 16-bit frame numbers run
+    backwards (the library then decides)."""
+    with open(path, "rb") as f:
+        head = f.read(512)
+        f.seek((head[0] - 1) * 512)
+        param_head = f.read(4)
+    processor = param_head[3] - 83
+    records = check_parameters(path, (head[0] - 1) * 512, param_head[2], path.stat().st_size)
+    n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
+    first, last = struct.unpack("<2H", head[6:10])
+    if last < first:
+        return None, 4 * n_points + analog_per_frame
+    return max(last - first + 1, *long_frame_counts(path, records, processor)), 4 * n_points + analog_per_frame
 
 
 @contextmanager
-def chunk_files(path: Path, total_frames: int) -> Iterator[list[tuple[Path, int]]]:
-    """Temporary C3D files of frames 65 536 … ``total_frames`` of ``path``, at most 65 535 frames each; yields
-    [(file, frames)] and removes them afterwards."""
+def chunk_files(path: Path, total_frames: int, part_frames: int = HEADER_FRAMES, *,
+                start_frame: int = HEADER_FRAMES) -> Iterator[Iterator[tuple[Path, int]]]:
+    """Temporary C3D files of frames ``start_frame`` + 1 … ``total_frames`` of ``path`` (counted from 1), at
+    most ``part_frames`` (≤ 65 535) each, made one at a time: yields an iterator of (file, frames), each file
+    removed once the next is asked for, the last on leaving."""
     size = path.stat().st_size
     with open(path, "rb") as f:
         head = f.read(512)
@@ -69,23 +66,26 @@ def chunk_files(path: Path, total_frames: int) -> Iterator[list[tuple[Path, int]
         raise InputError(path, "data", f"cannot read C3D: file is truncated ({size} bytes, its "
                                        f"{total_frames} frames need {start + total_frames * frame_bytes})")
     new_block = param_block + blocks  # the data right after the parameters
-    with tempfile.TemporaryDirectory(prefix="gait-c3d-") as folder, open(path, "rb") as f:
-        out = []
-        for k, first in enumerate(range(HEADER_FRAMES, total_frames, HEADER_FRAMES)):
-            count = min(HEADER_FRAMES, total_frames - first)
-            part = bytearray(head)
-            part[6:10] = struct.pack("<2H", 1, count)  # first and last frame
-            part[16:18] = struct.pack("<H", new_block)
-            _set(part, records.get(("POINT", "DATA_START")), new_block)
-            _set(part, records.get(("POINT", "FRAMES")), count)
-            _set(part, records.get(("POINT", "LONG_FRAMES")), count)
-            _set(part, records.get(("TRIAL", "ACTUAL_START_FIELD")), 1)
-            _set(part, records.get(("TRIAL", "ACTUAL_END_FIELD")), count)
-            f.seek(start + first * frame_bytes)
-            chunk = Path(folder) / f"part{k + 1}.c3d"
-            chunk.write_bytes(bytes(part) + f.read(count * frame_bytes))  # one part's data at a time
-            out.append((chunk, count))
-        yield out
+
+    def parts(folder: str) -> Iterator[tuple[Path, int]]:
+        with open(path, "rb") as f:
+            for first in range(start_frame, total_frames, part_frames):
+                count = min(part_frames, total_frames - first)
+                part = bytearray(head)
+                part[6:10] = struct.pack("<2H", 1, count)  # first and last frame
+                part[16:18] = struct.pack("<H", new_block)
+                _set(part, records.get(("POINT", "DATA_START")), new_block)
+                _set(part, records.get(("POINT", "FRAMES")), count)
+                _set(part, records.get(("POINT", "LONG_FRAMES")), count)
+                _set(part, records.get(("TRIAL", "ACTUAL_START_FIELD")), 1)
+                _set(part, records.get(("TRIAL", "ACTUAL_END_FIELD")), count)
+                f.seek(start + first * frame_bytes)
+                chunk = Path(folder) / "part.c3d"
+                chunk.write_bytes(bytes(part) + f.read(count * frame_bytes))  # one part's data at a time
+                yield chunk, count
+
+    with tempfile.TemporaryDirectory(prefix="gait-c3d-") as folder:
+        yield parts(folder)
 
 
 def _set(section: bytearray, record: ParameterRecord | None, value: int) -> None:

@@ -25,10 +25,10 @@ __all__ = ["MODEL_OUTPUT_GROUPS", "LAB_REACH_M", "LENGTH_M", "point_length_m", "
 MODEL_OUTPUT_GROUPS = ("ANGLES", "FORCES", "MOMENTS", "POWERS", "SCALARS", "REACTIONS")
 """POINT parameters that list model outputs stored as points (not markers)."""
 
-LAB_REACH_M = 100.0
-"""No capture volume reaches this far from its lab origin (the longest instrumented walkways and tracks span a
-few tens of metres): a marker coordinate beyond ±100 m is a damaged sample, read as a gap, not a position whose
-moments would be astronomical."""
+LAB_REACH_M = 10_000.0
+"""A marker coordinate beyond ±10 km of the lab origin is a damaged sample, read as a gap, not a position whose
+moments would be astronomical. No capture volume comes near (a long treadmill or overground recording stays
+within a kilometre); and there a float C3D coordinate in millimetres resolves a millimetre no better."""
 
 LENGTH_M = {
     "mm": 1e-3, "millimeter": 1e-3, "millimeters": 1e-3, "millimetre": 1e-3, "millimetres": 1e-3,

@@ -91,13 +91,41 @@ def _plate_values(params, name: str, block: int | None, index: int):
     return flat[block * index:block * (index + 1)]
 
 
-def read_plates(path: Path, c, length_m: float, markers: Markers, notes: list[str]) -> list[ForcePlate]:
-    """The usable force plates of ezc3d's ``c`` in SI units and lab axes; refused or unloaded plates are warned."""
-    params = c["parameters"]
-    used = param(params, "FORCE_PLATFORM", "USED", [0])
+#: what ezc3d's force-platform module gives per plate, sample by sample (each (3, samples)), and once
+PLATFORM_SAMPLES = ("force", "moment", "center_of_pressure", "Tz")
+PLATFORM_GEOMETRY = ("corners", "origin")
+
+
+def platform_outputs(c) -> list[dict[str, np.ndarray] | str]:
+    """Per plate of FORCE_PLATFORM:USED, ezc3d's force-platform outputs of ``c`` (:data:`PLATFORM_SAMPLES`,
+    :data:`PLATFORM_GEOMETRY`) as arrays, or why the module refused the plate."""
+    used = param(c["parameters"], "FORCE_PLATFORM", "USED", [0])
     n_used = int(used[0]) if len(used) else 0
-    analogs = c["data"]["analogs"]
-    if n_used == 0 or analogs.shape[1] == 0:
+    if n_used == 0 or c["data"]["analogs"].shape[1] == 0:
+        return []
+    out: list[dict[str, np.ndarray] | str] = []
+    for i in range(n_used):
+        try:
+            pf = ezc3d.c3d.PlatForm(ezc3d.ezc3d.ForcePlatform(i, c.c3d_swig))
+        except Exception as exc:  # ezc3d raises RuntimeError/ValueError with its own text
+            out.append(one_line(exc))
+            continue
+        out.append({k: np.asarray(pf[k], dtype=float) for k in PLATFORM_SAMPLES + PLATFORM_GEOMETRY})
+    return out
+
+
+def read_plates(path: Path, c, length_m: float, markers: Markers, notes: list[str]) -> list[ForcePlate]:
+    """The usable force plates of ezc3d's ``c`` in SI units and lab axes (:func:`plates_from`)."""
+    return plates_from(path, c["parameters"], platform_outputs(c), frame_rate_hz=float(c["header"]["points"]
+                       ["frame_rate"]), n_frames=c["data"]["points"].shape[2], length_m=length_m, markers=markers,
+                       notes=notes)
+
+
+def plates_from(path: Path, params, outputs: list[dict[str, np.ndarray] | str], *, frame_rate_hz: float,
+                n_frames: int, length_m: float, markers: Markers, notes: list[str]) -> list[ForcePlate]:
+    """The usable force plates from ezc3d's force-platform ``outputs`` (:func:`platform_outputs`, over the
+    whole trial) in SI units and lab axes; refused or unloaded plates are warned."""
+    if not outputs:
         return []
     force_units = param(params, "FORCE_PLATFORM", "UNITS", [])
     force_unit = str(force_units[0]).strip() if len(force_units) else "N"
@@ -106,23 +134,17 @@ def read_plates(path: Path, c, length_m: float, markers: Markers, notes: list[st
     force_scale = _FORCE_N[force_unit.lower()]
     types = np.asarray(param(params, "FORCE_PLATFORM", "TYPE", []), dtype=int).ravel()
     analog_units = strings(params, "ANALOG", "UNITS")
-    n_frames = c["data"]["points"].shape[2]
-    n_samples = analogs.shape[2]
-    rate_hz = float(c["header"]["points"]["frame_rate"]) * (n_samples / max(n_frames, 1))
+    n_samples = next((pf["force"].shape[1] for pf in outputs if not isinstance(pf, str)), 0)
+    rate_hz = frame_rate_hz * (n_samples / max(n_frames, 1))
     seen = np.isfinite(markers.positions_m).all(axis=2)
     marker_mean_lab = markers.positions_m[seen].mean(axis=0) / length_m if seen.any() else None
 
     plates = []
-    for i in range(n_used):
+    for i, pf in enumerate(outputs):
         name = f"plate{i + 1}"
-        try:
-            pf = ezc3d.c3d.PlatForm(ezc3d.ezc3d.ForcePlatform(i, c.c3d_swig))
-        except Exception as exc:
+        if isinstance(pf, str):
             type_text = f" (TYPE {types[i]})" if i < types.size else ""
-            warn(
-                f"{path.name}: plate {i + 1}{type_text} refused: {one_line(exc)}; supported FORCE_PLATFORM:TYPE 1-4",
-                notes,
-            )
+            warn(f"{path.name}: plate {i + 1}{type_text} refused: {pf}; supported FORCE_PLATFORM:TYPE 1-4", notes)
             continue
         plate_type = int(types[i]) if i < types.size else 2
         force = np.asarray(pf["force"], dtype=float).T
