@@ -1,8 +1,8 @@
 """A trial longer than the C3D header's 65,535 frames through ``gait filter`` and ``gait idyn``.
 
 Run from the repository root: ``python benchmarks/bench_long_trial.py [--strides 833]`` (833 strides of the
-synthetic walker: about 100,000 frames at 100 Hz, two plates at 1 kHz). Prints, for ``gait synth``,
-``gait filter`` and ``gait idyn`` (each a new process, one core): wall time, peak resident memory of the
+synthetic walker: about 100,000 frames at 100 Hz, two plates at 1 kHz). Prints, for ``gait synth``, the C3D reader
+alone, ``gait filter`` and ``gait idyn`` (each a new process, one core): wall time, peak resident memory of the
 process and of the C3D reader's child, the frame count the stage's summary.json reports against the file's,
 and the peak memory per byte of trial.c3d. ``--compare-mb 25 100`` instead prints the peak memory of
 ``gait compare`` on two identical trees with a joint_moments.csv of about that many MB each (flat in the size:
@@ -33,6 +33,15 @@ def _run(*args) -> tuple[float, float]:
     start = time.perf_counter()
     out = subprocess.run([sys.executable, "-c", _PEAK, *gait_argv(*args)], check=True, capture_output=True,
                          text=True)
+    return time.perf_counter() - start, int(out.stdout.split()[-1]) / 1024
+
+
+def _read(path: Path) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of reading ``path`` with gaitcli's C3D reader in a process of its own."""
+    code = ("import resource, sys, warnings; warnings.simplefilter('ignore'); from gaitcli.io.c3d import read_c3d_here; "
+            "read_c3d_here(sys.argv[1]); print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)")
+    start = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", code, str(path)], check=True, capture_output=True, text=True)
     return time.perf_counter() - start, int(out.stdout.split()[-1]) / 1024
 
 
@@ -80,6 +89,9 @@ def main() -> None:
         wall, peak = _run("-q", "synth", trial, "--strides", args.strides)
         size = (trial / "trial.c3d").stat().st_size
         print(f"{'synth':<8} {wall:8.1f} {peak:8.0f}  trial.c3d {size / 1e6:.1f} MB")
+        wall, peak = _read(trial / "trial.c3d")
+        print(f"{'read':<8} {wall:8.1f} {peak:8.0f}  the C3D reader alone; peak {peak * 1e6 / size:.0f} bytes per "
+              f"byte of trial.c3d")
         for stage in ("filter", "idyn"):
             wall, peak = _run("-q", stage, trial, "--no-plots")
             summary = json.loads((trial / "gait_out" / stage / "summary.json").read_text())

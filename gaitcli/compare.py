@@ -71,6 +71,7 @@ import json
 import math
 import re
 from collections.abc import Iterable, Mapping
+from contextlib import closing
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -423,9 +424,10 @@ def _csv_chunks(path: Path) -> Iterable[pd.DataFrame]:
             return
         rows = max(1, CHUNK_CELLS // max(1, len(columns)))
         empty = True
-        for chunk in pd.read_csv(path, dtype=str, keep_default_na=False, chunksize=rows):
-            empty = False
-            yield chunk
+        with pd.read_csv(path, dtype=str, keep_default_na=False, chunksize=rows) as reader:
+            for chunk in reader:
+                empty = False
+                yield chunk
         if empty:
             yield pd.DataFrame(columns=columns)
     except (pd.errors.ParserError, UnicodeDecodeError, ValueError) as exc:
@@ -462,7 +464,11 @@ def _where(table: pd.DataFrame, row: int) -> str:
 def _compare_csv(path_a: Path, path_b: Path, rel: str, tol: Tolerances) -> list[Finding]:
     """Two tables compared chunk by chunk (:func:`_csv_chunks`); each column's findings over the chunks merged
     (:func:`_merged`). A column is compared as text in the chunks where a cell of it is not a number."""
-    chunks_a, chunks_b = _csv_chunks(path_a), _csv_chunks(path_b)
+    with closing(_csv_chunks(path_a)) as chunks_a, closing(_csv_chunks(path_b)) as chunks_b:
+        return _compare_chunks(chunks_a, chunks_b, rel, tol, path_a, path_b)
+
+
+def _compare_chunks(chunks_a, chunks_b, rel: str, tol: Tolerances, path_a: Path, path_b: Path) -> list[Finding]:
     ta, tb = next(chunks_a), next(chunks_b)
     out = [Finding(rel, c, f"column_only_in_{side}", detail=f"only in {side.upper()}")
            for side, cols, others in (("a", ta.columns, tb.columns), ("b", tb.columns, ta.columns))

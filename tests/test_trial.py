@@ -508,8 +508,8 @@ def test_no_subject_yaml_and_no_vsk(tmp_path):
     folder = tmp_path / "empty"
     folder.mkdir()
     (folder / "trial.c3d").write_bytes(b"x")
-    with pytest.raises(InputError, match="subject.yaml: file not found \(every trial folder needs a subject.yaml "
-                                         "or a Vicon .vsk\)"):
+    with pytest.raises(InputError, match=r"subject.yaml: file not found \(every trial folder needs a subject.yaml "
+                                         r"or a Vicon .vsk\)"):
         open_trial(folder)
 
 

@@ -147,6 +147,9 @@ class Runner:
                 self.proc.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 self.proc.kill()
+                self.proc.wait()
+        for stream in (self.proc.stdin, self.proc.stdout, self.log):
+            stream.close()
 
 
 #: the idle runners of this test process (an xdist worker), started on first need, closed at exit

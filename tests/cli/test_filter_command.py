@@ -102,7 +102,7 @@ def test_writes_every_file_of_the_stage(runs, which):
     assert [p.name for p in out.rglob(".*")] == [".gait_files"]  # no temporary file; the list of gait's files
     listed = json.loads((out / ".gait_files").read_text())
     files = sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file())
-    assert listed == [f for f in files if f != ".gait_files"]
+    assert list(listed) == [f for f in files if f != ".gait_files"]
 
 
 def test_default_output_folders(runs):

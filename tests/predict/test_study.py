@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -176,13 +177,14 @@ def test_workers_end_when_their_parent_is_killed(tmp_path):
     assert len(workers) == 2
     os.kill(parent.pid, signal.SIGKILL)
     parent.wait(10)
+    parent.stdout.close()
 
     def alive(pid):
         try:
             os.kill(pid, 0)
         except ProcessLookupError:
             return False
-        return not open(f"/proc/{pid}/stat").read().split()[2] == "Z"
+        return not Path(f"/proc/{pid}/stat").read_text().split()[2] == "Z"
 
     deadline = time.monotonic() + 10
     while any(alive(p) for p in workers) and time.monotonic() < deadline:
