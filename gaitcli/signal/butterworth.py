@@ -4,7 +4,7 @@ The dissertation filters all measured signals with a 2nd-order Butterworth filte
 run forward and then backward in time, which cancels the phase shift and squares
 the magnitude response. So that the net (4th-order) filter has its half-power
 point at the wanted cut-off ``f_c``, the single-pass filter is designed at a
-higher frequency ``f_d`` (MODEL_CONSTANTS.md decision 3 and section J):
+higher frequency ``f_d`` (docs/model_constants.md §3):
 
     C   = (2^(1/passes) - 1)^(1/(2 order))         (0.802 for order 2, 2 passes)
     f_d = (f_s/pi) atan( tan(pi f_c / f_s) / C )   (7.43 Hz for 6 Hz at 100 Hz)
@@ -39,7 +39,7 @@ def correction_factor(*, order: int = 2, passes: int = 2) -> float:
 def design_frequency_hz(cutoff_hz: float, rate_hz: float, *, order: int = 2, passes: int = 2) -> float:
     """Single-pass design frequency (Hz) giving a net half-power cut-off ``cutoff_hz`` after ``passes`` passes.
 
-    ``f_d = (f_s/pi) atan(tan(pi f_c/f_s) / C)`` (3.1.4; MODEL_CONSTANTS decision 3).
+    ``f_d = (f_s/pi) atan(tan(pi f_c/f_s) / C)`` (3.1.4; docs/model_constants.md §3).
     Raises :class:`InputError` unless ``0 < cutoff_hz < rate_hz / 2``.
     """
     _check_rates(cutoff_hz, rate_hz)
@@ -54,7 +54,7 @@ def design_frequency_hz(cutoff_hz: float, rate_hz: float, *, order: int = 2, pas
 def design_sos(cutoff_hz: float, rate_hz: float, *, order: int = 2) -> np.ndarray:
     """Second-order sections of the single-pass low-pass filter, designed at :func:`design_frequency_hz`."""
     f_d = design_frequency_hz(cutoff_hz, rate_hz, order=order, passes=2)
-    from scipy.signal import butter  # here, not at import: scipy.signal is 0.6 s of every command's start-up
+    from scipy.signal import butter  # here, not at import: scipy.signal slows every command's start-up
 
     return butter(int(order), f_d, btype="low", fs=rate_hz, output="sos")
 
@@ -96,14 +96,30 @@ def finite_runs(finite: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int = 0) -> np.ndarray:
     """Zero-lag low-pass Butterworth filter along ``axis`` (3.1.4); net half-power cut-off ``cutoff_hz``.
 
-    ``x`` is any array sampled at ``rate_hz`` along ``axis`` (e.g. marker positions
-    (frames, markers, 3) in metres, or plate forces (samples, 3) in newtons); the
-    result has the same shape and units. An ``order``-th order Butterworth filter
-    designed at :func:`design_frequency_hz` is run forward and backward
-    (``sosfiltfilt``, odd extension over :func:`pad_length` samples). NaN samples
-    stay NaN and split the signal: each finite run is filtered separately, columns
-    that share the same NaN pattern in one call. Runs shorter than the padding are
-    filtered with ``padlen = run length - 1``; single samples are left unfiltered.
+    An ``order``-th order filter designed at :func:`design_frequency_hz` is run forward and
+    backward (``sosfiltfilt``, odd extension over :func:`pad_length` samples). NaN samples stay
+    NaN and split the signal: each finite run is filtered on its own (columns with one NaN
+    pattern together); runs shorter than the padding get ``padlen = run length - 1``, single
+    samples are left as they are.
+
+    Parameters
+    ----------
+    x : array_like
+        Samples along ``axis``, any units (marker positions (frames, markers, 3) in m, plate
+        forces (samples, 3) in N, ...).
+    rate_hz : float
+        Sampling rate of ``x``, Hz.
+    cutoff_hz : float
+        Net half-power cut-off of the forward-backward filter, Hz; ``0 < cutoff_hz < rate_hz / 2``.
+    order : int
+        Order of one pass (the net filter's is twice that).
+    axis : int
+        The time axis.
+
+    Returns
+    -------
+    numpy.ndarray
+        The filtered signal, same shape and units as ``x``.
     """
     from scipy.signal import sosfiltfilt
 
