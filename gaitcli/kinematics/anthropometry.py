@@ -2,7 +2,7 @@
 
 The added masses of the experiments (Tables A.2–A.3) are in :mod:`gaitcli.kinematics.disturbances`.
 
-de Leva's table (MODEL_CONSTANTS section A): mass = fraction · body mass; CoM at a
+de Leva's table (docs/model_constants.md §1): mass = fraction · body mass; CoM at a
 fraction of the segment length from the first (origin) endpoint; I = m (r L)². Lengths
 are de Leva's mean lengths scaled by stature / reference stature (1.741 m male,
 1.735 m female) unless measured: the thigh (HJC→KJC) and shank (KJC→AJC) lengths
@@ -24,7 +24,7 @@ The model's 8 bodies (3.2.1) split the trunk as Table A.4 does:
   0.112·H is the value that fits them best).
 
 Inertia axes (segment axes, upright posture: x forward, y left, z up): r_sag about
-x, r_trans about y, r_long about z (MODEL_CONSTANTS A). For the foot (x along the
+x, r_trans about y, r_long about z (docs/model_constants.md §1). For the foot (x along the
 foot, heel→toe) the dissertation's assignment is used — r_long about x, r_sag about
 y, r_trans about z — which reproduces Table A.5's foot inertias.
 """
@@ -55,7 +55,7 @@ def _rows(values: dict[str, tuple]) -> dict[str, DeLevaSegment]:
     return {k: DeLevaSegment(*v) for k, v in values.items()}
 
 
-#: de Leva (1996) Table 4 (MODEL_CONSTANTS A); keys name the endpoints used
+#: de Leva (1996) Table 4 (docs/model_constants.md §1); keys name the endpoints used
 DE_LEVA = {
     "male": _rows({
         "head": (242.9, 6.94, 50.02, 30.3, 31.5, 26.1),  # VERT->CERV

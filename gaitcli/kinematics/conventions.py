@@ -96,7 +96,7 @@ def moments_to_plug_in_gait(moments: np.ndarray) -> np.ndarray:
 
 
 def muscle_path_angles(hip_flexion, knee_flexion, ankle_dorsiflexion):
-    """Sagittal joint angles (rad) → the angles (α, β, γ) of the muscle path (A.9), MODEL_CONSTANTS decision 4.
+    """Sagittal joint angles (rad) → the angles (α, β, γ) of the muscle path (A.9; docs/model_constants.md §6).
 
     α = hip extension = −hip flexion, β = knee flexion, γ = ankle plantarflexion
     from neutral = −dorsiflexion.
@@ -105,7 +105,7 @@ def muscle_path_angles(hip_flexion, knee_flexion, ankle_dorsiflexion):
 
 
 def riener_edrich_angles(hip_flexion, knee_flexion, ankle_dorsiflexion):
-    """Sagittal joint angles (rad) → Riener & Edrich's (φ_H, φ_K, φ_A) in degrees (MODEL_CONSTANTS B).
+    """Sagittal joint angles (rad) → Riener & Edrich's (φ_H, φ_K, φ_A) in degrees (docs/model_constants.md §10).
 
     Their angles are hip flexion, knee flexion and ankle *plantar*flexion positive.
     """
@@ -125,7 +125,7 @@ WALKER_CLINICAL = ("hip_{s}_flexion", "knee_{s}_flexion", "ankle_{s}_dorsiflexio
 
 def walker_joint_angles(hat, thigh, knee, ankle):
     """The predictive model's angles (Diss. 5.2: clockwise-positive, rad) of one leg → its joint angles in
-    the product's senses (rad): hip flexion −(thigh − HAT) (CHAPTER5_NOTES §3 item 11), knee flexion, ankle
+    the product's senses (rad): hip flexion −(thigh − HAT) (docs/model_constants.md §13), knee flexion, ankle
     dorsiflexion −ankle (the model's ankle angle is plantarflexion-positive). Pure arithmetic: numpy or CasADi.
     """
     return -(thigh - hat), knee, -ankle

@@ -1,6 +1,6 @@
 """Joint centres and anatomical frames from landmarks (3.2.1, 3.3; Bell 1989/1990; Cappozzo 1995).
 
-* Hip: Bell et al. regression in the pelvis frame (MODEL_CONSTANTS D). Default
+* Hip: Bell et al. regression in the pelvis frame (docs/model_constants.md §2). Default
   ``"bell1990"``: from the mid-ASIS point, 0.19·PW posterior, 0.30·PW inferior,
   0.36·PW lateral (PW = inter-ASIS distance). ``"bell1989"``: from each ASIS,
   0.22·PW posterior, 0.30·PW distal, 0.14·PW medial (the same lateral position).

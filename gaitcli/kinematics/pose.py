@@ -4,7 +4,7 @@ For each frame the reference cluster ``a_j`` (body frame) is fitted to the measu
 markers ``b_j`` (global): minimise (1/n) Σ |R a_j + d − b_j|² (3.5). With centroids
 ā, b̄ (3.6) and the correlation matrix D = Σ (b_j − b̄)(a_j − ā)ᵀ (3.10–3.11),
 D = U W Vᵀ (3.12) gives R = U diag(1, 1, det(U Vᵀ)) Vᵀ — (3.15) with the reflection
-guard of MODEL_CONSTANTS decision 2 — and d = b̄ − R ā (3.7).
+guard of docs/model_constants.md §4 — and d = b̄ − R ā (3.7).
 
 Markers that are NaN in a frame get weight 0 in that frame (3.1.4: "the marker is
 simply ignored in the pose reconstruction"); a frame with fewer than 3 usable
@@ -67,7 +67,7 @@ def fit_rigid_pose(reference, current) -> RigidPoseFit:
     sign = np.sign(np.linalg.det(U @ Vt))
     sign[sign == 0] = 1.0
     U = U.copy()
-    U[..., :, 2] *= sign[:, None]  # U diag(1, 1, det(U Vᵀ)) (decision 2)
+    U[..., :, 2] *= sign[:, None]  # U diag(1, 1, det(U Vᵀ)): no reflection (docs/model_constants.md §4)
     R = U @ Vt  # (3.15)
     d = b_bar - np.einsum("nij,nj->ni", R, a_bar)  # (3.7)
     resid = np.einsum("nij,kj->nki", R, a0) + d[:, None] - b0
