@@ -13,15 +13,14 @@ conversion to the angles of the muscle path (A.9) happens only in
 :func:`gaitcli.kinematics.conventions.muscle_path_angles`. Moment arms are
 joint moments per newton, conjugate to ψ.
 
-Conventions and deliberate readings of the dissertation:
-- activation dynamics (2.17) with t1 = 1/τ_act − 1/τ_deact, t2 = 1/τ_deact (decision 1);
+Readings of the dissertation (docs/model_constants.md gives each reason):
+- activation dynamics (2.17) with t1 = 1/τ_act − 1/τ_deact, t2 = 1/τ_deact (§7);
 - force–velocity (A.3)–(A.8) with fac = 1, slope factor 1, A_r = 0.41, B_r = 5.2,
-  f_asympt = 1.5, linear in activation; force–length (A.4) clipped at ≥ 0 (decision 5);
+  f_asympt = 1.5, linear in activation; force–length (A.4) clipped at ≥ 0 (§8);
 - constant pennation: l_ce = (l_m − l_se)/cos α_p (4.17), f_ce = F/cos α_p (4.16,
-  no parallel element), and v_ce = (v_m − v_se)/cos α_p, the time derivative of
-  (4.17) (the printed (4.15) multiplies by cos α_p, which contradicts (4.17));
+  no parallel element), v_ce = (v_m − v_se)/cos α_p, the time derivative of (4.17) (§8);
 - metabolic rate of Umberger et al. (2003) (A.12–A.21) with the cap and floor
-  of decision 6, or the 2010 variant.
+  of §9, or the 2010 variant.
 """
 
 from __future__ import annotations
@@ -42,7 +41,7 @@ NQ = 3
 def path_angles(joint_angles):
     """Joint angles ψ = (hip flexion, knee flexion, ankle dorsiflexion) → (α, β, γ) of the muscle path (A.9).
 
-    α hip extension, β knee flexion, γ ankle plantarflexion (decision 4), through
+    α hip extension, β knee flexion, γ ankle plantarflexion (docs/model_constants.md §6), through
     :func:`gaitcli.kinematics.conventions.muscle_path_angles`.
     """
     return muscle_path_angles(joint_angles[0], joint_angles[1], joint_angles[2])
@@ -173,7 +172,7 @@ class MuscleModel:
 
     # ----------------------------------------------------------------- formulas
     def _activation_rate(self, u, a):
-        """ȧ = (u − a)(t1·u + t2) (2.17), decision 1."""
+        """ȧ = (u − a)(t1·u + t2) (2.17; t1, t2 as docs/model_constants.md §7), 1/s."""
         return (u - a) * (self._t1 * u + self._t2)
 
     def _excitation(self, a, adot):
@@ -273,7 +272,7 @@ class MuscleModel:
         return v_se, force, l_ce, v_ce
 
     def _heat_rate(self, u, a, l_ce, v_ce, smoothing: float = 0.0):
-        """Specific heat rate ḣ [W/kg] of Umberger et al. (2003) (A.14–A.21, decision 6).
+        """Specific heat rate ḣ [W/kg] of Umberger et al. (2003) (A.14–A.21; docs/model_constants.md §9).
 
         ``smoothing`` = 0 gives the exact model. A positive ε replaces each of
         its kinks (the u > a switch (A.17), l_ce ≷ l_opt (A.15/A.16), ṽ ≷ 0, the

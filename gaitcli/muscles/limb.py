@@ -11,7 +11,7 @@ Absolute segment angles, counter-clockwise seen with x to the right and z up
 flexion and ankle dorsiflexion moments, the signs of the output tables.
 
 The equations come from the planar-chain builder (:mod:`gaitcli.dynamics.planar`,
-prescribed base = the hip); segment inertia from de Leva (1996) (MODEL_CONSTANTS A,
+prescribed base = the hip); segment inertia from de Leva (1996) (docs/model_constants.md §1,
 the table of :mod:`gaitcli.kinematics.anthropometry`). The ground reaction acts
 on the foot at (cop_x, 0): the floor is the plane z = 0.
 """
@@ -39,7 +39,7 @@ LIMB_COORDINATES = ("thigh_angle", "knee_flexion", "ankle_dorsiflexion")
 #: foot HEEL→TTIP, and the radius of gyration of each for the sagittal plane: r_trans, except the foot,
 #: where the dissertation (Table A.5, I_Y = 0.0047 kg m²) uses r_sag
 _SAGITTAL_GYRATION = {"thigh": "r_trans_pct", "shank": "r_trans_pct", "foot": "r_sag_pct"}
-#: heel-to-ankle distance along the foot / stature (gait2dc: 0.06 m at 1.8 m; MODEL_CONSTANTS H)
+#: heel-to-ankle distance along the foot / stature (gait2dc: 0.06 m at 1.8 m; docs/model_constants.md §12)
 _HEEL_TO_ANKLE_PER_STATURE = 0.060 / 1.8
 #: foot CoM below the ankle / stature (Diss. Table A.5, subject 1: 0.043 m at 1.792 m)
 _FOOT_COM_BELOW_ANKLE_PER_STATURE = 0.043 / 1.792
@@ -93,7 +93,7 @@ class LimbParameters:
         return cls(
             body_mass_kg=float(body_mass_kg), stature_m=float(stature_m),
             thigh_length_m=length["thigh"], shank_length_m=length["shank"],
-            foot_length_m=0.152 * float(stature_m),  # Winter: heel–toe 0.152·H (MODEL_CONSTANTS H)
+            foot_length_m=0.152 * float(stature_m),  # Winter: heel–toe 0.152·H (docs/model_constants.md §12)
             thigh_mass_kg=float(body.mass_kg[b["thigh"]]), shank_mass_kg=float(body.mass_kg[b["shank"]]),
             foot_mass_kg=float(body.mass_kg[b["foot"]]),
             thigh_com_m=com["thigh"], shank_com_m=com["shank"],
@@ -131,7 +131,7 @@ class LimbParameters:
             foot_com_down_m=_FOOT_COM_BELOW_ANKLE_PER_STATURE * stature_m,
             thigh_inertia_kgm2=segs["thigh"][3], shank_inertia_kgm2=segs["shank"][3],
             foot_inertia_kgm2=segs["foot"][3], sex=sex,
-            notes=("de Leva (1996) via MODEL_CONSTANTS A; foot CoM offsets: heel–ankle 0.033·H "
+            notes=("de Leva (1996), docs/model_constants.md §1; foot CoM offsets: heel–ankle 0.033·H "
                    "(gait2dc), CoM 0.024·H below the ankle (Diss. Table A.5, subject 1)",))
 
 

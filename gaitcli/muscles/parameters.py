@@ -1,8 +1,8 @@
 """Muscle and joint parameters of the 2-D lower-limb model (Diss. Table A.1, 4.5.1).
 
-All numbers come from the dissertation's Appendix A.1 or from
-``MODEL_CONSTANTS.md`` (sections B, C, E, F, G), which cross-checks the
-literature values the dissertation cites without printing.
+All numbers come from the dissertation's Appendix A.1 or from the literature it
+cites without printing the values; docs/model_constants.md §5–§11 gives each
+source and the readings of the printed formulas.
 """
 
 from __future__ import annotations
@@ -43,12 +43,12 @@ class MuscleParameters:
     l_opt, ``width`` of the force–length parabola, ``max_isometric_force_N``,
     ``tendon_slack_length_m``, ``pennation_rad`` α_p and the path constants of
     (A.9) ``neutral_length_m`` l_m0, ``ankle_arm_m`` r_a, ``knee_arm_m`` r_k,
-    ``hip_arm_m`` r_h (signs as in Table A.1; MODEL_CONSTANTS decision 4).
+    ``hip_arm_m`` r_h (signs as in Table A.1, read as docs/model_constants.md §6).
 
     Model constants: tendon strain at F_max ε0 (2.19), force–velocity A_r,
-    B_r [l_opt/s], f_asympt, fac and slope factor (A.3–A.8, decision 5), the
+    B_r [l_opt/s], f_asympt, fac and slope factor (A.3–A.8, §8), the
     activation time constants (A.1–A.2), the energetics constants (A.12–A.21,
-    decision 6) and ``metabolic_model`` ("umberger2003" or "umberger2010").
+    §9) and ``metabolic_model`` ("umberger2003" or "umberger2010").
     """
 
     names: tuple
@@ -75,7 +75,7 @@ class MuscleParameters:
     heat_scale: float = 1.5  # S (A.15): 1.5 aerobic
     max_fast_twitch_velocity: float = 12.0  # ṽ_max,FT in l_opt/s (A.19)
     heat_floor_W_per_kg: float = 1.0  # floor of the total specific heat rate
-    shortening_heat_cap_W_per_kg: float = 100.0  # cap of −α_ST·ṽ (decision 6)
+    shortening_heat_cap_W_per_kg: float = 100.0  # cap of −α_ST·ṽ (docs/model_constants.md §9)
     metabolic_model: str = "umberger2003"
     notes: tuple = field(default=())
 
@@ -98,7 +98,7 @@ class MuscleParameters:
 
     @property
     def activation_t1_per_s(self) -> np.ndarray:
-        """t1 = 1/τ_act − 1/τ_deact of (2.17) (decision 1; the printed 1/(ta − t2) is a typo)."""
+        """t1 = 1/τ_act − 1/τ_deact of (2.17), 1/s (the printed 1/(ta − t2) is a typo: docs/model_constants.md §7)."""
         return 1.0 / self.activation_time_s - 1.0 / self.deactivation_time_s
 
     @property
@@ -127,7 +127,7 @@ class MuscleParameters:
 
 
 def table_a1(**changes) -> MuscleParameters:
-    """The dissertation's Table A.1 with the constants of A.1 and decisions 1, 4–6."""
+    """The dissertation's Table A.1 with the constants of A.1 (docs/model_constants.md §5–§9)."""
     t = _TABLE_A1
     params = MuscleParameters(
         names=MUSCLE_NAMES,
@@ -141,7 +141,7 @@ def table_a1(**changes) -> MuscleParameters:
         ankle_arm_m=t[:, 7].copy(),
         knee_arm_m=t[:, 8].copy(),
         hip_arm_m=t[:, 9].copy(),
-        notes=("Table A.1 (Gerritsen et al. 1998, Menegaldo et al.); decisions 1, 4, 5, 6 of MODEL_CONSTANTS",),
+        notes=("Table A.1 (Gerritsen et al. 1998, Menegaldo et al.); readings of docs/model_constants.md §6–§9",),
     )
     return params.with_options(**changes) if changes else params
 
@@ -152,13 +152,12 @@ class JointParameters:
 
     ``hip_damping_Nms_per_rad`` and ``knee_damping_Nms_per_rad`` are the linear
     viscous dampings the dissertation takes from Stein et al. (1996) without
-    printing them (MODEL_CONSTANTS C, decision 7: no public source gives the
-    values). The default 0.01 N·m·s/rad is the joint damping of the gait2d model
-    family (``gait2dc_par.xls``, JointB), the only published value found for a
-    comparable 2-D model; set the pendulum-test values here when they are known.
-    ``passive_moments`` switches the Riener & Edrich (1999) moments on or off; ``prosthetic_ankle`` removes
-    what spans the intact ankle (5.3.3; CHAPTER5_NOTES §3 item 16): no ankle moment M_A, and the knee
-    moment M_K evaluated at a neutral ankle.
+    printing them; the default 0.01 N·m·s/rad is the gait2d model family's joint
+    damping (docs/model_constants.md §11). Set the pendulum-test values here when
+    they are known. ``passive_moments`` switches the Riener & Edrich (1999) moments
+    on or off; ``prosthetic_ankle`` removes what spans the intact ankle (5.3.3): no
+    ankle moment M_A, and the knee moment M_K evaluated at a neutral ankle
+    (docs/model_constants.md §10).
     """
 
     hip_damping_Nms_per_rad: float = 0.01

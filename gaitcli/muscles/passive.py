@@ -4,7 +4,7 @@ The model takes the sagittal joint angles ψ = (hip flexion relative to the
 pelvis/HAT, knee flexion, ankle dorsiflexion) in rad and their rates, and returns
 joint moments in the same senses (for the limb of ``limb.py``, upright trunk,
 ψ = q and these are its generalized forces). Riener & Edrich's formulas
-(MODEL_CONSTANTS B) take degrees with hip flexion, knee flexion and ankle
+(docs/model_constants.md §10) take degrees with hip flexion, knee flexion and ankle
 *plantar*flexion positive and return moments positive in the same sense as
 their angle; the conversions are those of :mod:`gaitcli.kinematics.conventions`.
 """
@@ -19,7 +19,7 @@ from .parameters import JointParameters
 
 
 def _riener_edrich(phi_h, phi_k, phi_a):
-    """M_H, M_K, M_A in N·m from angles in degrees (MODEL_CONSTANTS B)."""
+    """M_H, M_K, M_A in N·m from angles in degrees (docs/model_constants.md §10)."""
     m_h = (ca.exp(1.4655 - 0.0034 * phi_k - 0.0750 * phi_h)
            - ca.exp(1.3403 - 0.0226 * phi_k + 0.0305 * phi_h) + 8.072)
     m_k = (ca.exp(1.800 - 0.0460 * phi_a - 0.0352 * phi_k + 0.0217 * phi_h)

@@ -152,7 +152,8 @@ class MuscleResult:
         return float(np.max(np.abs(self.moment_error_Nm)))
 
     def summary(self) -> dict:
-        """The stage's key scalars under the fixed ``summary.json`` keys (DESIGN.md)."""
+        """The stage's key scalars for ``summary.json``; the keys are fixed (tests, ``gait batch`` and
+        ``gait compare`` read them)."""
         def num(x):
             return None if x is None or not np.isfinite(x) else float(x)
         out = {"method": self.method, "nodes": int(self.nodes), "solve_time_s": float(self.solve_time_s),

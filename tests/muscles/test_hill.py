@@ -22,7 +22,7 @@ def test_table_a1_and_time_constants(model):
     p = model.params
     assert p.max_isometric_force_N[IDX["vasti"]] == 7403
     assert p.tendon_slack_length_m[IDX["soleus"]] == pytest.approx(0.245)
-    # MODEL_CONSTANTS F: τ_act / τ_deact in ms for Ilio RF Glu Ham Vas Gas TA Sol
+    # (A.1)–(A.2), docs/model_constants.md §7: τ_act / τ_deact in ms for Ilio RF Glu Ham Vas Gas TA Sol
     np.testing.assert_allclose(p.activation_time_s * 1000, [56.5, 49.45, 58.85, 63.55, 56.5, 56.5, 68.25, 70.6])
     np.testing.assert_allclose(p.deactivation_time_s * 1000, [62.0, 53.6, 64.8, 70.4, 62.0, 62.0, 76.0, 78.8])
 

@@ -94,7 +94,7 @@ def model(limb):
 
 
 def test_de_leva_parameters(limb):
-    """Diss. Table A.5, subject 1 (73.0 kg, 1.792 m): masses 10.34 / 3.16 / 1.00 kg (MODEL_CONSTANTS A)."""
+    """Diss. Table A.5, subject 1 (73.0 kg, 1.792 m): masses 10.34 / 3.16 / 1.00 kg (docs/model_constants.md §1)."""
     assert limb.thigh_mass_kg == pytest.approx(10.34, abs=0.01)
     assert limb.shank_mass_kg == pytest.approx(3.16, abs=0.01)
     assert limb.foot_mass_kg == pytest.approx(1.00, abs=0.01)

@@ -9,7 +9,7 @@ from gaitcli.muscles import JointModel, JointParameters
 
 
 @pytest.mark.parametrize("angles, moments", [
-    # MODEL_CONSTANTS B sanity values: (φ_H, φ_K, φ_A) deg → (M_H, M_K, M_A) N·m
+    # check values of docs/model_constants.md §10: (φ_H, φ_K, φ_A) deg → (M_H, M_K, M_A) N·m
     ((0, 0, 0), (8.58, 10.42, 6.39)),
     ((30, 0, 0), (-1.01, 15.97, 6.39)),
     ((0, 60, 0), (10.62, -4.45, 1.05)),

@@ -22,7 +22,7 @@ def _fit_sine(y, t, f_hz):
 
 
 def test_correction_factor_and_design_frequency_match_model_constants():
-    # MODEL_CONSTANTS.md section J: C = 0.8022; 7.30 / 7.43 / 7.47 Hz at 50 / 100 / 200 Hz; 6/C in the limit.
+    # docs/model_constants.md §3: C = 0.8022; 7.30 / 7.43 / 7.47 Hz at 50 / 100 / 200 Hz; 6/C in the limit.
     assert correction_factor() == pytest.approx(0.8022, abs=5e-5)
     assert design_frequency_hz(6.0, 50.0) == pytest.approx(7.30, abs=0.005)
     assert design_frequency_hz(6.0, 100.0) == pytest.approx(7.43, abs=0.005)
