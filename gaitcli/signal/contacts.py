@@ -6,10 +6,9 @@ from the first marker frame; frames are 0-based indices into the marker arrays.
 1. :func:`plate_contacts` finds the runs of *unfiltered* vertical force above the
    threshold at the analog rate (the zero-lag filter would spread the loading edge
    and move the crossing earlier by 1-2 frames), drops spikes shorter than
-   ``min_run_s`` (a real plate's noise: on Vicon's stair trial in ``../shared/data/pig``
-   up to 17 N SD, single samples above 20 N every few tens of ms, which bridged
-   would open a contact 125 ms before the heel strike or span the whole trial),
-   bridges dips shorter than ``min_gap_s``, drops runs shorter than ``min_contact_s``,
+   ``min_run_s`` (a real plate's noise, which bridged would open a contact before
+   the heel strike or span the whole trial: docs/plates_real.md), bridges dips
+   shorter than ``min_gap_s``, drops runs shorter than ``min_contact_s``,
    and times each edge by linear interpolation of F_z across the threshold.
 2. :func:`assign_contacts` gives each contact to the foot whose heel-toe segment is
    closest (horizontally) to the contact's COP path, using the frames with at
@@ -209,8 +208,7 @@ def plate_owner(contacts: list[Contact], loads: list[PlateLoad], events=None, *,
     Each assigned contact owns its frames, extended over the adjacent frames in which
     the (filtered) plate is still loaded, up to the neighbouring contact and by at most ``reach_s`` (how far the
     6 Hz filter spreads a loading edge; a noisy plate's filtered baseline can stay above the threshold for
-    seconds: on the stair trial in ``../shared/data/pig`` plate 2 would give the right foot its noise over the
-    whole trial, through the stance on plate 4). A ``'both_feet'``
+    seconds and would give the foot the other foot's stance: docs/plates_real.md). A ``'both_feet'``
     contact is split by ``events`` (:class:`~gaitcli.core.events.Events`): its first foot
     owns it until the other foot's heel strike, its last foot from the first foot's toe
     off; in between both feet stand on it and no foot owns it (their loads are unknown).

@@ -37,8 +37,7 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
     heel marker's vertical velocity from 0.02 s before to 0.1 s after the Zeni time
     (linear interpolation; no crossing keeps the Zeni time). Toe offs are not
     refined: the toe marker sits on a metatarsal head, which rises during push-off
-    well before the toes leave the ground (on walking2.c3d the same rule put toe off
-    80 ms before the plate's, while the Zeni toe off was 15 ms after it).
+    well before the toes leave the ground (docs/decisions.md).
     """
     one_of(side, SIDES, where="side")
     heel, toe, pelvis = (np.asarray(a, dtype=float) for a in (heel, toe, pelvis_centre))

@@ -206,7 +206,7 @@ def separated_plates(recording: Recording, plates: list[PlateLoad], contacts: li
                      cfg: FilterConfig) -> list[PlateLoad]:
     """The plates as the feet are given them: a plate both feet stood on is filtered again with its double support
     left out (NaN), so that the zero-lag filter does not carry one foot's load into the other's frames beside it
-    (at 6 Hz the filter reaches about 110 ms: 24 N·m at the next frame on a synthetic walk)."""
+    (at 6 Hz the filter reaches about 110 ms; docs/decisions.md)."""
     rate, n = recording.markers.rate_hz, recording.markers.n_frames
     out = list(plates)
     for index in sorted({c.plate_index for c in contacts if c.shared}):
