@@ -11,9 +11,8 @@ The 27-DoF motion takes the sagittal plane from it — the hip
 centres' path, the HAT angle as the pelvis's tilt (lumbar joint straight), hip, knee and ankle flexion —
 scaled to the subject by stature (lengths ∝ H) and to the cycle's period (time); sideways, the pelvis sways
 as the linear inverted pendulum over the stance foot's lane and each hip adducts (the ankle everts as much)
-to keep its foot in the lane. Its exact whole-body wrench is the planar model's (tests/synth/test_predicted.py)
-and rolls the single-support centre of pressure from 0.015 to 0.17 m ahead of the ankle by heel-off at 30 % of
-the cycle (measured at 1.78 m).
+to keep its foot in the lane. Its exact whole-body wrench is the planar model's, its single-support centre of
+pressure rolling from just ahead of the ankle towards the metatarsal heads (tests/synth/test_predicted.py).
 """
 
 from __future__ import annotations
@@ -40,14 +39,10 @@ WALK_NODES = 18
 #: how the shipped file was made (its header says so too)
 MAKE_COMMAND = 'python -c "from gaitcli.synth.predicted import make_walk; print(make_walk())"'
 WALK_STRENGTH_SCALE = 0.65  # the prediction's F_max, × Table A.1
-#: the second solve's settings (PredictSettings) beyond the dissertation's: Jdev also tracks each foot's centre
-#: of pressure rolling from heel to MTP over 85 % of its stance and a steady trunk (without them the optimum
-#: stands on the MTP point from 12 % of the cycle and rocks the HAT by 7°, which MSO cannot follow); the
-#: equations of motion are met to εm = 0.5 N·m (at 2 N·m per joint the least-squares ground reactions leave
-#: up to 17 N·m about the hip unexplained in single support, which the 3-D truth, whose ground wrench is exact,
-#: hands to the stance joints: +0.2 N·m/kg knee flexor, +0.3 ankle plantarflexor); the hip moment is within
-#: ±0.25 N·m/kg in swing (a typical adult's; unbounded, the optimum's swing hip reaches −0.41) and ±0.72 N·m/kg
-#: elsewhere (unbounded, its pre-swing flexor moment rises to 0.83 N·m/kg faster than MSO's iliopsoas follows)
+#: the second solve's settings (PredictSettings) beyond the dissertation's, each one so that the muscle stage can
+#: follow the walk's 3-D truth (docs/decisions.md): Jdev also tracks each foot's centre of pressure rolling from
+#: heel to MTP over 85 % of its stance and a steady trunk; the equations of motion are met to εm = 0.5 N·m; the
+#: hip moment is within ±0.25 N·m/kg in swing (a typical adult's) and ±0.72 N·m/kg elsewhere
 WALK_TRACKING = {"cop_sd_m": 0.007, "trunk_rate_sd_deg_s": 5.0, "moment_tolerance_Nm": 0.5,
                  "swing_hip_moment_Nm_per_kg": 0.25, "hip_moment_Nm_per_kg": 0.72}
 STEP_WIDTH_PER_STATURE = 0.067  # between the ankle centres, m per m of stature

@@ -25,9 +25,8 @@ MARKER_RATE_HZ = 100.0
 #: the markers' default white noise, RMS 3-D error, mm: still well above an optical system's own (a Vicon
 #: marker's position varies by < 0.025 mm standing and errs by < 2 mm moving, systematic part included:
 #: Merriaux et al., Sensors 17:1591, 2017); the skin artefact (10 mm) stays the larger error, as on a subject.
-#: At 2 mm the 6 Hz filtered moments wiggle by ~0.05 N·m/kg from frame to frame at push-off, faster than
-#: the muscles of MSO (4.4) can deactivate: on the predicted walk one infeasible frame on 2 of the 6 legs of
-#: seeds 0–2 (by ≤ 0.026); at 1 mm none on the 12 legs of seeds 0–5
+#: Not 2 mm: the filtered moments would then change at push-off faster than MSO's muscles can follow
+#: (docs/decisions.md)
 DEFAULT_NOISE_MM = 1.0
 
 #: the marker set of Table A.6 and the body each marker rides on
