@@ -84,10 +84,21 @@ def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s:
                    min_gap_s: float = 0.05, min_run_s: float = 0.01) -> list[Contact]:
     """Contact intervals of every plate from its unfiltered vertical force (see module docstring).
 
-    Uses ``raw_vertical_force_N`` at ``raw_rate_hz`` where present, else the (masked,
-    filtered) ``force_N[:, 2]``. Runs above ``threshold_N`` shorter than ``min_run_s``
-    are noise and dropped; the rest, separated by less than ``min_gap_s``, are joined;
-    runs shorter than ``min_contact_s`` are dropped. Ordered by plate, then time.
+    Parameters
+    ----------
+    loads : list of PlateLoad
+        The plates; each one's ``raw_vertical_force_N`` at ``raw_rate_hz`` where present, else its
+        (masked, filtered) ``force_N[:, 2]``.
+    threshold_N : float
+        Vertical force above which a plate is loaded, N.
+    min_contact_s, min_gap_s, min_run_s : float
+        Runs above the threshold shorter than ``min_run_s`` are noise and dropped; the rest, separated by
+        less than ``min_gap_s``, are joined; runs shorter than ``min_contact_s`` are dropped. Seconds.
+
+    Returns
+    -------
+    list of Contact
+        Ordered by plate, then time; ``side`` not yet assigned.
     """
     if not (np.isfinite(threshold_N) and threshold_N >= 0):
         raise InputError(None, "threshold_N", f"got {shown(threshold_N)} (expected a force >= 0 N)")
@@ -124,14 +135,32 @@ def assign_contacts(contacts: list[Contact], loads: list[PlateLoad], heel_r, toe
                     edge_tolerance_m: float = 0.02, min_alone_s: float = 0.05) -> list[Contact]:
     """Give each contact to the foot whose heel-toe segment is closest to its COP path (see module docstring).
 
-    Foot markers are (frames, 3) in model axes, NaN allowed. Returns new
-    :class:`Contact` objects with ``side``, distances, ``margin_m``, ``flag``,
-    ``heel_inside`` and ``toe_inside`` filled; a flagged contact has ``side = ''``.
-    ``edge_tolerance_m`` widens the plate outline for the heel/toe check (markers sit
-    a little behind the heel and above the toes); where the marker is not seen, or
-    the plate has no outline, the plate is trusted. ``min_alone_s``: how long the COP must stay with each foot
-    alone for a plate to count as loaded by both (5 frames at 100 Hz: longer than a COP jump that survives the
-    6 Hz filter, shorter than the last ~60 ms of a heel's load on a plate's far end).
+    Parameters
+    ----------
+    contacts : list of Contact
+        From :func:`plate_contacts`.
+    loads : list of PlateLoad
+        The plates at the marker frames.
+    heel_r, toe_r, heel_l, toe_l : array_like
+        Foot markers (frames, 3), model axes, m; NaN allowed.
+    max_distance_m : float
+        A COP path further than this from the chosen foot (median) strays from it.
+    min_margin_m : float
+        The two feet's mean distances must differ by this much, else the contact is ambiguous.
+    edge_tolerance_m : float
+        Widens the plate outline for the heel and toe checks (markers sit a little behind the heel and
+        above the toes); where a marker is not seen, or the plate has no outline, the plate is trusted.
+    min_alone_s : float
+        How long the COP must stay with each foot alone for a plate to count as loaded by both: longer
+        than a COP jump that survives the 6 Hz filter, shorter than the end of a heel's load on a
+        plate's far end.
+
+    Returns
+    -------
+    list of Contact
+        New contacts with ``side``, the distances, ``margin_m``, ``flag``, ``heel_inside``,
+        ``toe_inside`` (and for two feet ``first_side``, ``last_side``) filled; a flagged contact has
+        ``side = ''``.
     """
     feet = {"r": (np.asarray(heel_r, float), np.asarray(toe_r, float)),
             "l": (np.asarray(heel_l, float), np.asarray(toe_l, float))}

@@ -43,13 +43,31 @@ def detect_events(loads: list[PlateLoad], feet: dict, pelvis_centre, rate_hz: fl
                   max_distance_m: float = 0.1, min_margin_m: float = 0.05) -> EventDetection:
     """Heel strikes and toe offs of both feet: from plates where a foot was on one, else from kinematics.
 
-    ``feet`` maps ``'r'`` and ``'l'`` to ``(heel, toe)`` marker trajectories (frames, 3);
-    ``loads`` are the plates at the marker rate ``rate_hz`` (may be empty). Kinematic
-    events within ``duplicate_s`` of a plate event of the same side and kind are
-    dropped. ``refine`` is passed to :func:`kinematic_events`; ``min_contact_s`` to
-    :func:`plate_contacts`; ``max_distance_m`` and ``min_margin_m`` to
-    :func:`assign_contacts`. Returns the events, the assigned contacts and the
-    per-frame plate owner.
+    Parameters
+    ----------
+    loads : list of PlateLoad
+        The plates at the marker rate (may be empty).
+    feet : dict
+        ``'r'`` and ``'l'`` → ``(heel, toe)`` marker trajectories (frames, 3), model axes, m.
+    pelvis_centre : array_like
+        (frames, 3), m: the walking direction of :func:`kinematic_events`.
+    rate_hz : float
+        Marker rate, Hz.
+    threshold_N : float
+        Vertical force above which a plate is loaded, N.
+    duplicate_s : float
+        A kinematic event this close to a plate event of the same side and kind is dropped, s.
+    refine : bool
+        Passed to :func:`kinematic_events`.
+    min_contact_s : float
+        Passed to :func:`plate_contacts`.
+    max_distance_m, min_margin_m : float
+        Passed to :func:`assign_contacts`.
+
+    Returns
+    -------
+    EventDetection
+        The events, the assigned contacts and the per-frame plate owner.
     """
     missing = [s for s in SIDES if s not in feet]
     if missing:

@@ -135,9 +135,22 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
                rate_hz: float | None = None) -> PlateLoad:
     """Filter a plate's wrench at the analog rate, then form COP and free moment where loaded (3.1.4).
 
-    ``cutoff_hz`` is the net cut-off of the zero-lag Butterworth filter (0: no filtering); ``threshold_N``
-    the vertical force above which the plate counts as loaded; ``rate_hz`` the marker
-    rate to resample to (None keeps the plate's own rate).
+    Parameters
+    ----------
+    plate : ForcePlate
+        The plate as read (model axes, SI).
+    cutoff_hz : float
+        Net cut-off of the zero-lag Butterworth filter, Hz (0: no filtering).
+    threshold_N : float
+        Vertical force above which the plate counts as loaded, N.
+    rate_hz : float, optional
+        The marker rate to resample to, Hz (None keeps the plate's own rate).
+
+    Returns
+    -------
+    PlateLoad
+        Force, COP and free moment at ``rate_hz``, with the unfiltered vertical force at the
+        analog rate for contact timing.
     """
     force = np.asarray(plate.force_N, dtype=float)
     moment = np.asarray(plate.moment_Nm, dtype=float)

@@ -48,13 +48,24 @@ def find_gaps(positions, /) -> list[tuple[int, int, int]]:
 def fill_gaps(positions, /, *, max_gap_frames: int) -> tuple[np.ndarray, list[Gap]]:
     """Fill interior gaps of at most ``max_gap_frames`` frames by cubic-spline interpolation.
 
-    ``positions`` (frames, markers, 3) in metres, NaN where a marker is missing (a
-    frame with any NaN coordinate counts as missing for all three). For each marker
-    with a fillable gap, a not-a-knot cubic spline through all its complete frames
-    is evaluated in the gap frames. Gaps longer than the limit or touching the first
-    or last frame are set to NaN in all three coordinates and reported with
-    ``filled=False``. Returns the new array (the input is not modified) and the list
-    of every gap.
+    For each marker with a fillable gap, a not-a-knot cubic spline through all its
+    complete frames is evaluated in the gap frames. Gaps longer than the limit or
+    touching the first or last frame are NaN in all three coordinates.
+
+    Parameters
+    ----------
+    positions : array_like
+        (frames, markers, 3), m; NaN where a marker is missing (a frame with any NaN
+        coordinate counts as missing for all three).
+    max_gap_frames : int
+        Longest gap that is filled, frames.
+
+    Returns
+    -------
+    filled : numpy.ndarray
+        A new array (the input is not modified).
+    gaps : list of Gap
+        Every gap, ``filled=False`` for those left NaN.
     """
     if (isinstance(max_gap_frames, bool) or not isinstance(max_gap_frames, (int, np.integer))
             or max_gap_frames < 0):

@@ -24,20 +24,38 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
 
     Heel strike: a maximum of the heel's horizontal position relative to the pelvis
     centre along the walking direction; toe off: a minimum of the toe's. The walking
-    direction is the pelvis's horizontal displacement over +-0.5 s (frames where the
-    pelvis moves slower than ``min_speed_m_s`` give no events), so walking towards -x
-    or along a curve works as well. Peaks need a prominence of ``min_prominence_m``
-    and ``min_interval_s`` between events of one kind; their time is refined to a
-    fraction of a frame by a parabola through the three samples around the peak.
+    direction is the pelvis's horizontal displacement over ±0.5 s, so walking towards
+    −x or along a curve works as well. Each time is refined to a fraction of a frame
+    by a parabola through the three samples around the peak.
 
     The method finds the instant the foot's forward speed equals the pelvis's, which
     is before the true heel strike (the heel is still decelerating) and after the
-    true toe off (the toe is accelerating). With ``refine=True`` each heel strike is
-    moved to where the heel stops descending: the first upward zero crossing of the
-    heel marker's vertical velocity from 0.02 s before to 0.1 s after the Zeni time
-    (linear interpolation; no crossing keeps the Zeni time). Toe offs are not
-    refined: the toe marker sits on a metatarsal head, which rises during push-off
-    well before the toes leave the ground (docs/decisions.md).
+    true toe off (the toe is accelerating).
+
+    Parameters
+    ----------
+    heel, toe, pelvis_centre : array_like
+        Trajectories (frames, 3), model axes, m.
+    rate_hz : float
+        Marker rate, Hz.
+    side : str
+        ``'r'`` or ``'l'``, the side the events are given.
+    refine : bool
+        Move each heel strike to where the heel stops descending: the first upward zero crossing of
+        the heel marker's vertical velocity from 0.02 s before to 0.1 s after the Zeni time (none:
+        the Zeni time stays). Toe offs are not refined: the toe marker sits on a metatarsal head,
+        which rises well before the toes leave the ground (docs/decisions.md).
+    min_prominence_m : float
+        Prominence a peak needs, m.
+    min_interval_s : float
+        Least time between two events of one kind, s.
+    min_speed_m_s : float
+        Frames where the pelvis is slower than this give no events, m/s.
+
+    Returns
+    -------
+    Events
+        Source ``kinematics``.
     """
     one_of(side, SIDES, where="side")
     heel, toe, pelvis = (np.asarray(a, dtype=float) for a in (heel, toe, pelvis_centre))
