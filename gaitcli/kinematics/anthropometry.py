@@ -198,12 +198,22 @@ def segment_parameters(mass_kg: float, stature_m: float, sex: str = "male", *,
                        shoulder_width_m: float | None = None) -> dict[str, SegmentInertia]:
     """Mass, CoM and inertia of the 8 bodies in segment axes of the upright posture (3.2.2).
 
-    Lengths are de Leva's scaled by ``stature_m`` / reference stature unless given:
-    ``thigh_length_m`` (HJC–KJC), ``shank_length_m`` (KJC–AJC), ``foot_length_m``
-    (heel–toe tip) as one value or (right, left). ``shoulder_width_m`` is the
-    distance between the shoulder joint centres (default ``2 × 0.112 × stature``).
-    Returns ``{body: SegmentInertia}`` in :data:`BODIES` order; the HAT mass is the
-    remainder so the masses sum to ``mass_kg`` exactly.
+    Parameters
+    ----------
+    mass_kg, stature_m : float
+        Body mass (kg) and stature (m).
+    sex : str
+        ``"male"`` or ``"female"`` (``"m"``, ``"f"``): which of de Leva's tables.
+    thigh_length_m, shank_length_m, foot_length_m : float or (float, float), optional
+        Measured HJC–KJC, KJC–AJC and heel–toe-tip lengths, m, for both sides or (right, left);
+        None: de Leva's mean length × stature / reference stature.
+    shoulder_width_m : float, optional
+        Distance between the shoulder joint centres, m (default 2 × 0.112 × stature).
+
+    Returns
+    -------
+    dict of str to SegmentInertia
+        In :data:`BODIES` order; the HAT mass is the remainder, so the masses sum to ``mass_kg`` exactly.
     """
     mass_kg = _positive(mass_kg, "mass_kg")
     stature_m = _positive(stature_m, "stature_m")

@@ -214,12 +214,33 @@ def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, q
     Candidates are the frames in which every landmark the calibration needs is seen.
     Each leg's flexion is the angle between the thigh (Bell hip centre → mid-epicondyles,
     or the lab's KJC) and the shank (knee → mid-malleoli, or the lab's AJC). Where the
-    pelvis stays slower than ``quiet_speed_m_s`` for ``quiet_s`` or longer (the subject
-    stood), the quiet window of up to ``window_s`` with the least mean flexion of the more
-    flexed leg is used; in a walk without standing, the one frame where the more flexed
-    leg is straightest (both knees near extension: double support just before a heel
-    strike). Returns 0-based frame indices. Raises :class:`InputError` when no frame has
-    the landmarks.
+    subject stood, the quiet window with the least mean flexion of the more flexed leg is
+    used; in a walk without standing, the one frame where the more flexed leg is
+    straightest (both knees near extension: double support just before a heel strike).
+
+    Parameters
+    ----------
+    markers : Markers
+        The trial, labels renamed to model landmarks.
+    source : str or Path, optional
+        The trial file, for messages.
+    quiet_speed_m_s, quiet_s : float
+        The subject stands where the pelvis is slower than ``quiet_speed_m_s`` (m/s) for
+        ``quiet_s`` (s) or longer.
+    window_s : float
+        Longest quiet window averaged, s.
+
+    Returns
+    -------
+    frames : numpy.ndarray
+        0-based frame indices.
+    how : str
+        One line for the notes.
+
+    Raises
+    ------
+    InputError
+        When no frame shows the landmarks.
     """
     P = {lab: markers.get(lab) for lab in markers.labels}
     virtual = tuple(v for v in VIRTUAL_JOINT_CENTRES if v in P and v[:3] != "HJC")
@@ -278,18 +299,48 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
               source: str | Path | None = None) -> StaticCalibration:
     """Calibrate the 8-body model on the reference posture ``static`` (averaged over ``frames``).
 
-    Thigh and shank lengths are measured (HJC–KJC, KJC–AJC) unless given; other
-    lengths scale with stature (3.2.2). ``disturbances`` are :class:`Disturbance`
-    objects (body axes, offsets from the body's de Leva CoM) or preset names
-    (``"ankle_weight"``, ``"ski_boot:l"``). ``extra_tracking_markers`` adds lab
-    markers (by label) to a body's cluster (a marker set's tracking markers).
-    ``hip_method``: ``"bell1990"`` (the dissertation's), ``"bell1989"``, ``"harrington"``,
-    ``"hara"``, ``"davis"`` (these three with ``leg_length_m``, default ASIS to medial malleolus), or
-    ``"from_file"`` (the lab's ``HJCr``/``HJCl`` points; otherwise they are ignored). ``widths``:
-    knee/ankle widths, marker diameter and wands for Plug-in Gait's chord method. ``untracked``: landmarks that
-    place joint centres but track no body (a virtual point the walking trial does not hold).
-    Raises :class:`InputError` naming a marker the model's geometry needs (by the
-    lab label ``marker_set`` gives it).
+    Parameters
+    ----------
+    static : Markers
+        The reference posture, labels renamed to model landmarks (m).
+    mass_kg, stature_m : float
+        Body mass (kg) and stature (m).
+    sex : str
+        de Leva's table (:func:`~gaitcli.kinematics.anthropometry.segment_parameters`).
+    frames : sequence of int or slice, optional
+        The frames of ``static`` to average (default all).
+    thigh_length_m, shank_length_m, foot_length_m, shoulder_width_m : optional
+        Given lengths, m; the thigh (HJC–KJC) and shank (KJC–AJC) are measured when not given, the
+        others scale with stature (3.2.2).
+    disturbances : sequence of Disturbance or str
+        Added masses: :class:`Disturbance` objects (body axes, offsets from the body's de Leva CoM) or
+        preset names (``"ankle_weight"``, ``"ski_boot:l"``).
+    hip_method : str
+        ``"bell1990"`` (the dissertation's), ``"bell1989"``, ``"harrington"``, ``"hara"``, ``"davis"``
+        or ``"from_file"`` (the lab's ``HJCr``/``HJCl`` points, otherwise ignored).
+    ankle_method : str
+        ``"de_leva"`` or ``"midpoint"`` (:func:`~gaitcli.kinematics.joint_centres.ankle_joint_centre`).
+    extra_tracking_markers : mapping of body to labels, optional
+        Lab markers added to a body's cluster (a marker set's tracking markers).
+    marker_set : MarkerSet, optional
+        Names the lab labels in error messages.
+    leg_length_m : float, optional
+        For the Harrington, Hara and Davis regressions, m (default ASIS to medial malleolus).
+    widths : JointWidths, optional
+        Knee and ankle widths, marker diameter and wands for Plug-in Gait's chord method.
+    untracked : sequence of str
+        Landmarks that place joint centres but track no body (a virtual point the walking trial lacks).
+    source : str or Path, optional
+        The static file, for messages.
+
+    Returns
+    -------
+    StaticCalibration
+
+    Raises
+    ------
+    InputError
+        Naming a marker the model's geometry needs, by the lab label ``marker_set`` gives it.
     """
     sex = normalise_sex(sex)
     one_of(hip_method, HIP_METHODS, where="hip_joint_centre", path=source)

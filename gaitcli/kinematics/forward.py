@@ -183,12 +183,25 @@ def _jacobians(axes, d_parent, d_child):
 
 
 def forward_kinematics(q, params: BodyParameters, qd=None, qdd=None, *, jacobians: bool = False) -> BodyStates:
-    """Body poses (and velocities, accelerations, Jacobians) from coordinates ``q`` (n, 27) (2.2–2.7, 3.1).
+    """Body poses (and velocities, accelerations, Jacobians) from coordinates ``q`` (2.2–2.7, 3.1).
 
-    ``q`` in m and rad; ``qd``/``qdd`` their first/second time derivatives (n, 27).
-    With ``jacobians=True`` also ``J_T``, ``J_R`` (n, 8, 3, 27) and, when ``qd`` is
-    given, the local accelerations at ``qdd = 0`` (2.6–2.7). A single frame (27,)
-    is accepted and treated as ``n = 1``.
+    Parameters
+    ----------
+    q : array_like
+        (n, 27) or one frame (27,): the coordinates of :data:`~gaitcli.kinematics.model.COORDINATES`,
+        m and rad.
+    params : BodyParameters
+        The calibrated bodies.
+    qd, qdd : array_like, optional
+        (n, 27) first and second time derivatives of ``q`` (m/s, rad/s; m/s², rad/s²).
+    jacobians : bool
+        Also ``J_T``, ``J_R`` (n, 8, 3, 27) and, with ``qd``, the local accelerations at
+        ``qdd = 0`` (2.6–2.7).
+
+    Returns
+    -------
+    BodyStates
+        Global axes, SI; the fields not asked for are None.
     """
     q = _as_frames(q, "q")
     R, axes = _rotations_and_axes(q)

@@ -289,12 +289,38 @@ def leg_length_m(landmarks: Mapping[str, np.ndarray], source=None) -> float:
 def joint_centres(landmarks: Mapping[str, np.ndarray], *, hip_method: str = "bell1990",
                   ankle_method: str = "de_leva", sex: str = "male", leg_length: float | None = None,
                   widths: JointWidths | None = None, source: str | Path | None = None) -> dict[str, np.ndarray]:
-    """``HJCr, HJCl, KJCr, KJCl, AJCr, AJCl`` from landmark positions ``{name: (..., 3)}``.
+    """``HJCr, HJCl, KJCr, KJCl, AJCr, AJCl`` from landmark positions.
 
     A virtual joint centre present in ``landmarks`` is used as is; otherwise it is
     estimated (Bell or a regression; epicondyle midpoint and malleoli, or the chord method
     where the medial marker is absent and ``widths`` gives the joint's width and wand).
-    Raises :class:`InputError` naming the first marker an estimate needs but ``landmarks`` lacks.
+
+    Parameters
+    ----------
+    landmarks : mapping of str to array_like
+        Model landmark → position (..., 3), m.
+    hip_method : str
+        ``"bell1990"``, ``"bell1989"``, ``"harrington"``, ``"hara"`` or ``"davis"``.
+    ankle_method : str
+        ``"de_leva"`` or ``"midpoint"`` (:func:`ankle_joint_centre`).
+    sex : str
+        de Leva's table for the ankle.
+    leg_length : float, optional
+        For the regressions, m (default: :func:`leg_length_m` of the landmarks).
+    widths : JointWidths, optional
+        For the chord method.
+    source : str or Path, optional
+        The file, for messages.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The six centres (..., 3), m.
+
+    Raises
+    ------
+    InputError
+        Naming the first marker an estimate needs but ``landmarks`` lacks.
     """
     widths = widths or JointWidths()
     out: dict[str, np.ndarray] = {}

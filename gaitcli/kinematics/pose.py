@@ -41,9 +41,20 @@ class RigidPoseFit(NamedTuple):
 
 
 def fit_rigid_pose(reference, current) -> RigidPoseFit:
-    """Fit ``reference`` (k, 3) to ``current`` (n, k, 3) frame by frame (3.5–3.15), vectorised.
+    """Fit ``reference`` to ``current`` frame by frame (3.5–3.15), vectorised.
 
-    NaN markers in ``current`` (or rows of ``reference``) are left out of that frame's fit.
+    Parameters
+    ----------
+    reference : array_like
+        (k, 3) the cluster in the body frame, m; a NaN row is left out of every fit.
+    current : array_like
+        (n, k, 3) or (k, 3) the same markers in global axes, m; NaN markers are left out of
+        that frame's fit.
+
+    Returns
+    -------
+    RigidPoseFit
+        ``R``, ``d_m``, ``rms_m`` and ``markers_used`` per frame.
     """
     a = np.asarray(reference, dtype=float)
     b = np.asarray(current, dtype=float)
