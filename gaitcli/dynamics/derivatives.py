@@ -48,11 +48,24 @@ def _differentiate_run(y, dt, method):
 
 
 def coordinate_derivatives(q, rate_hz: float, *, method: str = "quintic_spline", angle_columns=None):
-    """First and second time derivatives ``(qd, qdd)`` of coordinates ``q`` (frames, m).
+    """First and second time derivatives of coordinates sampled at ``rate_hz`` (see the module docstring).
 
-    ``rate_hz``: sampling rate. ``angle_columns``: indices of columns in rad that are
-    unwrapped first; default the 24 Cardan angles when ``q`` has the 27 model
-    columns, none otherwise. Units: those of ``q`` per s and per s².
+    Parameters
+    ----------
+    q : array_like
+        (frames, columns), NaN where untracked.
+    rate_hz : float
+        Sampling rate, Hz.
+    method : str
+        ``"quintic_spline"`` or ``"central_difference"``.
+    angle_columns : sequence of int, optional
+        Columns in rad, unwrapped first; default the 24 Cardan angles when ``q`` has the 27
+        model columns, none otherwise.
+
+    Returns
+    -------
+    qd, qdd : numpy.ndarray
+        The units of ``q`` per s and per s².
     """
     one_of(method, METHODS, where="method")
     if not np.isfinite(rate_hz) or rate_hz <= 0:

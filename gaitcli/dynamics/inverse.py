@@ -89,12 +89,24 @@ def solve_axis_projections(axes_columns, projections):
 
 def inverse_dynamics(q, qd, qdd, params: BodyParameters, external=(), *,
                      gravity_m_s2: float = 9.81) -> InverseDynamicsResult:
-    """Joint moments (3.21) and pelvis residuals (3.22) from coordinates and their derivatives (n, 27).
+    """Joint moments (3.21) and pelvis residuals (3.22) from coordinates and their derivatives.
 
-    ``external``: sequence of :class:`~gaitcli.dynamics.equations.ExternalWrench`
-    (ground reactions at the centre of pressure plus free moments). Gravity
-    ``gravity_m_s2`` acts along −z. Frames are processed in blocks, so memory does
-    not grow with ``n`` beyond the outputs.
+    Frames are processed in blocks, so memory does not grow with ``n`` beyond the outputs.
+
+    Parameters
+    ----------
+    q, qd, qdd : array_like
+        (n, 27) coordinates (m, rad) and their first and second time derivatives.
+    params : BodyParameters
+        The calibrated bodies.
+    external : sequence of ExternalWrench
+        The measured external loads (ground reactions at the centre of pressure plus free moments).
+    gravity_m_s2 : float
+        Acts along −z.
+
+    Returns
+    -------
+    InverseDynamicsResult
     """
     q, qd, qdd = check_motion(q, qd, qdd)
     n = q.shape[0]
