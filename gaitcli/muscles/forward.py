@@ -75,14 +75,31 @@ def validate_forward(problem: Problem, motion_interp: MotionInterpolant, force_N
                      atol: float = 1e-9) -> ValidationResult:
     """Integrate (2.29) over the interval of interest with the EID excitations.
 
-    ``force_N``, ``activation``, ``excitation``: EID values (n, m) at all nodes of
-    ``problem`` (extra nodes included). Excitations between nodes are linear
-    in time (periodically wrapped for a full cycle). By default one integration
-    starts from the EID state at the first node (4.5.4). With
-    ``restart_at_nodes`` every inter-node interval starts again from the EID
-    state at its first node (the variant the dissertation expects to agree even
-    better); open-loop integration over a whole stance phase with prescribed
-    ground reactions drifts, this one measures the discretisation only.
+    Excitations between nodes are linear in time (periodically wrapped for a full cycle).
+
+    Parameters
+    ----------
+    problem : Problem
+        The EID problem.
+    motion_interp : MotionInterpolant
+        The prescribed hip path and ground reaction between nodes.
+    force_N, activation, excitation : numpy.ndarray
+        EID values (n, m) at all nodes of ``problem`` (extra nodes included).
+    metabolic_cost_eid_J : float
+        The EID's cost over the interval, for the comparison.
+    restart_at_nodes : bool
+        False: one integration from the EID state at the first node (4.5.4). True: every
+        inter-node interval starts again from the EID state at its first node (the variant the
+        dissertation expects to agree even better); open-loop integration over a whole stance
+        with prescribed ground reactions drifts, this one measures the discretisation only.
+    samples_per_node : int
+        Output samples per inter-node interval.
+    rtol, atol : float
+        The integrator's tolerances.
+
+    Returns
+    -------
+    ValidationResult
     """
     muscle = problem.models.muscle
     par = muscle.params

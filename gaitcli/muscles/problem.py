@@ -100,12 +100,27 @@ def build_problem(motion: SagittalMotion, models: Models, *, nodes: int | None =
                   extra_nodes: int = 2) -> Problem:
     """Sample the motion on the analysis grid and set up the moment equations.
 
-    ``interval`` (t_start, t_end) in s defaults to :func:`default_interval`;
-    ``periodic`` defaults to True for a heel-strike-to-heel-strike cycle.
-    ``nodes`` defaults to one per frame of the table. A periodic grid has
-    ``nodes`` nodes on [t_start, t_end); otherwise ``nodes`` nodes on
-    [t_start, t_end] plus up to ``extra_nodes`` before and after where the
-    table has data (4.3.6).
+    A periodic grid has ``nodes`` nodes on [t_start, t_end); otherwise ``nodes`` nodes on
+    [t_start, t_end] plus up to ``extra_nodes`` before and after where the table has data (4.3.6).
+
+    Parameters
+    ----------
+    motion : SagittalMotion
+        The leg's motion (SI, rad).
+    models : Models
+        The compiled muscle, limb and joint models.
+    nodes : int, optional
+        Default one per frame of the table.
+    interval : (float, float), optional
+        (t_start, t_end), s; default :func:`default_interval`.
+    periodic : bool, optional
+        Default True for a heel-strike-to-heel-strike cycle.
+    extra_nodes : int
+        Nodes before and after a non-periodic interval.
+
+    Returns
+    -------
+    Problem
     """
     t0_default, t1_default, periodic_default = default_interval(motion)
     t0, t1 = (t0_default, t1_default) if interval is None else (float(interval[0]), float(interval[1]))

@@ -197,10 +197,29 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
                 options: MuscleOptions | None = None, validate: bool = False) -> MuscleResult:
     """Solve the force-sharing problem of one leg with SO, MSO or EID (Diss. 4.1.1, 4.4, 4.3).
 
-    ``interval`` defaults to the first heel-strike-to-heel-strike cycle
-    (periodic) or the whole table; ``nodes`` to one per frame (SO, MSO) or
-    ``options.eid_nodes`` (EID). ``validate`` (EID only) integrates the forward
-    model with the EID excitations (4.5.4).
+    Parameters
+    ----------
+    motion : SagittalMotion
+        The leg's sagittal motion and ground reaction (SI, rad).
+    limb : LimbParameters
+        Its segments.
+    method : str
+        ``"so"``, ``"mso"`` or ``"eid"``.
+    nodes : int, optional
+        Analysis nodes: default one per frame (SO, MSO) or ``options.eid_nodes`` (EID).
+    interval : (float, float), optional
+        (start, end), s: default the first heel-strike-to-heel-strike cycle, else the whole table.
+    periodic : bool, optional
+        Default: True for a heel-strike-to-heel-strike cycle.
+    options : MuscleOptions, optional
+        Model parameters and solver settings (default: the dissertation's).
+    validate : bool
+        EID only: integrate the forward model with the EID excitations (4.5.4).
+
+    Returns
+    -------
+    MuscleResult
+        ``converged`` False when the solver did not converge (the CLI's exit 3).
     """
     one_of(method, METHODS, where="method")
     opts = options or MuscleOptions()
