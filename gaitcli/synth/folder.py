@@ -79,7 +79,10 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
                 stature_m: float = 1.78, sex: str = "male", period_s: float | None = None,
                 marker_set: str = "dissertation", gait: str = "normative") -> SyntheticTrial:
-    """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/."""
+    """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/.
+
+    The options are those of :func:`~gaitcli.synth.recording.simulate_trial`; returns the trial written.
+    """
     from gaitcli.io.atomic import atomic_path, make_parent
     from gaitcli.io.c3d_write import write_c3d
 

@@ -287,22 +287,42 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
                    gait: str = "normative") -> SyntheticTrial:
     """Make a synthetic walking trial with known truth (nothing written).
 
-    Two plates measure one right and one left stance in the middle of the walk; with
-    ``shared_plate`` one plate measures both (the second foot steps on it before the
-    first steps off: both feet load it in that double support).
+    Two plates measure one right and one left stance in the middle of the walk. The stride
+    length follows from stature and joint angles.
 
-    ``marker_set`` (:data:`SYNTH_MARKER_SETS`): the markers are labelled as that preset labels them, without the
-    Table A.6 markers it lacks and with its thigh and shank clusters.
+    Parameters
+    ----------
+    condition : str
+        An experiment of 3.1.1 (:data:`~gaitcli.synth.gait.CONDITIONS`): added masses, locked joints.
+    seed : int
+        Seed of the marker noise and artefact.
+    noise_mm : float
+        RMS of each marker's 3-D position error, mm (white, σ = noise/√3 per axis), as optical
+        systems quote their accuracy.
+    artefact_mm : float
+        Peak 3-D displacement of the low-frequency skin artefact, mm.
+    strides : int
+        Gait cycles in the trial.
+    mass_kg, stature_m, sex : float, float, str
+        The subject.
+    plate_noise_N : float
+        White noise on the plate channels, N (moments: 0.05 of it, N·m).
+    period_s : float, optional
+        Gait cycle, s (0.6–3.0); default the condition's, or with ``gait="predicted"`` the
+        prediction's scaled to the stature.
+    shared_plate : bool
+        One plate measures both stances (the second foot steps on it before the first steps off).
+    marker_set : str
+        :data:`SYNTH_MARKER_SETS`: the labels of that preset, without the Table A.6 markers it lacks
+        and with its thigh and shank clusters.
+    gait : str
+        :data:`SYNTH_GAITS`: ``normative``, the normative curves re-timed over the stance foot
+        (:mod:`~gaitcli.synth.gait`), or ``predicted``, the shipped muscle-driven prediction
+        (:mod:`~gaitcli.synth.predicted`; every joint free, so not with a locked-joint condition).
 
-    ``noise_mm`` is the RMS of each marker's 3-D position error (white, σ = noise/√3
-    per axis), as optical systems quote their accuracy; ``artefact_mm`` the peak
-    3-D displacement of the low-frequency skin artefact. ``period_s`` (gait cycle, s)
-    defaults to the condition's; the stride length follows from stature and angles.
-
-    ``gait`` (:data:`SYNTH_GAITS`): ``normative``, the normative curves re-timed over the stance foot
-    (:mod:`~gaitcli.synth.gait`), or ``predicted``, the shipped muscle-driven prediction of the walking model
-    (:mod:`~gaitcli.synth.predicted`; every joint free, so not with a locked-joint condition; its period by
-    default the prediction's scaled to the stature, 1.07 s at 1.78 m).
+    Returns
+    -------
+    SyntheticTrial
     """
     from gaitcli.kinematics.calibration import calibrate
     from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
