@@ -103,10 +103,6 @@ def inverse_dynamics(q, qd, qdd, params: BodyParameters, external=(), *,
         The measured external loads (ground reactions at the centre of pressure plus free moments).
     gravity_m_s2 : float
         Acts along −z.
-
-    Returns
-    -------
-    InverseDynamicsResult
     """
     q, qd, qdd = check_motion(q, qd, qdd)
     n = q.shape[0]

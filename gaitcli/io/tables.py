@@ -24,12 +24,8 @@ outline: ``corners_m`` is a 0.6 m (x) × 0.4 m (y) rectangle around that centre,
 in C3D corner order (plate z into the floor); nothing downstream should rely
 on its size.
 
-OpenSim formats follow OpenSim 4's TRCFileAdapter (PathFileType 4 header, the
-DataRate ... OrigNumFrames key line, ``Frame#  Time  <label>`` with two empty
-cells after each label, ``X1 Y1 Z1 ...``, a blank line, tab-separated rows,
-empty cells for missing markers) and the Storage/.mot format (name line,
-``version=1``, ``nRows``, ``nColumns`` (time included), ``inDegrees``,
-``endheader``, a ``time`` label row, tab-separated rows).
+``.trc`` and ``.mot`` are OpenSim 4's formats as its TRCFileAdapter and Storage
+write them (described in :mod:`gaitcli.io.opensim`).
 """
 
 from __future__ import annotations

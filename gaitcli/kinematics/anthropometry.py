@@ -1,32 +1,18 @@
 """Segment masses, centres of mass and inertias from de Leva (1996), 3.2.2.
 
-The added masses of the experiments (Tables A.2–A.3) are in :mod:`gaitcli.kinematics.disturbances`.
+mass = fraction · body mass; CoM at a fraction of the segment length from the first
+(origin) endpoint; I = m (r L)² about each segment axis (upright posture: x forward,
+y left, z up; r_sag about x, r_trans about y, r_long about z; the foot, x along it, as
+the dissertation: r_long about x, r_sag about y, r_trans about z). Lengths are de Leva's
+scaled by stature unless measured (thigh HJC→KJC, shank KJC→AJC from the static trial).
 
-de Leva's table (docs/model_constants.md §1): mass = fraction · body mass; CoM at a
-fraction of the segment length from the first (origin) endpoint; I = m (r L)². Lengths
-are de Leva's mean lengths scaled by stature / reference stature (1.741 m male,
-1.735 m female) unless measured: the thigh (HJC→KJC) and shank (KJC→AJC) lengths
-come from the static trial (3.2.2, the starred lengths of Tables A.4–A.5).
-
-The model's 8 bodies (3.2.1) split the trunk as Table A.4 does:
-
-* **pelvis** = de Leva's *lower trunk* OMPH→MIDH (11.17 % male). The lumbosacral
-  joint sits at OMPH, the hips at MIDH. This reproduces Table A.4 (subject 1:
-  8.15 kg, c1 = 0.092 m from the lumbar joint to the CoM, d2 = 0.058 m from the
-  CoM down to the hips, I = 0.0694 / 0.0557 / 0.0632 kg m²).
-* **HAT** = head + upper and middle trunk + both arms, its mass the remainder of the
-  body mass. The arms are crossed over the chest: upper arms hang vertically from
-  the shoulder joint centres (at MIDS height, ``0.112·H`` either side of the
-  midline), forearms and hands lie horizontally at elbow height, each reaching
-  across to the other side, in the frontal plane of the trunk axis. The
-  dissertation does not print its layout; this one reproduces Table A.4's
-  c2 = 0.269 m exactly and its HAT inertias within 3 % (the shoulder half-width
-  0.112·H is the value that fits them best).
-
-Inertia axes (segment axes, upright posture: x forward, y left, z up): r_sag about
-x, r_trans about y, r_long about z (docs/model_constants.md §1). For the foot (x along the
-foot, heel→toe) the dissertation's assignment is used — r_long about x, r_sag about
-y, r_trans about z — which reproduces Table A.5's foot inertias.
+The trunk is split as Table A.4 does: the **pelvis** is de Leva's lower trunk OMPH→MIDH
+(lumbosacral joint at OMPH, hips at MIDH); the **HAT** is head, upper and middle trunk
+and both arms crossed over the chest (upper arms hanging from shoulder centres
+:data:`SHOULDER_HALF_WIDTH_PER_STATURE` · H either side, forearms and hands across the
+chest at elbow height), its mass the remainder of the body mass. Sources, the reading of
+the radii's axes and what this reproduces of Tables A.4–A.5: docs/model_constants.md §1.
+The added masses of the experiments are in :mod:`gaitcli.kinematics.disturbances`.
 """
 
 from __future__ import annotations

@@ -333,10 +333,6 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     source : str or Path, optional
         The static file, for messages.
 
-    Returns
-    -------
-    StaticCalibration
-
     Raises
     ------
     InputError

@@ -1,13 +1,9 @@
 """Disturbances: the rigid masses added to the model's bodies in the experiments (3.1.1, Tables A.2–A.3).
 
-Holds :class:`Disturbance` (one added mass on one body), the dissertation's table of
-added masses :data:`DISTURBANCE_TABLE` (Tables A.2–A.3: the usual shoes of
-experiment 1, the weight band, the knee orthosis, the vario (fixing) shoes, the ski
-boot), the experiment presets (:data:`PRESETS`, :data:`PRESET_ALIASES`,
-:func:`preset_disturbances`, :func:`resolve_disturbances`), and the adding of a mass
-to a segment's :class:`~gaitcli.kinematics.anthropometry.SegmentInertia`
-(:func:`combine`, parallel-axis theorem; :func:`add_disturbance`,
-:func:`apply_disturbances`).
+The dissertation's added masses (:data:`DISTURBANCE_TABLE`: shoes, weight band, knee
+orthosis, vario shoes, ski boot), the experiments' presets that place them
+(:func:`preset_disturbances`), and their addition to a segment by the parallel-axis
+theorem (:func:`combine`).
 
 Axes and units: SI throughout (kg, m, kg m²). The table's moments of inertia are
 about the added mass's own CoM, about axes X, Y, Z parallel to the global frame in

@@ -1,21 +1,16 @@
 """Joint centres and anatomical frames from landmarks (3.2.1, 3.3; Bell 1989/1990; Cappozzo 1995).
 
-* Hip: Bell et al. regression in the pelvis frame (docs/model_constants.md §2). Default
-  ``"bell1990"``: from the mid-ASIS point, 0.19·PW posterior, 0.30·PW inferior,
-  0.36·PW lateral (PW = inter-ASIS distance). ``"bell1989"``: from each ASIS,
-  0.22·PW posterior, 0.30·PW distal, 0.14·PW medial (the same lateral position).
-  ``"harrington"`` (2007: pelvis width, depth and leg length), ``"hara"`` (2016: leg
-  length) and ``"davis"`` (Davis et al. 1991, Plug-in Gait's: leg length, inter-ASIS
-  distance, marker radius), not the dissertation's, for labs that use them.
+* Hip: Bell et al.'s regression in the pelvis frame, ``"bell1990"`` (the dissertation's,
+  default) or ``"bell1989"``; or, for labs that use them, ``"harrington"`` (2007),
+  ``"hara"`` (2016) and ``"davis"`` (1991, Plug-in Gait's). Coefficients and sources:
+  docs/model_constants.md §2.
 * Knee: midpoint of the femoral epicondyle markers LEF and MEF (3.2.1). Without the
   medial marker, Plug-in Gait's chord method (:func:`chord_joint_centre`) from the hip
   centre, the thigh wand and LEF with the knee width and marker diameter.
-* Ankle: "from the malleoli using de Leva's tables" (3.2.1). Default ``"de_leva"``:
-  the knee→mid-malleoli vector lengthened by de Leva's KJC→AJC / KJC→LMAL ratio
-  (440.3/434.0 male), which puts the centre about 6 mm distal of the malleoli as in
-  de Leva's shank rows; ``"midpoint"``: the midpoint of LM and MM. Without the medial
-  malleolus, the chord method from the knee centre, the shank wand and LM with the
-  ankle width.
+* Ankle: "from the malleoli using de Leva's tables" (3.2.1): ``"de_leva"`` (default) the
+  knee→mid-malleoli vector lengthened by de Leva's KJC→AJC / KJC→LMAL ratio (about 6 mm
+  distal of the malleoli), or ``"midpoint"``. Without the medial malleolus, the chord
+  method from the knee centre, the shank wand and LM with the ankle width.
 * Lab-exported virtual centres ``HJCr``, ``KJCr``, ``AJCr`` (and ``l``) replace these.
 
 Anatomical frames (model axes: x forward, y left, z up; columns of the returned

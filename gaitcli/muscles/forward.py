@@ -96,10 +96,6 @@ def validate_forward(problem: Problem, motion_interp: MotionInterpolant, force_N
         Output samples per inter-node interval.
     rtol, atol : float
         The integrator's tolerances.
-
-    Returns
-    -------
-    ValidationResult
     """
     muscle = problem.models.muscle
     par = muscle.params

@@ -13,14 +13,9 @@ conversion to the angles of the muscle path (A.9) happens only in
 :func:`gaitcli.kinematics.conventions.muscle_path_angles`. Moment arms are
 joint moments per newton, conjugate to ψ.
 
-Readings of the dissertation (docs/model_constants.md gives each reason):
-- activation dynamics (2.17) with t1 = 1/τ_act − 1/τ_deact, t2 = 1/τ_deact (§7);
-- force–velocity (A.3)–(A.8) with fac = 1, slope factor 1, A_r = 0.41, B_r = 5.2,
-  f_asympt = 1.5, linear in activation; force–length (A.4) clipped at ≥ 0 (§8);
-- constant pennation: l_ce = (l_m − l_se)/cos α_p (4.17), f_ce = F/cos α_p (4.16,
-  no parallel element), v_ce = (v_m − v_se)/cos α_p, the time derivative of (4.17) (§8);
-- metabolic rate of Umberger et al. (2003) (A.12–A.21) with the cap and floor
-  of §9, or the 2010 variant.
+Where the printed formulas are ambiguous or mistyped — t1 of (2.17), the force–length
+clip, fac and slope factor 1, v_ce under constant pennation (4.15), the Umberger heat
+rate's cap and floor — the readings and their reasons are docs/model_constants.md §7–§9.
 """
 
 from __future__ import annotations

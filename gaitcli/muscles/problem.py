@@ -117,10 +117,6 @@ def build_problem(motion: SagittalMotion, models: Models, *, nodes: int | None =
         Default True for a heel-strike-to-heel-strike cycle.
     extra_nodes : int
         Nodes before and after a non-periodic interval.
-
-    Returns
-    -------
-    Problem
     """
     t0_default, t1_default, periodic_default = default_interval(motion)
     t0, t1 = (t0_default, t1_default) if interval is None else (float(interval[0]), float(interval[1]))

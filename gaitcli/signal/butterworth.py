@@ -11,13 +11,8 @@ higher frequency ``f_d`` (docs/model_constants.md §3):
 
 This is exact for the digital (bilinear, pre-warped) filter that
 ``scipy.signal.butter`` returns; the dissertation's ``6/0.802 = 7.48 Hz`` is its
-limit for ``f_s -> inf``.
-
-Signals with gaps (NaN) are filtered run by run: every contiguous stretch of
-finite samples is filtered on its own, so a gap never spreads into its
-neighbours. Runs shorter than the filter's padding are filtered with the padding
-reduced to fit (``padlen = run length - 1``); single-sample runs are returned as
-they are.
+limit for ``f_s -> inf``. A gap (NaN) never spreads: :func:`lowpass` filters each
+finite run on its own.
 """
 
 from __future__ import annotations

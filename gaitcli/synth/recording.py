@@ -319,10 +319,6 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
         :data:`SYNTH_GAITS`: ``normative``, the normative curves re-timed over the stance foot
         (:mod:`~gaitcli.synth.gait`), or ``predicted``, the shipped muscle-driven prediction
         (:mod:`~gaitcli.synth.predicted`; every joint free, so not with a locked-joint condition).
-
-    Returns
-    -------
-    SyntheticTrial
     """
     from gaitcli.kinematics.calibration import calibrate
     from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
