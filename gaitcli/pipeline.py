@@ -364,7 +364,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
                   scheduler: str | None = None) -> PredictOutcome:
     """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`; the optimal
     prosthesis by :func:`gaitcli.predict.study.predict_optimal`; ``starts`` > 1: the best of that many starts,
-    :func:`gaitcli.studies.best_of_starts`), write ``OUT/predict/`` whole (``report.predict_outputs``) with its
+    :func:`gaitcli.studies.best_of_starts`), write ``OUT/predict/`` whole (``predict.outputs``) with its
     ``summary.json`` (and ``starts.csv``). Subject and reference as :func:`predict_inputs`."""
     from gaitcli.config import configure
     from gaitcli.core.registry import Progress
@@ -373,7 +373,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     from gaitcli.predict.nlp import TIME_LIMIT_STATUS
     from gaitcli.predict.prosthesis import CHOICES as PROSTHESIS_CHOICES
     from gaitcli.predict.stage import run_predict, violated_groups
-    from gaitcli.report.predict_outputs import write_predict_outputs
+    from gaitcli.predict.outputs import write_predict_outputs
 
     # everything is validated before anything runs or is written
     cfg.weight_pair()

@@ -1,7 +1,8 @@
 """The registry entries of the built-in stages: one :class:`~gaitcli.core.registry.Stage` each.
 
-Each entry ties a stage's pure function (in its package) to its writer and
-figures (``report/``) and to the reader of its hand-off (``io/h5.py``). Adding a
+Each entry ties a stage's pure function (in its package) to its writer (the
+package's ``outputs.py``), its figures (``report/plots.py``) and the reader of
+its hand-off (``io/h5.py``). Adding a
 stage is one module with its config and run function plus one entry here
 (``docs/architecture.md``).
 """
@@ -40,11 +41,11 @@ def _unconverged_muscles(result: MuscleResult) -> str:
 
 
 def _writer(module: str, name: str):
-    """The writer ``report.<module>.<name>``, imported when a stage first writes (matplotlib-free tables)."""
+    """The writer ``<module>.<name>`` (a stage package's ``outputs``), imported when a stage first writes."""
     def write(folder, result, attrs):
         from importlib import import_module
 
-        return getattr(import_module(f"gaitcli.report.{module}"), name)(folder, result, attrs)
+        return getattr(import_module(module), name)(folder, result, attrs)
     return write
 
 
@@ -58,19 +59,19 @@ def _figures(name: str):
 
 
 FILTER = register(Stage(
-    name="filter", config=FilterConfig, run=_filter, write=_writer("filter_outputs", "write_filter_outputs"),
+    name="filter", config=FilterConfig, run=_filter, write=_writer("gaitcli.signal.outputs", "write_filter_outputs"),
     read=lambda path: read_result(path, Trial, "trial"), handoff=lambda result: result.trial,
     h5_name="filter.h5", plots=_figures("filter_figures")))
 
 IDYN = register(Stage(
     name="idyn", config=IdynConfig, depends=("filter",), run=_idyn,
-    write=_writer("idyn_outputs", "write_idyn_outputs"),
+    write=_writer("gaitcli.dynamics.outputs", "write_idyn_outputs"),
     read=lambda path: read_result(path, SagittalExport, "sagittal"), handoff=lambda result: result.sagittal,
     h5_name="idyn.h5", plots=_figures("idyn_figures")))
 
 MUSCLES = register(Stage(
     name="muscles", config=MusclesConfig, depends=("idyn",), run=_muscles,
-    write=_writer("muscles_outputs", "write_muscle_outputs"),
+    write=_writer("gaitcli.muscles.outputs", "write_muscle_outputs"),
     result=MuscleResult, h5_name="muscles.h5",
     plots=_figures("muscle_figures"), folder=lambda cfg: f"muscles/{cfg.method}",
     converged=lambda result: result.converged, unconverged=_unconverged_muscles))

@@ -43,7 +43,7 @@ def case_key(case: StudyCase, subject: str, reference_sha: str, start_keys: tupl
 
 def write_case(folder: Path, result: PredictResult, attrs: dict, extra: dict) -> dict:
     """Write one case's files whole (atomic) with its summary plus ``extra`` (the case key and labels)."""
-    from gaitcli.report.predict_outputs import write_predict_outputs
+    from gaitcli.predict.outputs import write_predict_outputs
 
     with stage_folder(folder) as tmp:
         summary = write_predict_outputs(tmp, result, attrs)

@@ -81,7 +81,7 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
 
     from gaitcli.predict.layout import full_from_symmetric
     from gaitcli.predict.stage import evaluate_design
-    from gaitcli.report.predict_outputs import write_predict_outputs
+    from gaitcli.predict.outputs import write_predict_outputs
 
     stored = stored_solution(18, symmetric=True)
     x = full_from_symmetric(18, np.loadtxt(stored))

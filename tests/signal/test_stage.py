@@ -30,7 +30,7 @@ from gaitcli.signal.stage import FilterConfig
 from gaitcli.errors import GaitWarning
 from gaitcli.pipeline import load_recording
 from gaitcli.core.recording import Markers, Recording
-from gaitcli.report.filter_outputs import event_columns, grf_columns
+from gaitcli.signal.outputs import event_columns, grf_columns
 from gaitcli.resources import sample_trial
 from gaitcli.signal.stage import filter_trial
 from gaitcli.trial import open_trial

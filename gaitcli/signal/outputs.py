@@ -51,7 +51,7 @@ def event_columns(result: FilterResult) -> dict[str, np.ndarray]:
 
 
 def summary(result: FilterResult) -> dict:
-    """The filter stage's ``summary.json`` keys (DESIGN.md) plus notes and counts."""
+    """The filter stage's ``summary.json`` keys plus notes and counts."""
     ev = result.events
     rows = [{"time_s": float(t), "frame": int(f) + result.markers.first_frame, "side": str(s), "event": str(k),
              "source": str(src)} for t, f, s, k, src in zip(ev.time_s, ev.frame, ev.side, ev.kind, ev.source)]

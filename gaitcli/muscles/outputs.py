@@ -19,7 +19,7 @@ def per_muscle(result: MuscleResult, values: np.ndarray, suffix: str) -> dict:
 
 
 def summary(result: MuscleResult) -> dict:
-    """DESIGN.md's muscle keys plus the solver report and the analysed interval."""
+    """The muscle stage's ``summary.json`` keys: the metabolic cost, the solver's report and the analysed interval."""
     info = result.summary()
     info.update({
         "side": result.side, "phase": result.phase, "interval_s": list(result.interval_s),

@@ -131,7 +131,8 @@ def _rms_mm(values: np.ndarray) -> float | None:
 
 
 def summary(result: IdynResult) -> dict:
-    """DESIGN.md's idyn keys (Table 3.1 features, residuals) plus fit quality and provenance notes."""
+    """The idyn stage's ``summary.json`` keys: Table 3.1's features, the residuals, the fit quality and
+    provenance notes."""
     m = result.measured
     info = {
         "frames": int(result.q.shape[0]),
