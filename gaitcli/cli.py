@@ -55,7 +55,7 @@ class Console:
 
     def progress(self):
         """The rich progress display (silent with --quiet)."""
-        from gaitcli.report.progress import ProgressDisplay
+        from gaitcli.progress import ProgressDisplay
 
         return ProgressDisplay(enabled=not self.quiet)
 
@@ -68,7 +68,7 @@ class Console:
     def run(self, trial, names, cfg, *, out, plots: bool, show: str | None = None) -> None:
         """Run the stages through the pipeline with a progress display; unconverged → exit 3."""
         from gaitcli.pipeline import run_stages
-        from gaitcli.report.progress import ProgressDisplay
+        from gaitcli.progress import ProgressDisplay
 
         with ProgressDisplay(enabled=not self.quiet) as progress:
             outcomes = run_stages(trial, names, cfg, out=out, progress=progress, plots=plots)
@@ -406,7 +406,7 @@ def batch_command(ctx, lab_dir, pipeline, workers, scheduler, force, no_plots, b
 
     from gaitcli.batch import BATCH_SUMMARY, run_batch, stages_of
     from gaitcli.compare import DEFAULT_TOLERANCES, compare_trees, outputs_only, read_tolerances
-    from gaitcli.report.progress import BatchProgress
+    from gaitcli.progress import BatchProgress
 
     console: Console = ctx.obj
     if workers is not None and scheduler is not None:

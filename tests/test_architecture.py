@@ -11,7 +11,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "gaitcli"
 #: the stage packages, each allowed to import only the ones before it
 STAGE_ORDER = ("signal", "kinematics", "dynamics", "muscles", "predict")
 #: the edges: what no stage package may import
-EDGES = ("cli", "pipeline", "studies", "report", "config", "stages", "synth")
+EDGES = ("cli", "progress", "pipeline", "studies", "report", "config", "stages", "synth")
 
 
 def module_name(path: Path) -> str:
@@ -77,6 +77,13 @@ def test_compare_imports_only_io_core_and_errors():
                   if (p.is_dir() and (p / "__init__.py").is_file()) or p.suffix == ".py"}
     assert "compare" in everything
     assert not violations("compare", everything - {"io", "core", "errors", "__init__"})
+
+
+def test_only_the_command_line_imports_its_progress_display():
+    importers = sorted(str(path.relative_to(PACKAGE.parent)) for path in PACKAGE.rglob("*.py")
+                       if path.name != "progress.py" and any(first_part(m) == "progress"
+                                                             for m in imported_modules(path)))
+    assert importers == ["gaitcli/cli.py"]
 
 
 #: what writes files: the CSV/JSON writers, the HDF5 writer and the atomic staging

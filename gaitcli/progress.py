@@ -1,4 +1,8 @@
-"""Progress display for long work (stages, optimizer iterations, trials), on stderr via rich."""
+"""The command line's progress display for long work (stages, optimizer iterations, trials), on stderr via rich.
+
+Only :mod:`gaitcli.cli` uses it: the code that runs stages reports progress through callbacks
+(:class:`gaitcli.core.registry.Progress`, a batch's rows) and never draws.
+"""
 
 from __future__ import annotations
 
