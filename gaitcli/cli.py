@@ -366,7 +366,7 @@ def reference_command(console: Console, trials, out, pipeline, band):
     reference, right, left = reference_from_idyn(outputs, sources=names)
     write_table(out, reference.columns())
     if band is not None:
-        from gaitcli.report.bands import band_from_gait_cycles
+        from gaitcli.signal.bands import band_from_gait_cycles
 
         normal = band_from_gait_cycles([p.parent / "gait_cycle.csv" for p in outputs], source=", ".join(names))
         write_table(band, normal.columns())
@@ -499,7 +499,7 @@ def _print_findings(result) -> None:
 @click.pass_obj
 def report_command(console: Console, out_dir, reference, exports):
     """A self-contained HTML page per trial, prediction or study in OUT_DIR (and an index for a batch)."""
-    from gaitcli.report.bands import default_band, read_band
+    from gaitcli.signal.bands import default_band, read_band
     from gaitcli.report.html import find_report, write_report
 
     band = default_band() if reference is None else read_band(reference)

@@ -3,7 +3,7 @@
 A page embeds its figures as data URIs (PNG, the prediction's GIF): it opens from a file or an e-mail
 attachment with no network, and its Content-Security-Policy allows nothing else to load. Figures are drawn
 again from the stages' HDF5 files (:mod:`gaitcli.report.plots`, :mod:`gaitcli.report.predict_plots`), the
-cycle figures over the grey normal band (:mod:`gaitcli.report.bands`); a study's figures are its own PNGs.
+cycle figures over the grey normal band (:mod:`gaitcli.signal.bands`); a study's figures are its own PNGs.
 Right is red and left blue throughout, every axis has its unit, every figure a caption, and titles name the
 trial folder, never a path outside it.
 
@@ -27,7 +27,7 @@ from gaitcli import __version__
 from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.outputs import plain_text
-from gaitcli.report.bands import NormalBand
+from gaitcli.signal.bands import NormalBand
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
 #: Wolf and Rettig), the literature values the dissertation compares Table 3.1 with

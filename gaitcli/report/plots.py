@@ -21,6 +21,7 @@ from gaitcli.core.container import Trial  # noqa: E402
 from gaitcli.core.events import SIDE_NAMES  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
 from gaitcli.io.h5 import open_h5, read_record, read_records  # noqa: E402
+from gaitcli.signal.bands import CYCLE_PCT, NormalBand  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
 
@@ -47,6 +48,18 @@ def mark_events(ax, events, *, sides=("r", "l")) -> None:
             if times.size:
                 ax.vlines(times, 0, 1, transform=ax.get_xaxis_transform(), colors=SIDE_COLOUR.get(side, "grey"),
                           linewidths=0.8, alpha=0.6, linestyles=style)
+
+
+def draw_band(ax, band: NormalBand | None, variable: str, *, label: bool = True) -> bool:
+    """Grey mean ± 1 SD of ``variable`` behind whatever ``ax`` shows over 0–100 % (True when drawn)."""
+    got = None if band is None else band.get(variable)
+    if got is None:
+        return False
+    mean, sd = got
+    ax.fill_between(CYCLE_PCT, mean - sd, mean + sd, color="0.82", lw=0, zorder=0,
+                    label="normal ± 1 SD" if label else None)
+    ax.plot(CYCLE_PCT, mean, color="0.6", lw=0.8, ls=":", zorder=0.5)
+    return True
 
 
 def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
@@ -133,9 +146,8 @@ def _column(columns: list[str], joint: str, side: str, senses, suffix: str = "")
 def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", band=None):
     """Angles (deg), moments (N·m/kg) and, in the sagittal figure, total joint powers (W/kg) of hip, knee and
     ankle in ``plane`` over the gait cycle, mean ± SD of each side's strides (right red, left blue) over the grey
-    normal ``band`` (:mod:`gaitcli.report.bands`, the variable of the same name); moments and powers blank where
+    normal ``band`` (:mod:`gaitcli.signal.bands`, the variable of the same name); moments and powers blank where
     the foot's load is unknown. Returns the matplotlib figure."""
-    from gaitcli.report.bands import draw_band
     from gaitcli.signal.cycles import Stride, normalise
 
     with open_h5(h5_path, "gait idyn") as h5:
@@ -210,7 +222,7 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "", band="default"
     (:func:`cycle_figure`, over the package's normal band unless ``band`` is given or None);
     ``residuals.png``: the pelvis residual force and moment over time."""
     from gaitcli.dynamics.sagittal import SagittalExport
-    from gaitcli.report.bands import default_band
+    from gaitcli.signal.bands import default_band
 
     band = default_band() if band == "default" else band
     with open_h5(h5_path, "gait idyn") as h5:

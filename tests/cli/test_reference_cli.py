@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from gaitcli.report.bands import BAND_FILE
+from gaitcli.signal.bands import BAND_FILE
 from gaitcli.resources import bundled_reference
 
 from .conftest import gait, gait_many

@@ -1,4 +1,5 @@
-"""Normal bands for figures: mean ± 1 SD over the gait cycle of a reference, drawn grey behind a trial's curves.
+"""Normal bands: mean ± 1 SD over the gait cycle of a reference group, which figures draw grey behind a trial's
+curves (:func:`gaitcli.report.plots.draw_band`).
 
 A band holds side-free variables over 0–100 % of a stride (both legs alike, in the names and signs of the
 tables it was made from, the side dropped): angles ``<joint>_<sense>_deg`` (``hip_flexion_deg``,
@@ -7,7 +8,7 @@ tables it was made from, the side dropped): angles ``<joint>_<sense>_deg`` (``hi
 reaction ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
 ``<variable>_sd``; ``gait reference ... --band FILE`` writes one from idyn outputs) or from a ``gait reference``
 table, whose right-leg columns give the sagittal angles and forces. The package's band
-(``report/data/normal_band.csv``) comes from ``gait synth``'s normative trial (Winter's curves; the command is in
+(``signal/data/normal_band.csv``) comes from ``gait synth``'s normative trial (Winter's curves; the command is in
 sample_trials/README.md); one subject's strides vary far less than between subjects, so each SD is raised to a
 floor (3°, 0.1 N·m/kg, 0.2 W/kg, 0.3 N/kg, our choice as for the prediction's reference,
 :data:`gaitcli.predict.reference.SD_FLOOR`).
@@ -135,15 +136,3 @@ def default_band() -> NormalBand:
     """The package's band (the strides of ``gait synth``'s normative trial: Winter's curves)."""
     band = read_band(BAND_FILE)
     return NormalBand(band.mean, band.sd, "gaitcli's band: Winter's adult curves (gait synth --gait normative)")
-
-
-def draw_band(ax, band: NormalBand | None, variable: str, *, label: bool = True) -> bool:
-    """Grey mean ± 1 SD of ``variable`` behind whatever ``ax`` shows over 0–100 % (True when drawn)."""
-    got = None if band is None else band.get(variable)
-    if got is None:
-        return False
-    mean, sd = got
-    ax.fill_between(CYCLE_PCT, mean - sd, mean + sd, color="0.82", lw=0, zorder=0,
-                    label="normal ± 1 SD" if label else None)
-    ax.plot(CYCLE_PCT, mean, color="0.6", lw=0.8, ls=":", zorder=0.5)
-    return True
