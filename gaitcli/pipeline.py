@@ -197,7 +197,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
                     handoffs[name], sources[name] = _read(st, path), path
                     outcomes.append(StageOutcome(name, "reused", path.parent))
                     continue
-                except (KeyError, OSError, ValueError, TypeError):  # an older or damaged output: make it anew
+                except (InputError, KeyError, OSError, ValueError, TypeError):  # older or damaged: make it anew
                     pass
         started = time.perf_counter()
         ctx = StageContext(subject=run.trial.subject, folder=run.trial.folder, subject_path=run.trial.subject_path,

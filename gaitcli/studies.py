@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.core.registry import Progress, ProgressCallback, no_progress
+from gaitcli.errors import InputError
 from gaitcli.io.h5 import read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
@@ -59,7 +60,7 @@ def stored_case(folder: Path, key: str) -> PredictResult | None:
         if summary.get("case_key") != key:
             return None
         return read_result(folder / "predict.h5", PredictResult)
-    except (OSError, ValueError, KeyError):
+    except (InputError, OSError, ValueError, KeyError):
         return None
 
 

@@ -8,7 +8,10 @@ list), with the unit read from the field name's suffix (``force_N`` → ``N``,
 dataclass from the group, guided by its type annotations. So a result is written
 and read by the same two functions, and a later stage gets back exactly the
 object an earlier stage returned. Text is stored as UTF-8 strings and read with
-h5py's ``.asstr()``.
+h5py's ``.asstr()``. Tables for people (a 2-D dataset with its column names in an
+attribute) are read as a :class:`ColumnTable`. Files read back are input: every
+reader opens them through :func:`open_h5`, so a damaged or foreign file is an
+:class:`~gaitcli.errors.InputError`, and no dataset is read past :data:`H5_MAX_BYTES`.
 
 Root attributes (:func:`provenance`): gaitcli version, resolved config as YAML,
 the input files' SHA-256, creation time, and the trial's processing history.
@@ -188,6 +191,7 @@ def _read_value(node, hint):
         item_hint = args[0] if args else Any
         items = [_read_value(node[str(i)], item_hint) for i in range(int(node[".length"][()]))]
         return items if origin is list else tuple(items)
+    checked(node)  # a value: a dataset within the size limit (a group in a damaged file: InputError)
     if origin is tuple:
         args = typing.get_args(hint)
         item = args[0] if args else float
@@ -245,7 +249,50 @@ def _first_line(exc: BaseException) -> str:
     return lines[0][:SHOWN_CHARACTERS]
 
 
-def read_result(path: str | Path, cls, prefix: str = "result"):
-    """The stage result of type ``cls`` stored under ``prefix`` in the HDF5 file ``path``."""
-    with h5py.File(path, "r") as h5:
-        return read_record(h5[prefix], cls)
+def read_result(path: str | Path, cls, prefix: str = "result", *, what: str = "gaitcli"):
+    """The stage result of type ``cls`` stored under ``prefix`` in the HDF5 file ``path`` (``cls``: a dataclass,
+    or a type hint such as ``list[Stride]``); a damaged or foreign file is an InputError (:func:`open_h5`,
+    ``what``: whose file was expected)."""
+    with open_h5(path, what) as h5:
+        return _read_value(h5[prefix], cls)
+
+
+def read_field(path: str | Path, cls, name: str, prefix: str = "result", *, what: str = "gaitcli"):
+    """The field ``name`` alone of the ``cls`` record stored under ``prefix`` in ``path``, typed by ``cls``'s
+    annotation (a missing field, or a damaged or foreign file, is an InputError)."""
+    with open_h5(path, what) as h5:
+        return _read_value(h5[f"{prefix}/{name}"], typing.get_type_hints(cls)[name])
+
+
+def file_attrs(path: str | Path, *, what: str = "gaitcli") -> dict[str, Any]:
+    """The root attributes of an HDF5 file gaitcli wrote (:func:`provenance` and a stage's own, e.g. ``trial``,
+    ``stage_key``); a damaged or foreign file is an InputError."""
+    with open_h5(path, what) as h5:
+        return {key: h5.attrs[key] for key in h5.attrs}
+
+
+# ----------------------------------------------------------------------------------- tables
+
+@dataclass(frozen=True)
+class ColumnTable:
+    """A 2-D dataset whose columns are named by an attribute (``columns``; ``joints`` for per-joint arrays):
+    ``values`` (rows, columns) in ``units``, with the sign ``convention`` its writer recorded."""
+
+    values: np.ndarray
+    columns: tuple[str, ...]
+    units: str = "1"
+    convention: str = ""
+
+    def index(self, name: str) -> int:
+        return self.columns.index(name)
+
+    def column(self, name: str) -> np.ndarray:
+        """The values (rows,) of the column ``name`` (ValueError when there is none)."""
+        return self.values[:, self.columns.index(name)]
+
+
+def column_table(dataset: h5py.Dataset, names: str = "columns") -> ColumnTable:
+    """The :class:`ColumnTable` of a dataset whose attribute ``names`` lists its columns, comma-separated."""
+    values = checked(dataset)[()]
+    return ColumnTable(values, tuple(str(dataset.attrs[names]).split(",")), str(dataset.attrs.get("units", "1")),
+                       str(dataset.attrs.get("convention", "")))

@@ -96,3 +96,57 @@ def test_a_group_where_a_dataset_belongs_is_an_input_error(tmp_path):
         h5.create_group("result/design")
     with h5py.File(path, "r") as h5, pytest.raises(InputError, match="result/design.*a group"):
         checked(h5["result/design"])
+
+
+def test_one_field_is_read_typed_and_a_group_in_its_place_is_an_input_error(tmp_path):
+    from gaitcli.errors import InputError
+    from gaitcli.io.h5 import read_field
+
+    path = tmp_path / "r.h5"
+    write_h5(path, record_datasets("result", Leaf(np.array([[1.0, 2.0, 3.0]]), "right")), {})
+    np.testing.assert_array_equal(read_field(path, Leaf, "force_N"), [[1.0, 2.0, 3.0]])
+    assert read_field(path, Leaf, "label") == "right"
+    foreign = tmp_path / "foreign.h5"
+    with h5py.File(foreign, "w") as h5:
+        h5.create_group("result/force_N")
+    with pytest.raises(InputError, match="result/force_N.*a group"):
+        read_field(foreign, Leaf, "force_N")
+    with pytest.raises(InputError, match="not an HDF5 file of gait x"):  # the field is missing
+        read_field(foreign, Leaf, "label", what="gait x")
+
+
+def test_a_list_of_records_and_the_root_attributes_are_read_from_the_path(tmp_path):
+    from gaitcli.io.h5 import file_attrs
+
+    path = tmp_path / "r.h5"
+    write_h5(path, record_datasets("items", [Leaf(np.ones(2), "a"), Leaf(np.zeros(2), "b")]),
+             {"trial": "walk 1", "stage_key": "{}"})
+    assert [leaf.label for leaf in read_result(path, list[Leaf], "items")] == ["a", "b"]
+    assert file_attrs(path) == {"trial": "walk 1", "stage_key": "{}"}
+
+
+@pytest.mark.parametrize("content", [b"", b"\x89HDF\r\n\x1a\n" + bytes(100), b"time_s,x\n0,1\n"])
+def test_a_damaged_file_read_back_is_an_input_error_naming_it(tmp_path, content):
+    from gaitcli.errors import InputError
+    from gaitcli.io.h5 import file_attrs
+
+    path = tmp_path / "idyn.h5"
+    path.write_bytes(content)
+    for read in (lambda: read_result(path, Leaf), lambda: file_attrs(path)):
+        with pytest.raises(InputError, match="idyn.h5"):
+            read()
+
+
+def test_a_table_is_read_with_its_column_names_units_and_convention(tmp_path):
+    from gaitcli.io.h5 import Dataset, column_table
+
+    values = np.arange(6.0).reshape(3, 2)
+    path = tmp_path / "t.h5"
+    write_h5(path, {"angles": Dataset(values, "deg", {"columns": "hip_r_flexion,knee_r_flexion",
+                                                      "convention": "flexion positive"}),
+                    "powers": Dataset(values, "W", {"joints": "hip_r,knee_r"})}, {})
+    with h5py.File(path, "r") as h5:
+        angles, powers = column_table(h5["angles"]), column_table(h5["powers"], "joints")
+    assert angles.columns == ("hip_r_flexion", "knee_r_flexion") and angles.units == "deg"
+    assert angles.convention == "flexion positive" and powers.columns == ("hip_r", "knee_r") and powers.units == "W"
+    np.testing.assert_array_equal(angles.column("knee_r_flexion"), [1.0, 3.0, 5.0])
