@@ -44,7 +44,7 @@ from timing import Stopwatch, copy_sample, figure_times, median_of, one_core, py
 TARGET_S = 4.0
 COMMAND = ("muscles", "--method", "eid")
 #: what ``gait muscles`` imports, in order: the CLI, then on first use the pipeline, the writer, the figures
-MODULES = ("gaitcli.cli", "gaitcli.pipeline", "gaitcli.report.muscles_outputs")
+MODULES = ("gaitcli.cli", "gaitcli.pipeline", "gaitcli.muscles.outputs")
 PLOTS_MODULE = "gaitcli.report.plots"
 
 #: breakdown rows: (label, depth); the order in which they are printed
@@ -72,7 +72,7 @@ def child(folder: Path, plots: bool) -> dict:
     from gaitcli.config import configure
     from gaitcli.muscles import eid, so
     from gaitcli.muscles import stage as muscle_stage
-    from gaitcli.report import muscles_outputs
+    from gaitcli.muscles import outputs as muscles_outputs
 
     figures = {}
     with Stopwatch() as w:

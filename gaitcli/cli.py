@@ -185,14 +185,14 @@ def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, momen
     if exports:  # the export names checked before any stage runs: a name too long stops it with nothing written
         from gaitcli.io.atomic import check_output_file
         from gaitcli.pipeline import TrialRun
-        from gaitcli.report.exports import export_targets
+        from gaitcli.io.exports import export_targets
 
         run = TrialRun(trial, out, cfg)
         for path in export_targets(run.out_root, set(exports), trial_name=run.trial.folder.resolve().name):
             check_output_file(path)
     console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
     if exports:
-        from gaitcli.report.exports import export_trial
+        from gaitcli.io.exports import export_trial
 
         for path in export_trial(run.out_root, set(exports), trial_c3d=run.trial.trial_path):
             console.info(f"idyn: exported {path}")
@@ -507,7 +507,7 @@ def report_command(console: Console, out_dir, reference, exports):
     for page in pages:
         console.info(f"report: wrote {page.path}")
     if exports:
-        from gaitcli.report.exports import export_trial
+        from gaitcli.io.exports import export_trial
         from gaitcli.trial import open_trial
 
         kind, root = find_report(Path(out_dir).resolve())

@@ -1,22 +1,24 @@
 """Writes the idyn stage's files: kinematics.csv, joint_moments.csv, residuals.csv, sagittal.csv,
-gait_cycle.csv and idyn.h5, and gives its summary."""
+gait_cycle.csv and idyn.h5, and gives its summary; reads ``idyn.h5`` back typed (:func:`read_idyn_output`)."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from gaitcli.dynamics.sagittal import sagittal_columns
+from gaitcli.dynamics.sagittal import SagittalExport, sagittal_columns
 from gaitcli.dynamics.stage import IdynResult
-from gaitcli.io.h5 import Dataset, record_datasets, write_h5
+from gaitcli.io.h5 import Dataset, read_result, record_datasets, write_h5
+from gaitcli.io.stage_files import IdynTables, read_idyn_tables
 from gaitcli.io.outputs import write_table
 from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
 from gaitcli.kinematics.conventions import (ANATOMICAL_CONVENTION, CONVENTION, PIG_CONVENTION, PIG_MOMENTS,
                                             anatomical_to_degrees, coordinates_to_clinical, moments_to_clinical,
                                             moments_to_plug_in_gait)
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS
-from gaitcli.signal.cycles import CYCLE_POINTS, normalise
+from gaitcli.signal.cycles import CYCLE_POINTS, Stride, normalise
 
 
 def coordinate_columns(result: IdynResult) -> dict:
@@ -236,3 +238,21 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
     })
     write_h5(folder / "idyn.h5", data, attrs)
     return summary(result)
+
+
+@dataclass(frozen=True)
+class IdynOutput:
+    """What an ``idyn.h5`` gives the figures and the prediction's reference: the muscle stage's hand-off
+    (:class:`~gaitcli.dynamics.sagittal.SagittalExport`: each leg's motion and load, the events, the body
+    mass), every complete stride of both sides, and the tables for people
+    (:class:`~gaitcli.io.stage_files.IdynTables`)."""
+
+    sagittal: SagittalExport
+    strides: list[Stride]
+    tables: IdynTables
+
+
+def read_idyn_output(path: str | Path) -> IdynOutput:
+    """The :class:`IdynOutput` of an ``idyn.h5`` (a damaged or foreign file: InputError)."""
+    return IdynOutput(read_result(path, SagittalExport, "sagittal", what="gait idyn"),
+                      read_result(path, list[Stride], "strides", what="gait idyn"), read_idyn_tables(path))

@@ -26,6 +26,7 @@ from pathlib import Path
 from gaitcli import __version__
 from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import atomic_path
+from gaitcli.io.h5 import file_attrs
 from gaitcli.io.outputs import plain_text
 from gaitcli.signal.bands import NormalBand
 
@@ -274,13 +275,10 @@ def find_report(out_dir: Path) -> tuple[str, Path]:
 
 def _trial_name(root: Path) -> str:
     """The trial folder's name as the stages recorded it (HDF5 attribute ``trial``), else the output root's folder."""
-    import h5py
-
     for path in sorted(root.glob("*/*.h5")) + sorted(root.glob("muscles/*/*.h5")):
         try:
-            with h5py.File(path, "r") as h5:
-                name = h5.attrs.get("trial")
-        except OSError:
+            name = file_attrs(path).get("trial")
+        except InputError:  # a damaged file names no trial
             continue
         if name:
             return str(name)

@@ -17,10 +17,10 @@ matplotlib.rcParams["axes.titley"] = 1.0
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from gaitcli.core.container import Trial  # noqa: E402
 from gaitcli.core.events import SIDE_NAMES  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
-from gaitcli.io.h5 import open_h5, read_record, read_records  # noqa: E402
+from gaitcli.io.h5 import read_result  # noqa: E402
+from gaitcli.io.stage_files import IdynTables, read_filter_signals, read_idyn_tables  # noqa: E402
 from gaitcli.signal.bands import CYCLE_PCT, NormalBand  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
@@ -64,15 +64,8 @@ def draw_band(ax, band: NormalBand | None, variable: str, *, label: bool = True)
 
 def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     """``markers.png`` (raw vs filtered, a few foot and pelvis landmarks) and ``grf.png`` (per foot, events)."""
-    with open_h5(h5_path, "gait filter") as h5:
-        trial = read_record(h5["trial"], Trial)
-        raw = h5["markers/raw"][()]
-        cutoff_hz = float(h5["trial/markers/positions_m"].attrs["cutoff_hz"])
-        plates = {}
-        for name in (h5["plates"] if "plates" in h5 else []):
-            analog = h5[f"plates/{name}/analog/raw_vertical_force"]
-            plates[name] = (h5[f"plates/{name}/force"][()], h5[f"plates/{name}/cop"][()],
-                            analog[()], float(analog.attrs["rate_hz"]))
+    signals = read_filter_signals(h5_path)
+    trial, raw, cutoff_hz = signals.trial, signals.raw_markers_m, signals.cutoff_hz
     folder = Path(folder)
     written = []
     smooth = trial.markers
@@ -100,7 +93,7 @@ def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
         written.append(save(fig, folder / "markers.png"))
 
     loads = {side: (load.force_N, load.cop_m) for side, load in trial.feet.items() if load.on_plates} \
-        or {name: (force, cop) for name, (force, cop, _, _) in plates.items()}
+        or {name: (plate.force_N, plate.cop_m) for name, plate in signals.plates.items()}
     if loads:
         fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
         t = trial.time_s
@@ -110,9 +103,10 @@ def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
             axes[0].plot(t, force[:, 2], color=colour, label=label)
             axes[1].plot(t, force[:, 0], color=colour, label=label)
             axes[2].plot(t, cop[:, 0], color=colour, label=label)
-        for _, _, raw_fz, rate in plates.values():
+        for plate in signals.plates.values():
+            raw_fz = plate.raw_vertical_force_N
             if raw_fz.size:
-                axes[0].plot(np.arange(raw_fz.size) / rate, raw_fz, color="0.7", lw=0.6, zorder=0)
+                axes[0].plot(np.arange(raw_fz.size) / plate.analog_rate_hz, raw_fz, color="0.7", lw=0.6, zorder=0)
         for ax in axes:
             mark_events(ax, events)
         axes[0].set_ylabel("vertical GRF (N)")
@@ -148,23 +142,24 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
     ankle in ``plane`` over the gait cycle, mean ± SD of each side's strides (right red, left blue) over the grey
     normal ``band`` (:mod:`gaitcli.signal.bands`, the variable of the same name); moments and powers blank where
     the foot's load is unknown. Returns the matplotlib figure."""
-    from gaitcli.signal.cycles import Stride, normalise
+    from gaitcli.dynamics.outputs import read_idyn_output
 
-    with open_h5(h5_path, "gait idyn") as h5:
-        strides = read_records(h5["strides"], Stride)
-        kin_set = h5["angles"] if "angles" in h5 else h5["coordinates_clinical"]  # older files: coordinates
-        kin, angle_columns = kin_set[()], str(kin_set.attrs["columns"]).split(",")
-        shown = h5["joint_moments_shown"] if "joint_moments_shown" in h5 else h5["joint_moments_clinical"]
-        mom = shown[()] / float(h5["segments/mass"].attrs["body_mass_kg"])
-        moment_columns = str(shown.attrs["columns"]).split(",")
-        convention = str(shown.attrs.get("convention", ""))
-        known = h5["joint_moments_known"][()].astype(bool)  # blank where the foot's load is unknown
-        mom = np.where(np.repeat(known, 3, axis=1), mom, np.nan)
-        power = None
-        if plane == "sagittal" and "joint_powers" in h5:  # total joint power (W/kg), generated positive
-            power = np.where(known, h5["joint_powers"][()], np.nan) / float(h5["segments/mass"].attrs["body_mass_kg"])
-            power_joints = str(h5["joint_powers"].attrs["joints"]).split(",")
-        time_s = h5["time"][()]
+    idyn = read_idyn_output(h5_path)
+    return _cycle_figure(idyn.tables, idyn.strides, plane, title=title, band=band)
+
+
+def _cycle_figure(tables: IdynTables, strides, plane: str, *, title: str, band):
+    """:func:`cycle_figure` of the tables and strides read from ``idyn.h5``."""
+    from gaitcli.signal.cycles import normalise
+
+    kin, angle_columns = tables.angles.values, tables.angles.columns
+    mom = tables.known_moments_Nm() / tables.body_mass_kg  # blank where the foot's load is unknown
+    moment_columns, convention = tables.moments.columns, tables.moments.convention
+    power = None
+    if plane == "sagittal" and tables.powers is not None:  # total joint power (W/kg), generated positive
+        power = tables.known_powers_W() / tables.body_mass_kg
+        power_joints = tables.powers.columns
+    time_s = tables.time_s
     rows = 2 if power is None else 3
     fig, axes = plt.subplots(rows, 3, figsize=(12, 3 * rows), sharex=True)
     pct = np.arange(101)
@@ -221,19 +216,19 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "", band="default"
     """``cycle.png`` and ``cycle_frontal.png``: hip/knee/ankle angles and moments over the gait cycle
     (:func:`cycle_figure`, over the package's normal band unless ``band`` is given or None);
     ``residuals.png``: the pelvis residual force and moment over time."""
-    from gaitcli.dynamics.sagittal import SagittalExport
+    from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.signal.bands import default_band
 
     band = default_band() if band == "default" else band
-    with open_h5(h5_path, "gait idyn") as h5:
-        export = read_record(h5["sagittal"], SagittalExport)
-        residual_force, residual_moment = h5["residuals/force"][()], h5["residuals/moment"][()]
-        time_s = h5["time"][()]
-    events = export.events
-    measured = export.load_known["r"] & export.load_known["l"]
+    idyn = read_idyn_output(h5_path)
+    tables = idyn.tables
+    residual_force, residual_moment, time_s = tables.residual_force_N, tables.residual_moment_Nm, tables.time_s
+    events = idyn.sagittal.events
+    measured = idyn.sagittal.load_known["r"] & idyn.sagittal.load_known["l"]
     folder = Path(folder)
-    written = [save(cycle_figure(h5_path, "sagittal", title=title, band=band), folder / "cycle.png"),
-               save(cycle_figure(h5_path, "frontal", title=title, band=band), folder / "cycle_frontal.png")]
+    written = [save(_cycle_figure(tables, idyn.strides, "sagittal", title=title, band=band), folder / "cycle.png"),
+               save(_cycle_figure(tables, idyn.strides, "frontal", title=title, band=band),
+                    folder / "cycle_frontal.png")]
 
     fig, axes = plt.subplots(2, 1, figsize=(10, 5), sharex=True)
     residual_force, residual_moment = (np.where(measured[:, None], r, np.nan) for r in (residual_force,
@@ -261,8 +256,7 @@ def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
     offs of the analysed side marked), and ``metabolic_cost.png``: the metabolic energy of each muscle."""
     from gaitcli.muscles.stage import MuscleResult
 
-    with open_h5(h5_path, "gait muscles") as h5:
-        result = read_record(h5["result"], MuscleResult)
+    result = read_result(h5_path, MuscleResult, what="gait muscles")
     folder = Path(folder)
     written = []
     names = result.muscle_names

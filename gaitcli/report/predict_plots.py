@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gaitcli.io.h5 import open_h5, read_record
+from gaitcli.io.h5 import read_result
 from gaitcli.report.plots import SIDE_COLOUR, plt, save
 
 ANGLE_LABELS = ("hip flexion (°)", "knee flexion (°)", "ankle dorsiflexion (°)")
@@ -62,8 +62,7 @@ def predict_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Pat
     animated walk.gif."""
     from gaitcli.predict.stage import PredictResult
 
-    with open_h5(h5_path, "gait predict") as h5:
-        r = read_record(h5["result"], PredictResult)
+    r = read_result(h5_path, PredictResult, what="gait predict")
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     state = "" if r.converged else " (NOT CONVERGED)"

@@ -14,7 +14,7 @@ plates gave it (zero) and its point the origin: OpenSim cannot know either.
 per side — ``RPelvisAngles``, ``RHipAngles``, ``RKneeAngles``, ``RAnkleAngles``, ``RFootProgressAngles`` (deg),
 ``RHipMoment``, ``RKneeMoment``, ``RAnkleMoment`` (N·mm/kg) and ``RHipPower`` … (W/kg in Z), in Vicon's
 components and signs (:func:`c3d_points`); POINT:ANGLES, POINT:MOMENTS, POINT:POWERS (the file's own lists
-extended), their units and GAITCLI:CONVENTION say so. Points of these names the trial already holds (a Nexus
+extended), their units and GAITCLI:CONVENTION (the convention idyn.h5 records for its shown moments) say so. Points of these names the trial already holds (a Nexus
 trial's own Plug-in Gait outputs) are replaced, one label each, and a warning names them. Moments and powers where the foot's load is unknown are invalid points. Its EVENT group
 holds the gait events the filter used (the file's own or detected), as Vicon Nexus writes them ("Foot Strike"/
 "Foot Off", "Left"/"Right"); the copy's text parameters are made writable
@@ -25,15 +25,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from gaitcli.core.container import Trial
 from gaitcli.errors import InputError
 from gaitcli.io.atomic import atomic_path
-from gaitcli.io.h5 import read_record
+from gaitcli.io.h5 import read_result
 from gaitcli.io.opensim import write_motion, write_trc
-from gaitcli.kinematics.conventions import PIG_CONVENTION
+from gaitcli.io.stage_files import IdynTables, read_idyn_tables
 
 FORMATS = ("opensim", "c3d")
 #: the files of ``export/opensim/``
@@ -62,35 +61,22 @@ EXTERNAL_FORCE = """      <ExternalForce name="{side}_foot">
       </ExternalForce>"""
 
 
-def _idyn(folder: Path) -> dict:
-    with h5py.File(folder / "idyn.h5", "r") as h5:
-        out = {"time": h5["time"][()], "q": h5["coordinates_clinical"][()],
-               "q_columns": str(h5["coordinates_clinical"].attrs["columns"]).split(","),
-               "moments": h5["joint_moments_clinical"][()],
-               "moment_columns": str(h5["joint_moments_clinical"].attrs["columns"]).split(","),
-               "known": h5["joint_moments_known"][()].astype(bool),
-               "angles": h5["angles"][()], "angle_columns": str(h5["angles"].attrs["columns"]).split(","),
-               "pig_moments": h5["joint_moments_shown"][()],
-               "powers": np.where(h5["joint_moments_known"][()].astype(bool), h5["joint_powers"][()], np.nan),
-               "mass_kg": float(h5["segments/mass"].attrs["body_mass_kg"]), "trial": str(h5.attrs.get("trial", ""))}
-    out["moments"] = np.where(np.repeat(out["known"], 3, axis=1), out["moments"], np.nan)
-    out["pig_moments"] = np.where(np.repeat(out["known"], 3, axis=1), out["pig_moments"], np.nan)
-    return out
+def _trial(out_root: Path) -> Trial:
+    return read_result(out_root / "filter" / "filter.h5", Trial, "trial", what="gait filter")
 
 
 def export_opensim(out_root: Path) -> list[Path]:
     """``export/opensim/`` from ``out_root``'s filter and idyn outputs (module docstring)."""
-    with h5py.File(out_root / "filter" / "filter.h5", "r") as h5:
-        trial = read_record(h5["trial"], Trial)
-    idyn = _idyn(out_root / "idyn")
+    trial = _trial(out_root)
+    idyn = read_idyn_tables(out_root / "idyn" / "idyn.h5")
     folder = out_root / "export" / "opensim"
     folder.mkdir(parents=True, exist_ok=True)
     markers = trial.markers
     written = [write_trc(folder / "markers.trc", markers.labels, 1000.0 * markers.positions_m @ TO_OPENSIM.T,
                          markers.rate_hz, first_frame=markers.first_frame)]
-    time = idyn["time"]
-    written.append(write_motion(folder / "coordinates.mot", {"time": time, **dict(zip(idyn["q_columns"],
-                                                                                      idyn["q"].T))},
+    time = idyn.time_s
+    written.append(write_motion(folder / "coordinates.mot", {"time": time, **dict(zip(idyn.coordinates.columns,
+                                                                                      idyn.coordinates.values.T))},
                                 in_degrees=True, name="coordinates"))
     grf = {"time": time}
     for s in ("r", "l"):
@@ -106,21 +92,22 @@ def export_opensim(out_root: Path) -> list[Path]:
         for k, a in enumerate("xyz"):
             grf[f"{s}_ground_torque_{a}"] = torque[:, k]
     written.append(write_motion(folder / "grf.mot", grf, in_degrees=False, name="grf"))
-    written.append(write_motion(folder / "joint_moments.sto", {"time": time, **dict(zip(idyn["moment_columns"],
-                                                                                        idyn["moments"].T))},
-                                in_degrees=False, name="joint_moments"))
+    moments = idyn.known_moments_Nm(idyn.coordinate_moments)
+    written.append(write_motion(folder / "joint_moments.sto", {"time": time, **dict(zip(
+        idyn.coordinate_moments.columns, moments.T))}, in_degrees=False, name="joint_moments"))
     with atomic_path(folder / "external_loads.xml") as tmp:
         tmp.write_text(EXTERNAL_LOADS.format(forces="\n".join(EXTERNAL_FORCE.format(side=s) for s in ("r", "l"))))
     return written + [folder / "external_loads.xml"]
 
 
-def c3d_points(idyn: dict) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+def c3d_points(idyn: IdynTables) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """Vicon's Plug-in Gait points (frames, 3) and their descriptions, in Vicon's components and signs: angles
     (deg; AnkleAngles Y about the foot's toe → heel axis, the left pelvis mirrored), moments (N·mm/kg) and the
     total power in Z (W/kg); the 27 coordinates' angles where idyn ran with ``angles: posture``."""
     points, descriptions = {}, {}
-    anatomical = "pelvis_tilt" in idyn["angle_columns"]
-    column = {c: idyn["angles"][:, k] for k, c in enumerate(idyn["angle_columns"])}
+    anatomical = "pelvis_tilt" in idyn.angles.columns
+    column = {c: idyn.angles.values[:, k] for k, c in enumerate(idyn.angles.columns)}
+    moments, powers = idyn.known_moments_Nm(), idyn.known_powers_W()
     for s, prefix in (("r", "R"), ("l", "L")):
         mirror = 1.0 if s == "r" else -1.0
         if anatomical:
@@ -136,9 +123,9 @@ def c3d_points(idyn: dict) -> tuple[dict[str, np.ndarray], dict[str, str]]:
                 angles[1] = -angles[1]
             k = 1 + j + (3 if s == "l" else 0)  # the joint's index in JOINTS
             points[f"{prefix}{name}Angles"] = np.column_stack(angles)
-            points[f"{prefix}{name}Moment"] = 1000.0 * idyn["pig_moments"][:, 3 * k:3 * k + 3] / idyn["mass_kg"]
-            power = np.zeros((len(idyn["time"]), 3))
-            power[:, 2] = idyn["powers"][:, k] / idyn["mass_kg"]
+            points[f"{prefix}{name}Moment"] = 1000.0 * moments[:, 3 * k:3 * k + 3] / idyn.body_mass_kg
+            power = np.zeros((len(idyn.time_s), 3))
+            power[:, 2] = powers[:, k] / idyn.body_mass_kg
             points[f"{prefix}{name}Power"] = power
             descriptions[f"{prefix}{name}Angles"] = f"gaitcli {joint} angles (deg), Vicon's components and signs"
             descriptions[f"{prefix}{name}Moment"] = f"gaitcli {joint} moment (Nmm/kg), Plug-in Gait's signs"
@@ -152,18 +139,17 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
 
     if trial_c3d.suffix.lower() != ".c3d":
         raise InputError(trial_c3d, "--export", "c3d needs a C3D trial (this trial is a CSV)")
-    idyn = _idyn(out_root / "idyn")
-    with h5py.File(out_root / "filter" / "filter.h5", "r") as h5:
-        events = read_record(h5["trial"], Trial).events
+    idyn = read_idyn_tables(out_root / "idyn" / "idyn.h5")
+    events = _trial(out_root).events
     points, descriptions = c3d_points(idyn)
     labels = list(points)
-    target = out_root / "export" / f"{idyn['trial'] or trial_c3d.stem}.c3d"
+    target = out_root / "export" / f"{idyn.trial or trial_c3d.stem}.c3d"
     target.parent.mkdir(parents=True, exist_ok=True)
     parameters = {"POINT:ANGLES": [lab for lab in labels if lab.endswith("Angles")],
                   "POINT:MOMENTS": [lab for lab in labels if lab.endswith("Moment")],
                   "POINT:POWERS": [lab for lab in labels if lab.endswith("Power")],
                   "POINT:ANGLE_UNITS": "deg", "POINT:MOMENT_UNITS": "Nmm/kg", "POINT:POWER_UNITS": "W",
-                  "GAITCLI:CONVENTION": PIG_CONVENTION}
+                  "GAITCLI:CONVENTION": idyn.moments.convention}
     return [add_points(trial_c3d, target, points, descriptions=descriptions, parameters=parameters,
                        events=events, merged=("POINT:ANGLES", "POINT:MOMENTS", "POINT:POWERS"))]
 
