@@ -356,6 +356,7 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
 @click.pass_obj
 def reference_command(console: Console, trials, out, pipeline, band):
     """A reference gait (mean and SD over the cycle) from the idyn outputs of one or more trials."""
+    from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.io.outputs import write_table
     from gaitcli.pipeline import fresh_output
     from gaitcli.predict.reference import reference_from_idyn
@@ -363,7 +364,7 @@ def reference_command(console: Console, trials, out, pipeline, band):
     cfg = configure(pipeline)
     outputs = [fresh_output(trial, "idyn", cfg, plots=False) for trial in trials]
     names = [Path(t).resolve().name for t in trials]
-    reference, right, left = reference_from_idyn(outputs, sources=names)
+    reference, right, left = reference_from_idyn([read_idyn_output(p) for p in outputs], sources=names)
     write_table(out, reference.columns())
     if band is not None:
         from gaitcli.signal.bands import band_from_gait_cycles

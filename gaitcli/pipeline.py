@@ -18,15 +18,13 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-import h5py
-
 from gaitcli.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import check_output_folder, check_replaceable
-from gaitcli.io.h5 import provenance, read_result, record_datasets, write_h5
+from gaitcli.io.h5 import file_attrs, provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
 from gaitcli.trial import TrialFolder, open_trial, sha256
@@ -129,9 +127,8 @@ class TrialRun:
         if not path.is_file():
             return None
         try:
-            with h5py.File(path, "r") as h5:
-                key = h5.attrs.get("stage_key")
-        except OSError:
+            key = file_attrs(path).get("stage_key")
+        except InputError:  # damaged: made anew
             return None
         return path if key == self.stage_key(name) else None
 
@@ -261,16 +258,20 @@ def _read_init(path: Path):
     import numpy as np
 
     from gaitcli.errors import InputError
-    from gaitcli.io.h5 import checked
+    from gaitcli.io.h5 import read_field
+    from gaitcli.predict.stage import PredictResult
 
     try:
-        with h5py.File(path, "r") as h5:
-            return np.asarray(checked(h5["result/design"])[()], float)
-    except FileNotFoundError:
-        raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)") from None
-    except (OSError, KeyError, ValueError, TypeError, RuntimeError):  # not HDF5, no design, text, a link loop
-        raise InputError(path, "--init", "not a predict.h5 (expected result/design, the solution of an earlier "
-                                         "gait predict)") from None
+        return np.asarray(read_field(path, PredictResult, "design", what="gait predict"), float)
+    except InputError as exc:  # not HDF5, no design, a link loop
+        if exc.field is not None:  # a design gaitcli will not read (too large): as io.h5 names it
+            raise
+    except (ValueError, TypeError):  # text where the design's numbers belong
+        pass
+    if not Path(path).exists():
+        raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)")
+    raise InputError(path, "--init", "not a predict.h5 (expected result/design, the solution of an earlier "
+                                     "gait predict)")
 
 
 def prosthesis_of(cfg):
@@ -300,6 +301,7 @@ def predict_inputs(trial: Path | None, *, out: Path | None = None, reference_pat
     ``reference_path``'s, else one built from the trial's idyn output (made if missing or stale), else the
     bundled one."""
     from gaitcli.config import configure
+    from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.errors import InputError
     from gaitcli.predict.model import WalkerParameters
     from gaitcli.predict.reference import read_reference, reference_from_idyn
@@ -317,11 +319,11 @@ def predict_inputs(trial: Path | None, *, out: Path | None = None, reference_pat
     if folder is not None and (reference is None or mass is None):
         idyn = fresh_output(trial, "idyn", pipeline or configure(None), out=out, progress=progress, plots=False)
         inputs[str(idyn)] = sha256(idyn)
+        output = read_idyn_output(idyn)
         if reference is None:
-            reference, _, _ = reference_from_idyn([idyn], sources=[folder.folder.resolve().name])
+            reference, _, _ = reference_from_idyn([output], sources=[folder.folder.resolve().name])
         if mass is None:
-            with h5py.File(idyn, "r") as h5:
-                mass = float(h5["sagittal/body_mass_kg"][()])
+            mass = output.sagittal.body_mass_kg
     if reference is None:
         reference = read_reference(bundled_reference())
         inputs[str(bundled_reference())] = sha256(bundled_reference())

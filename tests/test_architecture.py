@@ -86,6 +86,18 @@ def test_only_the_command_line_imports_its_progress_display():
     assert importers == ["gaitcli/cli.py"]
 
 
+def test_every_hdf5_file_is_opened_by_io_h5():
+    # typed records, units from names, damaged files as InputError: no module reads HDF5 around it
+    opening = []
+    for path in PACKAGE.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(name.split(".")[0] == "h5py" for name in names):
+                opening.append(str(path.relative_to(PACKAGE.parent)))
+    assert sorted(set(opening)) == ["gaitcli/io/h5.py"]
+
+
 #: what writes files: the CSV/JSON writers, the HDF5 writer and the atomic staging
 FILE_WRITERS = {"gaitcli.io.outputs", "gaitcli.io.atomic", "gaitcli.io.h5.write_h5", "gaitcli.io.h5.record_datasets"}
 

@@ -15,12 +15,17 @@ over the cycle, 3° for the angles and 0.3 N/kg for the forces).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gaitcli.errors import InputError
+
+if TYPE_CHECKING:  # annotations only: importing the idyn stage would slow the start of every prediction process
+    from gaitcli.dynamics.outputs import IdynOutput
 
 ANGLES = ("hip_r_flexion_deg", "knee_r_flexion_deg", "ankle_r_dorsiflexion_deg",
           "hip_l_flexion_deg", "knee_l_flexion_deg", "ankle_l_dorsiflexion_deg")
@@ -128,24 +133,15 @@ def leg_cycles(time_s, values, load_known, strides) -> list[np.ndarray]:
     return out
 
 
-def idyn_reference_strides(path: str | Path) -> tuple[list[np.ndarray], list[np.ndarray], list[float]]:
-    """Each leg's :func:`leg_cycles` of one trial from its ``idyn.h5``, and where (%) the left heel strikes
-    in each right stride."""
-    import h5py
-
-    from gaitcli.dynamics.sagittal import SagittalExport
-    from gaitcli.io.h5 import read_record, read_records
-    from gaitcli.signal.cycles import Stride
-
-    with h5py.File(path, "r") as h5:
-        export = read_record(h5["sagittal"], SagittalExport)
-        columns = str(h5["coordinates_clinical"].attrs["columns"]).split(",")
-        clinical = h5["coordinates_clinical"][()]
-        strides = read_records(h5["strides"], Stride)
+def idyn_reference_strides(idyn: IdynOutput) -> tuple[list[np.ndarray], list[np.ndarray], list[float]]:
+    """Each leg's :func:`leg_cycles` of one trial's idyn output (the hip, knee and ankle flexion of its
+    clinical coordinates, deg; each foot's ground reaction per kg), and where (%) the left heel strikes in each
+    right stride."""
+    export, strides, coordinates = idyn.sagittal, idyn.strides, idyn.tables.coordinates
     mass = export.body_mass_kg
     cycles = {}
     for s in ("r", "l"):
-        angles = clinical[:, [columns.index(f"{j}_{s}_flexion") for j in ("hip", "knee", "ankle")]]
+        angles = coordinates.values[:, [coordinates.index(f"{j}_{s}_flexion") for j in ("hip", "knee", "ankle")]]
         leg = export.legs[s]
         values = np.column_stack([angles, leg.grf_x_N / mass, leg.grf_z_N / mass])
         cycles[s] = leg_cycles(export.time_s, values, export.load_known[s],
@@ -189,12 +185,12 @@ def read_reference(path: str | Path) -> Reference:
     return Reference(grid.copy(), interp(mean), interp(sd), np.zeros(len(VARIABLES), int), (str(path),))
 
 
-def reference_from_idyn(paths, sources=()) -> tuple[Reference, int, int]:
-    """The reference of every stride in the idyn outputs ``paths`` (``idyn.h5``), and how many right and left
-    strides it has; the left leg moved by the mean offset of its heel strikes (50 % where none was seen)."""
+def reference_from_idyn(outputs: Sequence[IdynOutput], sources=()) -> tuple[Reference, int, int]:
+    """The reference of every stride in the trials' idyn ``outputs``, and how many right and left strides it
+    has; the left leg moved by the mean offset of its heel strikes (50 % where none was seen)."""
     right, left, offsets = [], [], []
-    for path in paths:
-        r, l, o = idyn_reference_strides(path)
+    for idyn in outputs:
+        r, l, o = idyn_reference_strides(idyn)
         right, left, offsets = right + r, left + l, offsets + o
     reference = build_reference(right, left, left_offset_pct=float(np.mean(offsets)) if offsets else 50.0,
                                 sources=list(sources))
