@@ -142,10 +142,10 @@ def cycle_figure(h5_path: Path, plane: str = "sagittal", *, title: str = "", ban
     ankle in ``plane`` over the gait cycle, mean ± SD of each side's strides (right red, left blue) over the grey
     normal ``band`` (:mod:`gaitcli.signal.bands`, the variable of the same name); moments and powers blank where
     the foot's load is unknown. Returns the matplotlib figure."""
-    from gaitcli.dynamics.outputs import read_idyn_output
+    from gaitcli.signal.cycles import Stride
 
-    idyn = read_idyn_output(h5_path)
-    return _cycle_figure(idyn.tables, idyn.strides, plane, title=title, band=band)
+    strides = read_result(h5_path, list[Stride], "strides", what="gait idyn")
+    return _cycle_figure(read_idyn_tables(h5_path), strides, plane, title=title, band=band)
 
 
 def _cycle_figure(tables: IdynTables, strides, plane: str, *, title: str, band):
