@@ -1,1 +1,2 @@
-"""report stage family."""
+"""The HTML page (html.py) and the figures drawn from the stages' HDF5 files (plots.py, predict_plots.py,
+study_plots.py)."""
