@@ -13,6 +13,12 @@ import numpy as np
 
 from gaitcli.core.validate import integer, one_of
 
+def true_runs(mask) -> tuple[np.ndarray, np.ndarray]:
+    """Start and stop (exclusive) indices of the runs of ``True`` in the 1-D boolean array ``mask``."""
+    edges = np.diff(np.concatenate([[0], np.asarray(mask, dtype=np.int8), [0]]))
+    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+
+
 def frame_ranges(indices) -> list[tuple[int, int]]:
     """Consecutive runs ``(first, last)`` of sorted integer ``indices``."""
     idx = np.asarray(indices, dtype=int)

@@ -22,6 +22,7 @@ import warnings
 import numpy as np
 from scipy.interpolate import make_interp_spline
 
+from gaitcli.core.numerics import true_runs
 from gaitcli.core.validate import one_of
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.model import COORDINATES
@@ -29,12 +30,6 @@ from gaitcli.kinematics.model import COORDINATES
 METHODS = ("quintic_spline", "central_difference")
 #: shortest run (frames) each method can differentiate twice
 _MIN_RUN = {"quintic_spline": 4, "central_difference": 3}
-
-
-def _finite_runs(mask):
-    """(start, stop) index pairs of the runs of True in a boolean vector."""
-    edges = np.diff(np.r_[0, mask.astype(np.int8), 0])
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
 def _differentiate_run(y, dt, method):
@@ -87,7 +82,7 @@ def coordinate_derivatives(q, rate_hz: float, *, method: str = "quintic_spline",
     patterns, group = np.unique(finite.T, axis=0, return_inverse=True)
     for g, pattern in enumerate(patterns):
         cols = np.flatnonzero(group.ravel() == g)
-        for start, stop in _finite_runs(pattern):
+        for start, stop in zip(*true_runs(pattern)):
             if stop - start < _MIN_RUN[method]:
                 short += stop - start
                 continue

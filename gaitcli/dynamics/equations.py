@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.errors import InputError
 from gaitcli.kinematics.forward import N_BODIES, N_COORDINATES, BodyStates, forward_kinematics
 from gaitcli.kinematics.model import JOINT_CHILD, JOINT_PARENT, BodyParameters
@@ -102,7 +103,7 @@ def _global_inertia(states: BodyStates, params: BodyParameters):
     return np.einsum("nbij,bjk,nblk->nbil", S, np.asarray(params.inertia_kgm2, dtype=float), S)
 
 
-def applied_body_wrenches(states: BodyStates, params: BodyParameters, external=(), *, gravity_m_s2: float = 9.81):
+def applied_body_wrenches(states: BodyStates, params: BodyParameters, external=(), *, gravity_m_s2: float = GRAVITY_M_S2):
     """Stacked applied forces ``f^e`` (n, 8, 3) in N and moments ``l^e`` about each CoM (n, 8, 3) in N·m.
 
     This is the ``q̄e`` of (2.10): gravity plus the external wrenches.
@@ -126,7 +127,7 @@ def _gyroscopic(inertia, omega):
 
 
 def dalembert_body_wrenches(states: BodyStates, qdd, params: BodyParameters, external=(), *,
-                            gravity_m_s2: float = 9.81):
+                            gravity_m_s2: float = GRAVITY_M_S2):
     """Per body ``M̄ J̄ ÿ + q̄c − q̄e`` of (2.10): force (n, 8, 3) in N, moment about the CoM (n, 8, 3) in N·m.
 
     ``states`` must come from ``forward_kinematics(q, params, qd, jacobians=True)``; the
@@ -175,7 +176,7 @@ def project(states: BodyStates, force, moment):
     return out
 
 
-def equations_of_motion(q, qd, params: BodyParameters, external=(), *, gravity_m_s2: float = 9.81):
+def equations_of_motion(q, qd, params: BodyParameters, external=(), *, gravity_m_s2: float = GRAVITY_M_S2):
     """Mass matrix ``M`` (n, 27, 27), Coriolis/gyroscopic vector ``k`` (n, 27), applied forces ``q`` (n, 27) (2.13).
 
     Units: rows of translational coordinates in N (``M`` in kg), rows of angles in
@@ -194,7 +195,7 @@ def equations_of_motion(q, qd, params: BodyParameters, external=(), *, gravity_m
     return M, k, q_applied
 
 
-def generalized_forces(q, qd, qdd, params: BodyParameters, external=(), *, gravity_m_s2: float = 9.81):
+def generalized_forces(q, qd, qdd, params: BodyParameters, external=(), *, gravity_m_s2: float = GRAVITY_M_S2):
     """``M ÿ + k − q`` (n, 27) as ``J̄ᵀ (M̄ J̄ ÿ + q̄c − q̄e)``, without forming ``M`` (2.10–2.13, 3.19).
 
     Processed in blocks of :data:`CHUNK_FRAMES` frames. Rows 0–5 are the pelvis

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.dynamics.equations import (CHUNK_FRAMES, check_external_wrenches, check_motion, dalembert_body_wrenches,
                                        distal_bodies, project)
 from gaitcli.kinematics.forward import N_COORDINATES, N_JOINTS, forward_kinematics
@@ -88,7 +89,7 @@ def solve_axis_projections(axes_columns, projections):
 
 
 def inverse_dynamics(q, qd, qdd, params: BodyParameters, external=(), *,
-                     gravity_m_s2: float = 9.81) -> InverseDynamicsResult:
+                     gravity_m_s2: float = GRAVITY_M_S2) -> InverseDynamicsResult:
     """Joint moments (3.21) and pelvis residuals (3.22) from coordinates and their derivatives.
 
     Frames are processed in blocks, so memory does not grow with ``n`` beyond the outputs.
@@ -141,7 +142,7 @@ def inverse_dynamics(q, qd, qdd, params: BodyParameters, external=(), *,
     )
 
 
-def required_external_wrench(q, qd, qdd, params: BodyParameters, *, point_m=None, gravity_m_s2: float = 9.81):
+def required_external_wrench(q, qd, qdd, params: BodyParameters, *, point_m=None, gravity_m_s2: float = GRAVITY_M_S2):
     """Whole-body external wrench the ground must supply for zero residuals: (force_N (n, 3), moment_Nm (n, 3)).
 
     Force ``F = Σ m_i (a_i + g e_z)``; moment about ``point_m`` (global, (n, 3) or

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
 
@@ -45,7 +46,7 @@ class NewtonEulerResult:
 
 
 def recursive_newton_euler(q, qd, qdd, params: BodyParameters, external=(), *,
-                           gravity_m_s2: float = 9.81) -> NewtonEulerResult:
+                           gravity_m_s2: float = GRAVITY_M_S2) -> NewtonEulerResult:
     """Joint forces and moments and pelvis residuals by the recursive Newton–Euler method (2.8–2.9).
 
     ``q``, ``qd``, ``qdd`` (n, 27) in m, rad and their time derivatives;

@@ -54,11 +54,11 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError, shown
 
 BASES = ("floating", "prescribed")
-GRAVITY_M_S2 = 9.81
 
 
 @dataclass(frozen=True)

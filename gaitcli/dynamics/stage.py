@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDE_NAMES, SIDES, Events
 from gaitcli.core.recording import Markers, Recording
@@ -54,7 +55,7 @@ class IdynConfig:
 
     frames: str = parameter("reference", choices=FRAMES,
                             help="Frames the joint moments are expressed in (default: reference).")
-    gravity_m_s2: float = parameter(9.81, low=9.7, high=9.9,
+    gravity_m_s2: float = parameter(GRAVITY_M_S2, low=9.7, high=9.9,
                                     help="Gravitational acceleration, m/s² (Earth's surface: 9.78–9.83).")
     angles: str = parameter("anatomical", choices=ANGLES,
                             help="anatomical: joint angles between the segments' anatomical frames, as the lab's "

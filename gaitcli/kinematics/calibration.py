@@ -51,7 +51,7 @@ from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, 
 from gaitcli.kinematics.pose import MIN_MARKERS
 from gaitcli.kinematics.rotations import rot_z
 from gaitcli.core.recording import Markers
-from gaitcli.signal.butterworth import finite_runs
+from gaitcli.core.numerics import true_runs
 
 _PURPOSE = {"ASIS": "the pelvis frame and hip joint centres", "PSIS": "the pelvis frame and hip joint centres",
             "LEF": "the knee joint centre", "MEF": "the knee joint centre", "LM": "the ankle joint centre",
@@ -273,7 +273,7 @@ def least_flexed_frames(markers: Markers, *, source: str | Path | None = None, q
         speed = np.linalg.norm(np.gradient(pelvis, 1.0 / markers.rate_hz, axis=0), axis=-1)
     quiet = seen & (speed < quiet_speed_m_s)
     best = None
-    for a, b in zip(*finite_runs(quiet)):
+    for a, b in zip(*true_runs(quiet)):
         if (b - a) / markers.rate_hz < quiet_s:
             continue
         length = min(b - a, max(int(round(window_s * markers.rate_hz)), 1))

@@ -53,14 +53,6 @@ def anatomical_to_degrees(angles_rad: np.ndarray) -> np.ndarray:
     return np.degrees(np.asarray(angles_rad, dtype=float))
 
 
-def coordinates_from_clinical(table: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`coordinates_to_clinical`."""
-    out = np.array(table, dtype=float, copy=True)
-    out[:, 3:6] = np.radians(out[:, 3:6])
-    out[:, 6:] = np.radians(out[:, 6:] * SIGNS.reshape(-1))
-    return out
-
-
 def moments_to_clinical(moments: np.ndarray) -> np.ndarray:
     """Joint moment vectors (n, 7, 3) as (x, y, z) components in a segment frame → (n, 21) clinical columns.
 
@@ -71,11 +63,6 @@ def moments_to_clinical(moments: np.ndarray) -> np.ndarray:
     ordered = moments[:, :, [1, 0, 2]]  # (y, x, z) = flexion, adduction, rotation axes
     return (ordered * SIGNS).reshape(moments.shape[0], -1)
 
-
-def moments_from_clinical(table: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`moments_to_clinical`: (n, 21) → (n, 7, 3) x, y, z components."""
-    ordered = np.asarray(table, dtype=float).reshape(-1, 7, 3) * SIGNS
-    return ordered[:, :, [1, 0, 2]]
 
 
 #: the positive sense of each joint's moment components in the Plug-in Gait convention (flexion, adduction,

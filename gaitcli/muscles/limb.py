@@ -24,6 +24,7 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.dynamics.planar import Joint, PlanarChain, Segment
 from gaitcli.dynamics.sagittal import SagittalMotion
 from gaitcli.errors import InputError
@@ -31,7 +32,6 @@ from gaitcli.kinematics.anthropometry import DE_LEVA, REFERENCE_STATURE_M, norma
 
 from .evaluation import evaluate
 
-GRAVITY_M_S2 = 9.81
 #: the limb's generalized coordinates, in order
 LIMB_COORDINATES = ("thigh_angle", "knee_flexion", "ankle_dorsiflexion")
 

@@ -21,9 +21,11 @@ import math
 
 import numpy as np
 
+from gaitcli.core.numerics import true_runs
+
 from gaitcli.errors import InputError, shown
 
-__all__ = ["correction_factor", "design_frequency_hz", "design_sos", "pad_length", "lowpass", "finite_runs"]
+__all__ = ["correction_factor", "design_frequency_hz", "design_sos", "pad_length", "lowpass"]
 
 
 def correction_factor(*, order: int = 2, passes: int = 2) -> float:
@@ -82,12 +84,6 @@ def pad_length(sos: np.ndarray) -> int:
                                         "(expected a cut-off nearer the signal's rate)")
 
 
-def finite_runs(finite: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Start and stop (exclusive) indices of the runs of ``True`` in the 1-D boolean array ``finite``."""
-    edges = np.diff(np.concatenate([[0], np.asarray(finite, dtype=np.int8), [0]]))
-    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-
-
 def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int = 0) -> np.ndarray:
     """Zero-lag low-pass Butterworth filter along ``axis`` (3.1.4); net half-power cut-off ``cutoff_hz``.
 
@@ -132,7 +128,7 @@ def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int
     inverse = np.asarray(inverse).ravel()
     for p, pattern in enumerate(patterns):
         cols = np.flatnonzero(inverse == p)
-        for start, stop in zip(*finite_runs(pattern)):
+        for start, stop in zip(*true_runs(pattern)):
             seg = flat[start:stop][:, cols]
             if stop - start < 2:
                 out[start:stop, cols] = seg

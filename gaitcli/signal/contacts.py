@@ -35,7 +35,7 @@ import numpy as np
 
 from gaitcli.core.events import SIDES
 from gaitcli.errors import InputError, shown
-from gaitcli.signal.butterworth import finite_runs
+from gaitcli.core.numerics import true_runs
 from gaitcli.signal.forceplates import PlateLoad
 
 __all__ = ["Contact", "plate_contacts", "assign_contacts", "plate_owner"]
@@ -109,7 +109,7 @@ def plate_contacts(loads: list[PlateLoad], *, threshold_N: float, min_contact_s:
         else:
             fz, rate = load.force_N[:, 2], load.rate_hz
         fz = np.nan_to_num(fz, nan=0.0)
-        starts, stops = finite_runs(fz > threshold_N)
+        starts, stops = true_runs(fz > threshold_N)
         lasting = (stops - starts) >= min_run_s * rate
         starts, stops = starts[lasting], stops[lasting]
         if len(starts) > 1:
@@ -226,7 +226,7 @@ def _stood_alone(per_frame: dict, cop: np.ndarray, corners, *, max_distance_m: f
     for side, other in (("r", "l"), ("l", "r")):
         with np.errstate(invalid="ignore"):
             alone = on_plate & (per_frame[side] <= max_distance_m) & (per_frame[other] > max_distance_m)
-        starts, stops = finite_runs(alone)
+        starts, stops = true_runs(alone)
         out[side] = bool(starts.size) and bool(np.max(stops - starts) >= min_frames)
     return out
 
@@ -246,7 +246,7 @@ def plate_owner(contacts: list[Contact], loads: list[PlateLoad], events=None, *,
     owner = np.full((len(loads), n), "", dtype="<U1")
     for p, load in enumerate(loads):
         mine = sorted((c for c in contacts if c.plate_index == p), key=lambda c: c.first_frame)
-        starts, stops = finite_runs(load.loaded)
+        starts, stops = true_runs(load.loaded)
         for i, c in enumerate(mine):
             shared = c.shared and events is not None
             if not (c.side or shared):
@@ -311,7 +311,7 @@ def partly_off(owner: np.ndarray, loads: list[PlateLoad], foot_points: dict, sta
                 low = p[:, 2] <= np.nanmin(p[:, 2], initial=np.inf) + GROUND_MARGIN_M
             grounded = low & stance[side]
             if is_heel:
-                for a, b in zip(*finite_runs(stance[side])):
+                for a, b in zip(*true_runs(stance[side])):
                     down = np.flatnonzero(low[a:b])
                     if down.size:  # from the strike to the end of the first stretch on the ground
                         ends = np.flatnonzero(np.diff(down) > 1)

@@ -43,7 +43,8 @@ import numpy as np
 
 from gaitcli.errors import InputError, shown
 from gaitcli.core.recording import ForcePlate
-from gaitcli.signal.butterworth import finite_runs, lowpass
+from gaitcli.core.numerics import true_runs
+from gaitcli.signal.butterworth import lowpass
 
 #: the filtered vertical force, as a fraction of the threshold, above which a frame counts as loaded: the
 #: filter spreads each contact's edges over a few frames in which the load is small but real
@@ -195,7 +196,7 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
 def _runs_touching(positive: np.ndarray, touched: np.ndarray) -> np.ndarray:
     """``positive`` without its runs that hold no ``touched`` frame: the filter's ringing lobes beside a
     contact."""
-    starts, stops = finite_runs(positive)
+    starts, stops = true_runs(positive)
     keep = np.zeros_like(positive)
     for start, stop in zip(starts, stops):
         if touched[start:stop].any():

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from gaitcli.errors import InputError, shown
-from gaitcli.signal.butterworth import finite_runs
+from gaitcli.core.numerics import true_runs
 
 __all__ = ["Gap", "find_gaps", "fill_gaps"]
 
@@ -40,7 +40,7 @@ def find_gaps(positions, /) -> list[tuple[int, int, int]]:
     missing = _missing(positions)
     gaps = []
     for m in range(missing.shape[1]):
-        starts, stops = finite_runs(missing[:, m])
+        starts, stops = true_runs(missing[:, m])
         gaps.extend((m, int(a), int(b) - 1) for a, b in zip(starts, stops))
     return gaps
 

@@ -12,7 +12,7 @@ import numpy as np
 from gaitcli.core.events import SIDES, Events
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
-from gaitcli.signal.butterworth import finite_runs
+from gaitcli.core.numerics import true_runs
 
 __all__ = ["kinematic_events"]
 
@@ -88,7 +88,7 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
 def _peak_times(y: np.ndarray, distance: int, prominence: float) -> np.ndarray:
     """Sub-frame positions (in frames) of the maxima of ``y``, found in each finite run separately."""
     times = []
-    for a, b in zip(*finite_runs(np.isfinite(y))):
+    for a, b in zip(*true_runs(np.isfinite(y))):
         seg = y[a:b]
         if seg.size < 3:
             continue

@@ -10,9 +10,9 @@ ground reactions exactly consistent with it, split between the feet
 from gaitcli.synth.folder import subject_yaml, write_trial
 from gaitcli.synth.gait import (ANALOG_RATE_HZ, CONDITIONS, Condition, GaitDesign, Geometry, balanced_gait,
                                 design_gait, leg_angles)
-from gaitcli.synth.ground import G, ground_reactions, split_between_feet, whole_body_cop
+from gaitcli.synth.ground import ground_reactions, split_between_feet, whole_body_cop
 from gaitcli.synth.recording import MARKER_BODY, MARKER_RATE_HZ, SyntheticTrial, simulate_trial
 
-__all__ = ["ANALOG_RATE_HZ", "CONDITIONS", "Condition", "G", "GaitDesign", "Geometry", "MARKER_BODY",
+__all__ = ["ANALOG_RATE_HZ", "CONDITIONS", "Condition", "GaitDesign", "Geometry", "MARKER_BODY",
            "MARKER_RATE_HZ", "SyntheticTrial", "balanced_gait", "design_gait", "ground_reactions", "leg_angles",
            "simulate_trial", "split_between_feet", "subject_yaml", "whole_body_cop", "write_trial"]

@@ -14,9 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.kinematics.conventions import SIGNS
 from gaitcli.kinematics.model import BODIES, JOINTS
-from gaitcli.synth.ground import G, ground_reactions
+from gaitcli.synth.ground import ground_reactions
 
 #: the design grid's rate, Hz: one sample per analog (force plate) sample of the trial
 ANALOG_RATE_HZ = 1000.0
@@ -252,7 +253,7 @@ def design_gait(geometry: Geometry, condition: Condition, params, *, samples: in
         plan[trailing] = planted[trailing] + 0.13 + (lead - planted[trailing] - 0.13) * u
     cop_plan = plan - stride * tau
     detrended_plan = cop_plan if cop_offset_m is None else cop_plan + cop_offset_m
-    omega2 = G / float(np.mean(com[middle, 2]))
+    omega2 = GRAVITY_M_S2 / float(np.mean(com[middle, 2]))
     k = np.fft.rfftfreq(n, d=T / n) * 2 * np.pi
     target = np.fft.irfft(np.fft.rfft(detrended_plan) * omega2 / (omega2 + k ** 2), n=n) + stride * tau
     # invert com_x(φ) (monotonic) at the targets, over three cycles to handle the wrap

@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.kinematics.model import JOINTS
 
 if TYPE_CHECKING:
     from gaitcli.synth.gait import GaitDesign
 
-G = 9.81
 HEEL_COP_M = -0.04  # where the COP starts at heel strike, forward of the ankle centre
 
 
@@ -113,7 +113,7 @@ def split_between_feet(design: GaitDesign, force, cop, free, hips=None, ankles=N
     return out, clip
 
 
-def ground_reactions(design: GaitDesign, params, *, gravity_m_s2: float = G, with_plan: bool = False):
+def ground_reactions(design: GaitDesign, params, *, gravity_m_s2: float = GRAVITY_M_S2, with_plan: bool = False):
     """Exact derivatives of the designed cycle and the per-foot ground reactions consistent with it.
 
     Returns ``(qd, qdd, feet, clip)`` with ``feet[side]`` holding ``force_N``,

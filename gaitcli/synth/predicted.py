@@ -25,7 +25,7 @@ import numpy as np
 from gaitcli.kinematics.conventions import SIGNS, walker_joint_angles
 from gaitcli.kinematics.model import JOINTS
 from gaitcli.synth.gait import ANALOG_RATE_HZ, Condition, GaitDesign
-from gaitcli.synth.ground import G
+from gaitcli.core.physics import GRAVITY_M_S2
 
 #: the shipped prediction: subject, speed and step it was solved for
 WALK_FILE = Path(__file__).resolve().parent / "data" / "normal_walk_nn18.csv"
@@ -105,7 +105,7 @@ def lateral_sway(phase, stance, lane, com_height_m: float, period_s: float):
         before, after = plan[(first - 1) % n], plan[(idx[-1] + 1) % n]
         plan[idx] = before + (after - before) * (np.arange(length) + 0.5) / length
     k = np.fft.rfftfreq(n, d=period_s / n) * 2 * np.pi
-    return np.fft.irfft(np.fft.rfft(plan) / (1 + com_height_m / G * k ** 2), n=n)
+    return np.fft.irfft(np.fft.rfft(plan) / (1 + com_height_m / GRAVITY_M_S2 * k ** 2), n=n)
 
 
 def predicted_gait(condition: Condition, params, *, stature_m: float, x: np.ndarray | None = None) -> GaitDesign:

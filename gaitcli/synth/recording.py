@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from gaitcli.core.recording import ForcePlate, Markers
+from gaitcli.core.numerics import true_runs
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
@@ -220,9 +221,7 @@ def stance_contacts(stance, samples):
     index of each trial sample."""
     contacts = []
     for s in "rl":
-        on = stance[s][samples].astype(int)
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], on, [0]])))
-        contacts += [(s, a, b) for a, b in zip(edges[::2], edges[1::2])]
+        contacts += [(s, a, b) for a, b in zip(*true_runs(stance[s][samples]))]
     return contacts
 
 
