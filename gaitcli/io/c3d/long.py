@@ -17,8 +17,6 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-import numpy as np
-
 from gaitcli.errors import InputError
 from gaitcli.io.c3d.header import ParameterRecord, check_parameters, data_layout, long_frame_counts
 

@@ -47,7 +47,7 @@ from gaitcli.io.axes import LOAD_THRESHOLD_N
 from gaitcli.io.c3d.header import one_line, param, strings, warn
 from gaitcli.io.c3d.markers import LENGTH_M
 
-__all__ = ["plate_axes", "read_plates"]
+__all__ = ["PLATFORM_SAMPLES", "plate_axes", "platform_outputs", "plates_from"]
 
 _FORCE_N = {"n": 1.0, "nt": 1.0, "newton": 1.0, "newtons": 1.0, "kn": 1e3}
 _BASELINE_MAX_N = 100.0
@@ -112,13 +112,6 @@ def platform_outputs(c) -> list[dict[str, np.ndarray] | str]:
             continue
         out.append({k: np.asarray(pf[k], dtype=float) for k in PLATFORM_SAMPLES + PLATFORM_GEOMETRY})
     return out
-
-
-def read_plates(path: Path, c, length_m: float, markers: Markers, notes: list[str]) -> list[ForcePlate]:
-    """The usable force plates of ezc3d's ``c`` in SI units and lab axes (:func:`plates_from`)."""
-    return plates_from(path, c["parameters"], platform_outputs(c), frame_rate_hz=float(c["header"]["points"]
-                       ["frame_rate"]), n_frames=c["data"]["points"].shape[2], length_m=length_m, markers=markers,
-                       notes=notes)
 
 
 def plates_from(path: Path, params, outputs: list[dict[str, np.ndarray] | str], *, frame_rate_hz: float,
