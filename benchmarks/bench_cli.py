@@ -18,7 +18,7 @@ put around the functions it goes through (benchmark-side only; gaitcli is not ed
 input files, the freshness checks, reading filter.h5 and idyn.h5 back, the EID stage
 (``run_muscles_stage``: model and problem set-up, the SO warm start, the EID NLP's CasADi expressions,
 the IPOPT solver's construction — ``muscles.solver.build_solver`` — and the IPOPT solve —
-``muscles.solver.solve`` —, and the rest: inversions, energetics, result), the CSV tables, muscles.h5
+``core.ipopt.solve`` —, and the rest: inversions, energetics, result), the CSV tables, muscles.h5
 and summary.json, and each figure (from the previous figure's end, or the figure function's start,
 to the end of its PNG; the first includes reading muscles.h5). "Rest" rows are what the wrapped
 calls leave of their parent; "click, printing, exit" is end-to-end minus start-up, imports and

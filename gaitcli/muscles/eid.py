@@ -31,13 +31,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.ipopt import Outcome, solve
 from gaitcli.core.numerics import (MOMENT_SCALE_NM, finite_difference_matrix, force_from_stretch,
                                    stretch_from_force)
 from gaitcli.core.validate import one_of
 
 from .problem import Problem
 from .so import moment_constraints, solve_so
-from .solver import Outcome, SolverSettings, build_solver, solve
+from .solver import SolverSettings, build_solver
 
 OBJECTIVES = ("metabolic", "crowninshield_brand")
 #: the limb's moment equations, in the order of the problem's coordinates (4.21)
@@ -115,13 +116,21 @@ def _bounds_and_start(problem: Problem, so_force: np.ndarray, extra: int):
     s_max = np.sqrt(par.eccentric_asymptote)  # (4.28)
     lbx = np.zeros(3 * m * n + extra)
     ubx = np.concatenate([np.full(m * n, s_max), np.ones(2 * m * n), np.full(extra, np.inf)])  # (4.26), (4.27)
-    # warm start: SO forces and the activations/excitations they need, moved inside the bounds
+    # warm start: SO forces and the activations/excitations they need (the solver clips them into the
+    # bounds and reports what lay outside: SO's activations may leave [0, 1], Fig. 4.7)
     inv = muscle.invert_forces(so_force, problem.l_m, problem.v_m, problem.dt_s, problem.scheme)
-    s0 = np.clip(stretch_from_force(so_force, par.max_isometric_force_N), 0, s_max)
-    a0 = np.clip(np.nan_to_num(inv["a"], nan=0.0, posinf=1.0, neginf=0.0), 0, 1)
-    u0 = np.clip(np.nan_to_num(inv["u"], nan=0.0, posinf=1.0, neginf=0.0), 0, 1)
+    s0 = stretch_from_force(so_force, par.max_isometric_force_N)
+    a0 = np.nan_to_num(inv["a"], nan=0.0, posinf=1.0, neginf=0.0)
+    u0 = np.nan_to_num(inv["u"], nan=0.0, posinf=1.0, neginf=0.0)
     x0 = np.concatenate([s0.ravel(), a0.ravel(), u0.ravel(), np.zeros(extra)])  # (n, m) row-major = vec of (m, n)
     return x0, lbx, ubx, s_max
+
+
+def _blocks(m: int, n: int, extra: int) -> dict[str, slice]:
+    """The named blocks of the EID variables (module docstring): ŝ, a, u and the slacks."""
+    size = m * n
+    return {"stretch": slice(0, size), "activation": slice(size, 2 * size), "excitation": slice(2 * size, 3 * size),
+            "slack": slice(3 * size, 3 * size + extra)}
 
 
 def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objective: str = "metabolic",
@@ -137,7 +146,7 @@ def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objec
     x, cost, g = _eid_nlp(problem, objective, smoothing, None)
     solver = build_solver("eid", x, cost, g, settings=settings)
     x0, lbx, ubx, s_max = _bounds_and_start(problem, so_force, 0)
-    out = solve(solver, x0, lbx, ubx, 0.0, 0.0)
+    out = solve(solver, x0, lbx, ubx, 0.0, 0.0, blocks=_blocks(m, n, 0))
     blocks = out.x.reshape(3, n, m)
     s_opt = np.clip(blocks[0], 0.0, s_max)  # IPOPT's bound relaxation is 1e-8 of the bound
     return EidSolution(force_N=force_from_stretch(s_opt, par.max_isometric_force_N), activation=blocks[1],
@@ -183,7 +192,7 @@ def moment_shortfall(problem: Problem, settings: SolverSettings | None = None, *
     x, cost, g = _eid_nlp(problem, "crowninshield_brand", 0.0, penalty)
     solver = build_solver("eid_shortfall", x, cost, g, settings=settings)
     x0, lbx, ubx, _ = _bounds_and_start(problem, so_force, 6 * n)
-    out = solve(solver, x0, lbx, ubx, 0.0, 0.0)
+    out = solve(solver, x0, lbx, ubx, 0.0, 0.0, blocks=_blocks(m, n, 6 * n))
     over, under = out.x[3 * m * n:3 * m * n + 3 * n], out.x[3 * m * n + 3 * n:]
     # the slacks enter as moments − over + under = 0 with moments = (R·F − b)/scale: R·F − b = over − under
     shortfall = (under - over).reshape(n, 3) * MOMENT_SCALE_NM

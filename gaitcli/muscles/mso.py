@@ -27,11 +27,12 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.ipopt import Outcome, solve
 from gaitcli.core.numerics import MOMENT_SCALE_NM, force_from_stretch, stretch_from_force
 
 from .problem import Problem
 from .so import solve_so
-from .solver import Outcome, SolverSettings, build_solver, solve
+from .solver import SolverSettings, build_solver
 
 
 @dataclass(frozen=True)

@@ -17,8 +17,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from gaitcli.core.ipopt import Outcome, solve
+
 from .problem import Problem
-from .solver import Outcome, SolverSettings, build_solver, solve
+from .solver import SolverSettings, build_solver
 
 
 def moment_constraints(problem: Problem, force):

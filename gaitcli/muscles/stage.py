@@ -240,18 +240,18 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
     shortfall, diagnosis = None, ""
     if method == "so":
         force, out = solve_so(problem, opts.solver)
-        converged, status, iterations = out.success, out.status, out.iterations
+        converged, status, iterations = out.converged, out.status, out.iterations
         objective = "crowninshield_brand"
     elif method == "mso":
         sol = solve_mso(problem, opts.solver, penalty=opts.mso_penalty)
         force, scheme, objective = sol.force_N, "backward", "crowninshield_brand"
         activation, excitation = sol.activation, sol.excitation
         iterations = sol.so_outcome.iterations + sum(o.iterations for o in sol.outcomes)
-        failed = [j + 1 for j, o in enumerate(sol.outcomes) if not o.success]
+        failed = [j + 1 for j, o in enumerate(sol.outcomes) if not o.converged]
         bad = np.flatnonzero(sol.violation > opts.bound_tolerance)
         bad = bad[(bad >= problem.interval.start) & (bad < problem.interval.stop)]  # not the extra nodes
         infeasible, violation = tuple(int(j) for j in bad), tuple(float(sol.violation[j]) for j in bad)
-        converged = sol.so_outcome.success and not failed and not bad.size
+        converged = sol.so_outcome.converged and not failed and not bad.size
         status = "Solve_Succeeded" if not failed else f"{len(failed)} frame solves failed (frames {failed[:10]})"
         if bad.size:
             status += f"; {bad.size} infeasible frames (u outside [0, 1] by up to {sol.violation[bad].max():.3g})"
@@ -262,12 +262,15 @@ def run_muscles(motion: SagittalMotion, limb: LimbParameters, *, method: str, no
     else:
         sol = solve_eid(problem, opts.solver, objective=opts.objective, smoothing=opts.smoothing)
         force, out, objective = sol.force_N, sol.outcome, opts.objective
-        converged, status, iterations = out.success, out.status, out.iterations
+        converged, status, iterations = out.converged, out.status, out.iterations
         activation, excitation = sol.activation, sol.excitation
+        if out.outside:
+            notes.append(f"EID start (SO's forces and the states they need) outside the bounds, clipped: "
+                         f"{out.outside.describe()}")
         if not converged:  # where can the muscles not produce the moments? (one more, always feasible, NLP)
             shortfall = moment_shortfall(problem, SolverSettings(print_level=opts.solver.print_level),
                                          warm_start_force_N=sol.warm_start_force_N)
-            if shortfall.outcome.success:
+            if shortfall.outcome.converged:
                 diagnosis = shortfall.describe(problem.time_s)
                 notes.append(f"EID diagnosis (moment equations relaxed, L1 penalty): {diagnosis}")
             else:

@@ -116,7 +116,7 @@ def test_eid_lifted_variables_match_inversion(gait):
     models = Models.build(limb)
     problem = build_problem(motion, models, nodes=30)
     sol = solve_eid(problem, objective="crowninshield_brand")
-    assert sol.outcome.success
+    assert sol.outcome.converged
     inv = models.muscle.invert_forces(sol.force_N, problem.l_m, problem.v_m, problem.dt_s, "periodic")
     np.testing.assert_allclose(inv["a"], sol.activation, atol=1e-6)
     np.testing.assert_allclose(inv["u"], sol.excitation, atol=1e-6)
@@ -124,6 +124,29 @@ def test_eid_lifted_variables_match_inversion(gait):
     so_forces, _ = solve_so(problem)
     f_max = models.muscle.params.max_isometric_force_N
     assert np.sum((so_forces / f_max) ** 3) <= np.sum((sol.force_N / f_max) ** 3) * (1 + 1e-6)
+
+
+def test_so_mso_and_eid_return_the_shared_outcome_and_eid_reports_its_clipped_start(gait, results):
+    """One IPOPT interface for every problem (gaitcli/core/ipopt.py, beside predict's): SO, each MSO frame and
+    EID return its Outcome. EID starts from SO's forces, whose excitations leave [0, 1] (Fig. 4.7): the
+    solver reports that block and clips it, and the stage's notes say so."""
+    from gaitcli.core.ipopt import Outcome
+    from gaitcli.muscles.mso import solve_mso
+
+    motion, limb = gait
+    problem = build_problem(motion, Models.build(limb), nodes=11)
+    forces, so_out = solve_so(problem)
+    eid = solve_eid(problem, warm_start=(forces, so_out))
+    mso = solve_mso(problem, so=(forces, so_out))
+    for out in (so_out, eid.outcome, *mso.outcomes):
+        assert isinstance(out, Outcome) and out.converged, out.status
+        assert out.iterations > 0 and out.time_s > 0 and np.isfinite(out.objective)
+    m = forces.shape[1]
+    assert m == 8 and eid.outcome.x.size == 3 * m * 11 == eid.outcome.lam_x.size  # ŝ, a, u per muscle and node
+    outside, size, distance = eid.outcome.outside.blocks["excitation"]
+    assert size == m * 11 and 0 < outside <= size and distance > 0.1
+    assert not so_out.outside  # SO starts at zero forces, inside its bounds
+    assert any(note.startswith("EID start (SO's forces") and "excitation" in note for note in results["eid"].notes)
 
 
 def test_eid_unconverged_reports_status(gait):
@@ -151,7 +174,7 @@ def test_moment_shortfall_locates_an_impossible_moment(gait):
     required = problem.required.copy()
     required[node, 0] += capacity + extra
     s = moment_shortfall(dataclasses.replace(problem, required=required))
-    assert s.outcome.success
+    assert s.outcome.converged
     assert s.shortfall_Nm[node, 0] >= extra
     assert s.shortfall_Nm[node, 0] <= capacity + extra + abs(problem.required[node, 0])
     others = np.delete(np.abs(s.shortfall_Nm[:, 0]), node)
