@@ -10,7 +10,7 @@ Control points (notes §1.5, §3 item 7)
     durations free, the optimizer lengthened that sparsest phase (to 319 ms: 106 ms between points)
     and hid the push-off's muscle work between its points (measured on a Flex-Foot solution at 1.00 m/s:
     −118 W mean metabolic rate at the points, 1473 W on a 4× finer grid). 8 points there, and no phase
-    longer than :data:`MAX_POINT_SPACING_S` per interval (``nlp.box_bounds``), keep the points dense: the
+    longer than :data:`MAX_POINT_SPACING_S` per interval (``layout.box_bounds``), keep the points dense: the
     default prediction's Et is then 352.0 J/m at the points and 352.3 J/m on the 4× grid, its largest moment
     error there 3.5 N·m (with 5.2.10's counts: 279.5 and 397 J/m, 213 N·m). The contact-dependent quantities (λ, joint moments, e_m, c_ph,
     clearance, friction) are evaluated at all 88 points, a transition once with each adjacent

@@ -4,12 +4,12 @@ Full model (``symmetric=False``), N = nn − 1 intervals, signal-major blocks:
 
     coordinates   N × 9    nodal values of y1 (periodic part) … y9      (quartic splines)
     tendon_stretch N × 16  nodal values of the 16 muscles' normalised tendon stretch ŝ (cubic splines;
-                           F = F_max·ŝ², l_se = l_slack·(1 + ε0·ŝ): notes §3 item 18)
+                           F = F_max·ŝ², l_se = l_slack·(1 + ε0·ŝ): docs/prediction.md)
     durations     8        T_1 … T_8, s
     steps         2        L_r, L_l, m
     size = 25·N + 10                                                     (435 at nn = 18)
 
-Symmetric model (CHAPTER5_NOTES §3 item 6): the left leg is the right leg half a
+Symmetric model (5.3.1, docs/prediction.md): the left leg is the right leg half a
 cycle later, and hip and HAT repeat every half cycle:
 
     trunk         N_h × 3  y1 (periodic part), y2, y3 over T/2            (quartic, T/2-periodic)
@@ -23,6 +23,10 @@ N_h, the half cycle's number of intervals, must be odd (the periodic quartic is
 singular for an even count): the odd number nearest above N/2 (9 for N = 17).
 Blocks are stored column-major (``reshape(block, rows, cols)`` in CasADi, Fortran
 order in numpy), so each signal's nodal values are contiguous.
+
+Box bounds (:func:`box_bounds`; 5.44 prints none): ranges wide enough for walking, the tendon stretch of a
+removed muscle fixed at 0, and no phase so long that its control points lie more than
+``grid.MAX_POINT_SPACING_S`` apart.
 """
 
 from __future__ import annotations
@@ -32,7 +36,15 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, MAX_POINT_SPACING_S
 from gaitcli.predict.splines import cubic, evaluation_matrix, is_casadi, quartic
+
+#: box bounds of the nodal values (5.44 prints none: ranges wide enough for walking), per coordinate y1 … y9
+COORDINATE_RANGES = ((-0.5, 0.5), (0.5, 1.3), (-0.6, 0.6), (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8),
+                     (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8))  # hip x (periodic part), hip z, HAT, thigh, knee, ankle
+STRETCH_RANGE = (0.0, 1.3)  # F ≤ 1.69 F_max
+DURATION_RANGE_S = (0.01, 0.8)
+STEP_RANGE_M = (0.2, 1.2)
 
 
 def half_cycle_intervals(intervals: int) -> int:
@@ -93,6 +105,25 @@ class DesignLayout:
             value = np.asarray(blocks[name], float).reshape(rows, cols)
             x[start:start + rows * cols] = value.ravel(order="F")
         return x
+
+
+def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on χ of ``layout`` (full or symmetric); the tendon stretch of muscles not ``present`` (16,) is 0."""
+    present = np.ones(16, bool) if present is None else np.asarray(present, bool)
+    stretch = tuple(STRETCH_RANGE if keep else (0.0, 0.0) for keep in present)
+    ranges = {"coordinates": COORDINATE_RANGES, "trunk": COORDINATE_RANGES[:3], "right_leg": COORDINATE_RANGES[3:6],
+              "tendon_stretch": stretch, "right_stretch": stretch[:8],
+              "durations": (DURATION_RANGE_S,), "steps": (STEP_RANGE_M,)}
+    low, high = np.empty(layout.size), np.empty(layout.size)
+    for name, (start, rows, cols) in layout.blocks.items():
+        per_column = ranges[name] if len(ranges[name]) == cols else ranges[name] * cols
+        for k, (lo, hi) in enumerate(per_column):
+            low[start + k * rows:start + (k + 1) * rows], high[start + k * rows:start + (k + 1) * rows] = lo, hi
+    # no phase so long that its control points lie more than MAX_POINT_SPACING_S apart (grid.py says why)
+    start, rows, _ = layout.blocks["durations"]
+    longest = np.array([(c - 1) * MAX_POINT_SPACING_S for c in DEFAULT_CONTROL_POINTS[:rows]])
+    high[start:start + rows] = np.minimum(high[start:start + rows], longest)
+    return low, high
 
 
 def _fitted(spline, target, nodal, shift: float, scale: float, derivatives, fractions) -> np.ndarray:

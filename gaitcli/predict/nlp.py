@@ -76,7 +76,6 @@ EID (reported costs use the exact model).
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
@@ -87,12 +86,18 @@ import numpy as np
 from gaitcli.core.interrupts import interrupts_raised
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.constraints import GAIT_SHAPE, clearance_phases, feet_in_contact, friction, smooth_max
-from gaitcli.predict.cost import DEFAULT_WEIGHTS, cost_of_transport, deviation
-from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, MAX_POINT_SPACING_S, instant_times, periodic_derivative
-from gaitcli.predict.layout import DesignLayout, half_cycle_intervals
+from gaitcli.predict.cost import cost_of_transport, deviation
+from gaitcli.predict.grid import instant_times, periodic_derivative
+from gaitcli.predict.guess import initial_guess
+from gaitcli.predict.layout import DesignLayout, box_bounds, half_cycle_intervals
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
+from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
 from gaitcli.predict.splines import PeriodicSpline, continuity_matrix, quartic, segment_of, window_values
+
+#: re-exported for the call sites until they import settings.py, layout.py and guess.py
+__all__ = ["NLP", "PredictSettings", "TIME_LIMIT_STATUS", "box_bounds", "build_nlp", "cached_nlp", "initial_guess",
+           "instant_segments", "moved_windows", "solve", "solve_windowed", "solver_for"]
 
 GRAVITY_M_S2 = 9.81
 REACTION_SCALE_N = 100.0
@@ -105,79 +110,11 @@ FULL_LIFTED = (("Q", "instants", (("y", 9), ("yd", 9), ("ydd", 9), ("stretch", 1
 SYMMETRIC_LIFTED = (("Q", "instants", (("y", 3), ("yd", 3), ("ydd", 3), ("stretch", 8), ("l_m", 8), ("v_m", 8),
                                        ("a", 8))),
                     ("P", "half", (("y", 3), ("yd", 3), ("ydd", 3), ("rhs", 9))))
-#: box bounds of the nodal values (5.44 prints none: ranges wide enough for walking), per coordinate y1 … y9
-COORDINATE_RANGES = ((-0.5, 0.5), (0.5, 1.3), (-0.6, 0.6), (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8),
-                     (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8))  # hip x (periodic part), hip z, HAT, thigh, knee, ankle
-STRETCH_RANGE = (0.0, 1.3)  # F ≤ 1.69 F_max
-DURATION_RANGE_S = (0.01, 0.8)
-STEP_RANGE_M = (0.2, 1.2)
-#: the status of a solve stopped by its time limit (PredictConfig.time_limit_s)
-TIME_LIMIT_STATUS = "Time_Limit_Reached"
 #: scale of the device coefficients a_p, b_p, c0, a_n, b_n (N·m/rad³, /rad², /rad) and d_prosth (N·m·s/rad)
 DEVICE_SCALE = np.array([1e4, 1e3, 1e2, 1e3, 1e3, 1.0])
 #: bounds of the optimal prosthesis's coefficients: they contain Table A.7's feet and Table A.8's optima;
 #: c0 ≤ 0 (a restoring spring), 0 ≤ d_prosth ≤ 2 (CHAPTER5_NOTES §3 item 16)
 DEVICE_BOUNDS = (np.array([-6e4, -1.2e4, -500.0, -1e4, -2e3, 0.0]), np.array([6e4, 1.2e4, 0.0, 1e4, 8e3, 2.0]))
-
-
-@dataclass(frozen=True)
-class PredictSettings:
-    """The settings of one prediction (defaults: the dissertation's 5.2.10 and 5.3.1, and our stated choices)."""
-
-    speed_m_s: float = 1.1275
-    weights: tuple[float, float] = DEFAULT_WEIGHTS
-    moment_tolerance_Nm: float = 2.0
-    contact_tolerance_m: float = 0.002
-    friction_coefficient: float = 0.8
-    clearance_m: float = 0.0
-    mtp_moment_Nm: tuple[float, float] = (-10.0, 0.0)
-    smoothing: float = 1e-2
-    max_iterations: int = 3000
-    window_reach: int = 3  # segments either side of its own that an instant may move to within one solve
-    tolerance: float = 1e-6
-    # IPOPT's "acceptable" stop: 10 iterations in a row within 1e-4 (scaled) whose cost changes by < 1e-6
-    # (relative); the full model's tail otherwise creeps on for hundreds of iterations at J changes of 1e-7
-    acceptable_tolerance: float = 1e-4
-    acceptable_objective_change: float = 1e-6
-    acceptable_iterations: int = 10
-    print_level: int = 0
-    #: the ankle angles y (rad; y < 0 dorsiflexion) over which the optimal prosthesis's τ_s must decrease,
-    #: sampled at ``monotone_samples`` angles: −25° … +10° (Table A.8's 1.68 m/s c, d turn beyond +10°)
-    monotone_range_rad: tuple[float, float] = (float(np.radians(-25.0)), float(np.radians(10.0)))
-    monotone_samples: int = 71
-    #: > 0: every step this long, m (a walk at a chosen stride, e.g. the synthetic trials'); 0: free in STEP_RANGE_M
-    step_m: float = 0.0
-    #: > 0: Jdev (5.28) also tracks the HAT's pitch rate ẏ3 against 0 with this SD, deg/s (a steady trunk, e.g.
-    #: the synthetic walk's); 0: the dissertation's Jdev
-    trunk_rate_sd_deg_s: float = 0.0
-    #: > 0: Jdev (5.28) also tracks, from foot flat to the other foot's heel strike, each foot's centre of
-    #: pressure (from its heel and MTP forces; the MTP moment not counted) against a heel-to-MTP progression
-    #: linear over 85 % of its stance, with this SD, m; 0: the dissertation's Jdev
-    cop_sd_m: float = 0.0
-    #: > 0: the hip moment of a leg in swing (phases 7–8 right, 3–4 left) stays within ± this, N·m/kg, at every
-    #: instant (a typical adult's swing, e.g. the synthetic walk's); 0: unbounded, as in the dissertation
-    swing_hip_moment_Nm_per_kg: float = 0.0
-    #: > 0: the hip moments stay within ± this, N·m/kg, at every instant; 0: unbounded, as in the dissertation
-    hip_moment_Nm_per_kg: float = 0.0
-
-
-def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on χ of ``layout`` (full or symmetric); the tendon stretch of muscles not ``present`` (16,) is 0."""
-    present = np.ones(16, bool) if present is None else np.asarray(present, bool)
-    stretch = tuple(STRETCH_RANGE if keep else (0.0, 0.0) for keep in present)
-    ranges = {"coordinates": COORDINATE_RANGES, "trunk": COORDINATE_RANGES[:3], "right_leg": COORDINATE_RANGES[3:6],
-              "tendon_stretch": stretch, "right_stretch": stretch[:8],
-              "durations": (DURATION_RANGE_S,), "steps": (STEP_RANGE_M,)}
-    low, high = np.empty(layout.size), np.empty(layout.size)
-    for name, (start, rows, cols) in layout.blocks.items():
-        per_column = ranges[name] if len(ranges[name]) == cols else ranges[name] * cols
-        for k, (lo, hi) in enumerate(per_column):
-            low[start + k * rows:start + (k + 1) * rows], high[start + k * rows:start + (k + 1) * rows] = lo, hi
-    # no phase so long that its control points lie more than MAX_POINT_SPACING_S apart (grid.py says why)
-    start, rows, _ = layout.blocks["durations"]
-    longest = np.array([(c - 1) * MAX_POINT_SPACING_S for c in DEFAULT_CONTROL_POINTS[:rows]])
-    high[start:start + rows] = np.minimum(high[start:start + rows], longest)
-    return low, high
 
 
 @dataclass
@@ -225,7 +162,7 @@ class NLP:
 
     def parameter_values(self, settings: PredictSettings) -> np.ndarray:
         """p = (v, w1, w2) of ``settings``."""
-        return np.array([settings.speed_m_s, *settings.weights], float)
+        return settings.parameter_values()
 
     def device_bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
         """Bounds on D: fixed at ``curve``'s coefficients (a ProsthesisCurve), or the optimal prosthesis's box."""
@@ -341,10 +278,7 @@ def cached_nlp(transcriber: Transcriber, reference: Reference, settings: Predict
     every commercial foot, reuse one problem and its compiled solvers (:func:`solver_for`)."""
     s = settings or PredictSettings()
     reach = s.window_reach if reach is None else reach
-    shape = dataclasses.replace(s, speed_m_s=PredictSettings.speed_m_s, weights=PredictSettings.weights,
-                                max_iterations=0, tolerance=0.0, acceptable_tolerance=0.0,
-                                acceptable_objective_change=0.0, acceptable_iterations=0, print_level=0)
-    key = (transcriber.key, reference.digest(), repr(shape), symmetric, reach, tuple((k, tuple(int(i) for i in v)) for k, v in sorted(segments.items())))
+    key = (transcriber.key, reference.digest(), repr(s.structure()), symmetric, reach, tuple((k, tuple(int(i) for i in v)) for k, v in sorted(segments.items())))
     if key in _BUILT:
         _BUILT.move_to_end(key)
     else:
@@ -741,37 +675,6 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
                layout=layout, splines=splines, segments=segments, reach=reach, values=values,
                lifted=lifted_blocks, parameters=parameters, device_size=6 if muscles.prosthetic else 0,
                parts={"Et": et, "Jdev": jdev})
-
-
-def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
-                  symmetric: bool = False) -> np.ndarray:
-    """χ from the reference's angles (HAT upright), a hip height that puts the standing foot on the floor,
-    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1); clipped into
-    the box bounds (:func:`box_bounds`)."""
-    s = settings or PredictSettings()
-    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
-    p = transcriber.model.params
-    n = layout.nodes - 1
-    pct = 100 * np.arange(n) / n
-    mean = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[:, k]) for k in range(len(VARIABLES))])
-    rad = np.radians
-    hip_flex_r, knee_r, dorsi_r, hip_flex_l, knee_l, dorsi_l = (mean[:, VARIABLES.index(v)] for v in VARIABLES[:6])
-    leg = p.limb.thigh_length_m + p.limb.shank_length_m + p.contact_below_ankle_m
-    right = [-rad(hip_flex_r), rad(knee_r), -rad(dorsi_r)]
-    step = 0.62  # m: about half of a 1.24 m stride at the dissertation's subject 1's speed
-    half = step / s.speed_m_s  # s: half a cycle
-    phases = np.array([0.07, 0.13, 0.55, 0.25]) * half
-    if symmetric:
-        n_h = layout.blocks["trunk"][1]
-        trunk = np.column_stack([np.zeros(n_h), np.full(n_h, 0.97 * leg), np.zeros(n_h)])
-        x = layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
-                         "right_stretch": np.full((n, 8), np.sqrt(0.1)), "durations": phases, "steps": [step]})
-    else:
-        coordinates = np.column_stack([np.zeros(n), np.full(n, 0.97 * leg), np.zeros(n), *right,
-                                       -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
-        x = layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), np.sqrt(0.1)),
-                         "durations": np.tile(phases, 2), "steps": [step, step]})
-    return np.clip(x, *box_bounds(layout))  # a reference's knee hyperextended by 2° starts straight
 
 
 class IterationReport(ca.Callback):

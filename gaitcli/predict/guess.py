@@ -1,0 +1,50 @@
+"""The default initial guess χ of a prediction (Diss. 5.2.10): a walk read off the reference."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gaitcli.predict.layout import DesignLayout, box_bounds
+from gaitcli.predict.problem import Transcriber
+from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
+from gaitcli.predict.settings import PredictSettings
+
+#: m: the guess's step, about half of a 1.24 m stride at the dissertation's subject 1's speed
+GUESS_STEP_M = 0.62
+#: the guess's phase durations per half cycle (HSr→TCr, TCr→TOl, TOl→HOr, HOr→HSl): a 60 % stance
+GUESS_PHASE_FRACTIONS = (0.07, 0.13, 0.55, 0.25)
+#: the guess's tendon stretch ŝ: forces at 10 % of F_max (F = F_max·ŝ²)
+GUESS_STRETCH = float(np.sqrt(0.1))
+#: the guess's hip height per leg length (thigh + shank + ankle to sole): the standing foot on the floor
+GUESS_HIP_HEIGHT = 0.97
+
+
+def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
+                  symmetric: bool = False) -> np.ndarray:
+    """χ from the reference's angles (HAT upright), a hip height that puts the standing foot on the floor,
+    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1); clipped into
+    the box bounds (:func:`~gaitcli.predict.layout.box_bounds`)."""
+    s = settings or PredictSettings()
+    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
+    p = transcriber.model.params
+    n = layout.nodes - 1
+    pct = 100 * np.arange(n) / n
+    mean = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[:, k]) for k in range(len(VARIABLES))])
+    rad = np.radians
+    hip_flex_r, knee_r, dorsi_r, hip_flex_l, knee_l, dorsi_l = (mean[:, VARIABLES.index(v)] for v in VARIABLES[:6])
+    leg = p.limb.thigh_length_m + p.limb.shank_length_m + p.contact_below_ankle_m
+    right = [-rad(hip_flex_r), rad(knee_r), -rad(dorsi_r)]
+    half = GUESS_STEP_M / s.speed_m_s  # s: half a cycle
+    phases = np.array(GUESS_PHASE_FRACTIONS) * half
+    if symmetric:
+        n_h = layout.blocks["trunk"][1]
+        trunk = np.column_stack([np.zeros(n_h), np.full(n_h, GUESS_HIP_HEIGHT * leg), np.zeros(n_h)])
+        x = layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
+                         "right_stretch": np.full((n, 8), GUESS_STRETCH), "durations": phases,
+                         "steps": [GUESS_STEP_M]})
+    else:
+        coordinates = np.column_stack([np.zeros(n), np.full(n, GUESS_HIP_HEIGHT * leg), np.zeros(n), *right,
+                                       -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
+        x = layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), GUESS_STRETCH),
+                         "durations": np.tile(phases, 2), "steps": [GUESS_STEP_M, GUESS_STEP_M]})
+    return np.clip(x, *box_bounds(layout))  # a reference's knee hyperextended by 2° starts straight
