@@ -1,33 +1,60 @@
-"""The inequality constraints of the predictive gait per phase (Diss. 5.2.9, with the notes' corrections).
+"""The constraint groups of the predictive-gait NLP (Diss. 5.2.8–5.2.9), each built by its own function.
+
+Every group function returns :class:`Rows` (expressions with their lower and upper bounds, in order);
+:func:`gaitcli.predict.nlp.build_nlp` stacks them in the order of :data:`GROUPS`. The first six define the
+lifted variables (``variables.py``) from the spline coefficients; the rest are the dissertation's:
+
+    continuity  the segment coefficients make periodic C3 / C2 splines    (5.14–5.23)
+    splines     Q's y, ẏ, ÿ, ŝ = the splines at the instants              (5.10–5.12)
+    dynamics    rhs = M ÿ + k − g − Q_p − R f_m                           (5.1)
+    paths       l_m, v_m = the muscle paths at (y, ẏ)                     (A.9)
+    activation  a·F_max·g(l_ce, v_ce) = f_ce: the activation that makes F  (2.18, 4.18)
+    reactions   G_phᵀ (rhs − G_ph λ) = 0: λ = G_ph⁺ rhs                   (5.30)
+    moment      |B⁺e| ≤ εm, e = rhs − G_ph λ, per joint and control point (5.49–5.51, 5.53)
+    contact     |c_ph| ≤ εk per row and control point                    (5.57)
+    unilateral  f_z ≥ 0 at the points in contact                          (5.37–5.40)
+    mtp         −10 ≤ m_B ≤ 0 N·m where a foot stands on B alone          (docs/prediction.md)
+    friction    |f_x| ≤ μ f_z per foot down (two linear inequalities)     (5.41–5.42)
+    clearance   z ≥ h_min of the points not in contact                    (5.33–5.36)
+    excitation  0 ≤ u ≤ 1 as −t2·a ≤ ȧ ≤ (1 − a)(t1 + t2) with 0 ≤ a ≤ 1 (5.32)
+    speed       ΣT_ph − ΔS/v = 0                                          (5.43)
+    shape       LSE(knee in swing) ≥ 60°, LSE(thigh in late stance) ≥ 5°  (5.45–5.48)
+    hip_bound   |hip moment| ≤ bound at every instant, a tighter one in swing (opt-in, PredictSettings)
+    windows     each instant inside its window of segments
+    monotone    dτ_s/dy ≤ 0 at the sampled ankle angles (prosthetic models; linear in D)
 
 Which contact points each group applies to follows from the phase table
-(:data:`gaitcli.predict.contact.PHASE_TABLE`), not from the printed lists, two of
-which are typos (CHAPTER5_NOTES §3 item 8):
+(:data:`gaitcli.predict.contact.PHASE_TABLE`), not from the printed lists, two of which are typos
+(docs/prediction.md):
 
-- clearance (5.33–5.36): every heel A and MTP B *not* in contact stays at or above
-  ``h_min`` (default 0 m; "r_z > 0" as a closed bound, §3 item 9);
+- clearance (5.33–5.36): every heel A and MTP B *not* in contact stays at or above ``h_min`` (default 0 m;
+  "r_z > 0" as a closed bound);
 - unilateral contact (5.37–5.40): the vertical reaction f_z ≥ 0 at every point in contact;
-- friction (5.41–5.42): |f_x| ≤ μ·f_z per foot in contact, as the two smooth linear
-  inequalities f_x − μ f_z ≤ 0 and −f_x − μ f_z ≤ 0; μ = 0.8 by default (the
-  dissertation gives none; our choice, configurable);
-- gait shape (5.45–5.48): in its swing (phases 7–8 right, 3–4 left) a knee flexes at least
-  θ_knee = 60°; in late stance (phases 4–6 right, 1, 2, 8 left) a thigh extends at least
-  θ_hip = 5° — the absolute thigh angle y4/y7, as the equations say (§3 item 2). The
-  non-smooth max over control points becomes the log-sum-exp surrogate
-  LSE_β(x) = max x + log Σ exp(β(x − max x))/β, an upper bound within ln(n)/β of the max
-  (§3 item 10; β = 500 rad⁻¹: ≤ 0.50° for 80 points); the true max is reported.
+- friction (5.41–5.42): |f_x| ≤ μ·f_z per foot in contact, as the two smooth linear inequalities
+  f_x − μ f_z ≤ 0 and −f_x − μ f_z ≤ 0; μ = 0.8 by default (the dissertation gives none; our choice,
+  configurable);
+- gait shape (5.45–5.48): in its swing (phases 7–8 right, 3–4 left) a knee flexes at least θ_knee = 60°;
+  in late stance (phases 4–6 right, 1, 2, 8 left) a thigh extends at least θ_hip = 5° — the absolute thigh
+  angle y4/y7, as the equations say. The non-smooth max over control points becomes the log-sum-exp
+  surrogate LSE_β(x) = max x + log Σ exp(β(x − max x))/β, an upper bound within ln(n)/β of the max
+  (β = 500 rad⁻¹: ≤ 0.50° for 80 points); the true max is reported;
+- excitation (5.32): 0 ≤ u ≤ 1 is stated on ȧ, linear in the lifted a, by (2.17) solved for u at its ends.
 
-All functions take numpy arrays or CasADi expressions.
+The kernels (:func:`friction`, :func:`smooth_max`, the phase lists) take numpy arrays or CasADi expressions.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
 from gaitcli.core.validate import number
 from gaitcli.predict.contact import PHASE_TABLE, PHASES
-from gaitcli.predict.splines import is_casadi
+from gaitcli.predict.dynamics import ContactPoint, LegInversion
+from gaitcli.predict.splines import continuity_matrix, is_casadi
+from gaitcli.predict.variables import DEVICE_SCALE, LIFTED_SCALE, REACTION_SCALE_N, Variables
 
 CONTACT_POINTS = ("heel_r", "mtp_r", "heel_l", "mtp_l")
 FRICTION_COEFFICIENT = 0.8
@@ -63,7 +90,7 @@ def friction(force_x_N, force_z_N, coefficient: float = FRICTION_COEFFICIENT):
 
 
 def smooth_max(values, sharpness: float = SHAPE_SHARPNESS_PER_RAD):
-    """LSE_β(values): a smooth upper bound of max(values), within ln(n)/β of it (§3 item 10)."""
+    """LSE_β(values): a smooth upper bound of max(values), within ln(n)/β of it."""
     if is_casadi(values):
         x = ca.vec(values)
         top = ca.mmax(x)  # its derivative is that of the active entry: LSE's gradient does not depend on it
@@ -71,3 +98,216 @@ def smooth_max(values, sharpness: float = SHAPE_SHARPNESS_PER_RAD):
     x = np.asarray(values, float).ravel()
     top = x.max()
     return top + np.log(np.sum(np.exp(sharpness * (x - top)))) / sharpness
+
+
+# ------------------------------------------------------------------------------------------ the NLP's groups
+#: the constraint groups in the order g stacks them (module docstring)
+GROUPS = ("continuity", "splines", "dynamics", "paths", "activation", "reactions", "moment", "contact", "unilateral",
+          "mtp", "friction", "clearance", "excitation", "speed", "shape", "hip_bound", "windows", "monotone")
+
+
+@dataclass
+class Rows:
+    """One constraint group: its expressions (each a column) with their lower and upper bounds, in order."""
+
+    expressions: list = field(default_factory=list)
+    lows: list = field(default_factory=list)
+    highs: list = field(default_factory=list)
+
+    def add(self, expression, low, high) -> None:
+        """Append ``expression``'s entries (column-major) with bounds ``low`` ≤ · ≤ ``high`` (scalars or arrays)."""
+        expression = ca.vec(expression)
+        k = expression.size1()
+        self.expressions.append(expression)
+        self.lows.append(np.broadcast_to(low, (k,)).astype(float))
+        self.highs.append(np.broadcast_to(high, (k,)).astype(float))
+
+    @property
+    def size(self) -> int:
+        """How many rows of g the group has."""
+        return sum(e.size1() for e in self.expressions)
+
+
+def windows_rows(v: Variables, segments: dict, reach: int) -> Rows:
+    """Every instant inside its window of segments ``segments[key]`` ± ``reach``: its polynomials are never
+    extrapolated (a quartic's ÿ one segment beyond its node is off by 12·Δp4·τ²/Δt²); a solution pressing on a
+    window's edge is solved again with that window moved on (``solve.solve_windowed``)."""
+    rows = Rows()
+    for key, count, scale in (("cycle", v.n_i, 1.0), ("half", v.half, 2.0)):
+        if key in segments:
+            k0 = np.asarray(segments[key], float)
+            rows.add(scale * v.fractions[:count] * v.intervals[key] - ca.DM(k0), -float(reach), reach + 1.0)
+    return rows
+
+
+def continuity_rows(v: Variables) -> Rows:
+    """The segment coefficients form periodic splines (5.14–5.23); a removed muscle's (fixed at 0) has none."""
+    rows = Rows()
+    for b in v.splines:
+        columns = v.columns if b.name == "stretch" else list(range(b.coefficients.shape[1]))
+        rows.add(ca.DM(continuity_matrix(b.spline)) @ b.coefficients[:, columns], 0.0, 0.0)
+    return rows
+
+
+def splines_rows(v: Variables, at_instants: dict) -> Rows:
+    """The lifted y, ẏ, ÿ, ŝ are the splines' values at the instants (``variables.instant_splines``), scaled."""
+    rows = Rows()
+
+    def tie(block, i, values, names):
+        for row, name in zip(values, names):
+            keep = v.columns if name == "stretch" else list(range(row.shape[1]))
+            rows.add((v.lifted[(block, name)][i, keep] - row[:, keep]) / LIFTED_SCALE[name], 0.0, 0.0)
+
+    for i in range(v.n_i):
+        if v.symmetric:
+            tie("Q", i, at_instants[("leg", i)], ("y", "yd", "ydd", "stretch"))
+            if i < v.half:
+                tie("P", i, at_instants[("trunk", i)], ("y", "yd", "ydd"))
+        else:
+            tie("Q", i, at_instants[("coordinates", i)], ("y", "yd", "ydd", "stretch"))
+    return rows
+
+
+def dynamics_rows(residuals: list) -> Rows:
+    """rhs − Φ = 0 (5.1) at the stated instants (``dynamics.dynamics_residuals``), per 100 N."""
+    rows = Rows()
+    for residual in residuals:
+        rows.add(residual / LIFTED_SCALE["rhs"], 0.0, 0.0)
+    return rows
+
+
+def paths_rows(residuals: list) -> Rows:
+    """l_m, v_m = the muscle paths (A.9) at every instant (``dynamics.path_residuals``)."""
+    rows = Rows()
+    for lengths, velocities in residuals:
+        rows.add(lengths, 0.0, 0.0)
+        rows.add(velocities, 0.0, 0.0)
+    return rows
+
+
+def activation_rows(v: Variables, legs: list[LegInversion]) -> Rows:
+    """The fibre's force balance (2.18) per F_max of every modelled muscle and instant."""
+    rows = Rows()
+    for leg in legs:
+        rows.add(leg.balance[v.kept, :], 0.0, 0.0)
+    return rows
+
+
+def excitation_rows(v: Variables, legs: list[LegInversion]) -> Rows:
+    """0 ≤ u ≤ 1 (5.32) as ȧ + t2·a ≥ 0 and (1 − a)(t1 + t2) − ȧ ≥ 0 of every modelled muscle and instant."""
+    rows = Rows()
+    for leg in legs:
+        rows.add((leg.adot + leg.t2 * leg.a)[:, v.kept], 0.0, np.inf)
+        rows.add(((1 - leg.a) * (leg.t1 + leg.t2) - leg.adot)[:, v.kept], 0.0, np.inf)
+    return rows
+
+
+def reactions_rows(points: list[ContactPoint]) -> Rows:
+    """G_phᵀ e = 0 at every stated control point: λ = G_ph⁺ rhs (5.30), per 100 N."""
+    rows = Rows()
+    for p in points:
+        rows.add(p.G.T @ p.residual / REACTION_SCALE_N, 0.0, 0.0)
+    return rows
+
+
+def moment_rows(points: list[ContactPoint], joint_map_pinv: np.ndarray, tolerance_Nm: float) -> Rows:
+    """|B⁺e| ≤ εm (5.49–5.51, 5.53), N·m, per joint at every stated control point."""
+    rows, b_pinv = Rows(), ca.DM(joint_map_pinv)
+    for p in points:
+        rows.add(b_pinv @ p.residual, -tolerance_Nm, tolerance_Nm)
+    return rows
+
+
+def contact_rows(v: Variables, points: list[ContactPoint], contact, tolerance_m: float) -> Rows:
+    """|c_ph| ≤ εk (5.57), m, per row of each stated control point's phase."""
+    rows = Rows()
+    for p in points:
+        rows.add(contact.constraint[p.phase](p.y, v.steps_r, v.steps_l, 0.0), -tolerance_m, tolerance_m)
+    return rows
+
+
+def unilateral_rows(points: list[ContactPoint]) -> Rows:
+    """f_z ≥ 0 (5.37–5.40) of every point in contact."""
+    rows = Rows()
+    for p in points:
+        for k, name in enumerate(p.names):
+            if name.endswith("_fz_N"):
+                rows.add(p.lam[k], 0.0, np.inf)
+    return rows
+
+
+def mtp_rows(points: list[ContactPoint], bounds_Nm: tuple[float, float]) -> Rows:
+    """The MTP moment m_B within ``bounds_Nm`` where a foot stands on its MTP point alone."""
+    rows = Rows()
+    for p in points:
+        for k, name in enumerate(p.names):
+            if name.endswith("_moment_Nm"):
+                rows.add(p.lam[k], *bounds_Nm)
+    return rows
+
+
+def friction_rows(points: list[ContactPoint], coefficient: float) -> Rows:
+    """|f_x| ≤ μ f_z (5.41–5.42) per foot down, as :func:`friction`'s two inequalities."""
+    rows = Rows()
+    for p in points:
+        for side in feet_in_contact(p.phase):
+            rows.add(ca.vertcat(*friction(*p.feet[side], coefficient)), -np.inf, 0.0)
+    return rows
+
+
+def clearance_rows(points: list[ContactPoint], model, minimum_m: float) -> Rows:
+    """z ≥ h_min (5.33–5.36), m, of every contact point not in contact."""
+    rows = Rows()
+    for p in points:
+        heights = dict(zip(model.point_names, model.points(p.y)))
+        for point in CONTACT_POINTS:
+            if p.phase in clearance_phases(point):
+                rows.add(heights[point][1], minimum_m, np.inf)
+    return rows
+
+
+def speed_rows(v: Variables) -> Rows:
+    """ΣT_ph − ΔS/v = 0 (5.43), s, with the speed v the NLP's parameter."""
+    rows = Rows()
+    rows.add(v.period - v.stride / v.parameters[0], 0.0, 0.0)
+    return rows
+
+
+def shape_rows(v: Variables) -> Rows:
+    """LSE over the chosen phases' instants of a knee (swing) or a thigh (late stance) ≥ its bound (5.45–5.48)."""
+    rows, grid = Rows(), v.grid
+    for index, shape_phases, minimum in GAIT_SHAPE.values():
+        chosen = sorted({int(grid.instant[j]) for j in range(grid.points) if v.phases[j] in shape_phases})
+        rows.add(smooth_max(ca.vertcat(*[v.values["y"][i][index] for i in chosen])), minimum, np.inf)
+    return rows
+
+
+def hip_bound_rows(v: Variables, settings, model, muscles, forces: list) -> Rows:
+    """The hip moments of muscles and tissues within ± ``hip_moment_Nm_per_kg`` × body mass at every instant,
+    a leg in swing within ± ``swing_hip_moment_Nm_per_kg`` × body mass (opt-in; none when both are 0). The
+    symmetric model bounds its right leg alone: its left leg is the same half a cycle later."""
+    rows, s = Rows(), settings
+    if not (s.swing_hip_moment_Nm_per_kg > 0 or s.hip_moment_Nm_per_kg > 0):
+        return rows
+    limits = (s.hip_moment_Nm_per_kg or np.inf, s.swing_hip_moment_Nm_per_kg or np.inf)
+    for i, j in enumerate(v.grid.instant_points):
+        for thigh, swing in (((3, (7, 8)),) if v.symmetric else ((3, (7, 8)), (6, (3, 4)))):
+            bound = min(limits[0], limits[1] if v.phases[int(j)] in swing else np.inf) * model.total_mass_kg
+            if np.isfinite(bound):
+                y, yd = v.values["y"][i], v.values["yd"][i]
+                # on an absolute thigh angle, knee and ankle relative: the muscles' and tissues' hip moment
+                rows.add((muscles.moment_arms(y) @ forces[i] + muscles.tissue(y, yd))[thigh], -bound, bound)
+    return rows
+
+
+def monotone_rows(v: Variables, settings) -> Rows:
+    """dτ_s/dy = 3·a3·y² + 2·a2·y + c0 ≤ 0 (per c0's scale) at ``monotone_samples`` ankle angles of
+    ``monotone_range_rad`` (the prosthetic models' D, 5.3.3: a spring that stiffens, never turns)."""
+    rows = Rows()
+    if v.device is None:
+        return rows
+    c = v.coefficients
+    for angle in np.linspace(*settings.monotone_range_rad, settings.monotone_samples):
+        a3, a2, c0 = ((c[0], c[1]) if angle > 0 else (c[3], c[4])) + (c[2],)
+        rows.add((3 * a3 * angle ** 2 + 2 * a2 * angle + c0) / DEVICE_SCALE[2], -np.inf, 0.0)
+    return rows

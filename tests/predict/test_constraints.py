@@ -57,3 +57,83 @@ def test_smooth_max_bounds_the_max_from_above_within_log_n_over_beta():
     assert float(got) == pytest.approx(value, rel=1e-12)
     weights = np.exp(beta * (x - x.max()))
     np.testing.assert_allclose(np.array(gradient).ravel(), weights / weights.sum(), atol=1e-12)  # softmax
+
+
+@pytest.fixture(scope="module")
+def tiny():
+    """The walking model on the tiniest grid: 2 control points per phase (P = 16, I = 8), 6 nodes (N = 5, the
+    symmetric model's trunk N_h = 3)."""
+    from gaitcli.predict.grid import control_grid
+    from gaitcli.predict.problem import Transcriber
+
+    return Transcriber(6, grid=control_grid((2,) * 8))
+
+
+def _group_sizes(transcriber, symmetric, settings):
+    """Each constraint group function's row count, called one by one as build_nlp calls them."""
+    from gaitcli.predict import constraints as c
+    from gaitcli.predict.dynamics import (contact_points, dynamics_residuals, invert_muscles, muscle_forces,
+                                          path_residuals)
+    from gaitcli.predict.layout import DesignLayout
+    from gaitcli.predict.variables import Variables, instant_splines
+
+    v = Variables(transcriber, DesignLayout.build(6, symmetric=symmetric))
+    model, muscles = transcriber.model, transcriber.muscles
+    segments = {"cycle": np.arange(v.n_i) * 5 // v.n_i, **({"half": np.arange(v.half) * 3 // v.half} if symmetric
+                                                              else {})}
+    forces = muscle_forces(v, muscles.muscle.params.max_isometric_force_N)
+    legs, points = invert_muscles(v, transcriber, forces), contact_points(v, transcriber.contact)
+    rows = {"continuity": c.continuity_rows(v), "splines": c.splines_rows(v, instant_splines(v, segments, 1)),
+            "dynamics": c.dynamics_rows(dynamics_residuals(v, model, muscles, forces)),
+            "paths": c.paths_rows(path_residuals(v, muscles)), "activation": c.activation_rows(v, legs),
+            "excitation": c.excitation_rows(v, legs), "reactions": c.reactions_rows(points),
+            "moment": c.moment_rows(points, transcriber.joint_map_pinv, 2.0),
+            "contact": c.contact_rows(v, points, transcriber.contact, 0.002), "unilateral": c.unilateral_rows(points),
+            "mtp": c.mtp_rows(points, (-10.0, 0.0)), "friction": c.friction_rows(points, 0.8),
+            "clearance": c.clearance_rows(points, model, 0.0), "speed": c.speed_rows(v), "shape": c.shape_rows(v),
+            "hip_bound": c.hip_bound_rows(v, settings, model, muscles, forces),
+            "windows": c.windows_rows(v, segments, 1), "monotone": c.monotone_rows(v, settings)}
+    for name, group in rows.items():  # the bounds come with the rows
+        assert sum(len(low) for low in group.lows) == sum(len(high) for high in group.highs) == group.size, name
+    assert set(rows) == set(c.GROUPS)
+    return {name: group.size for name, group in rows.items()}
+
+
+def test_each_constraint_group_has_its_rows_on_a_tiny_grid(tiny):
+    # counted by hand from the phase table (contact.py): the stated points are the first half cycle's 8 (phases
+    # 1, 1, 2, 2, 3, 3, 4, 4) in the symmetric model, all 16 in the full one. Per phase 1 … 4 (5 … 8 mirrored):
+    # reactions 5, 5, 3, 3; contact rows 4, 5, 3, 2; f_z ≥ 0 rows 2, 3, 2, 1; an MTP moment in 1 and 4; feet down
+    # 2, 2, 1, 1 (two friction rows each); points clear of the floor 2, 1, 2, 3
+    from gaitcli.predict.settings import PredictSettings
+
+    bounded = PredictSettings(hip_moment_Nm_per_kg=0.9, swing_hip_moment_Nm_per_kg=0.3)
+    symmetric = {"continuity": 4 * 3 * 3 + 4 * 5 * 3 + 3 * 5 * 8,  # quartic C3: 4 per interval and column; cubic C2: 3
+                 "splines": 8 * (3 + 3 + 3 + 8) + 4 * (3 + 3 + 3),  # Q's y, ẏ, ÿ, ŝ at 8 instants; P's at 4
+                 "dynamics": 9 * 4, "paths": 2 * 8 * 8, "activation": 8 * 8, "excitation": 2 * 8 * 8,
+                 "reactions": 2 * (5 + 5 + 3 + 3), "moment": 6 * 8, "contact": 2 * (4 + 5 + 3 + 2),
+                 "unilateral": 2 * (2 + 3 + 2 + 1), "mtp": 2 * 2, "friction": 2 * 2 * (2 + 2 + 1 + 1),
+                 "clearance": 2 * (2 + 1 + 2 + 3), "speed": 1, "shape": 4, "hip_bound": 8, "windows": 8 + 4,
+                 "monotone": 0}
+    assert _group_sizes(tiny, True, bounded) == symmetric
+    full = {"continuity": 4 * 5 * 9 + 3 * 5 * 16, "splines": 8 * (9 + 9 + 9 + 16), "dynamics": 9 * 8,
+            "paths": 2 * 16 * 8, "activation": 16 * 8, "excitation": 2 * 16 * 8, "reactions": 2 * 2 * (5 + 5 + 3 + 3),
+            "moment": 6 * 16, "contact": 2 * 2 * (4 + 5 + 3 + 2), "unilateral": 2 * 2 * (2 + 3 + 2 + 1),
+            "mtp": 2 * 2 * 2, "friction": 2 * 2 * 2 * (2 + 2 + 1 + 1), "clearance": 2 * 2 * (2 + 1 + 2 + 3),
+            "speed": 1, "shape": 4, "hip_bound": 0, "windows": 8, "monotone": 0}
+    assert _group_sizes(tiny, False, PredictSettings()) == full
+
+
+def test_a_prosthetic_models_groups_leave_out_the_removed_muscles_and_add_the_monotonicity_rows():
+    # soleus and tibialis anterior gone (6 of 8 muscles per leg): their splines, paths, activation and
+    # excitation rows; the device's τ_s slope at each of the 71 sampled angles
+    from gaitcli.predict.grid import control_grid
+    from gaitcli.predict.muscles import WalkerMuscles
+    from gaitcli.predict.problem import Transcriber
+    from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+    from gaitcli.predict.settings import PredictSettings
+
+    sach = Transcriber(6, grid=control_grid((2,) * 8), muscles=WalkerMuscles(prosthesis=COMMERCIAL_FEET["sach"]))
+    sizes = _group_sizes(sach, True, PredictSettings())
+    assert sizes["continuity"] == 4 * 3 * 3 + 4 * 5 * 3 + 3 * 5 * 6 and sizes["splines"] == 8 * 15 + 4 * 9
+    assert sizes["paths"] == 2 * 6 * 8 and sizes["activation"] == 6 * 8 and sizes["excitation"] == 2 * 6 * 8
+    assert sizes["monotone"] == PredictSettings().monotone_samples == 71

@@ -56,6 +56,16 @@ def test_group_sizes(transcriber, built):
     assert nlp.layout.size == (219 if symmetric else 435)
 
 
+def test_the_variables_are_laid_out_as_documented(built):
+    # variables.py's table at nn = 18 on the default grid: each block's size, in order, filling w
+    symmetric, nlp = built
+    expected = ({"C_t": 5 * 9 * 3, "C_y": 5 * 17 * 3, "C_s": 4 * 17 * 8, "T": 4, "L": 1, "Q": 80 * 41, "P": 40 * 18,
+                 "Λ": 162} if symmetric else
+                {"C_y": 5 * 17 * 9, "C_s": 4 * 17 * 16, "T": 8, "L": 2, "Q": 80 * 100, "Λ": 324})
+    assert [(k, s.stop - s.start) for k, s in nlp.blocks.items()] == list(expected.items())
+    assert nlp.w.size1() == nlp.lbw.size == sum(expected.values()) == (5101 if symmetric else 10187)
+
+
 def test_lifted_start_solves_the_defining_equations(transcriber, reference, built):
     # w from the numeric transcription of χ (problem.py, λ by the pseudoinverse) satisfies the lifted NLP's own
     # equations, and its moment errors are the transcription's

@@ -1,0 +1,110 @@
+"""The cost terms of the predictive-gait NLP as expressions of its variables (Diss. 5.2.7, (5.27)–(5.29)).
+
+    Et    = (1/ΔS) Σ_m ∫ Ė_m dt                                    J/m   (5.27)
+    Jdev  = Σ_k ∫ (x_k − x̂_k)²/σ_k² dt                             s     (5.28)
+            x: hip and knee flexion, ankle dorsiflexion (deg) and f_x, f_z per body mass (N/kg) of both
+            sides at the I instants, against the reference's mean x̂ and SD σ at the same cycle percentage;
+            plus, opt-in (``PredictSettings``), a steady trunk (ẏ3 against 0, deg/s) and each foot's
+            centre of pressure (against a heel-to-MTP progression, per body weight)
+    J     = w1·Et/100 + w2·Jdev                                           (5.29)
+
+with the integrals by the periodic trapezoid rule (``cost.py``), the heat rates' kinks smoothed for the
+optimiser as in EID (reported costs use the exact model) and (w1, w2) parameters of the NLP. The symmetric
+model's Et counts its right leg's muscles twice; its second half cycle's ground forces are the first half's,
+sides swapped.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from gaitcli.kinematics.conventions import walker_joint_angles
+from gaitcli.predict.cost import cost_of_transport, deviation
+from gaitcli.predict.dynamics import ContactPoint, LegInversion
+from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
+from gaitcli.predict.variables import Variables
+
+#: the fraction of its stance over which a foot's centre of pressure is tracked from heel to MTP
+COP_PROGRESSION_STANCE = 0.85
+
+
+def energy(v: Variables, legs: list[LegInversion]) -> ca.SX:
+    """Et (5.27), J/m, from the heat rates of the modelled muscles."""
+    rate = [leg.rate[:, v.kept] for leg in legs]
+    return v.energy_factor * cost_of_transport(ca.horzcat(*rate), v.times, v.period, v.stride)
+
+
+def _interpolants(table: np.ndarray) -> list[ca.Function]:
+    """Linear interpolants over the cycle (%) of a reference table's columns (101 × 10)."""
+    return [ca.interpolant(f"reference_{k}", "linear", [CYCLE_PCT], table[:, k]) for k in range(len(VARIABLES))]
+
+
+def _per_side(v: Variables, table: dict, i: int) -> dict:
+    """``table[point]`` (side → value) at instant i; the symmetric model's second half: the first half's,
+    sides swapped."""
+    j = int(v.grid.instant_points[i])
+    if j in table:
+        return table[j]
+    mirrored = table[int(v.grid.instant_points[i - v.half])]
+    return {"r": mirrored["l"], "l": mirrored["r"]}
+
+
+def reference_deviation(v: Variables, reference: Reference, points: list[ContactPoint], mass_kg: float) -> ca.SX:
+    """The dissertation's Jdev (5.28): joint angles and ground forces against ``reference``."""
+    feet_at = {p.j: p.feet for p in points}
+    rows = []
+    for i in range(len(v.grid.instant_points)):
+        y = v.values["y"][i]
+        angles = [*walker_joint_angles(y[2], y[3], y[4], y[5]), *walker_joint_angles(y[2], y[6], y[7], y[8])]
+        feet = _per_side(v, feet_at, i)
+        ground = [feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1]]
+        rows.append(ca.horzcat(*[angle * 180 / np.pi for angle in angles], *[f / mass_kg for f in ground]))
+    pct = 100 * v.fractions
+    means = ca.horzcat(*[f(pct) for f in _interpolants(reference.mean)])
+    sds = ca.horzcat(*[f(pct) for f in _interpolants(reference.sd)])
+    return deviation(ca.vertcat(*rows), means, sds, v.times, v.period)
+
+
+def centre_of_pressure(v: Variables, points: list[ContactPoint], heel_to_mtp_m: float, weight_N: float,
+                       sd_m: float) -> ca.SX:
+    """∫(c − ĉ)²/σ² dt: from foot flat to the other foot's heel strike each foot's centre of pressure
+    (its heel and MTP forces, the MTP moment not counted) against a progression from heel to MTP linear over
+    :data:`COP_PROGRESSION_STANCE` of its stance; c, ĉ as moments per body weight ``weight_N``, m."""
+    split_at = {p.j: p.split for p in points}
+    strikes = {"r": 0.0, "l": ca.sum1(v.durations[:4])}
+    stance = ca.sum1(v.durations[:6])
+    rows = []
+    for i, j in enumerate(v.grid.instant_points):
+        phase, split = v.phases[int(j)], _per_side(v, split_at, i)
+        row = ca.SX(0)
+        for side, rolling in (("r", (2, 3, 4)), ("l", (6, 7, 8))):
+            if phase in rolling:
+                heel, mtp = split[side]  # heel 0 once it is off (phases 4, 8)
+                progress = (v.times[i] - strikes[side]) / (COP_PROGRESSION_STANCE * stance)
+                row = (mtp * heel_to_mtp_m - (heel + mtp) * heel_to_mtp_m * progress) / weight_N
+        rows.append(row)
+    return deviation(ca.vertcat(*rows), ca.DM.zeros(v.n_i, 1), ca.DM.ones(v.n_i, 1) * sd_m, v.times, v.period)
+
+
+def trunk_rate(v: Variables, sd_deg_s: float) -> ca.SX:
+    """∫(ẏ3/σ)² dt: the HAT's pitch rate (deg/s) against 0, a steady trunk."""
+    rate = ca.vertcat(*[v.values["yd"][i][2] * 180 / np.pi for i in range(v.n_i)])
+    return deviation(rate, ca.DM.zeros(v.n_i, 1), ca.DM.ones(v.n_i, 1) * sd_deg_s, v.times, v.period)
+
+
+def tracking(v: Variables, reference: Reference, points: list[ContactPoint], settings, transcriber) -> ca.SX:
+    """Jdev (5.28) with the opt-in terms of ``settings`` (module docstring)."""
+    model = transcriber.model
+    jdev = reference_deviation(v, reference, points, model.total_mass_kg)
+    if settings.cop_sd_m > 0:
+        jdev = jdev + centre_of_pressure(v, points, transcriber.contact.heel_to_mtp_m,
+                                         model.total_mass_kg * model.gravity_m_s2, settings.cop_sd_m)
+    if settings.trunk_rate_sd_deg_s > 0:
+        jdev = jdev + trunk_rate(v, settings.trunk_rate_sd_deg_s)
+    return jdev
+
+
+def objective(v: Variables, et: ca.SX, jdev: ca.SX) -> ca.SX:
+    """J = w1·Et/100 + w2·Jdev (5.29) with (w1, w2) the NLP's parameters (checked by ``cost.check_weights``)."""
+    return v.parameters[1] * et / 100.0 + v.parameters[2] * jdev

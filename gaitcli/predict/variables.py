@@ -1,0 +1,306 @@
+"""The variables w of the predictive-gait NLP (Diss. 5.2.7–5.2.9, lifted): every block, its order, size and units.
+
+w is the transcription's intermediate quantities made variables ("lifted") and tied together by equality
+constraints (``constraints.py``): the problem is (5.24)'s over χ (``layout.py``), but each constraint touches
+only a few variables. Blocks in order, each stored column-major (a column's values contiguous), every
+variable O(1) as value / scale; N = nn − 1 spline intervals, N_h the half cycle's (odd), I the distinct
+control instants (80 by default), I/2 the first half cycle's; in brackets the sizes at nn = 18 on the default
+grid (:meth:`Variables.blocks` gives each block's place in w):
+
+    block  full model       symmetric model   content                                          unit / scale
+    C_t    —                5N_h × 3 (135)    the trunk's (hip x periodic part, hip z, HAT)      m, rad / 1
+                                              T/2-periodic quartic segment coefficients p_{k,0…4}
+    C_y    5N × 9 (765)     5N × 3 (255)      the quartic coordinate splines' coefficients       m, rad / 1
+                                              (y1 periodic part … y9; symmetric: the right leg's
+                                              y4 … y6)
+    C_s    4N × 16 (1088)   4N × 8 (544)      the cubic tendon-stretch splines' coefficients ŝ   1 / 1
+    T      8                4                 the phase durations T_1 … (symmetric: T_5…8 =      s / 0.1
+                                              T_1…4)
+    L      2                1                 the step lengths L_r, L_l (symmetric: L_l = L_r)   m / 1
+    Q      I × 100 (8000)   I × 41 (3280)     per instant: y, ẏ, ÿ (9 each; symmetric: the right LIFTED_SCALE
+                                              leg's 3), ŝ (16; 8), rhs (9; full model only),
+                                              l_m, v_m, a (16 each; symmetric: 8)
+    P      —                I/2 × 18 (720)    the first half cycle's trunk y, ẏ, ÿ (3 each) and  LIFTED_SCALE
+                                              rhs (9)
+    Λ      Σ widths (324)   first half's (162)  the ground reactions λ_j of every stated control  N, N·m / 100
+                                              point in grid order (the phase's reaction names)
+    D      6 (prosthetic models only)         the device's (a_p, b_p, c0, a_n, b_n, d_prosth)    DEVICE_SCALE
+                                              of (5.58)–(5.59)
+    w      10 187 (10 193 with D)  5 101 (5 107 with D)
+
+The nodal values of χ (5.13) are the coefficients p_{k,0} (rows 0, 5, 10, … of a C block). Units of Q:
+y in m (y1, y2) or rad, ẏ per s, ÿ per s², ŝ dimensionless, rhs in N or N·m (5.1), l_m m, v_m m/s, a
+dimensionless. Muscles removed with a prosthetic ankle (``WalkerMuscles.present``) keep their places, fixed
+at zero by their bounds.
+
+Symmetric model (5.3.1): the left leg is the right leg half a cycle later, hip and HAT repeat every half
+cycle one half stride on: :attr:`Variables.values` gives every instant's full 9 coordinates and 16 muscles
+either way, so that no later part of the problem distinguishes the two models.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from gaitcli.predict.grid import instant_times
+from gaitcli.predict.layout import DesignLayout, box_bounds, half_cycle_intervals
+from gaitcli.predict.splines import PeriodicSpline, quartic, window_values
+
+REACTION_SCALE_N = 100.0
+DURATION_SCALE_S = 0.1
+#: scale of each lifted quantity (its variables are value/scale)
+LIFTED_SCALE = {"y": 1.0, "yd": 3.0, "ydd": 30.0, "stretch": 1.0, "rhs": 100.0, "l_m": 1.0, "v_m": 1.0, "a": 1.0}
+#: the lifted blocks: (name, rows: "instants" or "half", [(quantity, columns)])
+FULL_LIFTED = (("Q", "instants", (("y", 9), ("yd", 9), ("ydd", 9), ("stretch", 16), ("rhs", 9), ("l_m", 16),
+                                  ("v_m", 16), ("a", 16))),)
+SYMMETRIC_LIFTED = (("Q", "instants", (("y", 3), ("yd", 3), ("ydd", 3), ("stretch", 8), ("l_m", 8), ("v_m", 8),
+                                       ("a", 8))),
+                    ("P", "half", (("y", 3), ("yd", 3), ("ydd", 3), ("rhs", 9))))
+#: scale of the device coefficients a_p, b_p, c0, a_n, b_n (N·m/rad³, /rad², /rad) and d_prosth (N·m·s/rad)
+DEVICE_SCALE = np.array([1e4, 1e3, 1e2, 1e3, 1e3, 1.0])
+#: bounds of the optimal prosthesis's coefficients: they contain Table A.7's feet and Table A.8's optima;
+#: c0 ≤ 0 (a restoring spring), 0 ≤ d_prosth ≤ 2 (docs/prediction.md, "The prosthesis")
+DEVICE_BOUNDS = (np.array([-6e4, -1.2e4, -500.0, -1e4, -2e3, 0.0]), np.array([6e4, 1.2e4, 0.0, 1e4, 8e3, 2.0]))
+#: the lifted quantities of the full cycle's 9 coordinates (the rest are the 16 muscles')
+COORDINATE_QUANTITIES = ("y", "yd", "ydd")
+
+
+@dataclass
+class SplineBlock:
+    """One spline family of w: its coefficients (``rows`` × ``columns`` SX), spline, the χ block it stands for;
+    ``windows``: which segment list of the NLP places its windows ("cycle", or "half" for the trunk's)."""
+
+    name: str
+    spline: PeriodicSpline
+    coefficients: ca.SX
+    design_block: str
+    windows: str = "cycle"
+
+
+def half_spline(layout: DesignLayout) -> PeriodicSpline:
+    """The trunk's T/2-periodic quartic of the symmetric model (N_h odd intervals)."""
+    return quartic(half_cycle_intervals(layout.nodes - 1) + 1)
+
+
+def mirror(row):
+    """A 9-vector of generalized forces (or coordinates' rates) with the legs swapped."""
+    return ca.vertcat(row[0:3], row[6:9], row[3:6])
+
+
+class Variables:
+    """The symbols of w (module docstring) for one transcriber's structure and χ layout, and the gait they
+    describe over the whole cycle.
+
+    ``durations`` (8,) s, ``steps_r``, ``steps_l`` m, ``period`` T, ``stride`` ΔS, ``times`` (I,) s and
+    ``fractions`` t/T of the instants; ``values[name][i]`` the full model's column of quantity ``name`` ("y",
+    "yd", "ydd": 9; "stretch", "l_m", "v_m", "a": 16) at instant i and ``generalized_forces[i]`` its rhs (9);
+    ``reactions[j]`` λ (N) at stated control point j; ``coefficients`` the device's (6, zero without one);
+    ``parameters`` p = (v, w1, w2); ``intervals`` the spline intervals of the segment lists that place the
+    windows ("cycle": N; "half": N_h, symmetric model).
+
+    What the symmetric model states once: ``dynamics_instants`` (the first half's), ``points`` (the control
+    points of the first half cycle), ``muscle_columns`` (the right leg's 8) and ``energy_factor`` (its Et
+    counts the right leg's muscles twice).
+    """
+
+    def __init__(self, transcriber, layout: DesignLayout):
+        self.layout, self.symmetric, self.grid = layout, layout.symmetric, transcriber.grid
+        self.n_i = self.grid.instants
+        self.half = self.n_i // 2
+        self._design_blocks(transcriber)
+        self.period, self.stride = ca.sum1(self.durations), self.steps_r + self.steps_l
+        self.times = instant_times(self.grid, self.durations)
+        self.fractions = self.times / self.period
+        self.parameters = ca.SX.sym("p", 3)  # v, w1, w2
+        muscles = transcriber.muscles
+        self.present = muscles.present[self.muscle_columns]
+        self.kept = [k for k in range(8) if self.present[k]]  # of each leg's 8 muscles, those the model has
+        self.columns = [k for k in range(self.muscle_columns.stop) if muscles.present[k]]  # of the modelled ones
+        self.device = ca.SX.sym("D", 6) if muscles.prosthetic else None
+        self.coefficients = self.device * ca.DM(DEVICE_SCALE) if muscles.prosthetic else ca.DM.zeros(6)
+        self._lift()
+        self._ground_reactions(transcriber.contact)
+        self.values = {name: self._cycle_values(name) for name in ("y", "yd", "ydd", "stretch", "l_m", "v_m", "a")}
+        self.generalized_forces = self._cycle_rhs()
+
+    def _design_blocks(self, transcriber) -> None:
+        """C, T, L and what the model states once (class docstring)."""
+        sym, n = ca.SX.sym, self.layout.nodes - 1
+        quartic_spline, cubic_spline = transcriber.quartic, transcriber.cubic
+        if self.symmetric:
+            half = half_spline(self.layout)
+            self.intervals = {"cycle": quartic_spline.intervals, "half": half.intervals}
+            self.splines = [SplineBlock("trunk", half, sym("Ct", 5 * half.intervals, 3), "trunk", "half"),
+                            SplineBlock("leg", quartic_spline, sym("Cy", 5 * n, 3), "right_leg"),
+                            SplineBlock("stretch", cubic_spline, sym("Cs", 4 * n, 8), "right_stretch")]
+            self.durations_z, self.steps = sym("T", 4), sym("L", 1)
+            self.durations = ca.vertcat(self.durations_z, self.durations_z) * DURATION_SCALE_S
+            self.steps_r = self.steps_l = self.steps[0]
+            self.lifted_blocks, self.points = SYMMETRIC_LIFTED, list(range(self.grid.points // 2))
+            self.dynamics_instants, self.muscle_columns, self.energy_factor = range(self.half), slice(0, 8), 2.0
+        else:
+            self.intervals = {"cycle": quartic_spline.intervals}
+            self.splines = [SplineBlock("coordinates", quartic_spline, sym("Cy", 5 * n, 9), "coordinates"),
+                            SplineBlock("stretch", cubic_spline, sym("Cs", 4 * n, 16), "tendon_stretch")]
+            self.durations_z, self.steps = sym("T", 8), sym("L", 2)
+            self.durations = self.durations_z * DURATION_SCALE_S
+            self.steps_r, self.steps_l = self.steps[0], self.steps[1]
+            self.lifted_blocks, self.points = FULL_LIFTED, list(range(self.grid.points))
+            self.dynamics_instants, self.muscle_columns, self.energy_factor = range(self.n_i), slice(0, 16), 1.0
+
+    def _lift(self) -> None:
+        """Q (and P): ``lifted[(block, quantity)]`` the (rows × columns) values, variables × scale."""
+        self.lifted_symbols, self.lifted = [], {}
+        for block, rows, quantities in self.lifted_blocks:
+            q = ca.SX.sym(block, self.half if rows == "half" else self.n_i, sum(c for _, c in quantities))
+            self.lifted_symbols.append(q)
+            start = 0
+            for name, cols in quantities:
+                self.lifted[(block, name)] = q[:, start:start + cols] * LIFTED_SCALE[name]
+                start += cols
+
+    def _ground_reactions(self, contact) -> None:
+        """Λ: ``phases`` (1–8) of every grid point, ``reactions[j]`` λ (N) of every stated point."""
+        self.phases = [int(p) + 1 for p in self.grid.phase]
+        widths = [len(contact.reaction_names[self.phases[j]]) for j in self.points]
+        self.lam = ca.SX.sym("R", sum(widths))
+        offsets = np.concatenate([[0], np.cumsum(widths)])
+        self.reactions = {j: self.lam[offsets[k]:offsets[k + 1]] * REACTION_SCALE_N for k, j in enumerate(self.points)}
+
+    def _cycle_values(self, name: str) -> list:
+        """The full cycle's column of ``name`` at every instant (the symmetric model: left = right half a cycle
+        later; hip and HAT the first half's, y1 one half stride on in the second half)."""
+        q = self.lifted[("Q", name)]
+        if not self.symmetric:
+            return [q[i, :].T for i in range(self.n_i)]
+        out = []
+        for i in range(self.n_i):
+            right, left = q[i, :].T, q[(i + self.half) % self.n_i, :].T
+            if name in COORDINATE_QUANTITIES:
+                trunk = self.lifted[("P", name)][i % self.half, :].T
+                if name == "y" and i >= self.half:
+                    trunk = trunk + ca.vertcat(self.stride / 2, 0, 0)  # y1(t + T/2) = y1(t) + ΔS/2
+                out.append(ca.vertcat(trunk, right, left))
+            else:
+                out.append(ca.vertcat(right, left))
+        return out
+
+    def _cycle_rhs(self) -> list:
+        """rhs (5.1) at every instant (the symmetric model: the first half's, mirrored in the second)."""
+        if not self.symmetric:
+            return [self.lifted[("Q", "rhs")][i, :].T for i in range(self.n_i)]
+        rhs = self.lifted[("P", "rhs")]
+        return [rhs[i % self.half, :].T if i < self.half else mirror(rhs[i % self.half, :].T) for i in range(self.n_i)]
+
+    # ------------------------------------------------------------------------------------------- w as a whole
+    @property
+    def head(self) -> ca.SX:
+        """w's spline part: C…, T, L."""
+        return ca.vertcat(*[ca.vec(b.coefficients) for b in self.splines], self.durations_z, self.steps)
+
+    @property
+    def w(self) -> ca.SX:
+        """w = [C…, T, L, Q (, P), Λ (, D)]."""
+        device = [self.device] if self.device is not None else []
+        return ca.vertcat(self.head, *[ca.vec(q) for q in self.lifted_symbols], self.lam, *device)
+
+    def blocks(self) -> dict[str, slice]:
+        """Each block of w (module docstring) as a slice of w."""
+        names = {"trunk": "C_t", "leg": "C_y", "coordinates": "C_y", "stretch": "C_s"}
+        sizes = [(names[b.name], b.coefficients.numel()) for b in self.splines]
+        sizes += [("T", self.durations_z.numel()), ("L", self.steps.numel())]
+        sizes += [(block, q.numel()) for (block, _, _), q in zip(self.lifted_blocks, self.lifted_symbols)]
+        sizes += [("Λ", self.lam.numel())] + ([("D", 6)] if self.device is not None else [])
+        out, start = {}, 0
+        for name, size in sizes:
+            out[name], start = slice(start, start + size), start + size
+        return out
+
+    def bounds(self, present: np.ndarray, step_m: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """lbw, ubw without D: the nodal values p_{k,0}, durations and steps as :func:`box_bounds` (the steps
+        fixed at ``step_m`` when > 0); ŝ ≥ 0 (a taut or just slack tendon) and 0 ≤ a ≤ 1; the ``present``
+        (16,) muscles' values free, the others' fixed at 0."""
+        low, high = box_bounds(self.layout, present)
+        blocks_low, blocks_high = self.layout.unpack(low), self.layout.unpack(high)
+        if step_m > 0:
+            blocks_low["steps"] = blocks_high["steps"] = np.full_like(blocks_low["steps"], step_m)
+        lbw, ubw = [], []
+        for b in self.splines:
+            width = b.spline.degree + 1
+            lo, hi = np.full(b.coefficients.shape, -np.inf), np.full(b.coefficients.shape, np.inf)
+            lo[0::width], hi[0::width] = blocks_low[b.design_block], blocks_high[b.design_block]
+            if b.name == "stretch":  # a removed muscle's spline is 0
+                lo[:, ~self.present], hi[:, ~self.present] = 0.0, 0.0
+            lbw.append(lo.ravel(order="F"))
+            ubw.append(hi.ravel(order="F"))
+        lbw += [blocks_low["durations"].ravel() / DURATION_SCALE_S, blocks_low["steps"].ravel()]
+        ubw += [blocks_high["durations"].ravel() / DURATION_SCALE_S, blocks_high["steps"].ravel()]
+        for (_, _, quantities), q in zip(self.lifted_blocks, self.lifted_symbols):
+            lo, hi = [], []
+            for name, cols in quantities:
+                lo.append(np.full((q.size1(), cols), 0.0 if name in ("stretch", "a") else -np.inf))
+                hi.append(np.full((q.size1(), cols), 1.0 if name == "a" else np.inf))
+                if name in ("stretch", "l_m", "v_m", "a"):  # a removed muscle's values are fixed at 0
+                    lo[-1][:, ~present[:cols]] = hi[-1][:, ~present[:cols]] = 0.0
+            lbw.append(np.hstack(lo).ravel(order="F"))
+            ubw.append(np.hstack(hi).ravel(order="F"))
+        lbw.append(np.full(self.lam.size1(), -np.inf))
+        ubw.append(np.full(self.lam.size1(), np.inf))
+        return np.concatenate(lbw), np.concatenate(ubw)
+
+
+def instant_splines(v: Variables, segments: dict, reach: int) -> dict:
+    """The splines at the instants, each read from its window of segments ``segments[key][i]`` ± ``reach``
+    (:func:`gaitcli.predict.splines.window_values`): (family, i) → [y, ẏ, ÿ] (coordinates; hip x with its
+    drift ΔS/T) or those and [ŝ], family "coordinates" (full model) or "leg" and, over the first half
+    cycle, "trunk" (symmetric)."""
+    drift = v.stride / v.period  # hip x: y1 = periodic + (ΔS/T)·t (splines.py, "Hip x")
+    by_name = {b.name: b for b in v.splines}
+
+    def at(name, i, fraction, span, derivatives):
+        b = by_name[name]
+        k = int(segments[b.windows][i])
+        return window_values(b.spline, b.coefficients, span, fraction, (k - reach, k + reach), derivatives)
+
+    rows = {}
+    for i in range(v.n_i):
+        fraction = v.fractions[i]
+        if v.symmetric:
+            rows[("leg", i)] = at("leg", i, fraction, v.period, range(3)) + at("stretch", i, fraction, v.period, (0,))
+            if i < v.half:
+                trunk = at("trunk", i, 2 * fraction, v.period / 2, range(3))
+                trunk[0][0] += drift * v.times[i]
+                trunk[1][0] += drift
+                rows[("trunk", i)] = trunk
+        else:
+            coordinates = at("coordinates", i, fraction, v.period, range(3))
+            coordinates[0][0] += drift * v.times[i]
+            coordinates[1][0] += drift
+            rows[("coordinates", i)] = coordinates + at("stretch", i, fraction, v.period, (0,))
+    return rows
+
+
+def gait_function(v: Variables, rows: dict) -> ca.Function:
+    """w's spline part → (durations (8,), L_r, L_l, y, ẏ, ÿ (I × 9), ŝ (I × 16)) from the splines at the
+    instants (:func:`instant_splines`): the gait that :meth:`Transcriber.at` transcribes."""
+    full = []
+    for r in range(3):
+        if v.symmetric:
+            per_instant = []
+            for i in range(v.n_i):
+                trunk = rows[("trunk", i % v.half)][r]
+                if r == 0 and i >= v.half:
+                    trunk = trunk + ca.horzcat(v.stride / 2, 0, 0)
+                per_instant.append(ca.horzcat(trunk, rows[("leg", i)][r], rows[("leg", (i + v.half) % v.n_i)][r]))
+        else:
+            per_instant = [rows[("coordinates", i)][r] for i in range(v.n_i)]
+        full.append(ca.vertcat(*per_instant))
+    if v.symmetric:
+        full.append(ca.vertcat(*[ca.horzcat(rows[("leg", i)][3], rows[("leg", (i + v.half) % v.n_i)][3])
+                                 for i in range(v.n_i)]))
+    else:
+        full.append(ca.vertcat(*[rows[("coordinates", i)][3] for i in range(v.n_i)]))
+    return ca.Function("gait_values", [v.head], [v.durations, v.steps_r, v.steps_l, *full])
