@@ -1,4 +1,4 @@
-"""Predictive-gait timings (``gaitcli.predict.nlp``) beside the dissertation's Table 5.1 and two peers.
+"""Predictive-gait timings (``gaitcli.predict.nlp``, ``gaitcli.predict.solve``) beside the dissertation's Table 5.1 and two peers.
 
 Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--iterations N]
 [--model symmetric full]``. For each node count and model: ``run_predict`` on normal walking (subject 1,
@@ -10,7 +10,7 @@ Prints the build time (the CasADi expressions and the sparsity counts), the whol
 constraint Jacobian's and Lagrangian Hessian's non-zeros, and the ratio to the dissertation's hours.
 Threads limited to one, the process to one core. Asserts nothing.
 
-Peers (CHAPTER5_NOTES §5): Moco's example2DWalking prediction, 15 mesh intervals, 1379 s / 412
+Peers: Moco's example2DWalking prediction, 15 mesh intervals, 1379 s / 412
 iterations measured on a 2-core machine of this project's kind; the dissertation 11.3 / 15.9 / 22.3 /
 28.9 h at nn = 14 / 16 / 18 / 20 (Table 5.1).
 """

@@ -1,5 +1,5 @@
-"""How long IPOPT's construction takes for one predictive-gait NLP (``gaitcli.predict.nlp.solver_for``), first and
-again with other options.
+"""How long IPOPT's construction takes for one predictive-gait NLP (``gaitcli.predict.solve.NlpCache.solver``), first
+and again with other options.
 
 The first solver of an NLP derives ∇J, the constraint Jacobian and the Hessian of the Lagrangian from the CasADi
 expressions; a second one (a warm start's options, another iteration or time limit: every windowed solve's later
@@ -16,10 +16,13 @@ import time
 
 from timing import one_core
 
+from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout
-from gaitcli.predict.nlp import PredictSettings, build_nlp, initial_guess, instant_segments, solver_for
+from gaitcli.predict.nlp import build_nlp, instant_segments
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
+from gaitcli.predict.settings import PredictSettings
+from gaitcli.predict.solve import NlpCache, ipopt_options
 from gaitcli.resources import bundled_reference
 
 
@@ -40,11 +43,12 @@ def main() -> None:
             nlp = build_nlp(transcriber, reference, symmetric=symmetric,
                             segments=instant_segments(transcriber, DesignLayout.build(nodes, symmetric=symmetric), x0))
             built = time.perf_counter() - began
+            cache = NlpCache()
             began = time.perf_counter()
-            solver_for(nlp, settings)
+            cache.solver(nlp, ipopt_options(settings, warm=False))
             first = time.perf_counter() - began
             began = time.perf_counter()
-            solver_for(nlp, settings, warm=True)
+            cache.solver(nlp, ipopt_options(settings, warm=True))
             second = time.perf_counter() - began
             print(f"nn {nodes:2d} {model:9s}: w {nlp.w.numel():5d}, g {nlp.constraints.numel():5d}; NLP built "
                   f"{built:5.1f} s; first solver {first:5.1f} s, a warm start's {second:4.1f} s "

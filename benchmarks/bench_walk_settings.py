@@ -37,11 +37,12 @@ import numpy as np
 from bench_synth_walk import winter_figures
 
 from gaitcli.kinematics.conventions import walker_to_clinical
+from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkerParameters, WalkingModel
-from gaitcli.predict.nlp import initial_guess, solve_windowed
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import VARIABLES, Reference, read_reference
+from gaitcli.predict.solve import NlpCache, solve_windowed
 from gaitcli.predict.stage import PredictConfig, evaluate_design, settings_of, violated_groups, walker_muscles
 from gaitcli.synth import predicted as walk
 
@@ -104,7 +105,7 @@ def main() -> None:
         summary = evaluate_design(cfg, x, reference=reference, params=params).summary()
         row = {"solve": label}
         if solved is not None:
-            row.update(status=solved["status"], iterations=solved["iterations"], s=round(seconds))
+            row.update(status=solved.outcome.status, iterations=solved.outcome.iterations, s=round(seconds))
         row.update(J=round(summary["objective"], 2), Et_J_per_m=round(summary["cost_of_transport_J_per_m"], 1),
                    Jdev=round(summary["deviation"], 1), **walk_figures(x))
         # the constraint groups violated at the dissertation's settings (εm 2 N·m; no hip bounds)
@@ -112,6 +113,7 @@ def main() -> None:
         print(json.dumps(row, ensure_ascii=False), flush=True)
 
     show(f"shipped walk (F_max × {walk.WALK_STRENGTH_SCALE:g})", config(walk.WALK_STRENGTH_SCALE), walk.shipped_walk())
+    cache = NlpCache()  # this run's built problems and compiled solvers
     cfg, transcriber, plain = problem(1.0)
     if args.start is not None:
         start = np.loadtxt(args.start)
@@ -121,8 +123,8 @@ def main() -> None:
         rows_at, rows, _ = DesignLayout.build(walk.WALK_NODES, symmetric=True).blocks["steps"]
         x[rows_at:rows_at + rows] = step_m
         began = time.perf_counter()
-        solved = solve_windowed(transcriber, reference, x, plain, symmetric=True, options=options)
-        start = solved["x"]
+        solved = solve_windowed(transcriber, reference, x, plain, symmetric=True, options=options, cache=cache)
+        start = solved.x
         show("plain start (F_max × 1, the dissertation's settings)", cfg, start, solved, time.perf_counter() - began)
     if args.save_start is not None:
         np.savetxt(args.save_start, start, fmt="%.17g")
@@ -133,8 +135,8 @@ def main() -> None:
     for name in args.variants:
         settings = dataclasses.replace(plain, **{k: walk.WALK_TRACKING[k] for k in VARIANTS[name]})
         began = time.perf_counter()
-        solved = solve_windowed(transcriber, held, start, settings, symmetric=True, options=options)
-        show(f"{name}: {', '.join(VARIANTS[name])} (F_max × {args.scale:g}{held_by})", cfg, solved["x"], solved,
+        solved = solve_windowed(transcriber, held, start, settings, symmetric=True, options=options, cache=cache)
+        show(f"{name}: {', '.join(VARIANTS[name])} (F_max × {args.scale:g}{held_by})", cfg, solved.x, solved,
              time.perf_counter() - began)
 
 

@@ -1,10 +1,14 @@
-"""The default initial guess χ of a prediction (Diss. 5.2.10): a walk read off the reference."""
+"""The default initial guess χ of a prediction (Diss. 5.2.10): a walk read off the reference, not yet clipped.
+
+The guess may lie outside the box bounds (``layout.box_bounds``), e.g. a reference's knee hyperextended by
+2°: the solve checks it against them, reports what lies outside and clips it (``solve.solve_windowed``).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-from gaitcli.predict.layout import DesignLayout, box_bounds
+from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
 from gaitcli.predict.settings import PredictSettings
@@ -22,8 +26,7 @@ GUESS_HIP_HEIGHT = 0.97
 def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
                   symmetric: bool = False) -> np.ndarray:
     """χ from the reference's angles (HAT upright), a hip height that puts the standing foot on the floor,
-    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1); clipped into
-    the box bounds (:func:`~gaitcli.predict.layout.box_bounds`)."""
+    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1)."""
     s = settings or PredictSettings()
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
     p = transcriber.model.params
@@ -39,12 +42,10 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
     if symmetric:
         n_h = layout.blocks["trunk"][1]
         trunk = np.column_stack([np.zeros(n_h), np.full(n_h, GUESS_HIP_HEIGHT * leg), np.zeros(n_h)])
-        x = layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
-                         "right_stretch": np.full((n, 8), GUESS_STRETCH), "durations": phases,
-                         "steps": [GUESS_STEP_M]})
-    else:
-        coordinates = np.column_stack([np.zeros(n), np.full(n, GUESS_HIP_HEIGHT * leg), np.zeros(n), *right,
-                                       -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
-        x = layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), GUESS_STRETCH),
-                         "durations": np.tile(phases, 2), "steps": [GUESS_STEP_M, GUESS_STEP_M]})
-    return np.clip(x, *box_bounds(layout))  # a reference's knee hyperextended by 2° starts straight
+        return layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
+                            "right_stretch": np.full((n, 8), GUESS_STRETCH), "durations": phases,
+                            "steps": [GUESS_STEP_M]})
+    coordinates = np.column_stack([np.zeros(n), np.full(n, GUESS_HIP_HEIGHT * leg), np.zeros(n), *right,
+                                   -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
+    return layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), GUESS_STRETCH),
+                        "durations": np.tile(phases, 2), "steps": [GUESS_STEP_M, GUESS_STEP_M]})

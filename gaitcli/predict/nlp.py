@@ -4,7 +4,7 @@
     dynamics.py     the equations of motion, the muscle paths and inversion, the ground at the control points
     objective.py    J = w1·Et/100 + w2·Jdev (5.29) and the opt-in tracking terms
     constraints.py  each constraint group g (its table of equations) in its own function
-    (below)         IPOPT, this process's cache of built problems, the window strategy
+    solve.py        IPOPT through ``core/ipopt.py``, the cache of built problems, the window strategy
 
 Each instant reads the spline segments ``segments[i]`` ± ``reach`` only (``windows`` rows keep it there), so
 that every constraint touches a few variables; at a solution the lifted values equal the transcription of χ
@@ -15,14 +15,11 @@ study's speeds, weight sets and commercial feet.
 
 from __future__ import annotations
 
-import time
-from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
-from gaitcli.core.interrupts import interrupts_raised
 from gaitcli.predict import constraints as groups
 from gaitcli.predict.dynamics import contact_points, dynamics_residuals, invert_muscles, muscle_forces, path_residuals
 from gaitcli.predict.grid import instant_times
@@ -36,9 +33,7 @@ from gaitcli.predict.splines import segment_of
 from gaitcli.predict.variables import (DEVICE_BOUNDS, DEVICE_SCALE, DURATION_SCALE_S, LIFTED_SCALE,
                                        REACTION_SCALE_N, Variables, gait_function, half_spline, instant_splines)
 
-#: re-exported for the call sites until they import settings.py, layout.py and guess.py
-__all__ = ["NLP", "PredictSettings", "TIME_LIMIT_STATUS", "box_bounds", "build_nlp", "cached_nlp", "initial_guess",
-           "instant_segments", "moved_windows", "nlp_key", "solve", "solve_windowed", "solver_for"]
+__all__ = ["NLP", "TIME_LIMIT_STATUS", "build_nlp", "instant_segments", "nlp_key"]
 
 
 @dataclass
@@ -74,10 +69,6 @@ class NLP:
     intervals: dict = field(default_factory=dict)
     blocks: dict = field(default_factory=dict)
     key: tuple = ()
-    solvers: dict = field(default_factory=dict)  # the compiled IPOPT solvers by their options (solver_for)
-    #: ∇J, the Jacobian of g and the Hessian of the Lagrangian as CasADi made them for the first solver
-    #: (solver_for): every later solver of this NLP (other IPOPT options) takes them instead of deriving anew
-    derivatives: dict = field(default_factory=dict)
 
     def parameter_values(self, settings: PredictSettings) -> np.ndarray:
         """p = (v, w1, w2) of ``settings``."""
@@ -193,32 +184,6 @@ class NLP:
         return all(np.all(np.abs(now[k] - self.segments[k]) <= self.reach) for k in self.segments)
 
 
-#: the NLPs built in this process (with their compiled solvers), most recently used last (cached_nlp)
-_BUILT: OrderedDict = OrderedDict()
-#: how many NLPs stay built: a study alternates between at most two structures (intact, prosthetic)
-BUILT_NLPS_KEPT = 3
-
-
-def cached_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
-               symmetric: bool = False, segments: dict, reach: int | None = None) -> NLP:
-    """:func:`build_nlp`, built once per process for each structure: the subject's model and muscles, node
-    count, grid, reference, the settings that shape the problem (not speed, weights or IPOPT's stopping
-    rules: parameters and solver options), the windows. A study's cases at other speeds or weight sets, and
-    every commercial foot, reuse one problem and its compiled solvers (:func:`solver_for`)."""
-    s = settings or PredictSettings()
-    reach = s.window_reach if reach is None else reach
-    key = nlp_key(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach)
-    if key in _BUILT:
-        _BUILT.move_to_end(key)
-    else:
-        _BUILT[key] = build_nlp(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach)
-        while len(_BUILT) > BUILT_NLPS_KEPT:
-            _BUILT.popitem(last=False)
-    nlp = _BUILT[key]
-    nlp.transcriber = transcriber  # the same structure; this transcriber's prosthesis is the device's start
-    return nlp
-
-
 def instant_segments(transcriber: Transcriber, layout: DesignLayout, x: np.ndarray) -> dict:
     """The spline segment of each instant of χ ``x``: "cycle" (I,) for the T-periodic splines and, in the
     symmetric model, "half" (I/2,) for the T/2-periodic trunk splines."""
@@ -293,164 +258,3 @@ def _stacked(rows: dict) -> tuple:
         slices[name] = slice(start, start + block.size1())
         start += block.size1()
     return ca.vertcat(*exprs), np.concatenate(lows), np.concatenate(highs), slices
-
-
-class IterationReport(ca.Callback):
-    """IPOPT's iteration callback: ``report(iteration, objective, constraint_violation)`` after each iteration
-    (the violation is the largest distance of g from its bounds); past ``deadline`` (time.perf_counter's clock)
-    it stops IPOPT, which then returns ``User_Requested_Stop`` (:data:`TIME_LIMIT_STATUS` in the result)."""
-
-    def __init__(self, nlp: NLP, report=None):
-        ca.Callback.__init__(self)
-        self.report, self.lbg, self.ubg, self.iteration, self.deadline = report, nlp.lbg, nlp.ubg, 0, None
-        self.sizes = {"x": nlp.w.size1(), "g": nlp.constraints.size1()}
-        self.construct("iteration_report", {"enable_fd": False})
-
-    def get_n_in(self):
-        return ca.nlpsol_n_out()
-
-    def get_n_out(self):
-        return 1
-
-    def get_name_in(self, i):
-        return ca.nlpsol_out(i)
-
-    def get_name_out(self, i):
-        return "ret"
-
-    def get_sparsity_in(self, i):
-        name = ca.nlpsol_out(i)
-        if name in ("f",):
-            return ca.Sparsity.scalar()
-        if name in ("x", "lam_x"):
-            return ca.Sparsity.dense(self.sizes["x"])
-        if name in ("g", "lam_g"):
-            return ca.Sparsity.dense(self.sizes["g"])
-        return ca.Sparsity(0, 0)
-
-    def start(self, report, deadline: float | None = None) -> None:
-        """Report to ``report`` (or nobody) from iteration 0, and stop past ``deadline``: the compiled solver
-        keeps this callback."""
-        self.report, self.iteration, self.deadline = report, 0, deadline
-
-    def eval(self, arg):
-        stop = int(self.deadline is not None and time.perf_counter() > self.deadline)
-        if self.report is None:
-            return [stop]
-        g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
-        violation = float(np.max(np.maximum(self.lbg - g, 0) + np.maximum(g - self.ubg, 0))) if g.size else 0.0
-        self.report(self.iteration, float(arg[ca.nlpsol_out().index("f")]), violation)
-        self.iteration += 1
-        return [stop]
-
-
-def _ipopt_options(settings: PredictSettings, warm: bool) -> dict:
-    s = settings
-    opts = {"print_time": False, "ipopt.print_level": s.print_level, "ipopt.sb": "yes",
-            "ipopt.max_iter": s.max_iterations, "ipopt.tol": s.tolerance, "ipopt.mu_strategy": "adaptive",
-            "ipopt.mumps_pivot_order": 5,  # METIS: the fastest ordering measured on this KKT system
-            # MUMPS without its own row/column scaling (IPOPT's defaults 7 and 77): measured at 1.33 m/s, weights
-            # b), the normal gait 96 iterations in 31 s (109 in 48 s), SACH 262 in 73 s (363 in 119 s)
-            "ipopt.mumps_permuting_scaling": 0, "ipopt.mumps_scaling": 0,
-            "ipopt.acceptable_tol": s.acceptable_tolerance, "ipopt.acceptable_iter": s.acceptable_iterations,
-            "ipopt.acceptable_obj_change_tol": s.acceptable_objective_change}
-    if warm:
-        opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
-                     "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9})
-    return opts
-
-
-def solver_for(nlp: NLP, settings: PredictSettings, *, warm: bool = False, options: dict | None = None):
-    """IPOPT for ``nlp`` with the options of ``settings`` (a warm start's when ``warm``), compiled once per NLP
-    and option set and kept on it: the speed and the weights are parameters, so a study's cases reuse it.
-    Returns (solver, its iteration callback)."""
-    opts = {**_ipopt_options(settings, warm), **(options or {})}
-    key = repr(sorted(opts.items()))
-    cache = nlp.solvers
-    if key not in cache:
-        callback = IterationReport(nlp)
-        problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints, "p": nlp.parameters}
-        exact = opts.get("ipopt.hessian_approximation", "exact") == "exact"
-        reuse = nlp.derivatives if exact else {}
-        solver = ca.nlpsol("predict", "ipopt", problem, {**opts, **reuse, "iteration_callback": callback})
-        if exact and not nlp.derivatives:  # the symbolic Hessian is most of a solver's construction time
-            nlp.derivatives = {"grad_f": solver.get_function("nlp_grad_f"), "jac_g": solver.get_function("nlp_jac_g"),
-                               "hess_lag": solver.get_function("nlp_hess_l")}
-        cache[key] = (solver, callback)
-    return cache[key]
-
-
-def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
-          multipliers: dict | None = None, options: dict | None = None, report=None, device=None,
-          optimal_device: bool = False, deadline: float | None = None) -> dict:
-    """IPOPT with exact derivatives (Hessian included) from χ ``x0`` (or the whole ``w0``, and IPOPT's
-    ``multipliers`` of an earlier solve for a warm start); returns χ, w, the multipliers, the status,
-    iterations and cost. ``options``: further IPOPT/CasADi options; ``report(iteration, objective, violation)``
-    is called after every IPOPT iteration. Prosthetic models: D starts at (and, unless ``optimal_device``, is
-    fixed at) ``device`` (a ProsthesisCurve; default the transcriber's), free within DEVICE_BOUNDS when
-    ``optimal_device``; the result's ``device`` holds the coefficients. Past ``deadline`` (time.perf_counter's
-    clock) IPOPT stops with status :data:`TIME_LIMIT_STATUS`, unsuccessful."""
-    s = settings or PredictSettings()
-    solver, callback = solver_for(nlp, s, warm=bool(multipliers), options=options)
-    callback.start(report, deadline)
-    start = nlp.start(x0, device) if w0 is None else w0
-    if nlp.device_size and device is not None and w0 is not None:  # D starts at the given device
-        start = np.concatenate([start[:start.size - nlp.device_size], device.coefficients() / DEVICE_SCALE])
-    fixed = None if optimal_device else (device or nlp.transcriber.muscles.prosthesis)
-    lbw, ubw = nlp.bounds(fixed)
-    extra = {"lam_g0": multipliers["lam_g"], "lam_x0": multipliers["lam_x"]} if multipliers else {}
-    with interrupts_raised():
-        result = solver(x0=np.clip(start, lbw, ubw), lbx=lbw, ubx=ubw, lbg=nlp.lbg, ubg=nlp.ubg,
-                        p=nlp.parameter_values(s), **extra)
-    stats = solver.stats()
-    w = np.array(result["x"]).ravel()
-    status = stats.get("return_status", "")
-    if status == "User_Requested_Stop" and deadline is not None and time.perf_counter() > deadline:
-        status = TIME_LIMIT_STATUS
-    return {"x": nlp.design(w), "w": w, "status": status, "device": nlp.device(w),
-            "multipliers": {"lam_g": np.array(result["lam_g"]).ravel(), "lam_x": np.array(result["lam_x"]).ravel()},
-            "success": bool(stats.get("success")), "iterations": int(stats.get("iter_count", -1)),
-            "cost": float(result["f"])}
-
-
-def moved_windows(nlp: NLP, multipliers: dict, threshold: float = 1e-8) -> dict | None:
-    """The segments with every window whose edge an instant presses on (a non-zero multiplier of its
-    ``windows`` row) moved one segment that way; ``None`` when no window binds (a solution of the
-    problem without windows)."""
-    lam = multipliers["lam_g"][nlp.groups["windows"]]
-    moved, start, changed = {}, 0, False
-    for key in ("cycle", "half"):
-        if key not in nlp.segments:
-            continue
-        k = np.asarray(nlp.segments[key], int)
-        step = np.where(lam[start:start + k.size] > threshold, 1, np.where(lam[start:start + k.size] < -threshold,
-                                                                              -1, 0))
-        moved[key] = np.clip(k + step, 0, nlp.intervals[key] - 1)
-        changed |= bool(np.any(moved[key] != k))
-        start += k.size
-    return moved if changed else None
-
-
-def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarray,
-                   settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
-                   options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
-                   optimal_device: bool = False, deadline: float | None = None) -> dict:
-    """:func:`solve` with the spline windows placed where ``x0`` puts the instants; while a solution presses on
-    a window's edge, that window moves on and the problem is solved again from the last solution (warm, with
-    its multipliers; at most ``rounds`` solves). Adds ``rounds``, ``windows_hold`` (no window binds) and the last
-    ``nlp``. ``w0``: the whole first start (an earlier solution of a problem of the same structure);
-    ``device``, ``optimal_device``, ``deadline`` as :func:`solve`. The problems come from :func:`cached_nlp`."""
-    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
-    segments = instant_segments(transcriber, layout, x0)
-    x, w, multipliers, total = x0, w0, None, 0
-    for k in range(1, rounds + 1):
-        nlp = cached_nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
-        result = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report,
-                       device=device, optimal_device=optimal_device, deadline=deadline)
-        total += result["iterations"]
-        x, w, multipliers = result["x"], result["w"], result["multipliers"]
-        segments = moved_windows(nlp, multipliers)
-        multipliers["lam_g"][nlp.groups["windows"]] = 0.0  # the moved windows no longer bind
-        if segments is None or not result["success"]:
-            break
-    return {**result, "iterations": total, "rounds": k, "windows_hold": segments is None, "nlp": nlp}

@@ -1,7 +1,7 @@
 """The predict stage: a predictive simulation of one gait cycle by state dynamic optimization (Diss. 5.2–5.3).
 
 ``run_predict(cfg, params=…, reference=…)`` builds the lifted NLP (``nlp.py``) for the subject's
-walking model, solves it from the default initial guess (or a warm start) and returns a
+walking model, solves it (``solve.py``) from the default initial guess (or a warm start) and returns a
 :class:`PredictResult`: the gait transcribed from the solution's design vector by the independent
 numeric transcription (``problem.py``; λ by the pseudoinverse (5.30), the exact heat-rate model),
 its cost parts and every constraint group's largest violation. The CLI writes it and maps
@@ -22,14 +22,17 @@ from gaitcli.errors import InputError, shown
 from gaitcli.kinematics.conventions import walker_moments_to_clinical, walker_to_clinical
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
+from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
+from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, full_from_symmetric
 from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
-from gaitcli.predict.nlp import PredictSettings, build_nlp, initial_guess, instant_segments, solve_windowed
-from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
 from gaitcli.predict.muscles import WalkerMuscles
+from gaitcli.predict.nlp import build_nlp, instant_segments
 from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.prosthesis import FILE_KEYS, ProsthesisCurve, curve_for
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
+from gaitcli.predict.settings import PredictSettings
+from gaitcli.predict.solve import NlpCache, PredictSolution, solve_windowed
 
 #: phases with the right foot on the floor (HSr … TOr) and with both feet down (Fig. 5.3)
 RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
@@ -243,12 +246,14 @@ def walker_muscles(cfg: PredictConfig, device: ProsthesisCurve | None) -> Walker
 
 
 def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Reference,
-                init: np.ndarray | None = None, report=None, device: ProsthesisCurve | None = None) -> PredictResult:
+                init: np.ndarray | None = None, report=None, device: ProsthesisCurve | None = None,
+                cache: NlpCache | None = None) -> PredictResult:
     """Predict one gait cycle (module docstring). ``params``: the subject (``cfg``'s foot mass is added here);
     ``init``: a design vector χ of the same layout to start from; ``device``: the prostheses' curve (a
     commercial foot's or a file's; for ``prosthesis: optimal`` the start of the free coefficients; default the
     commercial foot ``cfg.prosthesis`` names); ``report(iteration, objective, violation)`` after every IPOPT
-    iteration."""
+    iteration; ``cache``: the runner's built problems and compiled solvers (default: one for this call; a
+    runner that solves many cases keeps one per process and passes it to each)."""
     weights = cfg.weight_pair()
     settings = settings_of(cfg)
     device = device if device is not None else curve_for(cfg.prosthesis)
@@ -268,7 +273,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
              + (f", prosthesis {cfg.prosthesis}" if cfg.prosthetic else "")
              + (f", +{cfg.foot_mass_kg:g} kg per foot" if cfg.foot_mass_kg else "")
              + (f", F_max ×{cfg.strength():g}" if cfg.strength() != 1 else ""))
-    solve_options = {"device": device, "optimal_device": optimal, "deadline": deadline}
+    cache = cache if cache is not None else NlpCache()
+    solve_options = {"device": device, "optimal_device": optimal, "deadline": deadline, "cache": cache}
     if init is not None:
         # a start from a solution (of a neighbouring case): windows of ±1 segment, a third of the
         # factorisation's cost; a window that binds is moved and the problem solved again (solve_windowed)
@@ -281,29 +287,36 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         first = solve_windowed(transcriber, reference, initial_guess(transcriber, reference, settings,
                                                                      symmetric=True),
                                settings, symmetric=True, report=report, **solve_options)
-        iterations, rounds = first["iterations"], first["rounds"]
-        history.append(f"predict: symmetric model (the full model's start), {label}: {first['status']} after "
-                       f"{first['iterations']} iterations")
-        x0 = (full_from_symmetric(cfg.nodes, first["x"]) if first["success"]
+        iterations, rounds = first.outcome.iterations, first.rounds
+        history += _solve_notes(first, f"symmetric model (the full model's start), {label}")
+        x0 = (full_from_symmetric(cfg.nodes, first.x) if first.outcome.converged
               else initial_guess(transcriber, reference, settings, symmetric=False))
-        if first["success"]:  # near a solution: windows of ±1 segment (a third of the factorisation's cost)
+        if first.outcome.converged:  # near a solution: windows of ±1 segment (a third of the factorisation's cost)
             settings = dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
-        if optimal and first["success"]:
-            solve_options["device"] = ProsthesisCurve("optimal", *first["device"])
+        if optimal and first.outcome.converged:
+            solve_options["device"] = ProsthesisCurve("optimal", *first.device)
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report,
                             **solve_options)
     solve_time = time.perf_counter() - start
-    final = (ProsthesisCurve("optimal", *solved["device"]) if optimal else device) if cfg.prosthetic else None
+    final = (ProsthesisCurve("optimal", *solved.device) if optimal else device) if cfg.prosthetic else None
     muscles = walker_muscles(cfg, final)
-    result, violations = describe(cfg, solved["nlp"], solved["w"], reference, model, muscles)
-    converged = solved["success"] and solved["windows_hold"] and not violated_groups(violations)
-    history.append(f"predict: {'symmetric' if cfg.symmetric else 'full'} model, {label}: {solved['status']} after "
-                   f"{solved['iterations']} iterations")
-    result["fine_grid"] = fine_grid(cfg, solved["x"], reference, model, muscles)
-    return PredictResult(**result, design=np.asarray(solved["x"], float), converged=bool(converged),
-                         status=solved["status"], iterations=iterations + solved["iterations"],
-                         rounds=rounds + solved["rounds"], solve_time_s=solve_time, history=tuple(history),
+    result, violations = describe(cfg, solved.nlp, solved.outcome.x, reference, model, muscles)
+    converged = solved.outcome.converged and solved.windows_hold and not violated_groups(violations)
+    history += _solve_notes(solved, f"{'symmetric' if cfg.symmetric else 'full'} model, {label}")
+    result["fine_grid"] = fine_grid(cfg, solved.x, reference, model, muscles)
+    return PredictResult(**result, design=np.asarray(solved.x, float), converged=bool(converged),
+                         status=solved.outcome.status, iterations=iterations + solved.outcome.iterations,
+                         rounds=rounds + solved.rounds, solve_time_s=solve_time, history=tuple(history),
                          prosthesis=final, foot_mass_kg=cfg.foot_mass_kg, strength_scale=cfg.strength())
+
+
+def _solve_notes(solved: PredictSolution, label: str) -> list[str]:
+    """The history lines of one windowed solve: what its start had outside the bounds (clipped), its end."""
+    notes = []
+    if solved.outcome.outside:
+        notes.append(f"predict: {label}: the start lay outside its bounds, clipped into them: "
+                     f"{solved.outcome.outside.describe()}")
+    return notes + [f"predict: {label}: {solved.outcome.status} after {solved.outcome.iterations} iterations"]
 
 
 def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model: WalkingModel,

@@ -1,6 +1,6 @@
 """Prediction studies (Diss. 5.3.2, 5.3.3): the optimal prosthesis from its warm starts, multi-start, study grids.
 
-- :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``nlp.py``'s D), started
+- :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``variables.py``'s D), started
   from the best commercial foot's solution and from the normal (intact) solution; the result is never worse
   than the best start, which is itself a feasible point of the optimal problem (its coefficients lie inside
   the bounds and its τ_s decreases over the declared range).
@@ -31,13 +31,14 @@ import numpy as np
 from gaitcli.core.interrupts import as_worker
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError, shown
-from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.guess import initial_guess
+from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import present_muscles
-from gaitcli.predict.nlp import box_bounds, initial_guess
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
 from gaitcli.predict.reference import Reference
+from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of
 
 #: two solutions "agree" when their objectives differ by less than this fraction of the better one
@@ -63,20 +64,22 @@ def as_optimal(start: PredictResult, note: str) -> PredictResult:
 def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Reference,
                     init: np.ndarray | None = None, report=None,
                     feet: dict[str, PredictResult] | None = None,
-                    normal: PredictResult | None = None) -> PredictResult:
+                    normal: PredictResult | None = None, cache: NlpCache | None = None) -> PredictResult:
     """``--prosthesis optimal`` (5.3.3): the free device warm started from the best commercial foot's solution
     (its χ and its coefficients) and, when that run does not improve on the foot, from the normal solution (with
     that foot's coefficients). ``feet``
     (name → result) and ``normal`` are solved here when not given: the normal gait (same F_max) from ``init``
 or the default guess, each foot from it. The
     result is the best of the optimal runs and of the best foot, which is itself a point of the optimal
-    problem: an optimal run never reports a higher J than the foot it started from."""
+    problem: an optimal run never reports a higher J than the foot it started from. ``cache``: the runner's
+    (:func:`~gaitcli.predict.stage.run_predict`; default: one shared by these runs)."""
+    cache = cache if cache is not None else NlpCache()
     if normal is None:
         normal = run_predict(dataclasses.replace(cfg, prosthesis="none", strength_scale=cfg.strength()),
-                             params=params, reference=reference, init=init, report=report)
+                             params=params, reference=reference, init=init, report=report, cache=cache)
     if feet is None:  # each foot from the normal solution, as a study does
         feet = {name: run_predict(dataclasses.replace(cfg, prosthesis=name), params=params, reference=reference,
-                                  init=normal.design, report=report) for name in COMMERCIAL_FEET}
+                                  init=normal.design, report=report, cache=cache) for name in COMMERCIAL_FEET}
     best_foot = None
     for result in feet.values():
         best_foot = better(best_foot, result)
@@ -87,7 +90,7 @@ or the default guess, each foot from it. The
         if start is None or (chosen is not None and chosen.converged and chosen.objective < best_foot.objective):
             continue  # the normal solution only when the start from the best foot did not improve on it
         run = run_predict(cfg, params=params, reference=reference, init=start.design, report=report,
-                          device=optimal_device)
+                          device=optimal_device, cache=cache)
         history.append(f"predict: optimal prosthesis from {label}: J {run.objective:.4g}"
                        f"{'' if run.converged else ' (not converged)'}")
         chosen = better(chosen, run)

@@ -184,11 +184,12 @@ def make_walk(out: Path = WALK_FILE, *, strength_scale: float = WALK_STRENGTH_SC
     import dataclasses
     import time
 
+    from gaitcli.predict.guess import initial_guess
     from gaitcli.predict.layout import DesignLayout
     from gaitcli.predict.model import WalkerParameters, WalkingModel
-    from gaitcli.predict.nlp import initial_guess, solve_windowed
     from gaitcli.predict.problem import Transcriber
     from gaitcli.predict.reference import read_reference
+    from gaitcli.predict.solve import NlpCache, solve_windowed
     from gaitcli.predict.stage import PredictConfig, evaluate_design, settings_of, walker_muscles
 
     cfg = PredictConfig(speed_m_s=WALK_SPEED_M_S, nodes=WALK_NODES, strength_scale=strength_scale)
@@ -201,13 +202,13 @@ def make_walk(out: Path = WALK_FILE, *, strength_scale: float = WALK_STRENGTH_SC
     x = initial_guess(transcriber, reference, plain, symmetric=True)
     steps, rows, _ = DesignLayout.build(WALK_NODES, symmetric=True).blocks["steps"]
     x[steps:steps + rows] = plain.step_m  # the default guess, its steps at the prescribed length
-    iterations = []
+    iterations, cache = [], NlpCache()
     for settings in (plain, dataclasses.replace(plain, **WALK_TRACKING)):
-        solved = solve_windowed(transcriber, reference, x, settings, symmetric=True)
-        if not solved["success"]:
-            raise RuntimeError(f"the walk's prediction did not converge: {solved['status']}")
-        x = solved["x"]
-        iterations.append(str(solved["iterations"]))
+        solved = solve_windowed(transcriber, reference, x, settings, symmetric=True, cache=cache)
+        if not solved.outcome.converged:
+            raise RuntimeError(f"the walk's prediction did not converge: {solved.outcome.status}")
+        x = solved.x
+        iterations.append(str(solved.outcome.iterations))
     summary = evaluate_design(cfg, x, reference=reference, params=params).summary()
     tracking = ", ".join(f"{k} {v:g}" for k, v in WALK_TRACKING.items())
     header = (f"A converged prediction (issue 11 item 7): the symmetric model's design vector chi ({x.size} "

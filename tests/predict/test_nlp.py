@@ -1,7 +1,7 @@
-"""The predictive-gait NLP (gaitcli/predict/nlp.py): the constraint groups' sizes follow the grid and the phase
-table; the lifted variables of a design vector solve the NLP's own defining equations (two implementations
-of the same quantities agree); the symmetric model's gait is symmetric to round-off; windows move only
-where a solution presses on them."""
+"""The predictive-gait NLP (gaitcli/predict/nlp.py and its parts): the constraint groups' sizes follow the grid
+and the phase table; the lifted variables of a design vector solve the NLP's own defining equations (two
+implementations of the same quantities agree); the symmetric model's gait is symmetric to round-off; windows
+move only where a solution presses on them."""
 
 from __future__ import annotations
 
@@ -9,9 +9,13 @@ import numpy as np
 import pytest
 
 from gaitcli.predict.contact import PHASE_TABLE
-from gaitcli.predict.nlp import PredictSettings, box_bounds, build_nlp, initial_guess, moved_windows
+from gaitcli.predict.guess import initial_guess
+from gaitcli.predict.layout import box_bounds
+from gaitcli.predict.nlp import build_nlp
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
+from gaitcli.predict.settings import PredictSettings
+from gaitcli.predict.solve import moved_windows
 from gaitcli.resources import bundled_reference
 
 DEFINING = ("continuity", "splines", "dynamics", "paths", "activation", "reactions")
@@ -70,7 +74,7 @@ def test_lifted_start_solves_the_defining_equations(transcriber, reference, buil
     # w from the numeric transcription of χ (problem.py, λ by the pseudoinverse) satisfies the lifted NLP's own
     # equations, and its moment errors are the transcription's
     symmetric, nlp = built
-    x0 = initial_guess(transcriber, reference, symmetric=symmetric)
+    x0 = np.clip(initial_guess(transcriber, reference, symmetric=symmetric), *box_bounds(nlp.layout))
     w0 = nlp.start(x0)
     np.testing.assert_allclose(nlp.design(w0), x0, atol=1e-12)  # χ → w → χ
     g = nlp.constraint_values(w0)
@@ -105,10 +109,10 @@ def test_symmetric_gait_is_symmetric_to_round_off(transcriber, reference):
 def test_windows_move_only_where_a_solution_presses_on_them(built):
     _, nlp = built
     lam_g = np.zeros(nlp.constraints.size1())
-    assert moved_windows(nlp, {"lam_g": lam_g}) is None
+    assert moved_windows(nlp, lam_g) is None
     rows = nlp.groups["windows"]
     lam_g[rows.start + 3], lam_g[rows.start + 5] = 1e-3, -1e-3  # instant 3 presses forward, instant 5 back
-    moved = moved_windows(nlp, {"lam_g": lam_g})
+    moved = moved_windows(nlp, lam_g)
     before = nlp.segments["cycle"]
     assert moved["cycle"][3] == before[3] + 1 and moved["cycle"][5] == max(before[5] - 1, 0)
     assert np.array_equal(np.delete(moved["cycle"], [3, 5]), np.delete(before, [3, 5]))
@@ -125,7 +129,7 @@ def prosthetic(reference):
 
 
 def test_prosthetic_nlp_removes_two_muscles_and_its_start_solves_the_defining_equations(prosthetic, reference):
-    from gaitcli.predict.nlp import DEVICE_SCALE
+    from gaitcli.predict.variables import DEVICE_SCALE
 
     transcriber, nlp = prosthetic
     grid = transcriber.grid
@@ -153,7 +157,7 @@ def test_prosthetic_nlp_removes_two_muscles_and_its_start_solves_the_defining_eq
 
 
 def test_monotonicity_rows_accept_the_commercial_feet_and_refuse_a_rising_curve(prosthetic, reference):
-    from gaitcli.predict.nlp import DEVICE_SCALE
+    from gaitcli.predict.variables import DEVICE_SCALE
     from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
 
     transcriber, nlp = prosthetic
@@ -172,8 +176,6 @@ def test_monotonicity_rows_accept_the_commercial_feet_and_refuse_a_rising_curve(
 
 def test_speed_and_weights_are_parameters(built, transcriber, reference):
     # one built problem serves every speed and weight set: T − ΔS/v and J = w1·Et/100 + w2·Jdev at p
-    from gaitcli.predict.nlp import PredictSettings
-
     symmetric, nlp = built
     w0 = nlp.start(initial_guess(transcriber, reference, symmetric=symmetric))
     durations, steps_r, steps_l, _ = nlp.gait(w0)
@@ -188,8 +190,6 @@ def test_speed_and_weights_are_parameters(built, transcriber, reference):
 def test_steady_trunk_and_centre_of_pressure_terms_add_their_integrals(built, transcriber, reference):
     # Jdev with trunk_rate_sd_deg_s and cop_sd_m = the dissertation's Jdev + ∫(ẏ3/σ)² + ∫(c − ĉ)²/σ², the
     # integrands recomputed here from the numeric transcription (λ by the pseudoinverse) and closed periodically
-    from gaitcli.predict.nlp import PredictSettings
-
     symmetric, nlp = built
     settings = PredictSettings(trunk_rate_sd_deg_s=10.0, cop_sd_m=0.02)
     extended = build_nlp(transcriber, reference, settings, symmetric=symmetric, segments=nlp.segments)
@@ -226,8 +226,6 @@ def test_the_hip_bounds_hold_the_hip_moments(built, transcriber, reference):
     # the opt-in hip_bound rows are what the muscles and tissues give each thigh, recomputed here from its
     # equation of motion: (M ÿ + k − g)_thigh − rhs_thigh, at every instant (the symmetric model: the right leg's,
     # its left leg being the same half a cycle later), within ± bound × body mass, the swing's bound in swing
-    from gaitcli.predict.nlp import PredictSettings
-
     symmetric, nlp = built
     settings = PredictSettings(swing_hip_moment_Nm_per_kg=0.3, hip_moment_Nm_per_kg=0.9)
     bounded = build_nlp(transcriber, reference, settings, symmetric=symmetric, segments=nlp.segments)

@@ -4,6 +4,8 @@ reports every iteration with the violation the result then states, the result's 
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -42,29 +44,64 @@ def test_the_result_parts_agree(stopped):
     assert result.excitations.shape == (80, 16) and result.grf_N.shape == (88, 4)
 
 
-def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(stopped):
+def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives():
     """Another IPOPT option set builds another solver from the first one's ∇J, Jacobian and Hessian of the
     Lagrangian (not derived anew): from the same start both take the same iterates, as if each had derived
-    its own (a mismatch of CasADi's conventions for them — a triangle, the sign of λ — would show here). The
-    NLP is the stopped prediction's, from this process's cache (its first solver derived them)."""
+    its own (a mismatch of CasADi's conventions for them — a triangle, the sign of λ — would show here). Both
+    solves return the shared IPOPT outcome; the cache hands back the problem it built, unchanged."""
+    from gaitcli.core.ipopt import Outcome
+    from gaitcli.predict.guess import initial_guess
     from gaitcli.predict.layout import DesignLayout
     from gaitcli.predict.model import WalkingModel
-    from gaitcli.predict.nlp import cached_nlp, initial_guess, instant_segments, solve
+    from gaitcli.predict.nlp import instant_segments
     from gaitcli.predict.problem import Transcriber
+    from gaitcli.predict.solve import NlpCache, solve
     from gaitcli.predict.stage import settings_of, walker_muscles
 
     cfg = PredictConfig(nodes=6, max_iterations=2)
     reference, settings = read_reference(bundled_reference()), settings_of(cfg)
     transcriber = Transcriber(6, model=WalkingModel(cfg.walker_parameters(None)), muscles=walker_muscles(cfg, None))
     x0 = initial_guess(transcriber, reference, settings, symmetric=True)
-    nlp = cached_nlp(transcriber, reference, settings, symmetric=True,
-                     segments=instant_segments(transcriber, DesignLayout.build(6, symmetric=True), x0))
-    first = solve(nlp, x0, settings)
-    assert set(nlp.derivatives) == {"grad_f", "jac_g", "hess_lag"}
-    solvers = len(nlp.solvers)
-    again = solve(nlp, x0, settings, options={"ipopt.print_frequency_iter": 2})
-    assert len(nlp.solvers) == solvers + 1 and again["iterations"] == first["iterations"] == 2
-    np.testing.assert_array_equal(again["w"], first["w"])
+    segments = instant_segments(transcriber, DesignLayout.build(6, symmetric=True), x0)
+    cache = NlpCache()
+    nlp = cache.nlp(transcriber, reference, settings, symmetric=True, segments=segments)
+    first = solve(nlp, x0, settings, cache=cache)
+    assert set(cache.derivatives(nlp)) == {"grad_f", "jac_g", "hess_lag"}
+    solvers = len(cache.solvers(nlp))
+    again = solve(nlp, x0, settings, options={"ipopt.print_frequency_iter": 2}, cache=cache)
+    assert len(cache.solvers(nlp)) == solvers + 1 and again.iterations == first.iterations == 2
+    np.testing.assert_array_equal(again.x, first.x)
+    assert isinstance(first, Outcome) and not first.converged and first.status == "Maximum_Iterations_Exceeded"
+    faster = dataclasses.replace(settings, speed_m_s=1.3, max_iterations=5)  # a parameter, not the structure
+    assert cache.nlp(transcriber, reference, faster, symmetric=True, segments=segments) is nlp and len(cache) == 1
+
+    # a start with the right knee hyperextended beyond its bound (0 rad): reported per block of χ, then clipped
+    start, rows, _ = DesignLayout.build(6, symmetric=True).blocks["right_leg"]
+    bent = x0.copy()
+    knee = slice(start + rows, start + 2 * rows)  # right_leg's columns: thigh, knee, ankle
+    bent[knee] -= 0.3
+    outside = bent[knee] < 0
+    assert outside.any()
+    out = solve(nlp, bent, settings, cache=cache)
+    count, size, distance = out.outside.blocks["right_leg"]
+    assert (count, size) == (outside.sum(), 3 * rows) and distance == pytest.approx(-bent[knee].min(), rel=1e-12)
+    assert "right_leg" not in first.outside.blocks and len(cache.solvers(nlp)) == solvers + 1
+
+
+def test_a_start_outside_its_bounds_is_a_line_of_the_history():
+    from gaitcli.core.ipopt import Outcome, OutsideBounds
+    from gaitcli.predict.solve import PredictSolution
+    from gaitcli.predict.stage import _solve_notes
+
+    outcome = Outcome(x=np.zeros(1), objective=1.0, converged=True, status="Solve_Succeeded", iterations=7,
+                      time_s=1.0, outside=OutsideBounds({"right_leg": (2, 15, 0.035), "Q": (4, 328, 0.5)}))
+    solved = PredictSolution(outcome=outcome, x=np.zeros(1), device=np.zeros(0), nlp=None, rounds=1,
+                             windows_hold=True)
+    assert _solve_notes(solved, "symmetric model") == [
+        "predict: symmetric model: the start lay outside its bounds, clipped into them: right_leg 2 of 15 by up to "
+        "0.035; Q 4 of 328 by up to 0.5", "predict: symmetric model: Solve_Succeeded after 7 iterations"]
+    inside = dataclasses.replace(solved, outcome=dataclasses.replace(outcome, outside=OutsideBounds()))
+    assert _solve_notes(inside, "full model") == ["predict: full model: Solve_Succeeded after 7 iterations"]
 
 
 def test_a_warm_start_of_another_layout_is_refused():
@@ -98,7 +135,7 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
 def test_a_solve_past_its_time_limit_stops_unconverged_and_says_why():
     """The limit counts from the start of the prediction: 1 µs is spent before IPOPT's first iteration, so the
     iteration callback stops it there (not the 50-iteration limit)."""
-    from gaitcli.predict.nlp import TIME_LIMIT_STATUS
+    from gaitcli.predict.settings import TIME_LIMIT_STATUS
 
     result = run_predict(PredictConfig(nodes=6, max_iterations=50, time_limit_s=1e-6),
                          reference=read_reference(bundled_reference()))

@@ -13,8 +13,7 @@ import pytest
 from gaitcli.errors import InputError
 from gaitcli.io.yamlfile import read_yaml
 from gaitcli.predict import study
-from gaitcli.predict.layout import DesignLayout
-from gaitcli.predict.nlp import box_bounds
+from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import PredictConfig
@@ -101,7 +100,7 @@ def test_the_optimal_prosthesis_never_ends_above_the_foot_it_started_from(monkey
     runs = iter(optimal_objectives)
     started = []
 
-    def fake_run(cfg, *, params, reference, init, report=None, device=None):
+    def fake_run(cfg, *, params, reference, init, report=None, device=None, cache=None):
         started.append((cfg.prosthesis, device.coefficients().tolist()))
         return Solved(next(runs), True, device)
 

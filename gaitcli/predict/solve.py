@@ -1,0 +1,277 @@
+"""Solving the predictive-gait NLP: IPOPT through ``core/ipopt.py``, the runner's cache, the window strategy.
+
+:func:`solve` runs IPOPT with exact derivatives (Hessian included) on one built problem: the start χ is
+checked against its box bounds and the start w against w's bounds, what lies outside is reported in the
+:class:`~gaitcli.core.ipopt.Outcome` (``outside``) and clipped. :func:`solve_windowed` places the spline
+windows where the start puts the instants and, while a solution presses on a window's edge, moves that window
+and solves again from the last solution (warm, with its multipliers).
+
+:class:`NlpCache` holds the built problems (one per structure, :func:`gaitcli.predict.nlp.nlp_key`) and
+their compiled IPOPT solvers (one per problem and option set; a later solver of a problem takes the first
+one's derivatives instead of deriving them anew): the speed and the weights are parameters, so a study's
+cases reuse them. The runner owns the cache and passes it in; a hit is returned as stored, never changed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections import OrderedDict
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from gaitcli.core import ipopt
+from gaitcli.core.ipopt import Outcome, outside_bounds
+from gaitcli.predict.layout import DesignLayout, box_bounds
+from gaitcli.predict.nlp import NLP, build_nlp, instant_segments, nlp_key
+from gaitcli.predict.problem import Transcriber
+from gaitcli.predict.reference import Reference
+from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
+from gaitcli.predict.variables import DEVICE_SCALE
+
+#: how many built problems a cache keeps: a study alternates between at most two structures (intact,
+#: prosthetic)
+BUILT_NLPS_KEPT = 3
+
+
+class IterationReport(ca.Callback):
+    """IPOPT's iteration callback: ``report(iteration, objective, constraint_violation)`` after each iteration
+    (the violation is the largest distance of g from its bounds); past ``deadline`` (time.perf_counter's clock)
+    it stops IPOPT, which then returns ``User_Requested_Stop`` (:data:`TIME_LIMIT_STATUS` in the result).
+    The compiled solver keeps its callback: :meth:`start` points it at one solve's caller."""
+
+    def __init__(self, nlp: NLP, report=None):
+        ca.Callback.__init__(self)
+        self.report, self.lbg, self.ubg, self.iteration, self.deadline = report, nlp.lbg, nlp.ubg, 0, None
+        self.sizes = {"x": nlp.w.size1(), "g": nlp.constraints.size1()}
+        self.construct("iteration_report", {"enable_fd": False})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_name_in(self, i):
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i):
+        return "ret"
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        if name in ("f",):
+            return ca.Sparsity.scalar()
+        if name in ("x", "lam_x"):
+            return ca.Sparsity.dense(self.sizes["x"])
+        if name in ("g", "lam_g"):
+            return ca.Sparsity.dense(self.sizes["g"])
+        return ca.Sparsity(0, 0)
+
+    def start(self, report, deadline: float | None = None) -> None:
+        """Report to ``report`` (or nobody) from iteration 0, and stop past ``deadline``."""
+        self.report, self.iteration, self.deadline = report, 0, deadline
+
+    def eval(self, arg):
+        stop = int(self.deadline is not None and time.perf_counter() > self.deadline)
+        if self.report is None:
+            return [stop]
+        g = np.array(arg[ca.nlpsol_out().index("g")]).ravel()
+        violation = float(np.max(np.maximum(self.lbg - g, 0) + np.maximum(g - self.ubg, 0))) if g.size else 0.0
+        self.report(self.iteration, float(arg[ca.nlpsol_out().index("f")]), violation)
+        self.iteration += 1
+        return [stop]
+
+
+def ipopt_options(settings: PredictSettings, warm: bool) -> dict:
+    """IPOPT's options for ``settings`` (a warm start's when ``warm``): MUMPS with METIS ordering and without
+    its own row/column scaling, the fastest measured on this KKT system (``benchmarks/README.md``)."""
+    s = settings
+    opts = ipopt.options(tol=s.tolerance, max_iter=s.max_iterations, print_level=s.print_level,
+                         **{"ipopt.mumps_pivot_order": 5, "ipopt.mumps_permuting_scaling": 0,
+                            "ipopt.mumps_scaling": 0, "ipopt.acceptable_tol": s.acceptable_tolerance,
+                            "ipopt.acceptable_iter": s.acceptable_iterations,
+                            "ipopt.acceptable_obj_change_tol": s.acceptable_objective_change})
+    if warm:
+        opts.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
+                     "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9})
+    return opts
+
+
+@dataclass
+class _Built:
+    """One cached problem, its compiled solvers by their options, and the derivatives the first exact one made."""
+
+    nlp: NLP
+    solvers: dict = field(default_factory=dict)
+    derivatives: dict = field(default_factory=dict)
+
+
+class NlpCache:
+    """The built problems of one runner and their compiled IPOPT solvers (module docstring); the
+    ``kept`` most recently used problems stay, with their solvers."""
+
+    def __init__(self, kept: int = BUILT_NLPS_KEPT):
+        self.kept = kept
+        self._built: OrderedDict[tuple, _Built] = OrderedDict()
+
+    def __len__(self) -> int:
+        return len(self._built)
+
+    def _entry(self, key: tuple, make) -> _Built:
+        if key in self._built:
+            self._built.move_to_end(key)
+        else:
+            self._built[key] = _Built(make())
+            while len(self._built) > self.kept:
+                self._built.popitem(last=False)
+        return self._built[key]
+
+    def nlp(self, transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
+            symmetric: bool = False, segments: dict, reach: int | None = None) -> NLP:
+        """:func:`build_nlp`'s problem, built once per structure (:func:`gaitcli.predict.nlp.nlp_key`)."""
+        s = settings or PredictSettings()
+        reach = s.window_reach if reach is None else reach
+        key = nlp_key(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach)
+        return self._entry(key, lambda: build_nlp(transcriber, reference, s, symmetric=symmetric, segments=segments,
+                                                  reach=reach)).nlp
+
+    def solvers(self, nlp: NLP) -> dict:
+        """The compiled solvers of ``nlp`` so far, by their options' key (a copy)."""
+        return dict(self._entry(nlp.key, lambda: nlp).solvers)
+
+    def derivatives(self, nlp: NLP) -> dict:
+        """∇J, the Jacobian of g and the Hessian of the Lagrangian as the first exact solver of ``nlp`` made them."""
+        return dict(self._entry(nlp.key, lambda: nlp).derivatives)
+
+    def solver(self, nlp: NLP, opts: dict) -> tuple[ca.Function, IterationReport]:
+        """IPOPT for ``nlp`` with the options ``opts``, compiled once per problem and option set.
+        Returns (solver, its iteration callback)."""
+        entry = self._entry(nlp.key, lambda: nlp)
+        key = repr(sorted(opts.items()))
+        if key not in entry.solvers:
+            callback = IterationReport(nlp)
+            problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints, "p": nlp.parameters}
+            exact = opts.get("ipopt.hessian_approximation", "exact") == "exact"
+            reuse = entry.derivatives if exact else {}
+            solver = ipopt.build_solver("predict", problem, {**opts, **reuse, "iteration_callback": callback})
+            if exact and not entry.derivatives:  # the symbolic Hessian is most of a solver's construction time
+                entry.derivatives.update({"grad_f": solver.get_function("nlp_grad_f"),
+                                          "jac_g": solver.get_function("nlp_jac_g"),
+                                          "hess_lag": solver.get_function("nlp_hess_l")})
+            entry.solvers[key] = (solver, callback)
+        return entry.solvers[key]
+
+
+def checked_design(transcriber: Transcriber, layout: DesignLayout, x) -> tuple[np.ndarray, ipopt.OutsideBounds]:
+    """χ ``x`` clipped into its box bounds (``layout.box_bounds``) and what lay outside them, per χ block
+    (in its own units: m, rad, s; the tendon stretch dimensionless)."""
+    low, high = box_bounds(layout, transcriber.muscles.present)
+    blocks = {name: slice(start, start + rows * cols) for name, (start, rows, cols) in layout.blocks.items()}
+    return np.clip(x, low, high), outside_bounds(x, low, high, blocks)
+
+
+def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
+          multipliers: tuple[np.ndarray, np.ndarray] | None = None, options: dict | None = None, report=None,
+          device=None, optimal_device: bool = False, deadline: float | None = None, cache: NlpCache | None = None,
+          transcriber: Transcriber | None = None) -> Outcome:
+    """IPOPT with exact derivatives from χ ``x0`` (or the whole ``w0``, and the (lam_g, lam_x) ``multipliers``
+    of an earlier solve for a warm start); the outcome's ``x`` is w and ``outside`` what lay outside the
+    bounds of χ (its blocks) or of w (w's blocks) and was clipped.
+
+    ``options``: further IPOPT/CasADi options; ``report(iteration, objective, violation)`` after every IPOPT
+    iteration. Prosthetic models: D starts at (and, unless ``optimal_device``, is fixed at) ``device`` (a
+    ProsthesisCurve; default the transcriber's), free within DEVICE_BOUNDS when ``optimal_device``. Past
+    ``deadline`` (time.perf_counter's clock) IPOPT stops with status :data:`TIME_LIMIT_STATUS`, unconverged.
+    ``cache``: the runner's (default: one for this call); ``transcriber``: the case's (default the NLP's: a
+    problem of the same structure serves every transcriber of its key, whose prosthesis starts D)."""
+    s = settings or PredictSettings()
+    transcriber = transcriber or nlp.transcriber
+    solver, callback = (cache or NlpCache()).solver(nlp, {**ipopt_options(s, warm=multipliers is not None),
+                                                          **(options or {})})
+    callback.start(report, deadline)
+    outside = ipopt.OutsideBounds()
+    if w0 is None:
+        x, outside = checked_design(transcriber, nlp.layout, x0)
+        start = nlp.lifted_start(x, device, transcriber)
+    else:
+        start = w0
+        if nlp.device_size and device is not None:  # D starts at the given device
+            start = np.concatenate([start[:start.size - nlp.device_size], device.coefficients() / DEVICE_SCALE])
+    lbw, ubw = nlp.bounds(None if optimal_device else (device or transcriber.muscles.prosthesis))
+    lam_g0, lam_x0 = multipliers if multipliers is not None else (None, None)
+    out = ipopt.solve(solver, start, lbw, ubw, nlp.lbg, nlp.ubg, s.parameter_values(), lam_g0=lam_g0,
+                      lam_x0=lam_x0, blocks=nlp.blocks)
+    status = out.status
+    if status == "User_Requested_Stop" and deadline is not None and time.perf_counter() > deadline:
+        status = TIME_LIMIT_STATUS
+    return dataclasses.replace(out, status=status, outside=outside.merged(out.outside))
+
+
+def moved_windows(nlp: NLP, lam_g: np.ndarray, threshold: float = 1e-8) -> dict | None:
+    """The segments with every window whose edge an instant presses on (a non-zero multiplier ``lam_g`` of its
+    ``windows`` row) moved one segment that way; ``None`` when no window binds (a solution of the problem
+    without windows)."""
+    lam = lam_g[nlp.groups["windows"]]
+    moved, start, changed = {}, 0, False
+    for key in ("cycle", "half"):
+        if key not in nlp.segments:
+            continue
+        k = np.asarray(nlp.segments[key], int)
+        step = np.where(lam[start:start + k.size] > threshold, 1, np.where(lam[start:start + k.size] < -threshold,
+                                                                              -1, 0))
+        moved[key] = np.clip(k + step, 0, nlp.intervals[key] - 1)
+        changed |= bool(np.any(moved[key] != k))
+        start += k.size
+    return moved if changed else None
+
+
+@dataclass(frozen=True)
+class PredictSolution:
+    """A windowed solve: ``outcome`` the last solve's (iterations and time summed over the rounds; ``x`` is w,
+    ``outside`` what the first start had outside the bounds), ``x`` χ of the solution, ``device`` its device
+    coefficients (empty without one), ``nlp`` the last problem, ``rounds`` the solves, ``windows_hold`` whether
+    no window binds (a solution of the problem without windows)."""
+
+    outcome: Outcome
+    x: np.ndarray
+    device: np.ndarray
+    nlp: NLP
+    rounds: int
+    windows_hold: bool
+
+
+def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarray,
+                   settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
+                   options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
+                   optimal_device: bool = False, deadline: float | None = None,
+                   cache: NlpCache | None = None) -> PredictSolution:
+    """:func:`solve` with the spline windows placed where χ ``x0`` (clipped into its box) puts the instants;
+    while a solution presses on a window's edge, that window moves on and the problem is solved again from the
+    last solution (warm, with its multipliers; at most ``rounds`` solves). ``w0``: the whole first start (an
+    earlier solution of a problem of the same structure); ``device``, ``optimal_device``, ``deadline`` as
+    :func:`solve`. The problems come from ``cache`` (the runner's; default: one for this call)."""
+    cache = cache if cache is not None else NlpCache()
+    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
+    x, outside = checked_design(transcriber, layout, x0)
+    segments = instant_segments(transcriber, layout, x)
+    w, multipliers, iterations, seconds = w0, None, 0, 0.0
+    for k in range(1, rounds + 1):
+        nlp = cache.nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
+        out = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report, device=device,
+                    optimal_device=optimal_device, deadline=deadline, cache=cache, transcriber=transcriber)
+        if k == 1:
+            outside = outside.merged(out.outside)
+        iterations, seconds = iterations + out.iterations, seconds + out.time_s
+        x, w = nlp.design(out.x), out.x
+        segments = moved_windows(nlp, out.lam_g)
+        lam_g = out.lam_g.copy()
+        lam_g[nlp.groups["windows"]] = 0.0  # the moved windows no longer bind
+        multipliers = (lam_g, out.lam_x)
+        if segments is None or not out.converged:
+            break
+    outcome = dataclasses.replace(out, iterations=iterations, time_s=seconds, outside=outside)
+    return PredictSolution(outcome=outcome, x=x, device=nlp.device(out.x), nlp=nlp, rounds=k,
+                           windows_hold=segments is None)
