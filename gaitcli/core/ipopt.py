@@ -54,8 +54,25 @@ class OutsideBounds:
 
 def outside_bounds(x, low, high, blocks: dict[str, slice] | None = None,
                    tolerance: float = BOUND_TOLERANCE) -> OutsideBounds:
-    """Which components of ``x`` lie outside [``low``, ``high``] by more than ``tolerance``·max(1, |bound|),
-    per block of ``blocks`` (name → slice of ``x``; default one block "x"). NaN components count as outside."""
+    """Which components of a start lie outside their bounds.
+
+    Parameters
+    ----------
+    x : array (n,)
+        The start.
+    low, high : array (n,) or float
+        Its bounds (±inf where there is none).
+    blocks : dict of str to slice, optional
+        The named blocks of ``x`` to report on (default one block, "x").
+    tolerance : float
+        A component counts as outside beyond ``tolerance``·max(1, |bound|) (:data:`BOUND_TOLERANCE`).
+
+    Returns
+    -------
+    OutsideBounds
+        Per block with a component outside: how many, of how many, and the largest distance (NaN counts as
+        outside, at an infinite distance).
+    """
     x, low, high = (np.broadcast_to(np.asarray(v, float), np.shape(x)) for v in (x, low, high))
     with np.errstate(invalid="ignore"):
         below = np.where(x < low - tolerance * np.maximum(1.0, np.abs(low)), low - x, 0.0)
@@ -105,8 +122,28 @@ def build_solver(name: str, problem: dict, opts: dict) -> ca.Function:
 
 def solve(solver: ca.Function, x0, lbx, ubx, lbg, ubg, p=None, *, lam_g0=None, lam_x0=None,
           blocks: dict[str, slice] | None = None) -> Outcome:
-    """Run ``solver`` from ``x0`` clipped into [``lbx``, ``ubx``] (what lay outside, per block of ``blocks``,
-    is the outcome's ``outside``); ``lam_g0``, ``lam_x0``: an earlier run's multipliers (a warm start)."""
+    """Run ``solver`` from ``x0`` clipped into its bounds, interrupts raised (``core/interrupts.py``).
+
+    Parameters
+    ----------
+    solver : casadi.Function
+        An IPOPT ``nlpsol`` (:func:`build_solver`).
+    x0 : array (n,)
+        The start; what lies outside [``lbx``, ``ubx``] is reported (:func:`outside_bounds`) and clipped.
+    lbx, ubx, lbg, ubg : array or float
+        The bounds of x and of g(x, p).
+    p : array, optional
+        The problem's parameters.
+    lam_g0, lam_x0 : array, optional
+        An earlier run's multipliers, for a warm start (both or neither).
+    blocks : dict of str to slice, optional
+        The named blocks of x that ``outside`` reports on.
+
+    Returns
+    -------
+    Outcome
+        The solution, IPOPT's status and counts, the multipliers and what the start had outside its bounds.
+    """
     x0 = np.asarray(x0, float)
     outside = outside_bounds(x0, lbx, ubx, blocks)
     args = {"x0": np.clip(x0, lbx, ubx), "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}

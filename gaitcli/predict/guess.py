@@ -25,8 +25,25 @@ GUESS_HIP_HEIGHT = 0.97
 
 def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
                   symmetric: bool = False) -> np.ndarray:
-    """χ from the reference's angles (HAT upright), a hip height that puts the standing foot on the floor,
-    phase durations of a 60 % stance, equal steps for the speed, forces at 10 % of F_max (ŝ = √0.1)."""
+    """The default start χ: a walk read off the reference.
+
+    Parameters
+    ----------
+    transcriber : Transcriber
+        The subject's model (its leg length) and node count.
+    reference : Reference
+        Its mean hip and knee flexion and ankle dorsiflexion give the legs' angles (the HAT upright).
+    settings : PredictSettings, optional
+        Its speed sets the phase durations (a 60 % stance, steps of :data:`GUESS_STEP_M`).
+    symmetric : bool
+        The symmetric model's χ or the full one's.
+
+    Returns
+    -------
+    array
+        χ of the layout, the hip at :data:`GUESS_HIP_HEIGHT` of the leg's length, forces at 10 % of F_max
+        (ŝ = √0.1); not clipped into the box bounds.
+    """
     s = settings or PredictSettings()
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
     p = transcriber.model.params

@@ -207,8 +207,29 @@ def nlp_key(transcriber: Transcriber, reference: Reference, settings: PredictSet
 
 def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
               symmetric: bool = False, segments: dict | None = None, reach: int | None = None) -> NLP:
-    """The lifted NLP of one prediction (module docstring), each instant reading the spline segments
-    ``segments`` ± ``reach`` (default: where the default guess puts the instants)."""
+    """The lifted NLP of one prediction (module docstring).
+
+    Parameters
+    ----------
+    transcriber : Transcriber
+        The subject's model, muscles (a prosthetic model's included), node count and control grid.
+    reference : Reference
+        What Jdev (5.28) tracks.
+    settings : PredictSettings, optional
+        What shapes the problem (tolerances, opt-in terms); its speed and weights are the parameters p, not
+        part of the problem.
+    symmetric : bool
+        The symmetric model (5.3.1) or the full one.
+    segments : dict, optional
+        Each instant's window centre (:func:`instant_segments`; default where the default guess puts them).
+    reach : int, optional
+        Segments either side of the centre an instant may read (default ``settings.window_reach``).
+
+    Returns
+    -------
+    NLP
+        w, J(w; p), g(w; p) with bounds, each group's slice of g, the bounds on w.
+    """
     s = settings or PredictSettings()
     reach = s.window_reach if reach is None else reach
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)

@@ -177,16 +177,42 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
           multipliers: tuple[np.ndarray, np.ndarray] | None = None, options: dict | None = None, report=None,
           device=None, optimal_device: bool = False, deadline: float | None = None, cache: NlpCache | None = None,
           transcriber: Transcriber | None = None) -> Outcome:
-    """IPOPT with exact derivatives from χ ``x0`` (or the whole ``w0``, and the (lam_g, lam_x) ``multipliers``
-    of an earlier solve for a warm start); the outcome's ``x`` is w and ``outside`` what lay outside the
-    bounds of χ (its blocks) or of w (w's blocks) and was clipped.
+    """IPOPT with exact derivatives (Hessian included) on one built problem.
 
-    ``options``: further IPOPT/CasADi options; ``report(iteration, objective, violation)`` after every IPOPT
-    iteration. Prosthetic models: D starts at (and, unless ``optimal_device``, is fixed at) ``device`` (a
-    ProsthesisCurve; default the transcriber's), free within DEVICE_BOUNDS when ``optimal_device``. Past
-    ``deadline`` (time.perf_counter's clock) IPOPT stops with status :data:`TIME_LIMIT_STATUS`, unconverged.
-    ``cache``: the runner's (default: one for this call); ``transcriber``: the case's (default the NLP's: a
-    problem of the same structure serves every transcriber of its key, whose prosthesis starts D)."""
+    Parameters
+    ----------
+    nlp : NLP
+        The problem (:func:`~gaitcli.predict.nlp.build_nlp`, or the cache's).
+    x0 : array
+        The start χ: checked against its box bounds, clipped, and transcribed into w (unless ``w0``).
+    settings : PredictSettings, optional
+        The parameters p (speed, weights) and IPOPT's stopping rules.
+    w0 : array, optional
+        The whole start w (an earlier solution of a problem of the same structure).
+    multipliers : (array, array), optional
+        (lam_g, lam_x) of an earlier solve: a warm start.
+    options : dict, optional
+        Further IPOPT/CasADi options.
+    report : callable, optional
+        ``report(iteration, objective, violation)`` after every IPOPT iteration.
+    device : ProsthesisCurve, optional
+        Prosthetic models: where D starts and, unless ``optimal_device``, stays (default the transcriber's).
+    optimal_device : bool
+        D free within DEVICE_BOUNDS.
+    deadline : float, optional
+        On time.perf_counter's clock: past it IPOPT stops with status :data:`TIME_LIMIT_STATUS`, unconverged.
+    cache : NlpCache, optional
+        The runner's (default: one for this call).
+    transcriber : Transcriber, optional
+        The case's (default the NLP's: a problem serves every transcriber of its key; this one's prosthesis
+        starts D).
+
+    Returns
+    -------
+    Outcome
+        Its ``x`` is w; ``outside`` what the start had outside the bounds of χ (per χ block, in SI units) or
+        of w (per w block, scaled), clipped before IPOPT ran.
+    """
     s = settings or PredictSettings()
     transcriber = transcriber or nlp.transcriber
     solver, callback = (cache or NlpCache()).solver(nlp, {**ipopt_options(s, warm=multipliers is not None),
@@ -248,11 +274,35 @@ def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarra
                    options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
                    optimal_device: bool = False, deadline: float | None = None,
                    cache: NlpCache | None = None) -> PredictSolution:
-    """:func:`solve` with the spline windows placed where χ ``x0`` (clipped into its box) puts the instants;
-    while a solution presses on a window's edge, that window moves on and the problem is solved again from the
-    last solution (warm, with its multipliers; at most ``rounds`` solves). ``w0``: the whole first start (an
-    earlier solution of a problem of the same structure); ``device``, ``optimal_device``, ``deadline`` as
-    :func:`solve`. The problems come from ``cache`` (the runner's; default: one for this call)."""
+    """:func:`solve` with the spline windows placed where the start puts the instants, moved while a solution
+    presses on one.
+
+    Parameters
+    ----------
+    transcriber : Transcriber
+        The case's model, muscles, node count and grid.
+    reference : Reference
+        What Jdev tracks.
+    x0 : array
+        The start χ (clipped into its box bounds first; what lay outside is reported).
+    settings : PredictSettings, optional
+        As :func:`solve`; ``window_reach`` the windows' reach.
+    symmetric : bool
+        The symmetric model or the full one.
+    rounds : int
+        At most this many solves: after each, the windows an instant presses on move one segment and the
+        problem is solved again from the last solution (warm, with its multipliers).
+    options, report, w0, device, optimal_device, deadline
+        As :func:`solve` (``w0`` the first round's).
+    cache : NlpCache, optional
+        The runner's built problems and compiled solvers (default: one for this call).
+
+    Returns
+    -------
+    PredictSolution
+        The last solve's outcome (iterations and time over all rounds; ``outside``: the first start's), χ,
+        the device coefficients, the last problem, the rounds and whether no window binds.
+    """
     cache = cache if cache is not None else NlpCache()
     layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
     x, outside = checked_design(transcriber, layout, x0)

@@ -16,8 +16,9 @@ from PIL import Image
 
 from .conftest import Runner, copy_sample, gait_many, snapshot
 
-#: one worker for the study on a cluster: its tasks then share that process's compiled NLPs (gaitcli.predict.nlp
-#: cached_nlp), as a study's tasks on a busy cluster often do; a first IPOPT solver takes 10–20 s to build
+#: one worker for the study on a cluster: its tasks run in one process, as a study's tasks on a busy cluster
+#: often do (a runner that keeps one gaitcli.predict.solve.NlpCache per process lets them share its compiled NLPs;
+#: a first IPOPT solver takes 10–20 s to build)
 DASK_WORKERS = 1
 PREDICT_FILES = ("motion.csv", "grf.csv", "moments.csv", "muscles.csv", "predict.h5", "summary.json")
 #: DESIGN.md's summary.json keys of the predict stage
@@ -91,11 +92,11 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
     with h5py.File(tmp_path / "normal" / "gait_out" / "predict" / "predict.h5", "r") as h5:
         assert abs(float(h5["result/body_mass_kg"][()]) - 75.0) < 0.5
 
-    # SIGTERM inside the next run's IPOPT iterations (issue 9): "gait: interrupted", exit 130, the unconverged
-    # result above untouched and no half-written folder. The same process runs it: its NLP and IPOPT's
-    # derivatives are compiled (gaitcli.predict.nlp cached_nlp), so IPOPT iterates within 2 s of the start
-    # (measured alone: such a run stopped after two iterations takes 1.8 s in all, outputs written); without an
-    # iteration limit it would go on for minutes.
+    # SIGTERM during the next run: "gait: interrupted", exit 130, the unconverged result above untouched
+    # and no half-written folder. Without an iteration limit the run would go on for minutes. Where the process
+    # keeps no NlpCache across commands the signal may come while the problem is built rather than in IPOPT's
+    # iterations; an interrupt inside IPOPT is tests/core/test_ipopt.py's and test_interrupts.py's (EID), every
+    # solve going through core/ipopt.solve.
     earlier = snapshot(tmp_path / "normal" / "gait_out")
     runner.send(trial_args, tmp_path)
     time.sleep(6.0)

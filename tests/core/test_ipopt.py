@@ -43,3 +43,44 @@ def test_a_start_outside_is_reported_clipped_and_solved_as_from_inside():
     inside = ipopt.solve(solver, np.clip(outside, 0, 1), np.zeros(3), np.ones(3), 0.5, 0.5)
     assert not inside.outside and inside.iterations == out.iterations
     np.testing.assert_array_equal(inside.x, out.x)
+
+
+class _SignalAt(ca.Callback):
+    """An iteration callback that sends this process SIGINT at iteration ``at`` (as Ctrl-C would)."""
+
+    def __init__(self, at: int):
+        ca.Callback.__init__(self)
+        self.at, self.iteration = at, 0
+        self.construct("signal_at", {"enable_fd": False})
+
+    def get_n_in(self):
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self):
+        return 1
+
+    def get_sparsity_in(self, i):
+        name = ca.nlpsol_out(i)
+        return {"f": ca.Sparsity.scalar(), "x": ca.Sparsity.dense(3), "lam_x": ca.Sparsity.dense(3),
+                "g": ca.Sparsity.dense(1), "lam_g": ca.Sparsity.dense(1)}.get(name, ca.Sparsity(0, 0))
+
+    def eval(self, arg):
+        import os
+        import signal
+
+        if self.iteration == self.at:
+            os.kill(os.getpid(), signal.SIGINT)
+        self.iteration += 1
+        return [0]
+
+
+def test_an_interrupt_during_ipopt_is_raised_not_returned_as_a_failure():
+    # CasADi stops IPOPT on a KeyboardInterrupt and returns its iterate as an ordinary failure; the one solve
+    # every problem goes through raises it instead (core/interrupts.py)
+    x = ca.SX.sym("x", 3)
+    callback = _SignalAt(1)
+    solver = ipopt.build_solver("interrupted", {"x": x, "f": ca.sumsqr(x - 2), "g": ca.sum1(x)},
+                                {**ipopt.options(tol=1e-12, max_iter=50), "iteration_callback": callback})
+    with pytest.raises(KeyboardInterrupt):
+        ipopt.solve(solver, np.zeros(3), -10.0, 10.0, 0.5, 0.5)
+    assert callback.iteration == 1  # stopped where the signal came (the handler raised in the callback)
