@@ -31,7 +31,7 @@ from gaitcli.pipeline import load_recording
 from gaitcli.report import plots
 from gaitcli.resources import sample_trial
 from gaitcli.signal.stage import FilterConfig, filter_trial
-from gaitcli.trial import open_trial
+from gaitcli.kinematics.subject import open_trial
 
 SAMPLES = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")
 SHARED_C3D = REPO.parent / "shared" / "data" / "c3d"

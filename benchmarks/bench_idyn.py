@@ -51,7 +51,7 @@ from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments
 from gaitcli.pipeline import load_static, run_stage, run_stages
 from gaitcli.synth import MARKER_RATE_HZ, simulate_trial
-from gaitcli.trial import open_trial
+from gaitcli.kinematics.subject import open_trial
 
 MASS_KG, STATURE_M = 75.0, 1.78
 

@@ -91,7 +91,7 @@ def sample_legs(tmp: Path, side: str = "r", phases=("cycle",), *, sample: str = 
     """
     from gaitcli.core.registry import stage
     from gaitcli.muscles.interval import prepare_leg
-    from gaitcli.trial import open_trial
+    from gaitcli.kinematics.subject import open_trial
 
     folder, h5 = sample_outputs(tmp, ("idyn",), sample=sample)
     export = stage("idyn").read(h5["idyn"])

@@ -29,7 +29,7 @@ from gaitcli.predict.stage import PredictConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.synth.gait import CONDITIONS
 from gaitcli.synth.recording import DEFAULT_NOISE_MM, SYNTH_GAITS, SYNTH_MARKER_SETS
-from gaitcli.trial import SEXES
+from gaitcli.kinematics.subject import SEXES
 
 
 class Console:
@@ -509,7 +509,7 @@ def report_command(console: Console, out_dir, reference, exports):
         console.info(f"report: wrote {page.path}")
     if exports:
         from gaitcli.io.exports import export_trial
-        from gaitcli.trial import open_trial
+        from gaitcli.kinematics.subject import open_trial
 
         kind, root = find_report(Path(out_dir).resolve())
         roots = [root] if kind == "trial" else [p.path.parent for p in pages if p.status not in ("index", "study")]

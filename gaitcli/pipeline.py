@@ -27,7 +27,7 @@ from gaitcli.io.atomic import check_output_folder, check_replaceable
 from gaitcli.io.h5 import file_attrs, provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
-from gaitcli.trial import TrialFolder, open_trial, sha256
+from gaitcli.kinematics.subject import TrialFolder, open_trial, sha256
 
 #: bump when a stage's output files change, so that older outputs count as stale
 OUTPUT_FORMAT = 2
@@ -306,7 +306,7 @@ def predict_inputs(trial: Path | None, *, out: Path | None = None, reference_pat
     from gaitcli.predict.model import WalkerParameters
     from gaitcli.predict.reference import read_reference, reference_from_idyn
     from gaitcli.resources import bundled_reference
-    from gaitcli.trial import load_subject
+    from gaitcli.kinematics.subject import load_subject
 
     folder = open_trial(trial) if trial is not None else None
     reference = read_reference(reference_path) if reference_path is not None else None

@@ -1,4 +1,4 @@
-"""subject.yaml validation and trial-folder discovery (gaitcli/trial.py)."""
+"""subject.yaml validation and trial-folder discovery (gaitcli/kinematics/subject.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import yaml
 
 from gaitcli.errors import InputError
 from gaitcli.resources import sample_trial
-from gaitcli.trial import KEYS, load_subject, open_trial, sha256, subject_from_dict
+from gaitcli.kinematics.subject import KEYS, load_subject, open_trial, sha256, subject_from_dict
 
 BASE = {"mass_kg": 75.0, "stature_m": 1.78, "sex": "male"}
 

@@ -40,7 +40,7 @@ from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINTS, BodyParameters
 from gaitcli.signal.cycles import GaitFeatures, Stride, gait_features, strides
 
 if TYPE_CHECKING:
-    from gaitcli.trial import Subject
+    from gaitcli.kinematics.subject import Subject
 
 FRAMES = ("reference", "anatomical")
 ANGLES = ("anatomical", "posture")

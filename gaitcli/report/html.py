@@ -138,7 +138,7 @@ def _subject(trial_folder: Path | None) -> str:
     if trial_folder is None or not (trial_folder / "subject.yaml").is_file():
         return ""
     try:
-        from gaitcli.trial import load_subject
+        from gaitcli.kinematics.subject import load_subject
 
         s = load_subject(trial_folder / "subject.yaml")
     except InputError:

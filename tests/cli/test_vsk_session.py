@@ -21,7 +21,7 @@ import yaml
 
 from gaitcli.dynamics.stage import subject_measurements
 from gaitcli.pipeline import load_recording, load_static
-from gaitcli.trial import open_trial
+from gaitcli.kinematics.subject import open_trial
 
 from .conftest import gait
 

@@ -52,7 +52,7 @@ from gaitcli.core.recording import ForcePlate, Markers, Recording
 from gaitcli.core.events import Events
 from gaitcli.signal.stage import filter_trial
 from gaitcli.synth import simulate_trial
-from gaitcli.trial import Subject
+from gaitcli.kinematics.subject import Subject
 from tests.signal.conftest import make_walk
 from tests.signal.test_stage import _recording as walk_recording
 

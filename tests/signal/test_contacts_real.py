@@ -17,7 +17,7 @@ import pytest
 
 from gaitcli.pipeline import load_recording
 from gaitcli.signal.stage import FilterConfig, filter_trial
-from gaitcli.trial import open_trial
+from gaitcli.kinematics.subject import open_trial
 from tests.conftest import REPO
 
 pytestmark = pytest.mark.shared
