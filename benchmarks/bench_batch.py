@@ -2,7 +2,7 @@
 
 Run from the repository root: ``python benchmarks/bench_batch.py [--copies 20] [--memory-trials 200]``.
 
-1. Throughput: ``--copies`` copies of ``sample_trials/normal`` run by :func:`gaitcli.batch.run_batch` with the
+1. Throughput: ``--copies`` copies of ``sample_trials/normal`` run by :func:`gaitcli.run.batch.run_batch` with the
    ``muscles_eid`` pipeline (filter, idyn, EID on the right leg; no plots) on a local Dask cluster of 1 and of
    2 worker processes (one thread each). Prints trials per minute for each and the ratio (issue target: at
    least 1.7 on 2 cores), with the cluster's start-up counted in, as a lab would see it.
@@ -22,8 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from gaitcli.batch import run_batch
-from gaitcli.config import configure
+from gaitcli.run.batch import run_batch
+from gaitcli.run.config import configure
 from gaitcli.resources import sample_trials_dir
 
 

@@ -11,7 +11,7 @@ ratio measured / target; nothing is asserted).
 
 The breakdown is measured in-process, in a new process per run as well (this script run with
 ``--child``; medians of ``--repeat``): Python's start-up (``python -c pass``); the imports the command
-makes (``gaitcli.cli`` first, then what is imported on first use: ``gaitcli.pipeline``, the muscle
+makes (``gaitcli.cli`` first, then what is imported on first use: ``gaitcli.run.pipeline``, the muscle
 writer and, with figures, ``gaitcli.report.plots`` with matplotlib); then one
 ``run_stages(copy, ["muscles"], cfg, plots=...)`` — what the command calls — with timing wrappers
 put around the functions it goes through (benchmark-side only; gaitcli is not edited): hashing the
@@ -44,7 +44,7 @@ from timing import Stopwatch, copy_sample, figure_times, median_of, one_core, py
 TARGET_S = 4.0
 COMMAND = ("muscles", "--method", "eid")
 #: what ``gait muscles`` imports, in order: the CLI, then on first use the pipeline, the writer, the figures
-MODULES = ("gaitcli.cli", "gaitcli.pipeline", "gaitcli.muscles.outputs")
+MODULES = ("gaitcli.cli", "gaitcli.run.pipeline", "gaitcli.muscles.outputs")
 PLOTS_MODULE = "gaitcli.report.plots"
 
 #: breakdown rows: (label, depth); the order in which they are printed
@@ -68,8 +68,8 @@ def child(folder: Path, plots: bool) -> dict:
         import_module(module)
         imports[f"import {module}"] = time.perf_counter() - start
 
-    from gaitcli import pipeline, stages
-    from gaitcli.config import configure
+    from gaitcli.run import pipeline, stages
+    from gaitcli.run.config import configure
     from gaitcli.muscles import eid, so
     from gaitcli.muscles import stage as muscle_stage
     from gaitcli.muscles import outputs as muscles_outputs

@@ -37,7 +37,7 @@ from timing import copy_sample, median_s, one_core, sample_outputs, time_gait
 
 import numpy as np
 
-from gaitcli.config import configure
+from gaitcli.run.config import configure
 from gaitcli.core.container import FootLoad, Trial
 from gaitcli.core.events import Events
 from gaitcli.core.recording import Markers
@@ -49,9 +49,9 @@ from gaitcli.dynamics.stage import (IdynConfig, body_mass, external_wrenches, in
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments
-from gaitcli.pipeline import load_static, run_stage, run_stages
+from gaitcli.run.pipeline import load_static, run_stage, run_stages
 from gaitcli.synth import MARKER_RATE_HZ, simulate_trial
-from gaitcli.kinematics.subject import open_trial
+from gaitcli.run.trial import open_trial
 
 MASS_KG, STATURE_M = 75.0, 1.78
 

@@ -63,7 +63,7 @@ def compare_memory(sizes_mb: list[float]) -> None:
 
 
 def ceilings() -> None:
-    from gaitcli.compare import CHUNK_CELLS
+    from gaitcli.run.compare import CHUNK_CELLS
     from gaitcli.io.c3d.header import C3D_MAX_NUMBERS
     from gaitcli.io.h5 import H5_MAX_BYTES
 

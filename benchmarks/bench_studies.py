@@ -20,7 +20,7 @@ import argparse
 import time
 from pathlib import Path
 
-from gaitcli.pipeline import predict_study
+from gaitcli.run.pipeline import predict_study
 from gaitcli.resources import study_file
 
 #: Table 5.2: weight set → (normal J, Et, Jdev), (+2 kg J, Et, Jdev)

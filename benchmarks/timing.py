@@ -6,7 +6,7 @@ matplotlib's Agg backend. :func:`one_core` also pins the process (and its childr
 
 Helpers: :func:`median_s` (median wall time of repeated calls), :func:`copy_sample` (a bundled sample
 trial without its outputs), :func:`sample_outputs` (run stages on such a copy through
-``gaitcli.pipeline.run_stages``), :func:`sample_legs` (one leg's muscle-stage inputs from a sample's
+``gaitcli.run.pipeline.run_stages``), :func:`sample_legs` (one leg's muscle-stage inputs from a sample's
 idyn.h5), :func:`gait_argv`/:func:`time_gait` (the ``gait`` command in a new
 process), :func:`write_stage` (a stage's writer into a fresh folder, plus ``summary.json``, as the
 pipeline does), :class:`Stopwatch` (time calls of named functions without editing gaitcli) and
@@ -74,9 +74,9 @@ def sample_outputs(tmp: Path, stages=("idyn",), *, sample: str = "normal", plots
     Returns (trial folder, {stage: HDF5 path}) for every stage written or reused; outputs go to the
     copy's ``gait_out``, as ``gait`` writes them.
     """
-    from gaitcli.config import configure
+    from gaitcli.run.config import configure
     from gaitcli.core.registry import stage
-    from gaitcli.pipeline import run_stages
+    from gaitcli.run.pipeline import run_stages
 
     folder = copy_sample(sample, Path(tmp) / sample)
     outcomes = run_stages(folder, stages, cfg or configure(None), plots=plots)
@@ -91,7 +91,7 @@ def sample_legs(tmp: Path, side: str = "r", phases=("cycle",), *, sample: str = 
     """
     from gaitcli.core.registry import stage
     from gaitcli.muscles.interval import prepare_leg
-    from gaitcli.kinematics.subject import open_trial
+    from gaitcli.run.trial import open_trial
 
     folder, h5 = sample_outputs(tmp, ("idyn",), sample=sample)
     export = stage("idyn").read(h5["idyn"])
@@ -102,8 +102,8 @@ def sample_legs(tmp: Path, side: str = "r", phases=("cycle",), *, sample: str = 
 
 def stage_attrs(trial_folder: Path, name: str, cfg=None) -> dict:
     """The HDF5 root attributes the pipeline gives stage ``name`` of this trial (provenance, stage key)."""
-    from gaitcli.config import configure
-    from gaitcli.pipeline import TrialRun
+    from gaitcli.run.config import configure
+    from gaitcli.run.pipeline import TrialRun
 
     return TrialRun(trial_folder, None, cfg or configure(None)).attrs(name)
 

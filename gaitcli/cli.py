@@ -19,7 +19,7 @@ from pathlib import Path
 import click
 
 from gaitcli import __version__
-from gaitcli.config import configure
+from gaitcli.run.config import configure
 from gaitcli.core.interrupts import terminate_as_interrupt
 from gaitcli.core.validate import expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
@@ -67,7 +67,7 @@ class Console:
 
     def run(self, trial, names, cfg, *, out, plots: bool, show: str | None = None) -> None:
         """Run the stages through the pipeline with a progress display; unconverged → exit 3."""
-        from gaitcli.pipeline import run_stages
+        from gaitcli.run.pipeline import run_stages
         from gaitcli.progress import ProgressDisplay
 
         with ProgressDisplay(enabled=not self.quiet) as progress:
@@ -184,7 +184,7 @@ def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, momen
                     filter={"events": events})
     if exports:  # the export names checked before any stage runs: a name too long stops it with nothing written
         from gaitcli.io.atomic import check_output_file
-        from gaitcli.pipeline import TrialRun
+        from gaitcli.run.pipeline import TrialRun
         from gaitcli.io.exports import export_targets
 
         run = TrialRun(trial, out, cfg)
@@ -266,7 +266,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
                     subject, init, foot_mass_kg, foot_mass_at, prosthesis, strength_scale, monotone_range_deg,
                     starts, seed, workers, scheduler, study, force, no_plots):
     """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
-    from gaitcli.pipeline import predict_trial
+    from gaitcli.run.pipeline import predict_trial
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("--workers and --scheduler exclude each other (a scheduler has its own workers)")
@@ -278,7 +278,7 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
         else prosthesis, "strength_scale": strength_scale,
         "monotone_range_deg": monotone_range_deg}.items() if v is not None})
     if study is not None:
-        from gaitcli.pipeline import predict_study
+        from gaitcli.run.pipeline import predict_study
         from gaitcli.report.study_plots import study_text
 
         with console.progress() as progress:
@@ -358,7 +358,7 @@ def reference_command(console: Console, trials, out, pipeline, band):
     """A reference gait (mean and SD over the cycle) from the idyn outputs of one or more trials."""
     from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.io.outputs import write_table
-    from gaitcli.pipeline import fresh_output
+    from gaitcli.run.pipeline import fresh_output
     from gaitcli.predict.reference import reference_from_idyn
 
     cfg = configure(pipeline)
@@ -405,8 +405,8 @@ def batch_command(ctx, lab_dir, pipeline, workers, scheduler, force, no_plots, b
     """Run the pipeline on every trial folder below LAB_DIR as Dask tasks; batch_summary.csv in LAB_DIR."""
     import os
 
-    from gaitcli.batch import BATCH_SUMMARY, run_batch, stages_of
-    from gaitcli.compare import DEFAULT_TOLERANCES, compare_trees, outputs_only, read_tolerances
+    from gaitcli.run.batch import BATCH_SUMMARY, run_batch, stages_of
+    from gaitcli.run.compare import DEFAULT_TOLERANCES, compare_trees, outputs_only, read_tolerances
     from gaitcli.progress import BatchProgress
 
     console: Console = ctx.obj
@@ -454,7 +454,7 @@ def compare_command(ctx, a, b, tolerances):
 
     Exit 0 when everything agrees within tolerance, 1 when something differs (the table says what, where and by
     how much), 2 for bad input."""
-    from gaitcli.compare import DEFAULT_TOLERANCES, compare_trees, read_tolerances
+    from gaitcli.run.compare import DEFAULT_TOLERANCES, compare_trees, read_tolerances
 
     console: Console = ctx.obj
     result = compare_trees(a, b, tolerances=DEFAULT_TOLERANCES if tolerances is None else read_tolerances(tolerances))
@@ -469,7 +469,7 @@ def compare_command(ctx, a, b, tolerances):
 
 def _print_findings(result) -> None:
     """The findings as a table on stderr: rich's on a terminal, aligned plain text in logs (never cut)."""
-    from gaitcli.compare import TABLE_HEADER, finding_rows
+    from gaitcli.run.compare import TABLE_HEADER, finding_rows
 
     rows = finding_rows(result)
     if sys.stderr.isatty():
@@ -509,7 +509,7 @@ def report_command(console: Console, out_dir, reference, exports):
         console.info(f"report: wrote {page.path}")
     if exports:
         from gaitcli.io.exports import export_trial
-        from gaitcli.kinematics.subject import open_trial
+        from gaitcli.run.trial import open_trial
 
         kind, root = find_report(Path(out_dir).resolve())
         roots = [root] if kind == "trial" else [p.path.parent for p in pages if p.status not in ("index", "study")]

@@ -21,7 +21,7 @@ def _bars(count: str):
 
 
 class ProgressDisplay:
-    """A progress callback for :func:`gaitcli.pipeline.run_stages`: one rich bar per stage and description.
+    """A progress callback for :func:`gaitcli.run.pipeline.run_stages`: one rich bar per stage and description.
 
     Silent when disabled or when stderr is not a terminal. Use as a context manager.
     """

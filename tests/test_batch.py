@@ -10,8 +10,8 @@ import io
 import os
 import shutil
 
-from gaitcli.batch import plan, run_trial
-from gaitcli.config import load_pipeline
+from gaitcli.run.batch import plan, run_trial
+from gaitcli.run.config import load_pipeline
 from gaitcli.resources import sample_trial
 
 

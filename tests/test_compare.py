@@ -1,4 +1,4 @@
-"""``gaitcli.compare`` on small hand-made trees with known differences (the CLI: tests/cli/test_compare_cli.py)."""
+"""``gaitcli.run.compare`` on small hand-made trees with known differences (the CLI: tests/cli/test_compare_cli.py)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from gaitcli.compare import (DEFAULT_TOLERANCES, FAMILIES, VOLATILE_KEYS, compare_trees, finding_rows,
+from gaitcli.run.compare import (DEFAULT_TOLERANCES, FAMILIES, VOLATILE_KEYS, compare_trees, finding_rows,
                              read_tolerances, split_path, unit_of)
 from gaitcli.errors import InputError
 

@@ -1,4 +1,4 @@
-"""``gait compare`` reads its tables in chunks (gaitcli/compare.py, CHUNK_CELLS): the findings do not depend on
+"""``gait compare`` reads its tables in chunks (gaitcli/run/compare.py, CHUNK_CELLS): the findings do not depend on
 the chunk size, so memory stays flat in the tables' length (figures: benchmarks/bench_long_trial.py)."""
 
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import gaitcli.compare as compare
-from gaitcli.compare import compare_trees
+import gaitcli.run.compare as compare
+from gaitcli.run.compare import compare_trees
 
 
 def write_table(path, rows: int, *, edits=()) -> None:

@@ -1,4 +1,4 @@
-"""Pipeline configuration (gaitcli/config.py): defaults, the standard pipeline file, validation, overrides."""
+"""Pipeline configuration (gaitcli/run/config.py): defaults, the standard pipeline file, validation, overrides."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 import yaml
 
-from gaitcli.config import PipelineConfig, configure, load_pipeline, pipeline_from_dict, to_yaml, with_overrides
+from gaitcli.run.config import PipelineConfig, configure, load_pipeline, pipeline_from_dict, to_yaml, with_overrides
 from gaitcli.core.registry import stage_names
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import InputError
@@ -198,7 +198,7 @@ def test_configs_are_frozen():
 
 
 def test_an_empty_stage_list_is_an_error():
-    from gaitcli.config import pipeline_from_dict
+    from gaitcli.run.config import pipeline_from_dict
     from gaitcli.errors import InputError
 
     with pytest.raises(InputError, match="non-empty list"):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from gaitcli.cli import main
-from gaitcli.config import PipelineConfig, load_pipeline
+from gaitcli.run.config import PipelineConfig, load_pipeline
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDES
 from gaitcli.core.registry import Stage, register, requirements, stage_names, unregister

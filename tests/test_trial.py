@@ -1,4 +1,4 @@
-"""subject.yaml validation and trial-folder discovery (gaitcli/kinematics/subject.py)."""
+"""subject.yaml validation (gaitcli/kinematics/subject.py) and trial-folder discovery (gaitcli/run/trial.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,8 @@ import yaml
 
 from gaitcli.errors import InputError
 from gaitcli.resources import sample_trial
-from gaitcli.kinematics.subject import KEYS, load_subject, open_trial, sha256, subject_from_dict
+from gaitcli.kinematics.subject import KEYS, load_subject, subject_from_dict
+from gaitcli.run.trial import open_trial, sha256
 
 BASE = {"mass_kg": 75.0, "stature_m": 1.78, "sex": "male"}
 

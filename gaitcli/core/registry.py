@@ -16,8 +16,8 @@ the stages whose results it takes, and four functions:
 
 ``handoff(result)`` gives the same hand-off from a result in memory, so a later
 stage sees one type whether its input was computed in this run or read back.
-Stages are registered in ``gaitcli/stages.py`` (one entry per stage) and run by
-:func:`gaitcli.pipeline.run_stage`.
+Stages are registered in ``gaitcli/run/stages.py`` (one entry per stage) and run by
+:func:`gaitcli.run.pipeline.run_stage`.
 """
 
 from __future__ import annotations
@@ -127,9 +127,9 @@ def unregister(name: str) -> None:
 
 
 def stage(name: str) -> Stage:
-    """The registered stage ``name`` (the built-in ones are registered by importing ``gaitcli.stages``)."""
+    """The registered stage ``name`` (the built-in ones are registered by importing ``gaitcli.run.stages``)."""
     if not _REGISTRY:
-        raise LookupError("no stage registered yet: import gaitcli.stages (or gaitcli.config) first")
+        raise LookupError("no stage registered yet: import gaitcli.run.stages (or gaitcli.run.config) first")
     return _REGISTRY[one_of(name, tuple(_REGISTRY), where="stage")]
 
 

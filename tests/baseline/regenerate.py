@@ -12,9 +12,9 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from gaitcli.batch import run_batch
-from gaitcli.compare import outputs_only, tree_files
-from gaitcli.config import configure
+from gaitcli.run.batch import run_batch
+from gaitcli.run.compare import outputs_only, tree_files
+from gaitcli.run.config import configure
 from gaitcli.resources import sample_trials_dir
 
 BASELINE = Path(__file__).resolve().parent

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gaitcli.batch import BatchRow, read_summary, write_summary
+from gaitcli.run.batch import BatchRow, read_summary, write_summary
 from gaitcli.resources import sample_trial
 
 from .conftest import Result, build_once, gait_many, snapshot

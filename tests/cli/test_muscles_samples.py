@@ -25,8 +25,8 @@ METHODS = ("so", "mso", "eid")
 
 def _build(root: Path) -> dict:
     """Every method on every sample trial, in this process through ``run_stages`` (what the commands call)."""
-    from gaitcli.config import configure
-    from gaitcli.pipeline import run_stages
+    from gaitcli.run.config import configure
+    from gaitcli.run.pipeline import run_stages
 
     record = {}
     with warnings.catch_warnings():

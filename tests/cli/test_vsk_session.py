@@ -20,8 +20,8 @@ import pytest
 import yaml
 
 from gaitcli.dynamics.stage import subject_measurements
-from gaitcli.pipeline import load_recording, load_static
-from gaitcli.kinematics.subject import open_trial
+from gaitcli.run.pipeline import load_recording, load_static
+from gaitcli.run.trial import open_trial
 
 from .conftest import gait
 

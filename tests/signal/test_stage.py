@@ -28,12 +28,12 @@ import pytest
 
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.errors import GaitWarning
-from gaitcli.pipeline import load_recording
+from gaitcli.run.pipeline import load_recording
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.signal.outputs import event_columns, grf_columns
 from gaitcli.resources import sample_trial
 from gaitcli.signal.stage import filter_trial
-from gaitcli.kinematics.subject import open_trial
+from gaitcli.run.trial import open_trial
 from tests.cli.truth import (COP_M, FREE_MOMENT_NM, GRF_FRACTION_OF_PEAK, KINEMATIC_HEEL_STRIKE_FRAMES,
                              KINEMATIC_TOE_OFF_FRAMES, PLATE_EVENT_FRAMES, event_errors, grf_errors, plate_feet,
                              read_truth, truth_load_edges)

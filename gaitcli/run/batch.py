@@ -6,7 +6,7 @@ current: a trial whose every stage's output was made from the same inputs and co
 (its key figures read from the outputs' ``summary.json``), and a trial that failed on bad input (exit 2) in the
 previous batch with the same files and configuration (``batch_summary.csv``'s ``input_key``) keeps its failure
 without being run again. The rest become Dask tasks (:func:`run_trial`), each calling the pipeline's stage
-functions (:func:`gaitcli.pipeline.run_stages`), never the CLI; a trial's failure is its rows, never the
+functions (:func:`gaitcli.run.pipeline.run_stages`), never the CLI; a trial's failure is its rows, never the
 batch's. A worker that dies mid-trial leaves only the hidden ``.part`` folder of the stage it was writing
 (outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); the scheduler runs that trial once more on
 another worker and marks it failed after a second death (``distributed.scheduler.allowed-failures: 1`` on
@@ -27,13 +27,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 
-from gaitcli.config import PipelineConfig, to_yaml
+from gaitcli.run.config import PipelineConfig, to_yaml
 from gaitcli.core.registry import stage_names
-from gaitcli.cluster import dask_client
+from gaitcli.run.cluster import dask_client
 from gaitcli.errors import GaitError, InputError
 from gaitcli.io.atomic import atomic_path, remove_stale
 from gaitcli.io.outputs import plain_text, spreadsheet_text
-from gaitcli.pipeline import needed_stages
+from gaitcli.run.pipeline import needed_stages
 
 BATCH_SUMMARY = "batch_summary.csv"
 #: folders never searched for trials: outputs, and hidden or cache folders
@@ -141,7 +141,7 @@ def stale_stages(folder: Path, name: str, cfg: PipelineConfig, key: str) -> tupl
     """The stages of a trial whose outputs are missing or were made from other inputs or configuration, and
     ``skipped`` rows for the others (their key figures from ``summary.json``). A trial that cannot be opened
     (bad subject.yaml, no trial file) has every stage stale: running it gives the reason."""
-    from gaitcli.pipeline import TrialRun
+    from gaitcli.run.pipeline import TrialRun
 
     try:
         run = TrialRun(folder, None, cfg)
@@ -165,7 +165,7 @@ def run_trial(folder: str, name: str, cfg: PipelineConfig, key: str, stale: Sequ
               plots: bool = True) -> list[BatchRow]:
     """The Dask task: run the ``stale`` stages on one trial (the fresh ones they need are read back); its rows
     (a failure is rows, not an exception)."""
-    from gaitcli.pipeline import run_stages
+    from gaitcli.run.pipeline import run_stages
 
     started = time.perf_counter()
 

@@ -18,7 +18,7 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from gaitcli.config import PipelineConfig, section_dict, to_yaml
+from gaitcli.run.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
 from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
@@ -27,7 +27,7 @@ from gaitcli.io.atomic import check_output_folder, check_replaceable
 from gaitcli.io.h5 import file_attrs, provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
-from gaitcli.kinematics.subject import TrialFolder, open_trial, sha256
+from gaitcli.run.trial import TrialFolder, open_trial, sha256
 
 #: bump when a stage's output files change, so that older outputs count as stale
 OUTPUT_FORMAT = 2
@@ -300,7 +300,7 @@ def predict_inputs(trial: Path | None, *, out: Path | None = None, reference_pat
     the subject is ``subject_path``'s, else the trial's, else the dissertation's subject 1; the reference is
     ``reference_path``'s, else one built from the trial's idyn output (made if missing or stale), else the
     bundled one."""
-    from gaitcli.config import configure
+    from gaitcli.run.config import configure
     from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.errors import InputError
     from gaitcli.predict.model import WalkerParameters
@@ -339,11 +339,11 @@ def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = No
                   force: bool = False, progress: ProgressCallback = no_progress,
                   pipeline: PipelineConfig | None = None, scheduler: str | None = None):
     """``gait predict --study FILE``: validate the study file and the inputs, run every case
-    (:func:`gaitcli.studies.run_study`) into ``OUT/study/``. Returns (rows, the study folder)."""
-    from gaitcli.config import configure
+    (:func:`gaitcli.run.studies.run_study`) into ``OUT/study/``. Returns (rows, the study folder)."""
+    from gaitcli.run.config import configure
     from gaitcli.io.yamlfile import read_yaml
     from gaitcli.predict.study import StudySpec
-    from gaitcli.studies import run_study
+    from gaitcli.run.studies import run_study
 
     if not Path(study_path).is_file():
         raise InputError(study_path, "--study", "file not found (expected a study YAML: name, speeds_m_s, weights, "
@@ -366,9 +366,9 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
                   scheduler: str | None = None) -> PredictOutcome:
     """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`; the optimal
     prosthesis by :func:`gaitcli.predict.study.predict_optimal`; ``starts`` > 1: the best of that many starts,
-    :func:`gaitcli.studies.best_of_starts`), write ``OUT/predict/`` whole (``predict.outputs``) with its
+    :func:`gaitcli.run.studies.best_of_starts`), write ``OUT/predict/`` whole (``predict.outputs``) with its
     ``summary.json`` (and ``starts.csv``). Subject and reference as :func:`predict_inputs`."""
-    from gaitcli.config import configure
+    from gaitcli.run.config import configure
     from gaitcli.core.registry import Progress
     from gaitcli.errors import InputError
     from gaitcli.predict.layout import DesignLayout
@@ -402,7 +402,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
 
     starts_table = None
     if starts > 1:
-        from gaitcli.studies import best_of_starts
+        from gaitcli.run.studies import best_of_starts
 
         result, starts_table, agreed = best_of_starts(cfg, starts, params=params, reference=reference, device=device,
                                                  seed=seed, workers=workers, scheduler=scheduler, progress=progress)

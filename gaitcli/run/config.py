@@ -17,7 +17,7 @@ from typing import Any
 
 import yaml
 
-from gaitcli import stages as _builtin_stages  # noqa: F401  (registers the built-in stages)
+from gaitcli.run import stages as _builtin_stages  # noqa: F401  (registers the built-in stages)
 from gaitcli.core.registry import stage, stage_names
 from gaitcli.core.validate import known_keys, replace_checked
 from gaitcli.errors import InputError, shown

@@ -183,7 +183,7 @@ def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, at
     progress(Progress("study", "cases", 0, total))
     args = [(chain, spec, str(root), params, reference, subject, attrs, force) for chain in chains]
     if scheduler is not None:  # the workers may run elsewhere, in other folders: absolute paths
-        from gaitcli.cluster import dask_client
+        from gaitcli.run.cluster import dask_client
 
         root = root.resolve()
 
@@ -241,7 +241,7 @@ def best_of_starts(cfg, starts: int, *, params, reference, device, seed: int = 0
                           detail=f"start {k}: J {result.objective:.4g}{'' if result.converged else ' (unconverged)'}"))
 
     if scheduler is not None:
-        from gaitcli.cluster import dask_client
+        from gaitcli.run.cluster import dask_client
 
         with dask_client(1, scheduler) as client:
             results = run_starts(cfg, starts, params=params, reference=reference, seed=seed, device=device,
