@@ -21,7 +21,7 @@ import click
 from gaitcli import __version__
 from gaitcli.run.config import configure
 from gaitcli.core.interrupts import terminate_as_interrupt
-from gaitcli.core.validate import expected_one_of, parameter_spec
+from gaitcli.core.validate import check_parameter, expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import GaitError, GaitWarning, InputError, NotConvergedError
 from gaitcli.muscles.stage import MusclesConfig
@@ -140,19 +140,48 @@ def _trial_options(func):
     return _trial_argument(func)
 
 
+def _default_text(value) -> str:
+    """A parameter's default as the help shows it: pairs as "A,B", exact small fractions as "4/3"."""
+    from fractions import Fraction
+
+    if isinstance(value, tuple):
+        return ",".join(_default_text(v) for v in value)
+    if isinstance(value, float) and value != int(value):
+        fraction = Fraction(value).limit_denominator(100)
+        if float(fraction) == value:
+            return f"{fraction.numerator}/{fraction.denominator}"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
 def _config_option(config, name: str, *flags: str, flag: bool = False):
-    """A click option for the stage parameter ``config.name``: type, choices, range and help from its declaration."""
+    """A click option for the stage parameter ``config.name``: type, choices, range and help from its declaration,
+    and the value checked by the same validator as a pipeline file's (:func:`core.validate.check_parameter`),
+    an error naming the flag."""
     f = next(f for f in dataclasses.fields(config) if f.name == name)
     spec = parameter_spec(f)
+
+    def checked(ctx, param, value):
+        return value if value is None else check_parameter(f, value, where=param.opts[0])
+
+    # the default is the declaration's, shown unless the help says it; the option's own default stays None, so
+    # that a flag not given leaves the pipeline file's value
+    said = "(default" in spec["help"] or "; default" in spec["help"] or f.default is None or flag
+    text = "on" if f.default is True else "off" if f.default is False else _default_text(f.default)
+    options = {"default": None, "help": spec["help"] + ("" if said else f"  [default: {text}]"), "callback": checked}
     if flag:
-        return click.option(*flags, name, is_flag=True, default=None, help=spec["help"])
-    if spec["choices"] is not None:
+        return click.option(*flags, name, is_flag=True, **options)
+    if "/" in flags[0]:  # --name/--no-name
+        return click.option(*flags, name, **options)
+    if spec.get("parse") is not None and not isinstance(f.default, (int, float)):
+        kind = click.STRING
+        options["metavar"] = spec.get("metavar")
+    elif spec["choices"] is not None:
         kind = Choice(spec["choices"])
     elif isinstance(f.default, int):
         kind = click.IntRange(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
     else:
         kind = FiniteFloat(min=spec["low"], max=spec["high"], min_open=spec["low_open"])
-    return click.option(*flags, name, type=kind, default=None, help=spec["help"])
+    return click.option(*flags, name, type=kind, **options)
 
 
 @gait.command("filter")
@@ -220,11 +249,9 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 @click.option("-o", "--out", "out", type=click.Path(path_type=Path),
               help="Output root (default TRIAL/gait_out; ./gait_out without a trial).")
 @_config_option(PredictConfig, "speed_m_s", "--speed")
-@click.option("--weights", "weights", default=None, metavar="W1,W2",
-              help="W1,W2 of J = W1·Et/100 + W2·Jdev (5.29), ≥ 0 and summing to 2 (default 4/3,2/3).")
+@_config_option(PredictConfig, "weights", "--weights")
 @_config_option(PredictConfig, "nodes", "--nodes")
-@click.option("--symmetric/--no-symmetric", "symmetric", default=None,
-              help="Left leg = right leg half a cycle later (5.3.1; default on).")
+@_config_option(PredictConfig, "symmetric", "--symmetric/--no-symmetric")
 @_config_option(PredictConfig, "max_iterations", "--max-iterations")
 @_config_option(PredictConfig, "time_limit_s", "--time-limit")
 @click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
@@ -235,48 +262,33 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 @click.option("--init", "init", type=click.Path(path_type=Path, dir_okay=False),
               help="Start from the solution in an earlier predict.h5 (same --nodes and --symmetric).")
 @_config_option(PredictConfig, "foot_mass_kg", "--foot-mass")
-@click.option("--foot-mass-at", "foot_mass_at", default=None, metavar="FORWARD,DOWN",
-              help="Put the added foot mass as a band FORWARD,DOWN m from the ankle in the foot frame, with Table "
-                   "A.2's inertia (default: at the foot's CoM, inertia unchanged).")
-@click.option("--prosthesis", "prosthesis", default=None, metavar="sach|seattle|flex|optimal|FILE",
-              help="Bilateral transtibial prostheses (5.3.3): a commercial foot of Table A.7, the optimal device, "
-                   "or a YAML file of a_p, b_p, c0, a_n, b_n, d_prosth (N·m/rad³, /rad², /rad, N·m·s/rad).")
+@_config_option(PredictConfig, "foot_mass_at", "--foot-mass-at")
+@_config_option(PredictConfig, "prosthesis", "--prosthesis")
 @_config_option(PredictConfig, "strength_scale", "--strength-scale")
-@click.option("--monotone-range", "monotone_range_deg", default=None, metavar="LOW,HIGH",
-              help="Ankle angles (deg, negative = dorsiflexion) over which a prosthesis's spring moment must "
-                   "decrease (default -25,10).")
-@click.option("--starts", "starts", type=click.IntRange(min=1, max=100), default=1, show_default=True,
-              help="Solve from this many starts (the default guess and seeded perturbations of it) in parallel "
-                   "processes and keep the best; every start in starts.csv.")
-@click.option("--seed", "seed", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Seed of the perturbed starts.")
+@_config_option(PredictConfig, "monotone_range_deg", "--monotone-range")
+@_config_option(PredictConfig, "starts", "--starts")
+@_config_option(PredictConfig, "seed", "--seed")
 @click.option("--workers", "workers", type=click.IntRange(min=1, max=256), default=None,
               help="Worker processes for --starts and --study (default: one per core).")
 @click.option("--scheduler", "scheduler", default=None, metavar="ADDRESS",
-              help="Run --starts and --study as tasks on the Dask cluster at ADDRESS (tcp://host:port); a study's "
-                   "warm starts become task dependencies.")
+              help="Run --starts and --study as tasks on the Dask cluster at ADDRESS (tcp://host:port).")
 @click.option("--study", "study", type=click.Path(path_type=Path, dir_okay=False),
               help="Run a study file's grid (speeds × weight sets × conditions) into OUT/study/, reusing the cases "
                    "already computed with the same inputs; see pipelines/study_*.yaml.")
 @click.option("--force", "force", is_flag=True, help="With --study: solve every case again.")
 @click.option("--no-plots", "no_plots", is_flag=True, help="Skip the figures (plots/).")
 @click.pass_obj
-def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, symmetric, max_iterations, time_limit_s,
-                    reference,
-                    subject, init, foot_mass_kg, foot_mass_at, prosthesis, strength_scale, monotone_range_deg,
-                    starts, seed, workers, scheduler, study, force, no_plots):
+def predict_command(console: Console, trial, out, reference, subject, init, workers, scheduler, study, force, no_plots,
+                    **settings):
     """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
     from gaitcli.run.pipeline import predict_trial
 
     if workers is not None and scheduler is not None:
         raise click.UsageError("--workers and --scheduler exclude each other (a scheduler has its own workers)")
+    from gaitcli.core.validate import replace_checked
 
-    cfg = dataclasses.replace(PredictConfig(), **{k: v for k, v in {
-        "speed_m_s": speed_m_s, "weights": weights, "nodes": nodes, "symmetric": symmetric,
-        "max_iterations": max_iterations, "time_limit_s": time_limit_s, "foot_mass_kg": foot_mass_kg, "foot_mass_at": foot_mass_at,
-        "prosthesis": prosthesis.lower() if prosthesis and not prosthesis.lower().endswith((".yaml", ".yml"))
-        else prosthesis, "strength_scale": strength_scale,
-        "monotone_range_deg": monotone_range_deg}.items() if v is not None})
+    cfg = replace_checked(PredictConfig(), {k: v for k, v in settings.items() if v is not None}, section="predict",
+                          path="command line")
     if study is not None:
         from gaitcli.run.pipeline import predict_study
         from gaitcli.report.study_plots import study_text
@@ -293,8 +305,8 @@ def predict_command(console: Console, trial, out, speed_m_s, weights, nodes, sym
         return
     with console.progress() as progress:
         outcome = predict_trial(trial, cfg, out=out, reference_path=reference, subject_path=subject,
-                                init_path=init, progress=progress, plots=not no_plots, starts=starts, seed=seed,
-                                workers=workers, scheduler=scheduler)
+                                init_path=init, progress=progress, plots=not no_plots, starts=cfg.starts,
+                                seed=cfg.seed, workers=workers, scheduler=scheduler)
     console.summaries["predict"] = outcome.summary
     console.info(f"predict: wrote {outcome.folder}")
     console.print_json("predict")

@@ -4,9 +4,11 @@ Messages name the file, the field and what was expected, e.g.
 ``pipeline.yaml: muscles.method: got 'eidd' (expected one of so, mso, eid; did you mean 'eid'?)``.
 
 Stage parameters are declared once with :func:`parameter` (default, choices, range,
-help); the pipeline file (``config.py``), the command line (``cli.py``, whose click
-types come from the same metadata) and the stage functions all validate with
-:func:`check_parameter`.
+help, and for values that are not a single number or word the function that parses
+them); the pipeline file (``run/config.py``), study files (``run/studies.py``) and the
+command line (``cli.py``, whose click types and callbacks come from the same metadata)
+all validate with :func:`check_parameter`, which names the file and key, or the flag,
+that gave the value.
 """
 
 from __future__ import annotations
@@ -106,31 +108,81 @@ def text(value: Any, *, where: str | None, path: Where = None, expected: str = "
     return value
 
 
+def number_pair(value: Any, *, fractions: bool = False) -> tuple[float, float]:
+    """Two finite numbers from text "A,B" (the command line) or a list of two (a YAML file); with ``fractions``
+    each may be a fraction such as "4/3", read exactly (``fractions.Fraction``). ValueError otherwise."""
+    from fractions import Fraction
+
+    items = value.split(",") if isinstance(value, str) else value
+    if not isinstance(items, (list, tuple)) or len(items) != 2:
+        raise ValueError("two numbers")
+
+    def one(item) -> float:
+        if isinstance(item, bool):
+            raise ValueError("a number")
+        if isinstance(item, str):
+            try:
+                item = Fraction(item.strip()) if fractions else float(item)
+            except ZeroDivisionError:
+                raise ValueError("a number") from None
+        if not isinstance(item, (int, float, Fraction)):
+            raise ValueError("a number")
+        try:
+            number = float(item)
+        except OverflowError:
+            raise ValueError("a number") from None
+        if not math.isfinite(number):
+            raise ValueError("a finite number")
+        return number
+
+    return one(items[0]), one(items[1])
+
+
 def parameter(default: Any, *, choices: Iterable | None = None, low: float | None = None,
-              high: float | None = None, low_open: bool = False, help: str = ""):
-    """A stage-config field: its default, allowed values or range, and the help text the CLI shows."""
+              high: float | None = None, low_open: bool = False, help: str = "", parse=None,
+              expected: str = "", metavar: str | None = None):
+    """A stage-config field: its default, allowed values or range, the help text the CLI shows, and for a value
+    that is not one number, flag or word, ``parse(value) -> value`` (text from the command line, or what a YAML
+    file holds), which raises ValueError when the value is not ``expected`` (or an InputError naming a file it
+    read). For a number, ``parse`` checks further what its type and range let through (e.g. parity)."""
     meta = {"choices": None if choices is None else tuple(choices), "low": low, "high": high,
-            "low_open": low_open, "help": help}
+            "low_open": low_open, "help": help, "parse": parse, "expected": expected, "metavar": metavar}
     return dataclasses.field(default=default, metadata={"gait": meta})
 
 
 def parameter_spec(f: dataclasses.Field) -> dict:
     """The validation metadata of a config field declared with :func:`parameter` (empty limits otherwise)."""
-    return f.metadata.get("gait", {"choices": None, "low": None, "high": None, "low_open": False, "help": ""})
+    return f.metadata.get("gait", {"choices": None, "low": None, "high": None, "low_open": False, "help": "",
+                                   "parse": None, "expected": "", "metavar": None})
+
+
+def _parsed(spec: dict, value: Any, *, where: str, path: Where) -> Any:
+    try:
+        return spec["parse"](value)
+    except ValueError:
+        raise InputError(path, where, f"got {shown(value)} (expected {spec['expected']})") from None
+    except InputError as exc:  # a file the value names: that file, and where it was named
+        raise InputError(exc.path or path, where, exc.problem) from None
 
 
 def check_parameter(f: dataclasses.Field, value: Any, *, where: str, path: Where = None) -> Any:
-    """Validate and coerce ``value`` for the config field ``f`` (type from its default, limits from its spec)."""
+    """Validate and coerce ``value`` for the config field ``f`` (type from its default, limits from its spec);
+    an error names ``path`` and ``where`` (a file and its key, or ``path`` None and the flag)."""
     spec = parameter_spec(f)
     default = f.default
     if isinstance(default, bool):
         return boolean(value, where=where, path=path)
-    if isinstance(default, int):
-        low = None if spec["low"] is None else int(spec["low"]) + (1 if spec["low_open"] else 0)
-        high = None if spec["high"] is None else int(spec["high"])
-        return integer(value, where=where, path=path, low=low, high=high)
-    if isinstance(default, float):
-        return number(value, where=where, path=path, low=spec["low"], high=spec["high"], low_open=spec["low_open"])
+    if isinstance(default, (int, float)):
+        if isinstance(default, int):
+            low = None if spec["low"] is None else int(spec["low"]) + (1 if spec["low_open"] else 0)
+            high = None if spec["high"] is None else int(spec["high"])
+            value = integer(value, where=where, path=path, low=low, high=high)
+        else:
+            value = number(value, where=where, path=path, low=spec["low"], high=spec["high"],
+                           low_open=spec["low_open"])
+        return value if spec.get("parse") is None else _parsed(spec, value, where=where, path=path)
+    if spec.get("parse") is not None:
+        return _parsed(spec, value, where=where, path=path)
     if isinstance(default, str):
         value = text(value, where=where, path=path)
         if spec["choices"] is not None:
@@ -139,9 +191,11 @@ def check_parameter(f: dataclasses.Field, value: Any, *, where: str, path: Where
     return value
 
 
-def replace_checked(config, values: Mapping[str, Any], *, section: str, path: Where = None):
-    """``config`` (a frozen dataclass) with ``values`` validated and replaced; unknown keys are errors."""
+def replace_checked(config, values: Mapping[str, Any], *, section: str | None, path: Where = None):
+    """``config`` (a frozen dataclass) with ``values`` validated and replaced; unknown keys are errors. Errors
+    name ``section.key`` (a pipeline file's), or the key alone without ``section`` (a study file's)."""
+    prefix = f"{section}." if section else ""
     fields = {f.name: f for f in dataclasses.fields(config)}
-    known_keys(values, fields, where=f"{section}.", path=path)
-    checked = {k: check_parameter(fields[k], v, where=f"{section}.{k}", path=path) for k, v in values.items()}
+    known_keys(values, fields, where=prefix, path=path)
+    checked = {k: check_parameter(fields[k], v, where=f"{prefix}{k}", path=path) for k, v in values.items()}
     return dataclasses.replace(config, **checked)

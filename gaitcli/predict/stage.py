@@ -14,11 +14,12 @@ import dataclasses
 import itertools
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-from gaitcli.core.validate import parameter
-from gaitcli.errors import InputError, shown
+from gaitcli.core.validate import number_pair, parameter
+from gaitcli.errors import InputError
 from gaitcli.kinematics.conventions import walker_moments_to_clinical, walker_to_clinical
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
@@ -29,7 +30,7 @@ from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.nlp import build_nlp, instant_segments
 from gaitcli.predict.problem import Transcriber, gait_at
-from gaitcli.predict.prosthesis import FILE_KEYS, ProsthesisCurve, curve_for
+from gaitcli.predict.prosthesis import CHOICES, FILE_KEYS, ProsthesisCurve, curve_for
 from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
 from gaitcli.predict.settings import PredictSettings
 from gaitcli.predict.solve import NlpCache, PredictSolution, solve_windowed
@@ -46,38 +47,106 @@ WARM_WINDOW_REACH = 1
 JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
 
 
+WEIGHTS_EXPECTED = "two weights W1,W2 ≥ 0 that sum to 2, (5.29); e.g. 4/3,2/3"
+PROSTHESIS_EXPECTED = f"{', '.join(CHOICES)} or a .yaml file of {', '.join(FILE_KEYS)}"
+
+
+def weight_pair(value) -> tuple[float, float]:
+    """(w1, w2) of "W1,W2" or a pair, each a number or a fraction read exactly ("4/3": 4/3 and 2/3 written as
+    decimals differ from the default weights in the last bit, and the optimizer's path is sensitive to that);
+    ≥ 0 and summing to 2 (5.29). ValueError otherwise."""
+    try:
+        return check_weights(number_pair(value, fractions=True))
+    except InputError:
+        raise ValueError(WEIGHTS_EXPECTED) from None
+
+
+def angle_range_deg(value) -> tuple[float, float]:
+    """(low, high) in degrees of "LOW,HIGH" or a pair, −60 ≤ low < high ≤ 60. ValueError otherwise."""
+    low, high = number_pair(value)
+    if not -60 <= low < high <= 60:
+        raise ValueError("an increasing range")
+    return low, high
+
+
+def foot_position_m(value) -> tuple[float, float] | None:
+    """(forward, down) in m of "FORWARD,DOWN" or a pair, each within ±0.3; None (or "") for the foot's CoM."""
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    forward, down = number_pair(value)
+    if abs(forward) > 0.3 or abs(down) > 0.3:
+        raise ValueError("a position near the ankle")
+    return forward, down
+
+
+def even_nodes(nodes: int) -> int:
+    """``nodes`` when even (5.2.4: with an odd number the periodic quartic spline is singular)."""
+    if nodes % 2:
+        raise ValueError("an even number")
+    return nodes
+
+
+def prosthesis_name(value) -> str:
+    """One of :data:`~gaitcli.predict.prosthesis.CHOICES` (any case), or the path of an existing .yaml file of
+    the curve's coefficients (read, and checked against the monotone range, when the stage runs)."""
+    if not isinstance(value, str):
+        raise ValueError(PROSTHESIS_EXPECTED)
+    if value.lower().endswith((".yaml", ".yml")):
+        if not Path(value).is_file():
+            raise InputError(value, None, f"file not found (expected a YAML file of {', '.join(FILE_KEYS)})")
+        return value
+    if value.lower() not in CHOICES:
+        raise ValueError(PROSTHESIS_EXPECTED)
+    return value.lower()
+
+
+#: the optimal prosthesis's monotone range by default: the NLP's, in degrees (PredictSettings.monotone_range_rad)
+MONOTONE_RANGE_DEG = tuple(round(float(np.degrees(v)), 9) for v in PredictSettings.monotone_range_rad)
+
+
 @dataclass(frozen=True)
 class PredictConfig:
-    """Parameters of ``gait predict`` (5.2.10, 5.3.1)."""
+    """Parameters of ``gait predict`` (5.2.10, 5.3.1): numbers and pairs of numbers, parsed where they are given
+    (the command line, a pipeline file's ``predict:`` section, a study file) by :func:`core.validate.check_parameter`.
+    The defaults of the problem's settings are :class:`~gaitcli.predict.nlp.PredictSettings`'s."""
 
-    speed_m_s: float = parameter(1.1275, low=0.0, high=3.0, low_open=True,
-                                 help="Mean walking speed, m/s (5.43; default 1.1275, the dissertation's).")
-    weights: str = parameter("4/3,2/3",
-                             help="W1,W2 of J = W1·Et/100 + W2·Jdev (5.29), ≥ 0 and summing to 2 (default 4/3,2/3).")
-    nodes: int = parameter(18, low=6, high=40, help="Spline nodes over the cycle, even (5.2.4; default 18).")
-    symmetric: bool = parameter(True, help="Left leg = right leg half a cycle later (5.3.1; default on).")
-    max_iterations: int = parameter(3000, low=1, high=100000, help="IPOPT's iteration limit (default 3000).")
+    speed_m_s: float = parameter(PredictSettings.speed_m_s, low=0.0, high=3.0, low_open=True,
+                                 help="Mean walking speed, m/s (5.43).")
+    weights: tuple[float, float] = parameter(PredictSettings.weights, parse=weight_pair, expected=WEIGHTS_EXPECTED,
+                                             metavar="W1,W2", help="W1,W2 of J = W1·Et/100 + W2·Jdev (5.29), ≥ 0 "
+                                                                   "and summing to 2; fractions such as 4/3 are exact.")
+    nodes: int = parameter(18, low=6, high=40, parse=even_nodes,
+                           expected="an even number of nodes: with an odd number the periodic quartic spline is "
+                                    "singular, 5.2.4",
+                           help="Spline nodes over the cycle, even (5.2.4).")
+    symmetric: bool = parameter(True, help="Left leg = right leg half a cycle later (5.3.1).")
+    max_iterations: int = parameter(PredictSettings.max_iterations, low=1, high=100000,
+                                    help="IPOPT's iteration limit.")
     time_limit_s: float = parameter(0.0, low=0.0, high=1e6,
                                     help="Wall-clock budget of the solves, s: past it IPOPT stops and the result "
-                                         "is marked unconverged (default 0: none).")
-    foot_mass_kg: float = parameter(0.0, low=0.0, high=20.0,
-                                    help="Mass added to each foot, kg (5.3.2: 2; default 0).")
-    foot_mass_at: str = parameter("", help="Where the added foot mass sits: FORWARD,DOWN of the ankle in the foot "
-                                           "frame, m, as a band with Table A.2's inertia (default: the foot's CoM).")
-    prosthesis: str = parameter("none", help="Bilateral transtibial prostheses (5.3.3): none, sach, seattle, "
-                                             "flex, optimal, or a YAML file of a_p, b_p, c0, a_n, b_n, d_prosth.")
+                                         "is marked unconverged (0: none).")
+    foot_mass_kg: float = parameter(0.0, low=0.0, high=20.0, help="Mass added to each foot, kg (5.3.2: 2).")
+    foot_mass_at: tuple[float, float] | None = parameter(
+        None, parse=foot_position_m, metavar="FORWARD,DOWN",
+        expected="FORWARD,DOWN in m from the ankle in the foot frame, each within ±0.3",
+        help="Where the added foot mass sits: FORWARD,DOWN m from the ankle in the foot frame, as a band with "
+             "Table A.2's inertia (default: at the foot's CoM, inertia unchanged).")
+    prosthesis: str = parameter("none", parse=prosthesis_name, expected=PROSTHESIS_EXPECTED,
+                                metavar="sach|seattle|flex|optimal|FILE",
+                                help="Bilateral transtibial prostheses (5.3.3): a commercial foot of Table A.7, the "
+                                     "optimal device, or a YAML file of a_p, b_p, c0, a_n, b_n, d_prosth "
+                                     "(N·m/rad³, /rad², /rad, N·m·s/rad).")
     strength_scale: float = parameter(0.0, low=0.0, high=5.0,
                                       help="Every F_max times this (5.3.3: 1.5; default 0 = 1.5 with a "
                                            "prosthesis, 1 without).")
-    monotone_range_deg: str = parameter("-25,10", help="Ankle angles y (deg; negative = dorsiflexion) over which "
-                                                       "the optimal prosthesis's spring moment decreases.")
-
-    def weight_pair(self) -> tuple[float, float]:
-        """(w1, w2) of ``weights`` "W1,W2" (an InputError naming ``--weights`` otherwise)."""
-        parts = str(self.weights).split(",")
-        if len(parts) != 2:
-            raise InputError(None, "--weights", f"got {shown(self.weights)} (expected two numbers W1,W2 that sum to 2)")
-        return check_weights(parts)
+    monotone_range_deg: tuple[float, float] = parameter(
+        MONOTONE_RANGE_DEG, parse=angle_range_deg, metavar="LOW,HIGH",
+        expected="LOW,HIGH in degrees, −60 ≤ LOW < HIGH ≤ 60",
+        help="Ankle angles (deg, negative = dorsiflexion) over which a prosthesis's spring moment must decrease.")
+    starts: int = parameter(1, low=1, high=100,
+                            help="Solve from this many starts (the default guess and seeded perturbations of it) in "
+                                 "parallel and keep the best; every start in starts.csv.")
+    seed: int = parameter(0, low=0, help="Seed of the perturbed starts.")
 
     @property
     def prosthetic(self) -> bool:
@@ -88,33 +157,14 @@ class PredictConfig:
         return float(self.strength_scale) if self.strength_scale else (1.5 if self.prosthetic else 1.0)
 
     def monotone_range_rad(self) -> tuple[float, float]:
-        """``monotone_range_deg`` as (low, high) in rad (an InputError naming ``--monotone-range`` otherwise)."""
-        try:
-            low, high = (float(v) for v in str(self.monotone_range_deg).split(","))
-        except ValueError:
-            low = high = float("nan")
-        if not (np.isfinite(low) and np.isfinite(high) and -60 <= low < high <= 60):
-            raise InputError(None, "--monotone-range", f"got {shown(self.monotone_range_deg)} (expected LOW,HIGH in "
-                                                      "degrees, −60 ≤ LOW < HIGH ≤ 60)")
+        """``monotone_range_deg`` in rad."""
+        low, high = self.monotone_range_deg
         return float(np.radians(low)), float(np.radians(high))
-
-    def foot_mass_position_m(self) -> tuple[float, float] | None:
-        """``foot_mass_at`` as (forward, down) in m, None for the foot's CoM."""
-        if not str(self.foot_mass_at).strip():
-            return None
-        try:
-            forward, down = (float(v) for v in str(self.foot_mass_at).split(","))
-        except ValueError:
-            forward = down = float("nan")
-        if not (np.isfinite(forward) and np.isfinite(down) and abs(forward) <= 0.3 and abs(down) <= 0.3):
-            raise InputError(None, "--foot-mass-at", f"got {shown(self.foot_mass_at)} (expected FORWARD,DOWN in m "
-                                                     "from the ankle in the foot frame, each within ±0.3)")
-        return forward, down
 
     def walker_parameters(self, params: WalkerParameters | None) -> WalkerParameters:
         """The subject's model parameters with this case's added foot mass."""
         params = params if params is not None else WalkerParameters.subject_1()
-        return params.with_foot_mass(self.foot_mass_kg, self.foot_mass_position_m()) if self.foot_mass_kg else params
+        return params.with_foot_mass(self.foot_mass_kg, self.foot_mass_at) if self.foot_mass_kg else params
 
 
 @dataclass(frozen=True)
@@ -232,7 +282,7 @@ def violated_groups(violations: dict, tolerance: float = FEASIBILITY_TOLERANCE) 
 
 def settings_of(cfg: PredictConfig) -> PredictSettings:
     """The NLP's settings for ``cfg``."""
-    return PredictSettings(speed_m_s=cfg.speed_m_s, weights=cfg.weight_pair(), max_iterations=cfg.max_iterations,
+    return PredictSettings(speed_m_s=cfg.speed_m_s, weights=cfg.weights, max_iterations=cfg.max_iterations,
                            monotone_range_rad=cfg.monotone_range_rad())
 
 
@@ -254,7 +304,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     commercial foot ``cfg.prosthesis`` names); ``report(iteration, objective, violation)`` after every IPOPT
     iteration; ``cache``: the runner's built problems and compiled solvers (default: one for this call; a
     runner that solves many cases keeps one per process and passes it to each)."""
-    weights = cfg.weight_pair()
+    weights = cfg.weights
     settings = settings_of(cfg)
     device = device if device is not None else curve_for(cfg.prosthesis)
     optimal = cfg.prosthesis == "optimal"
@@ -330,7 +380,7 @@ def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model
     durations, steps_r, steps_l, values = nlp.gait(w)
     exact = Transcriber(cfg.nodes, model=model, muscles=muscles, smoothing=0.0)
     t = exact.at(durations, steps_r, steps_l, values)
-    fields = _result(cfg, cfg.weight_pair(), exact, t, durations, (steps_r, steps_l), reference, violations)
+    fields = _result(cfg, cfg.weights, exact, t, durations, (steps_r, steps_l), reference, violations)
     return fields, violations
 
 
@@ -393,7 +443,7 @@ def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Reference, model: Wa
     et, jdev = _costs(fine, t, float(np.sum(durations)), sum(layout.step_lengths(x)), reference)
     u = np.asarray(t.muscle_state["u"], float)[:, fine.muscles.present]
     return {"refinement": refinement, "cost_of_transport_J_per_m": et, "deviation": jdev,
-            "objective": float(objective(et, jdev, cfg.weight_pair())),
+            "objective": float(objective(et, jdev, cfg.weights)),
             "max_moment_error_Nm": float(max(np.abs(fine.joint_map_pinv @ np.asarray(e, float)).max()
                                              for e in t.residual)),
             "max_contact_error_m": float(max(np.abs(c).max() for c in t.contact_error_m)),

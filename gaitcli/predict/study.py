@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gaitcli.core.interrupts import as_worker
-from gaitcli.core.validate import one_of
+from gaitcli.core.validate import check_parameter, one_of
 from gaitcli.errors import InputError, shown
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
@@ -39,7 +39,7 @@ from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
 from gaitcli.predict.reference import Reference
 from gaitcli.predict.solve import NlpCache
-from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of
+from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of, weight_pair
 
 #: two solutions "agree" when their objectives differ by less than this fraction of the better one
 AGREEMENT = 0.01
@@ -227,8 +227,8 @@ def agreeing(results: list[PredictResult], tolerance: float = AGREEMENT) -> tupl
 
 # ----------------------------------------------------------------------------------------------- study grids
 CONDITIONS = ("normal", "foot_mass", *COMMERCIAL_FEET, "optimal")
-#: Table 5.2/5.3's weight sets a)–d) (5.3.1)
-WEIGHT_SETS = {"a": "1,1", "b": "4/3,2/3", "c": "8/5,2/5", "d": "20/11,2/11"}
+#: Table 5.2/5.3's weight sets a)–d) (5.3.1), read as the command line reads --weights
+WEIGHT_SETS = {k: weight_pair(v) for k, v in {"a": "1,1", "b": "4/3,2/3", "c": "8/5,2/5", "d": "20/11,2/11"}.items()}
 
 
 @dataclass(frozen=True)
@@ -274,9 +274,11 @@ class StudySpec:
                 raise InputError(path, "speeds_m_s", f"got {shown(v)} (expected speeds in m/s, 0 < v ≤ 3)")
             return float(v)
 
+        weights_field = next(f for f in dataclasses.fields(PredictConfig) if f.name == "weights")
+
         def weight(v):
-            label = WEIGHT_SETS.get(str(v), str(v))
-            dataclasses.replace(PredictConfig(), weights=label).weight_pair()  # InputError naming --weights
+            if str(v) not in WEIGHT_SETS:
+                check_parameter(weights_field, v, where="weights", path=path)
             return str(v)
 
         def condition(v):
@@ -312,9 +314,9 @@ class StudyCase:
     starts_from: tuple[str, ...] = field(default=())
 
 
-def weight_label(weights: str) -> str:
-    """A weight set's label: "a"–"d" for Table 5.2's sets, else the "W1,W2" string."""
-    return next((k for k, v in WEIGHT_SETS.items() if v == weights), weights)
+def weight_label(weights: tuple[float, float], given: str) -> str:
+    """A weight set's label: "a"–"d" for Table 5.2's sets, else the "W1,W2" text ``given``."""
+    return next((k for k, v in WEIGHT_SETS.items() if v == weights), given)
 
 
 def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
@@ -326,8 +328,8 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
     for speed in spec.speeds_m_s:
         chain, previous = [], None
         for w in spec.weights:
-            weights = WEIGHT_SETS.get(w, w)
-            label = weight_label(weights)
+            weights = WEIGHT_SETS.get(w) or weight_pair(w)
+            label = weight_label(weights, w)
             base = dataclasses.replace(PredictConfig(), speed_m_s=speed, weights=weights, nodes=spec.nodes,
                                        max_iterations=spec.max_iterations, time_limit_s=spec.time_limit_s,
                                        strength_scale=spec.strength_scale)

@@ -370,22 +370,13 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
     ``summary.json`` (and ``starts.csv``). Subject and reference as :func:`predict_inputs`."""
     from gaitcli.run.config import configure
     from gaitcli.core.registry import Progress
-    from gaitcli.errors import InputError
-    from gaitcli.predict.layout import DesignLayout
     from gaitcli.predict.nlp import TIME_LIMIT_STATUS
     from gaitcli.predict.prosthesis import CHOICES as PROSTHESIS_CHOICES
     from gaitcli.predict.stage import run_predict, violated_groups
     from gaitcli.predict.outputs import write_predict_outputs
 
     # everything is validated before anything runs or is written
-    cfg.weight_pair()
-    cfg.foot_mass_position_m()
-    cfg.monotone_range_rad()
     device = prosthesis_of(cfg)
-    try:
-        DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
-    except InputError as exc:
-        raise InputError(None, "--nodes", exc.problem) from None
     init = _read_init(Path(init_path)) if init_path is not None else None
     params, reference, inputs, folder = predict_inputs(trial, out=out, reference_path=reference_path,
                                                        subject_path=subject_path, progress=progress,

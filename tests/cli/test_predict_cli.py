@@ -43,7 +43,7 @@ def test_bad_options_and_files_exit_2_naming_them(tmp_path):
              "missing study": (("--study", "none.yaml"), "none.yaml: --study: file not found"),
              "study condition": (("--study", "walking.yaml"), "walking.yaml: conditions: got 'walking'"),
              "study speed": (("--study", "fast.yaml"), "fast.yaml: speeds_m_s: got 9"),
-             "weights": (("--weights", "1,2"), "--weights: got 1,2"),
+             "weights": (("--weights", "1,2"), "--weights: got '1,2'"),
              "speed": (("--speed", "0"), "--speed"),
              "reference": (("--reference", "ref.csv"), "ref.csv: hip_r_flexion_deg_sd: missing column"),
              "init": (("--init", "none.h5"), "none.h5: --init: file not found")}

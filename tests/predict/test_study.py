@@ -58,7 +58,7 @@ def test_the_foot_mass_study_is_table_5_2s_grid():
 
 
 @pytest.mark.parametrize("change, field", [({"conditions": ["normal", "optimal"]}, "conditions"),
-                                           ({"weights": ["3,3"]}, "--weights"), ({"starts": 0}, "starts"),
+                                           ({"weights": ["3,3"]}, "weights"), ({"starts": 0}, "starts"),
                                            ({"speeds": [1.0]}, "speeds"), ({"time_limit_s": -1}, "time_limit_s")])
 def test_a_bad_study_file_is_refused_naming_the_field(change, field):
     data = {"speeds_m_s": [1.0], "weights": ["b"], "conditions": ["normal"], **change}
