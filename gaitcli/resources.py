@@ -12,13 +12,12 @@ from pathlib import Path
 
 
 def _shipped_folder(package: str, folder: str) -> Path:
-    try:
-        return Path(str(files(package)))
-    except ModuleNotFoundError:
-        # gaitcli imported from a source checkout rather than the installed copy (e.g.
-        # `python -m pytest` at the repository root puts ./gaitcli first on sys.path):
-        # the folder sits beside the package directory.
-        return Path(__file__).resolve().parent.parent / folder
+    # gaitcli imported from a source checkout (``python -m pytest`` at the repository root puts ./gaitcli first
+    # on sys.path; a git worktree beside an editable install): the checkout's own folder, beside the package
+    checkout = Path(__file__).resolve().parent.parent
+    if (checkout / "pyproject.toml").is_file() and (checkout / folder).is_dir():
+        return checkout / folder
+    return Path(str(files(package)))
 
 
 def sample_trials_dir() -> Path:
