@@ -69,6 +69,24 @@ def interrupts_raised():
         raise KeyboardInterrupt
 
 
+@contextmanager
+def interrupts_deferred():
+    """Within it an interrupt waits: it raises KeyboardInterrupt when the block ends (main thread only). For
+    a short step that must not stop half-way, such as starting the workers a run will have to stop."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    interrupted = []
+    previous = {s: signal.signal(s, lambda signum, frame: interrupted.append(signum)) for s in INTERRUPTS}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    if interrupted:
+        raise KeyboardInterrupt
+
+
 #: prctl's option that has the kernel signal a process when its parent dies (linux/prctl.h)
 _PR_SET_PDEATHSIG = 1
 

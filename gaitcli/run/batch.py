@@ -1,17 +1,18 @@
-"""Many trials at once on a Dask cluster (``gait batch``).
+"""Many trials at once (``gait batch``), on the workers of :func:`gaitcli.run.cluster.workers`.
 
 :func:`find_trials` finds every trial folder below a lab folder (a folder with ``subject.yaml``; ``gait_out``
-and hidden folders are not searched). :func:`plan` decides, in the client and without a cluster, what is
-current: a trial whose every stage's output was made from the same inputs and configuration is ``skipped``
+and hidden folders are not searched). :func:`plan` decides, in this process and before any worker starts, what
+is current: a trial whose every stage's output was made from the same inputs and configuration is ``skipped``
 (its key figures read from the outputs' ``summary.json``), and a trial that failed on bad input (exit 2) in the
 previous batch with the same files and configuration (``batch_summary.csv``'s ``input_key``) keeps its failure
-without being run again. The rest become Dask tasks (:func:`run_trial`), each calling the pipeline's stage
-functions (:func:`gaitcli.run.pipeline.run_stages`), never the CLI; a trial's failure is its rows, never the
-batch's. A worker that dies mid-trial leaves only the hidden ``.part`` folder of the stage it was writing
-(outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); the scheduler runs that trial once more on
-another worker and marks it failed after a second death (``distributed.scheduler.allowed-failures: 1`` on
-the local cluster). Results stay on disk: the client holds one row per trial × stage and at most a few tasks
-per worker in flight, so its memory does not grow with the number of trials waiting.
+without being run again. The rest become tasks (:func:`run_trial`), each calling the pipeline's stage
+functions (:func:`gaitcli.run.pipeline.run_stages`), never the command line; a trial's failure is its rows,
+never the batch's. A worker that dies mid-trial leaves only the hidden ``.part`` folder of the stage it was
+writing (outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); on a Dask cluster the scheduler runs
+that trial once more on another worker and marks it failed after a second death
+(``distributed.scheduler.allowed-failures: 1`` on a local cluster). Results stay on disk: this process holds
+one row per trial × stage and at most a few tasks per worker in flight, so its memory does not grow with the
+number of trials waiting.
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ from pathlib import Path
 
 from gaitcli.run.config import PipelineConfig, to_yaml
 from gaitcli.core.registry import stage_names
-from gaitcli.run.cluster import dask_client
+from gaitcli.run.cluster import Task, completed
+from gaitcli.run.cluster import workers as cluster_workers
 from gaitcli.errors import GaitError, InputError
 from gaitcli.io.atomic import atomic_path, remove_stale
 from gaitcli.io.outputs import plain_text, spreadsheet_text
@@ -258,15 +260,12 @@ def plan(lab_dir: Path, cfg: PipelineConfig, *, force: bool = False) -> tuple[li
     return rows, todo
 
 
-def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int = 2, scheduler: str | None = None,
+def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None = None, scheduler: str | None = None,
               force: bool = False, plots: bool = True, on_rows: Callable[[list[BatchRow]], None] | None = None,
               on_start: Callable[[int, int, str | None], None] | None = None) -> BatchResult:
     """Run the pipeline over every trial below ``lab_dir`` (see the module docstring) and write
     ``batch_summary.csv`` there. ``on_start(total trials, to run, dashboard address)`` and ``on_rows(rows of one
     trial)`` report progress. An interrupt leaves the previous ``batch_summary.csv`` as it was."""
-    from distributed import as_completed
-    from distributed.scheduler import KilledWorker
-
     started = time.perf_counter()
     lab_dir = Path(lab_dir).resolve()  # the workers may run in other folders
     rows, todo = plan(lab_dir, cfg, force=force)
@@ -278,39 +277,37 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int = 2, sch
         if on_start is not None:
             on_start(len({r.trial for r in rows}), 0, None)
     else:
-        with dask_client(workers, scheduler) as client:
-            services = client.scheduler_info().get("services", {})
-            dashboard = client.dashboard_link if "dashboard" in services else None
-            if on_start is not None:
-                on_start(len({r.trial for r in rows}) + len(todo), len(todo), dashboard)
-            width = max(1, TASKS_PER_WORKER * len(client.scheduler_info().get("workers", {})) or workers)
-            waiting = iter(todo)
-            keys = {}
-
-            def submit(item):
-                folder, name, key, stale = item
-                future = client.submit(run_trial, str(folder), name, cfg, key, stale, plots, pure=False,
-                                       key=f"trial-{hashlib.sha1(str(folder).encode()).hexdigest()[:12]}-{key[:8]}")
-                keys[future.key] = item
-                return future
-
-            pending = as_completed([submit(item) for _, item in zip(range(width), waiting)])
-            for future in pending:
-                folder, name, key, _ = keys.pop(future.key)
-                try:
-                    got = future.result()
-                except KilledWorker:
-                    remove_stale_parts(folder, cfg)
-                    got = failure_rows(name, key, cfg, 1, "the worker running this trial died twice (killed or out "
-                                                          "of memory)")
-                except Exception as exc:  # a task that could not run (e.g. a worker without gaitcli)
-                    got = failure_rows(name, key, cfg, 1, f"internal error: {type(exc).__name__}: {exc}")
-                future.release()
-                rows += got
-                if on_rows is not None:
-                    on_rows(got)
-                following = next(waiting, None)
-                if following is not None:
-                    pending.add(submit(following))
+        try:
+            with cluster_workers(min(len(todo), workers or os.cpu_count() or 1), scheduler, dashboard=True) as pool:
+                dashboard = pool.dashboard
+                if on_start is not None:
+                    on_start(len({r.trial for r in rows}) + len(todo), len(todo), dashboard)
+                tasks = {item[0]: Task(run_trial, (str(item[0]), item[1], cfg, item[2], item[3], plots))
+                         for item in todo}
+                items = {item[0]: item for item in todo}
+                for folder, future in completed(pool, tasks, in_flight=TASKS_PER_WORKER * pool.size):
+                    _, name, key, _ = items.pop(folder)
+                    got = _rows_of(future, folder, name, key, cfg)
+                    rows += got
+                    if on_rows is not None:
+                        on_rows(got)
+        except BaseException:
+            for folder, *_ in todo:  # what a stopped worker was writing
+                remove_stale_parts(Path(folder), cfg)
+            raise
     write_summary(lab_dir / BATCH_SUMMARY, rows)
     return BatchResult(rows, round(time.perf_counter() - started, 3), dashboard)
+
+
+def _rows_of(future, folder: Path, name: str, key: str, cfg: PipelineConfig) -> list[BatchRow]:
+    """A trial task's rows; a task that could not run is its trial's failure."""
+    try:
+        return future.result()
+    except Exception as exc:
+        remove_stale_parts(folder, cfg)
+        if type(exc).__name__ == "KilledWorker":  # distributed's, after the retry its scheduler allows
+            return failure_rows(name, key, cfg, 1, "the worker running this trial died twice (killed or out of "
+                                                   "memory)")
+        if type(exc).__name__ == "BrokenProcessPool":  # the standard library's pool, whose workers all end
+            return failure_rows(name, key, cfg, 1, "a worker process died (killed or out of memory)")
+        return failure_rows(name, key, cfg, 1, f"internal error: {type(exc).__name__}: {exc}")
