@@ -342,7 +342,7 @@ def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = No
     (:func:`gaitcli.run.studies.run_study`) into ``OUT/study/``. Returns (rows, the study folder)."""
     from gaitcli.run.config import configure
     from gaitcli.io.yamlfile import read_yaml
-    from gaitcli.predict.study import StudySpec
+    from gaitcli.predict.starts import StudySpec
     from gaitcli.run.studies import run_study
 
     if not Path(study_path).is_file():
@@ -365,7 +365,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
                   plots: bool = True, starts: int = 1, seed: int = 0, workers: int | None = None,
                   scheduler: str | None = None) -> PredictOutcome:
     """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`; the optimal
-    prosthesis by :func:`gaitcli.predict.study.predict_optimal`; ``starts`` > 1: the best of that many starts,
+    prosthesis by :func:`gaitcli.predict.starts.predict_optimal`; ``starts`` > 1: the best of that many starts,
     :func:`gaitcli.run.studies.best_of_starts`), write ``OUT/predict/`` whole (``predict.outputs``) with its
     ``summary.json`` (and ``starts.csv``). Subject and reference as :func:`predict_inputs`."""
     from gaitcli.run.config import configure
@@ -398,7 +398,7 @@ def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference
         result, starts_table, agreed = best_of_starts(cfg, starts, params=params, reference=reference, device=device,
                                                  seed=seed, workers=workers, scheduler=scheduler, progress=progress)
     elif cfg.prosthesis == "optimal":
-        from gaitcli.predict.study import predict_optimal
+        from gaitcli.predict.starts import predict_optimal
 
         result = predict_optimal(cfg, params=params, reference=reference, init=init, report=iteration)
     else:

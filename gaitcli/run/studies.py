@@ -1,7 +1,7 @@
 """``gait predict --study FILE.yaml`` and ``--starts N``: run the cases, write every case's folder, the study table
-and its figures (the edge of :mod:`gaitcli.predict.study`).
+and its figures (the edge of :mod:`gaitcli.predict.starts`).
 
-A study's chains (one per speed, :func:`gaitcli.predict.study.study_cases`) run in parallel
+A study's chains (one per speed, :func:`gaitcli.predict.starts.study_cases`) run in parallel
 worker processes; within a chain each case starts from the solutions it names. Every case is written whole
 into ``OUT/study/<case>/`` (the files of ``gait predict``) with a ``case_key``: the SHA-256 of its resolved
 configuration, the subject, the reference and the keys of the cases it started from. A case whose folder
@@ -27,7 +27,7 @@ from gaitcli.io.h5 import read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.stage import PredictResult, run_predict
-from gaitcli.predict.study import (StudyCase, StudySpec, agreeing, pool, predict_optimal, retimed, run_starts,
+from gaitcli.predict.starts import (StudyCase, StudySpec, agreeing, pool, predict_optimal, retimed, run_starts,
                                    stop, study_cases)
 from gaitcli.resources import stored_solution
 

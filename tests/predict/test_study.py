@@ -1,4 +1,4 @@
-"""Prediction studies (gaitcli/predict/study.py): the bundled study files' grids, seeded perturbed starts, and the
+"""Prediction studies (gaitcli/predict/starts.py): the bundled study files' grids, seeded perturbed starts, and the
 optimal prosthesis never reporting a higher J than the commercial foot it started from."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 
 from gaitcli.errors import InputError
 from gaitcli.io.yamlfile import read_yaml
-from gaitcli.predict import study
+from gaitcli.predict import starts as study
 from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.reference import read_reference
@@ -165,7 +165,7 @@ def test_workers_end_when_their_parent_is_killed(tmp_path):
     script = tmp_path / "parent.py"
     script.write_text(
         "import os, time\n"
-        "from gaitcli.predict.study import pool\n"
+        "from gaitcli.predict.starts import pool\n"
         "executor = pool(2)\n"
         "futures = [executor.submit(time.sleep, 60) for _ in range(4)]\n"
         "time.sleep(1.0)\n"
