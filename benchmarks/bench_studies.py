@@ -2,7 +2,7 @@
 
 Run from the repository root: ``python benchmarks/bench_studies.py [--study prostheses foot_mass] [--out DIR]
 [--workers N] [--force]``. Runs each bundled study (``pipelines/study_*.yaml``) through
-``pipeline.predict_study`` — what the command runs — into DIR (default ``/tmp/gaitcli_bench_studies``); a case
+``run.studies.run_study`` — what the command runs — into DIR (default ``/tmp/gaitcli_bench_studies``); a case
 already computed there with the same inputs is read back, so a second run prints the tables at once (``--force``
 solves everything again). Prints the whole study's wall time against the 30-minute target and the
 dissertation's "about a day per case", our J, Et, Jdev beside the dissertation's for every case, and whether
@@ -20,8 +20,9 @@ import argparse
 import time
 from pathlib import Path
 
-from gaitcli.run.pipeline import predict_study
 from gaitcli.resources import study_file
+from gaitcli.run.config import configure
+from gaitcli.run.studies import run_study
 
 #: Table 5.2: weight set → (normal J, Et, Jdev), (+2 kg J, Et, Jdev)
 TABLE_5_2 = {"a": ((14.17, 468.8, 10.04), (22.00, 547.2, 17.46)), "b": ((14.22, 432.7, 11.86), (18.25, 489.6, 18.41)),
@@ -108,8 +109,8 @@ def main() -> None:
     args = parser.parse_args()
     for name in args.study:
         start = time.perf_counter()
-        rows, folder = predict_study(None, study_file(name), out=args.out / name, workers=args.workers,
-                                     force=args.force)
+        rows, folder = run_study(None, study_file(name), configure(None), out=args.out / name,
+                                 workers_count=args.workers, force=args.force)
         wall = time.perf_counter() - start
         solved = [r for r in rows if not r["reused"]]
         print(f"\nstudy {name}: {len(rows)} cases ({len(solved)} solved, {len(rows) - len(solved)} reused) in "

@@ -65,13 +65,14 @@ class Console:
         if self.as_json and data:  # nothing when the stage failed before writing
             click.echo(json.dumps(data, indent=2, default=str))
 
-    def run(self, trial, names, cfg, *, out, plots: bool, show: str | None = None) -> None:
-        """Run the stages through the pipeline with a progress display; unconverged → exit 3."""
-        from gaitcli.run.pipeline import run_stages
+    def run(self, trial, names, cfg, *, out, plots: bool, show: str | None = None, **options) -> None:
+        """Run the stages through the pipeline with a progress display (``options``: files, workers, scheduler
+        of :func:`gaitcli.run.pipeline.run_stages`); unconverged → exit 3."""
         from gaitcli.progress import ProgressDisplay
+        from gaitcli.run.pipeline import run_stages
 
         with ProgressDisplay(enabled=not self.quiet) as progress:
-            outcomes = run_stages(trial, names, cfg, out=out, progress=progress, plots=plots)
+            outcomes = run_stages(trial, names, cfg, out=out, progress=progress, plots=plots, **options)
         self.outcomes(outcomes)
         self.print_json(show)
         failed = [o for o in outcomes if not o.converged]
@@ -281,21 +282,17 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 def predict_command(console: Console, trial, out, reference, subject, init, workers, scheduler, study, force, no_plots,
                     **settings):
     """Predict a gait cycle by state dynamic optimization: motion, ground reactions, muscles, cost (ch. 5)."""
-    from gaitcli.run.pipeline import predict_trial
-
     if workers is not None and scheduler is not None:
         raise click.UsageError("--workers and --scheduler exclude each other (a scheduler has its own workers)")
-    from gaitcli.core.validate import replace_checked
-
-    cfg = replace_checked(PredictConfig(), {k: v for k, v in settings.items() if v is not None}, section="predict",
-                          path="command line")
+    cfg = configure(None, predict=settings)
+    files = {"reference": reference, "subject": subject}
     if study is not None:
-        from gaitcli.run.pipeline import predict_study
         from gaitcli.report.study_plots import study_text
+        from gaitcli.run.studies import run_study
 
         with console.progress() as progress:
-            rows, folder = predict_study(trial, study, out=out, reference_path=reference, subject_path=subject,
-                                         workers=workers, force=force, progress=progress, scheduler=scheduler)
+            rows, folder = run_study(trial, study, cfg, out=out, files=files, workers_count=workers,
+                                     scheduler=scheduler, force=force, progress=progress)
         console.info(study_text(rows))
         console.info(f"predict: wrote {folder} ({len(rows)} cases, study.csv)")
         bad = [r["case"] for r in rows if not r["converged"]]
@@ -303,15 +300,8 @@ def predict_command(console: Console, trial, out, reference, subject, init, work
             raise NotConvergedError(f"{len(bad)} of {len(rows)} study cases did not converge ({', '.join(bad)}); "
                                     f"marked in {folder / 'study.csv'}")
         return
-    with console.progress() as progress:
-        outcome = predict_trial(trial, cfg, out=out, reference_path=reference, subject_path=subject,
-                                init_path=init, progress=progress, plots=not no_plots, starts=cfg.starts,
-                                seed=cfg.seed, workers=workers, scheduler=scheduler)
-    console.summaries["predict"] = outcome.summary
-    console.info(f"predict: wrote {outcome.folder}")
-    console.print_json("predict")
-    if not outcome.converged:
-        raise NotConvergedError(f"{outcome.message}; results written to {outcome.folder} with converged: false")
+    console.run(trial, ["predict"], cfg, out=out, plots=not no_plots, show="predict", files={**files, "init": init},
+                workers=workers, scheduler=scheduler)
 
 
 @gait.command("synth")

@@ -12,10 +12,11 @@ from gaitcli.core.registry import stage_names
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import InputError
 from gaitcli.muscles.stage import MusclesConfig
+from gaitcli.predict.stage import PredictConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.resources import pipeline_file
 
-SECTIONS = {"filter": FilterConfig, "idyn": IdynConfig, "muscles": MusclesConfig}
+SECTIONS = {"filter": FilterConfig, "idyn": IdynConfig, "muscles": MusclesConfig, "predict": PredictConfig}
 
 
 def _error(data, path="p.yaml") -> InputError:
@@ -49,8 +50,9 @@ def test_standard_pipeline_file_lists_every_parameter():
     assert set(data) == {"stages", *SECTIONS}
     for name, cls in SECTIONS.items():
         assert set(data[name]) == {f.name for f in dataclasses.fields(cls)}, name
-        for key, value in data[name].items():
-            assert value == getattr(cls(), key), f"{name}.{key}"
+        for key, value in data[name].items():  # as the file's text is read: "4/3,2/3" is the default weights
+            assert getattr(pipeline_from_dict({name: {key: value}}).section(name), key) == getattr(cls(), key), \
+                f"{name}.{key}"
 
 
 def test_bundled_pipelines_by_name(monkeypatch, tmp_path):
@@ -75,7 +77,7 @@ def test_partial_file_keeps_other_defaults(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("stages: [idyn, filter, muscles]\nfilter:\n  cutoff_hz: 8\nmuscles:\n  method: so\n")
     cfg = load_pipeline(path)
-    assert cfg.stages == stage_names()  # run in pipeline order whatever the file's order
+    assert cfg.stages == stage_names()[:3]  # run in pipeline order whatever the file's order
     assert cfg.filter == dataclasses.replace(FilterConfig(), cutoff_hz=8.0)
     assert isinstance(cfg.filter.cutoff_hz, float)
     assert cfg.muscles == dataclasses.replace(MusclesConfig(), method="so")
@@ -128,7 +130,10 @@ def test_unknown_key_without_a_close_match_lists_the_allowed_keys():
     ("idyn", "gravity_m_s2", 1e300), ("idyn", "gravity_m_s2", 1.62),
     ("idyn", "gravity_m_s2", float("nan")), ("muscles", "method", "cmc"), ("muscles", "side", "right"),
     ("muscles", "nodes", 0), ("muscles", "validate", "yes"), ("muscles", "validate", 1),
-    ("muscles", "objective", "effort"),
+    ("muscles", "objective", "effort"), ("predict", "weights", "1,2"), ("predict", "weights", [1, "x"]),
+    ("predict", "weights", "4/0,2"), ("predict", "nodes", 17), ("predict", "monotone_range_deg", [10, -5]),
+    ("predict", "monotone_range_deg", "-25"), ("predict", "foot_mass_at", [1, 2]), ("predict", "prosthesis", "carbon"),
+    ("predict", "prosthesis", "absent.yaml"), ("predict", "starts", 0), ("predict", "symmetric", "no"),
 ])
 def test_bad_values(section, key, value):
     err = _error({section: {key: value}})
@@ -136,7 +141,7 @@ def test_bad_values(section, key, value):
 
 
 @pytest.mark.parametrize("data,field", [
-    ({"stages": "filter"}, "stages"), ({"stages": ["filter", "predict"]}, "stages"), ({"filter": 6}, "filter"),
+    ({"stages": "filter"}, "stages"), ({"stages": ["filter", "predicts"]}, "stages"), ({"filter": 6}, "filter"),
     ({"filter": ["cutoff_hz", 6]}, "filter"),
 ])
 def test_bad_structure(data, field):
@@ -212,3 +217,12 @@ def test_a_resolved_configuration_pickles(tmp_path):
     cfg = configure("muscles_eid", muscles={"method": "so"})
     back = pickle.loads(pickle.dumps(cfg))
     assert back == cfg and back.muscles.method == "so" and back.stages == ("filter", "idyn", "muscles")
+
+
+def test_the_predict_section_is_parsed_once_into_numbers_and_pairs():
+    cfg = pipeline_from_dict({"stages": ["predict"], "predict": {"weights": "8/5,2/5", "monotone_range_deg": "-20,5",
+                                                                 "foot_mass_at": [0.1, 0.02], "prosthesis": "SACH"}})
+    assert cfg.stages == ("predict",)
+    assert cfg.predict.weights == (8 / 5, 2 / 5) and cfg.predict.monotone_range_deg == (-20.0, 5.0)
+    assert cfg.predict.foot_mass_at == (0.1, 0.02) and cfg.predict.prosthesis == "sach"
+    assert pipeline_from_dict(yaml.safe_load(to_yaml(cfg))) == cfg

@@ -1,10 +1,13 @@
-"""The stage registry: a new stage is one module plus one registry entry, and `gait run` runs it."""
+"""The stage registry: a new stage is one module plus one registry entry (docs/architecture.md's example, run from
+the page), and `gait run` runs it."""
 
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from dataclasses import dataclass
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -14,52 +17,54 @@ from gaitcli.cli import main
 from gaitcli.run.config import PipelineConfig, load_pipeline
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDES
-from gaitcli.core.registry import Stage, register, requirements, stage_names, unregister
+from gaitcli.core.registry import Stage, register, requirements, stage, stage_names, unregister
 from gaitcli.core.validate import parameter
 from gaitcli.errors import InputError
 from gaitcli.resources import sample_trial
 
 
-# --- the example stage of docs/architecture.md ----------------------------------------------------------------
-@dataclass(frozen=True)
-class CadenceConfig:
-    side: str = parameter("r", choices=SIDES, help="Which foot's heel strikes.")
+# --- the example stage of docs/architecture.md, executed from the page itself --------------------------------
+ARCHITECTURE = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
 
 
-@dataclass(frozen=True)
-class Cadence:
-    steps_per_min: float
-    strides: int
+def example_blocks() -> list[str]:
+    """The Python blocks of the page's "Adding a stage": the module, then its registry entry."""
+    section = ARCHITECTURE.read_text().split("### Adding a stage", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```python\n(.*?)```", section, flags=re.S)
 
 
-def cadence(trial: Trial, cfg: CadenceConfig) -> Cadence:
-    """Steps per minute from one foot's heel strikes (two steps per stride)."""
-    strikes = trial.events.times(cfg.side, "heel_strike")
-    return Cadence(steps_per_min=2 * 60 / float(np.mean(np.diff(strikes))), strides=len(strikes) - 1)
-
-
-CADENCE = Stage(name="cadence", config=CadenceConfig, depends=("filter",), result=Cadence, h5_name="cadence.h5",
-                run=lambda ctx, cfg: cadence(ctx.inputs["filter"], cfg))
-# ---------------------------------------------------------------------------------------------------------------
+def example_namespace() -> dict:
+    """What the page's module imports, and its code run: CadenceConfig, Cadence, cadence."""
+    namespace = {"dataclass": dataclass, "np": np, "parameter": parameter, "SIDES": SIDES, "Trial": Trial,
+                 "Stage": Stage, "register": register}
+    exec(example_blocks()[0], namespace)  # noqa: S102 (the documentation's own example)
+    return namespace
 
 
 @pytest.fixture
 def registered():
-    register(CADENCE)
-    yield CADENCE
+    namespace = example_namespace()
+    exec(example_blocks()[1], namespace)  # noqa: S102 (the registry entry, as gaitcli/run/stages.py would hold it)
+    yield namespace
     unregister("cadence")
+# ---------------------------------------------------------------------------------------------------------------
 
 
 def test_builtin_stages_in_dependency_order():
-    assert stage_names()[:3] == ("filter", "idyn", "muscles")
+    assert stage_names()[:4] == ("filter", "idyn", "muscles", "predict")
     assert requirements("muscles") == ("filter", "idyn", "muscles")
     assert requirements("filter") == ("filter",)
+    assert requirements("predict") == ("predict",)  # idyn is optional: asked for only with a trial
+    assert stage("predict").optional == ("idyn",) and not stage("predict").trial
 
 
 def test_a_stage_that_depends_on_an_unknown_stage_is_refused():
+    config = example_namespace()["CadenceConfig"]
     with pytest.raises(InputError, match="expected one of filter, idyn, muscles"):
-        register(Stage(name="x", config=CadenceConfig, depends=("filtre",), h5_name="x.h5", run=lambda c, g: None))
-    assert "x" not in stage_names()
+        register(Stage(name="x", config=config, depends=("filtre",), h5_name="x.h5", run=lambda c, g: None))
+    with pytest.raises(InputError, match="stage y: optional: got 'idin'"):
+        register(Stage(name="y", config=config, optional=("idin",), h5_name="y.h5", run=lambda c, g: None))
+    assert "x" not in stage_names() and "y" not in stage_names()
 
 
 def test_a_new_stage_gets_a_pipeline_section_and_runs_through_gait_run(registered, tmp_path, capsys):
@@ -67,8 +72,9 @@ def test_a_new_stage_gets_a_pipeline_section_and_runs_through_gait_run(registere
     shutil.copytree(sample_trial("normal"), trial, ignore=shutil.ignore_patterns("gait_out"))
     pipeline = tmp_path / "cadence.yaml"
     pipeline.write_text("stages: [filter, cadence]\ncadence:\n  side: l\n")
-    assert load_pipeline(pipeline).cadence == CadenceConfig(side="l")
-    assert PipelineConfig().cadence == CadenceConfig()
+    config = registered["CadenceConfig"]
+    assert load_pipeline(pipeline).cadence == config(side="l")
+    assert PipelineConfig().cadence == config()
 
     assert main(["--quiet", "--json", "run", str(trial), "--pipeline", str(pipeline), "--no-plots"]) == 0
     printed = json.loads(capsys.readouterr().out)

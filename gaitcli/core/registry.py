@@ -1,7 +1,10 @@
 """The stage registry: what a stage is to the pipeline, the CLI and a batch runner.
 
 A stage declares its name, its config dataclass (defined beside the stage),
-the stages whose results it takes, and four functions:
+the stages whose results it takes (``depends``), the stages whose output it may
+ask for (``optional``: read back where fresh, else made first, and only with a
+trial; ``StageContext.optional``), whether it needs a trial at all (``trial``),
+and four functions:
 
 - ``run(context, cfg) -> result``: pure computation from the context (subject,
   trial files, the earlier stages' hand-offs) to a typed result; raises
@@ -17,7 +20,7 @@ the stages whose results it takes, and four functions:
 ``handoff(result)`` gives the same hand-off from a result in memory, so a later
 stage sees one type whether its input was computed in this run or read back.
 Stages are registered in ``gaitcli/run/stages.py`` (one entry per stage) and run by
-:func:`gaitcli.run.pipeline.run_stage`.
+:func:`gaitcli.run.pipeline.run_stages`.
 """
 
 from __future__ import annotations
@@ -67,7 +70,12 @@ class StageContext:
     trial file when it was computed in this run);
     ``recording()`` and ``static_recording()``: the dynamic trial as read and the
     standing trial (None without static.c3d), labels renamed by the marker set;
-    ``progress``: where to report progress.
+    ``progress``: where to report progress. ``files``: the files named for this
+    run by name (e.g. predict's ``reference`` and ``init``; ``subject`` has taken
+    the trial's subject's place); ``workers``, ``scheduler``: where a stage may run
+    work in parallel (:func:`gaitcli.run.cluster.workers`). Without a trial
+    (a stage with ``trial=False``) the trial's paths are None and ``recording``
+    raises.
     """
 
     subject: Any
@@ -81,9 +89,26 @@ class StageContext:
     static_recording: Callable[[], Any]
     progress: ProgressCallback = no_progress
     stage: str = ""
+    files: dict[str, Path] = field(default_factory=dict)
+    workers: int | None = None
+    scheduler: str | None = None
+    #: the pipeline's: an optional stage's hand-off (None without a trial), and the record of a file read
+    resolve_optional: Callable[[str], Any] = lambda name: None
+    record_input: Callable[[Path], None] = lambda path: None
 
     def report(self, description: str, completed: float = 0.0, total: float | None = None) -> None:
         self.progress(Progress(self.stage, description, completed, total))
+
+    def optional(self, name: str) -> Any:
+        """The hand-off of ``name``, one of the stage's ``optional`` stages: read back from its output where
+        that is fresh, else made (and written) first; its output's path is then ``input_paths[name]``. None
+        without a trial."""
+        return self.resolve_optional(name)
+
+    def uses(self, path: Path) -> Path:
+        """``path``, recorded as an input of this stage (its SHA-256 in the HDF5 attributes)."""
+        self.record_input(Path(path))
+        return Path(path)
 
 
 @dataclass(frozen=True)
@@ -95,6 +120,10 @@ class Stage:
     run: Callable[[StageContext, Any], Any]
     h5_name: str
     depends: tuple[str, ...] = ()
+    #: stages whose output it may ask for with ``StageContext.optional`` (module docstring)
+    optional: tuple[str, ...] = ()
+    #: whether it needs a trial; a stage that does not runs without one (a prediction from defaults)
+    trial: bool = True
     result: type | None = None  # the result dataclass (for the default writer and reader)
     write: Callable[[Path, Any, dict], dict] | None = None
     read: Callable[[Path], Any] | None = None
@@ -117,6 +146,8 @@ def register(stage: Stage) -> Stage:
     """Add ``stage`` to the registry (after the stages it depends on); returns it."""
     for dep in stage.depends:
         one_of(dep, tuple(_REGISTRY), where=f"stage {stage.name}: depends")
+    for dep in stage.optional:
+        one_of(dep, tuple(_REGISTRY), where=f"stage {stage.name}: optional")
     _REGISTRY[stage.name] = stage
     return stage
 

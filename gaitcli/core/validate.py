@@ -161,8 +161,10 @@ def _parsed(spec: dict, value: Any, *, where: str, path: Where) -> Any:
         return spec["parse"](value)
     except ValueError:
         raise InputError(path, where, f"got {shown(value)} (expected {spec['expected']})") from None
-    except InputError as exc:  # a file the value names: that file, and where it was named
-        raise InputError(exc.path or path, where, exc.problem) from None
+    except InputError as exc:  # a file the value names: where it was named, and that file
+        if path is None or exc.path is None:
+            raise InputError(exc.path or path, where, exc.problem) from None
+        raise InputError(path, where, f"{shown(str(exc.path))}: {exc.problem}") from None
 
 
 def check_parameter(f: dataclasses.Field, value: Any, *, where: str, path: Where = None) -> Any:

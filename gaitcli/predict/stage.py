@@ -132,7 +132,7 @@ class PredictConfig:
         help="Where the added foot mass sits: FORWARD,DOWN m from the ankle in the foot frame, as a band with "
              "Table A.2's inertia (default: at the foot's CoM, inertia unchanged).")
     prosthesis: str = parameter("none", parse=prosthesis_name, expected=PROSTHESIS_EXPECTED,
-                                metavar="sach|seattle|flex|optimal|FILE",
+                                metavar="|".join(CHOICES[1:]) + "|FILE",
                                 help="Bilateral transtibial prostheses (5.3.3): a commercial foot of Table A.7, the "
                                      "optimal device, or a YAML file of a_p, b_p, c0, a_n, b_n, d_prosth "
                                      "(N·m/rad³, /rad², /rad, N·m·s/rad).")

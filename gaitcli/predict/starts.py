@@ -1,36 +1,21 @@
-"""Prediction studies (Diss. 5.3.2, 5.3.3): the optimal prosthesis from its warm starts, multi-start, study grids.
+"""The optimal prosthesis from its warm starts and multi-start (Diss. 5.3.2, 5.3.3): pure functions of one
+prediction's starts; running many of them at once is :mod:`gaitcli.run.studies`'s.
 
 - :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``variables.py``'s D), started
   from the best commercial foot's solution and from the normal (intact) solution; the result is never worse
   than the best start, which is itself a feasible point of the optimal problem (its coefficients lie inside
   the bounds and its τ_s decreases over the declared range).
-- :func:`perturbed_guess`, :func:`run_starts` — ``--starts N``: seeded perturbations of the initial guess solved
-  in parallel processes; the best converged solution is kept and :func:`agreeing` counts the starts that
-  found it.
-- :class:`StudySpec`, :func:`study_cases` — ``--study FILE.yaml``: speeds × weight sets × conditions, ordered in
-  chains (one per speed, run in parallel): per weight set the normal case first (from the previous weight
-  set's normal solution), every other case warm started from it, except the second and third commercial
-  feet: they start from the first foot's solution when it converged (else from the normal one), the optimal
-  prosthesis last from the best foot and the normal solution. Why the feet from a foot: the normal gait's
-  ankle angles put Seattle's τ_s (a_p = −34020 N·m/rad³) hundreds of N·m off, and IPOPT from there spends
-  6 s per iteration in inertia corrections (measured at 1.00 m/s, weights a): 67 iterations in 400 s, J 179);
-  from the SACH solution it converges in 83 iterations, 25 s (J 22.48), and Flex in 142 iterations, 42 s.
+- :func:`perturbed_guess`, :func:`solve_start` — ``--starts N``: seeded perturbations of the initial guess; the
+  best converged solution is kept and :func:`agreeing` counts the starts that found it.
+- :func:`retimed` — a solution at one speed as the start of a case at another (a study's chains).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import multiprocessing
-import os
-import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from gaitcli.core.interrupts import as_worker
-from gaitcli.core.validate import check_parameter, one_of
-from gaitcli.errors import InputError, shown
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.model import WalkerParameters, WalkingModel
@@ -39,7 +24,7 @@ from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
 from gaitcli.predict.reference import Reference
 from gaitcli.predict.solve import NlpCache
-from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of, weight_pair
+from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of
 
 #: two solutions "agree" when their objectives differ by less than this fraction of the better one
 AGREEMENT = 0.01
@@ -137,81 +122,19 @@ def retimed(cfg: PredictConfig, x: np.ndarray) -> np.ndarray:
     return layout.pack(blocks)
 
 
-def _one_start(args) -> PredictResult:
-    cfg, params, reference, seed, device, init = args
+def solve_start(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Reference, seed: int | None,
+                device: ProsthesisCurve | None = None, init: np.ndarray | None = None) -> PredictResult:
+    """One start of ``--starts N``: from ``init`` (default: the default guess) when ``seed`` is None, else from
+    :func:`perturbed_guess` with that seed; the optimal prosthesis by :func:`predict_optimal`."""
     init = init if seed is None else perturbed_guess(cfg, params, reference, seed)
     if cfg.prosthesis == "optimal":
         return predict_optimal(cfg, params=params, reference=reference, init=init)
     return run_predict(cfg, params=params, reference=reference, init=init, device=device)
 
 
-def pool(workers: int) -> ProcessPoolExecutor:
-    """Worker processes (forked where the platform allows: no re-import, the parent's thread settings) that end
-    with their parent and leave interrupts to it (:func:`~gaitcli.core.interrupts.as_worker`)."""
-    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    return ProcessPoolExecutor(max_workers=max(1, workers), mp_context=multiprocessing.get_context(method),
-                               initializer=as_worker, initargs=(os.getpid(),))
-
-
-#: how long stopped workers get to unwind (remove their temporary folders) before they are killed
-STOP_GRACE_S = 1.0
-
-
-def stop(executor: ProcessPoolExecutor) -> None:
-    """Cancel what has not started and end the workers now (an interrupt of the parent: SIGTERM reaches the
-    parent alone): SIGTERM, which unwinds a worker's run (its atomic writes leave nothing half-written), then
-    SIGKILL after :data:`STOP_GRACE_S` for any still running, which a worker that caught the interrupt in
-    a solve and took its next queued task would be."""
-    # no public API ends running workers; shutdown() sets _processes to None, so take them first. SIGTERM before
-    # shutdown(): shutdown closes the task queue, and an idle worker reading it would die of EOFError, loudly
-    processes = list((getattr(executor, "_processes", None) or {}).values())
-    for process in processes:
-        process.terminate()
-    executor.shutdown(wait=False, cancel_futures=True)
-    deadline = time.monotonic() + STOP_GRACE_S
-    for process in processes:
-        process.join(max(0.0, deadline - time.monotonic()))
-        if process.is_alive():
-            process.kill()
-            process.join(1.0)
-
-
-def run_starts(cfg: PredictConfig, starts: int, *, params: WalkerParameters | None, reference: Reference,
-               seed: int = 0, workers: int | None = None, device: ProsthesisCurve | None = None,
-               init: np.ndarray | None = None, on_done=None, executor=None) -> list[PredictResult]:
-    """``starts`` solves of ``cfg`` in parallel processes (or on ``executor``, a ``concurrent.futures`` executor
-    such as a Dask client's): start 0 from ``init`` (default: the default guess), start k from
-    :func:`perturbed_guess` with seed ``seed + k``. ``on_done(k, result)`` as each finishes."""
-    jobs = [(cfg, params, reference, None if k == 0 else seed + k, device, init) for k in range(starts)]
-    workers = min(starts, workers or os.cpu_count() or 1)
-    if executor is not None:
-        return _run_on(executor, jobs, on_done)
-    if workers <= 1:
-        results = []
-        for k, job in enumerate(jobs):
-            results.append(_one_start(job))
-            if on_done:
-                on_done(k, results[-1])
-        return results
-    with pool(workers) as executor:
-        return _run_on(executor, jobs, on_done, stop)
-
-
-def _run_on(executor, jobs, on_done, stopping=None) -> list[PredictResult]:
-    """The starts as tasks of ``executor``; on an interrupt what has not started is cancelled (and ``stopping``
-    ends the running ones, for a process pool)."""
-    results: list = [None] * len(jobs)
-    try:
-        futures = {executor.submit(_one_start, job): k for k, job in enumerate(jobs)}
-        for future in as_completed(futures):
-            k = futures[future]
-            results[k] = future.result()
-            if on_done:
-                on_done(k, results[k])
-    except BaseException:
-        (stopping or (lambda e: e.shutdown(wait=False, cancel_futures=True)))(executor)
-        raise
-    return results
+def start_seeds(cfg: PredictConfig) -> list[int | None]:
+    """The seeds of ``cfg.starts`` starts: None (the start itself) for the first, ``cfg.seed + k`` for start k."""
+    return [None if k == 0 else cfg.seed + k for k in range(cfg.starts)]
 
 
 def agreeing(results: list[PredictResult], tolerance: float = AGREEMENT) -> tuple[int, PredictResult]:
@@ -223,134 +146,3 @@ def agreeing(results: list[PredictResult], tolerance: float = AGREEMENT) -> tupl
         return 0, best
     count = sum(1 for r in results if r.converged and r.objective <= best.objective * (1 + tolerance))
     return count, best
-
-
-# ----------------------------------------------------------------------------------------------- study grids
-CONDITIONS = ("normal", "foot_mass", *COMMERCIAL_FEET, "optimal")
-#: Table 5.2/5.3's weight sets a)–d) (5.3.1), read as the command line reads --weights
-WEIGHT_SETS = {k: weight_pair(v) for k, v in {"a": "1,1", "b": "4/3,2/3", "c": "8/5,2/5", "d": "20/11,2/11"}.items()}
-
-
-@dataclass(frozen=True)
-class StudySpec:
-    """A study file (``--study``): speeds (m/s) × weight sets × conditions, and what every case shares.
-
-    ``weights``: labels of :data:`WEIGHT_SETS` or "W1,W2" strings; ``conditions``: of :data:`CONDITIONS`;
-    ``strength_scale``: every case's F_max scale, the normal one's included (5.3.3: 1.5; 0: each condition's
-    default); ``foot_mass_kg``: the foot_mass condition's added mass (5.3.2: 2); ``starts``: solves per case;
-    ``time_limit_s``: each case's wall-clock budget (s; 0: none).
-    """
-
-    name: str
-    speeds_m_s: tuple[float, ...]
-    weights: tuple[str, ...]
-    conditions: tuple[str, ...]
-    nodes: int = 18
-    strength_scale: float = 0.0
-    foot_mass_kg: float = 2.0
-    starts: int = 1
-    max_iterations: int = 3000
-    time_limit_s: float = 0.0
-
-    @classmethod
-    def from_mapping(cls, data, path) -> StudySpec:
-        """The spec of a study file's contents (an InputError naming ``path`` and the field otherwise)."""
-        if not isinstance(data, dict):
-            raise InputError(path, "study", f"got {shown(data)} (expected a mapping: name, speeds_m_s, weights, "
-                                            "conditions)")
-        known = {f.name for f in dataclasses.fields(cls)}
-        for key in data:
-            if key not in known:
-                raise InputError(path, str(key), f"unknown key (expected {', '.join(sorted(known))})")
-
-        def listed(key, kind):
-            value = data.get(key)
-            if not isinstance(value, list) or not value:
-                raise InputError(path, key, f"got {shown(value)} (expected a non-empty list)")
-            return tuple(kind(v) for v in value)
-
-        def speed(v):
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 3:
-                raise InputError(path, "speeds_m_s", f"got {shown(v)} (expected speeds in m/s, 0 < v ≤ 3)")
-            return float(v)
-
-        weights_field = next(f for f in dataclasses.fields(PredictConfig) if f.name == "weights")
-
-        def weight(v):
-            if str(v) not in WEIGHT_SETS:
-                check_parameter(weights_field, v, where="weights", path=path)
-            return str(v)
-
-        def condition(v):
-            return one_of(str(v), CONDITIONS, where="conditions", path=path)
-
-        spec = {"name": str(data.get("name", "study")), "speeds_m_s": listed("speeds_m_s", speed),
-                "weights": listed("weights", weight), "conditions": listed("conditions", condition)}
-        for key, kind, low, high in (("nodes", int, 6, 40), ("strength_scale", float, 0.0, 5.0),
-                                     ("foot_mass_kg", float, 0.0, 20.0), ("starts", int, 1, 100),
-                                     ("max_iterations", int, 1, 100000), ("time_limit_s", float, 0.0, 1e6)):
-            if key in data:
-                value = data[key]
-                if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high \
-                        or (kind is int and value != int(value)):
-                    raise InputError(path, key, f"got {shown(value)} (expected {kind.__name__} in [{low}, {high}])")
-                spec[key] = kind(value)
-        if "optimal" in spec["conditions"] and not set(COMMERCIAL_FEET) <= set(spec["conditions"]):
-            raise InputError(path, "conditions", "optimal needs sach, seattle and flex as well (its warm starts, "
-                                                 "5.3.3)")
-        return cls(**spec)
-
-
-@dataclass(frozen=True)
-class StudyCase:
-    """One case of a study: its folder name, labels and configuration; ``starts_from``: the cases (of its chain)
-    whose solutions start it."""
-
-    name: str
-    speed_m_s: float
-    weight_set: str
-    condition: str
-    cfg: PredictConfig
-    starts_from: tuple[str, ...] = field(default=())
-
-
-def weight_label(weights: tuple[float, float], given: str) -> str:
-    """A weight set's label: "a"–"d" for Table 5.2's sets, else the "W1,W2" text ``given``."""
-    return next((k for k, v in WEIGHT_SETS.items() if v == weights), given)
-
-
-def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
-    """The study's cases in chains, one per speed: for each weight set in turn, the normal case (started from
-    the previous weight set's normal solution; the chain's first from the default guess), every other condition
-    from that normal solution except the second and third feet (from the first foot's solution, then the normal
-    one: module docstring), and the optimal prosthesis last (from the feet and the normal solution)."""
-    chains = []
-    for speed in spec.speeds_m_s:
-        chain, previous = [], None
-        for w in spec.weights:
-            weights = WEIGHT_SETS.get(w) or weight_pair(w)
-            label = weight_label(weights, w)
-            base = dataclasses.replace(PredictConfig(), speed_m_s=speed, weights=weights, nodes=spec.nodes,
-                                       max_iterations=spec.max_iterations, time_limit_s=spec.time_limit_s,
-                                       strength_scale=spec.strength_scale)
-            prefix = f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
-            normal = f"{prefix}_normal"
-            order = ["normal"] + [c for c in spec.conditions if c not in ("normal", "optimal")] + \
-                    (["optimal"] if "optimal" in spec.conditions else [])
-            for condition in order:
-                if condition == "normal":
-                    cfg, starts = base, (() if previous is None else (previous,))
-                elif condition == "foot_mass":
-                    cfg, starts = dataclasses.replace(base, foot_mass_kg=spec.foot_mass_kg), (normal,)
-                elif condition == "optimal":
-                    cfg = dataclasses.replace(base, prosthesis="optimal")
-                    starts = tuple(f"{prefix}_{f}" for f in COMMERCIAL_FEET) + (normal,)
-                else:  # the first foot from the normal solution, the others from the first foot's (module doc)
-                    feet = [c for c in order if c in COMMERCIAL_FEET]
-                    first_foot = f"{prefix}_{feet[0]}"
-                    cfg = dataclasses.replace(base, prosthesis=condition)
-                    starts = (normal,) if condition == feet[0] else (first_foot, normal)
-                chain.append(StudyCase(f"{prefix}_{condition}", speed, label, condition, cfg, starts))
-            previous = normal
-        chains.append(chain)
-    return chains

@@ -46,6 +46,7 @@ KEY_FIGURES = {
     "idyn": ("speed_m_s", "stride_length_m", "period_s", "stance_right_pct", "stance_left_pct",
              "rms_residual_force_N", "rms_residual_moment_Nm", "mass_kg"),
     "muscles": ("method", "converged", "metabolic_cost_J", "cost_of_transport_J_per_m", "max_moment_error_Nm"),
+    "predict": ("converged", "iterations", "objective", "cost_of_transport_J_per_m", "deviation"),
 }
 #: tasks in flight per worker: enough to keep every worker busy, few enough that the client stays small
 TASKS_PER_WORKER = 2
@@ -178,7 +179,7 @@ def run_trial(folder: str, name: str, cfg: PipelineConfig, key: str, stale: Sequ
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            outcomes = run_stages(Path(folder), stale, cfg, plots=plots)
+            outcomes = run_stages(Path(folder), stale, cfg, plots=plots, workers=1)  # one worker: this one
     except GaitError as exc:  # bad input (2), an unconverged optimization that raised (3)
         return failed(exc.exit_code, str(exc))
     except Exception as exc:  # an internal error in one trial is that trial's failure

@@ -113,7 +113,8 @@ def configure(pipeline: Path | None, **sections) -> PipelineConfig:
 
 
 def section_dict(cfg: PipelineConfig, name: str) -> dict:
-    return dataclasses.asdict(cfg.section(name))
+    """One section's parameters as plain data (pairs as lists), as a pipeline file would give them."""
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in dataclasses.asdict(cfg.section(name)).items()}
 
 
 def to_yaml(cfg: PipelineConfig) -> str:

@@ -21,7 +21,8 @@ from pathlib import Path
 from gaitcli.run.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
-from gaitcli.core.registry import ProgressCallback, StageContext, no_progress, requirements, stage, stage_names
+from gaitcli.core.registry import (Progress, ProgressCallback, StageContext, no_progress, requirements, stage,
+                                   stage_names)
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import check_output_folder, check_replaceable
 from gaitcli.io.h5 import file_attrs, provenance, read_result, record_datasets, write_h5
@@ -90,19 +91,31 @@ def load_static(trial: TrialFolder, lab_to_model) -> Recording | None:
 
 
 class TrialRun:
-    """One trial, its output root and the resolved configuration: freshness, provenance, inputs read once."""
+    """One run: its trial (None for stages that need none), output root, resolved configuration and the files
+    named for it; freshness, provenance, inputs read once. Without a trial, stages that need one run on the
+    bundled sample trial (``needs_trial``) and the output root is ./gait_out."""
 
-    def __init__(self, trial: Path | None, out: Path | None, cfg: PipelineConfig):
+    def __init__(self, trial: Path | None, out: Path | None, cfg: PipelineConfig, *,
+                 files: dict[str, Path] | None = None, needs_trial: bool = True):
         bundled = trial is None
-        self.trial = open_trial(sample_trial() if bundled else trial)
+        self.trial = open_trial(sample_trial() if bundled else trial) if trial is not None or needs_trial else None
         if out is None:
             out = Path.cwd() / "gait_out" if bundled else self.trial.folder / "gait_out"
         self.out_root = Path(out)
         self.cfg = cfg
-        self.inputs = {p.name: sha256(p) for p in self.trial.input_files()}
+        self.files = {k: Path(v) for k, v in (files or {}).items() if v is not None}
+        self.inputs = {p.name: sha256(p) for p in self.trial.input_files()} if self.trial is not None else {}
+        self.read: dict[str, dict[str, str]] = {}  # per stage: the further files it read (StageContext.uses)
         self._recording: Recording | None = None
 
+    @property
+    def title(self) -> str:
+        """The figures' title: the trial folder's name ("" without a trial)."""
+        return self.trial.folder.resolve().name if self.trial is not None else ""
+
     def recording(self) -> Recording:
+        if self.trial is None:
+            raise InputError(None, "trial", "this stage needs a trial folder (expected TRIAL)")
         if self._recording is None:
             self._recording = load_recording(self.trial)
         return self._recording
@@ -113,9 +126,9 @@ class TrialRun:
         return json.dumps({"inputs": self.inputs, "config": cfg, "format": OUTPUT_FORMAT}, sort_keys=True)
 
     def attrs(self, name: str, history: tuple[str, ...] = ()) -> dict:
-        attrs = provenance(to_yaml(self.cfg), self.inputs, history)
+        attrs = provenance(to_yaml(self.cfg), {**self.inputs, **self.read.get(name, {})}, history)
         attrs["stage_key"] = self.stage_key(name)
-        attrs["trial"] = self.trial.folder.resolve().name
+        attrs["trial"] = self.title or None
         return attrs
 
     def output_folder(self, name: str) -> Path:
@@ -131,6 +144,36 @@ class TrialRun:
         except InputError:  # damaged: made anew
             return None
         return path if key == self.stage_key(name) else None
+
+    def record(self, name: str, path: Path) -> None:
+        """``path`` read by stage ``name``: its SHA-256 goes into that stage's provenance."""
+        self.read.setdefault(name, {})[str(path)] = sha256(path)
+
+    def context(self, name: str, *, inputs: dict | None = None, input_paths: dict | None = None,
+                static_recording=None, progress: ProgressCallback = no_progress, plots: bool = True,
+                workers: int | None = None, scheduler: str | None = None) -> StageContext:
+        """The context of stage ``name`` in this run (``inputs``: the hand-offs of the stages it depends on)."""
+        trial = self.trial
+        input_paths = {} if input_paths is None else input_paths
+
+        def optional(dep: str):
+            if dep not in stage(name).optional:
+                raise LookupError(f"stage {name} asked for {dep}, which is not one of its optional stages")
+            if trial is None:
+                return None
+            path = fresh_output(trial.folder, dep, self.cfg, out=self.out_root, progress=progress, plots=plots)
+            input_paths[dep] = path
+            self.record(name, path)
+            return _read(stage(dep), path)
+
+        return StageContext(subject=trial.subject if trial else None, folder=trial.folder if trial else None,
+                            subject_path=trial.subject_path if trial else None,
+                            trial_path=trial.trial_path if trial else None,
+                            static_path=trial.static_path if trial else None,
+                            inputs=inputs or {}, input_paths=input_paths, recording=self.recording,
+                            static_recording=static_recording or (lambda: None), progress=progress, stage=name,
+                            files=self.files, workers=workers, scheduler=scheduler, resolve_optional=optional,
+                            record_input=lambda path: self.record(name, path))
 
 
 def write_record(folder: Path, result, attrs: dict, *, h5_name: str) -> dict:
@@ -165,18 +208,24 @@ def needed_stages(names) -> tuple[str, ...]:
 
 
 def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | None = None,
-               progress: ProgressCallback = no_progress, plots: bool = True) -> list[StageOutcome]:
+               progress: ProgressCallback = no_progress, plots: bool = True, files: dict[str, Path] | None = None,
+               workers: int | None = None, scheduler: str | None = None) -> list[StageOutcome]:
     """Run the stages ``names`` (and whatever they need) on one trial; one outcome per stage touched.
 
     The named stages always run; a stage they depend on is read back from its
     output where that is fresh. Nothing is written until every stage has been
-    computed. Raises :class:`~gaitcli.errors.InputError` for bad input (nothing
-    written); an unconverged optimization is written and reported in its outcome.
+    computed, except an optional stage a stage asks for (``StageContext.optional``),
+    which is made and written first when its output is not fresh. ``trial`` None:
+    no trial when no stage needed needs one, else the bundled sample. ``files``:
+    files named for the run (``StageContext.files``); ``workers``, ``scheduler``:
+    where a stage may run work in parallel. Raises
+    :class:`~gaitcli.errors.InputError` for bad input (nothing written); an
+    unconverged optimization is written and reported in its outcome.
     """
-    run = TrialRun(trial, out, cfg)
-    check_output_folder(run.out_root)
     names = tuple(names)
     needed = needed_stages(names)
+    run = TrialRun(trial, out, cfg, files=files, needs_trial=any(stage(n).trial for n in needed))
+    check_output_folder(run.out_root)
     handoffs, sources, outcomes, computed = {}, {}, [], []
 
     def static_recording():
@@ -197,12 +246,11 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
                 except (InputError, KeyError, OSError, ValueError, TypeError):  # older or damaged: make it anew
                     pass
         started = time.perf_counter()
-        ctx = StageContext(subject=run.trial.subject, folder=run.trial.folder, subject_path=run.trial.subject_path,
-                           trial_path=run.trial.trial_path, static_path=run.trial.static_path,
-                           inputs={d: handoffs[d] for d in st.depends}, input_paths={d: sources[d] for d in st.depends},
-                           recording=run.recording, static_recording=static_recording, progress=progress, stage=name)
+        ctx = run.context(name, inputs={d: handoffs[d] for d in st.depends},
+                          input_paths={d: sources[d] for d in st.depends}, static_recording=static_recording,
+                          progress=progress, plots=plots, workers=workers, scheduler=scheduler)
         result = st.run(ctx, cfg.section(name))
-        handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path
+        handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path if run.trial else None
         computed.append((name, result, time.perf_counter() - started))
 
     for name, _, _ in computed:  # before the first write: a user's file in any folder to replace stops them all
@@ -214,7 +262,9 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
         with stage_folder(target) as tmp:
             summary = _write(st, tmp, result, run.attrs(name, _history(result)))
             if plots and st.plots is not None:
-                st.plots(tmp / st.h5_name, tmp / "plots", run.trial.folder.resolve().name)
+                progress(Progress(name, "figures", 0, 1))
+                st.plots(tmp / st.h5_name, tmp / "plots", run.title)
+                progress(Progress(name, "figures", 1, 1))
             summary["elapsed_s"] = round(elapsed + time.perf_counter() - started, 3)
             write_json(tmp / "summary.json", summary)
         converged = st.converged(result)
@@ -229,7 +279,6 @@ def run_stage(trial: Path | None, name: str, cfg: PipelineConfig, **options) -> 
     return next(o for o in run_stages(trial, [name], cfg, **options) if o.stage == name)
 
 
-
 def fresh_output(trial: Path | None, name: str, cfg: PipelineConfig, *, out: Path | None = None,
                  progress: ProgressCallback = no_progress, plots: bool = True) -> Path:
     """The HDF5 output of stage ``name`` for one trial: the existing one when fresh, else made anew (with
@@ -240,193 +289,3 @@ def fresh_output(trial: Path | None, name: str, cfg: PipelineConfig, *, out: Pat
         run_stages(trial, [name], cfg, out=out, progress=progress, plots=plots)
         path = run.output_folder(name) / stage(name).h5_name
     return path
-
-
-@dataclass(frozen=True)
-class PredictOutcome:
-    """What ``gait predict`` wrote: the folder, its summary, whether the optimization converged and, if not,
-    a one-line ``message`` naming the violated constraint groups."""
-
-    folder: Path
-    summary: dict
-    converged: bool
-    message: str = ""
-
-
-def _read_init(path: Path):
-    """The design vector χ of an earlier ``predict.h5`` (``--init``)."""
-    import numpy as np
-
-    from gaitcli.errors import InputError
-    from gaitcli.io.h5 import read_field
-    from gaitcli.predict.stage import PredictResult
-
-    try:
-        return np.asarray(read_field(path, PredictResult, "design", what="gait predict"), float)
-    except InputError as exc:  # not HDF5, no design, a link loop
-        if exc.field is not None:  # a design gaitcli will not read (too large): as io.h5 names it
-            raise
-    except (ValueError, TypeError):  # text where the design's numbers belong
-        pass
-    if not Path(path).exists():
-        raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)")
-    raise InputError(path, "--init", "not a predict.h5 (expected result/design, the solution of an earlier "
-                                     "gait predict)")
-
-
-def prosthesis_of(cfg):
-    """The prostheses' curve of ``cfg.prosthesis``: a commercial foot (Table A.7), a YAML file's (validated:
-    :func:`gaitcli.predict.prosthesis.curve_from_mapping`), or None (none, optimal)."""
-    from gaitcli.errors import InputError
-    from gaitcli.io.yamlfile import read_yaml
-    from gaitcli.predict.prosthesis import CHOICES, curve_for, curve_from_mapping
-
-    if cfg.prosthesis in CHOICES:
-        return curve_for(cfg.prosthesis)
-    path = Path(cfg.prosthesis)
-    if path.suffix.lower() not in (".yaml", ".yml"):
-        raise InputError(None, "--prosthesis", f"got {cfg.prosthesis!r} (expected {', '.join(CHOICES)} or a .yaml "
-                                               "file of a_p, b_p, c0, a_n, b_n, d_prosth)")
-    if not path.is_file():
-        raise InputError(path, "--prosthesis", "file not found (expected a YAML file of a_p, b_p, c0, a_n, b_n, "
-                                               "d_prosth)")
-    return curve_from_mapping(read_yaml(path), path, cfg.monotone_range_rad())
-
-
-def predict_inputs(trial: Path | None, *, out: Path | None = None, reference_path: Path | None = None,
-                   subject_path: Path | None = None, progress: ProgressCallback = no_progress,
-                   pipeline: PipelineConfig | None = None):
-    """The subject's model parameters, the reference, the inputs' SHA-256 and the trial folder of a prediction:
-    the subject is ``subject_path``'s, else the trial's, else the dissertation's subject 1; the reference is
-    ``reference_path``'s, else one built from the trial's idyn output (made if missing or stale), else the
-    bundled one."""
-    from gaitcli.run.config import configure
-    from gaitcli.dynamics.outputs import read_idyn_output
-    from gaitcli.errors import InputError
-    from gaitcli.predict.model import WalkerParameters
-    from gaitcli.predict.reference import read_reference, reference_from_idyn
-    from gaitcli.resources import bundled_reference
-    from gaitcli.kinematics.subject import load_subject
-
-    folder = open_trial(trial) if trial is not None else None
-    reference = read_reference(reference_path) if reference_path is not None else None
-    subject = load_subject(subject_path) if subject_path is not None else (folder.subject if folder else None)
-    if subject is not None and subject_path is not None and subject.mass_kg is None:
-        raise InputError(subject_path, "mass_kg", "got 'auto' (expected the body mass in kg: gait predict has no "
-                                                  "force plates to weigh the subject)")
-    inputs = {str(p): sha256(p) for p in (reference_path, subject_path) if p is not None}
-    mass = subject.mass_kg if subject is not None else None
-    if folder is not None and (reference is None or mass is None):
-        idyn = fresh_output(trial, "idyn", pipeline or configure(None), out=out, progress=progress, plots=False)
-        inputs[str(idyn)] = sha256(idyn)
-        output = read_idyn_output(idyn)
-        if reference is None:
-            reference, _, _ = reference_from_idyn([output], sources=[folder.folder.resolve().name])
-        if mass is None:
-            mass = output.sagittal.body_mass_kg
-    if reference is None:
-        reference = read_reference(bundled_reference())
-        inputs[str(bundled_reference())] = sha256(bundled_reference())
-    params = (WalkerParameters.from_subject(mass, subject.stature_m, subject.sex,
-                                            thigh_length_m=subject.thigh_length_m,
-                                            shank_length_m=subject.shank_length_m)
-              if subject is not None else WalkerParameters.subject_1())
-    return params, reference, inputs, folder
-
-
-def predict_study(trial: Path | None, study_path: Path, *, out: Path | None = None,
-                  reference_path: Path | None = None, subject_path: Path | None = None, workers: int | None = None,
-                  force: bool = False, progress: ProgressCallback = no_progress,
-                  pipeline: PipelineConfig | None = None, scheduler: str | None = None):
-    """``gait predict --study FILE``: validate the study file and the inputs, run every case
-    (:func:`gaitcli.run.studies.run_study`) into ``OUT/study/``. Returns (rows, the study folder)."""
-    from gaitcli.run.config import configure
-    from gaitcli.io.yamlfile import read_yaml
-    from gaitcli.predict.starts import StudySpec
-    from gaitcli.run.studies import run_study
-
-    if not Path(study_path).is_file():
-        raise InputError(study_path, "--study", "file not found (expected a study YAML: name, speeds_m_s, weights, "
-                                                "conditions)")
-    spec = StudySpec.from_mapping(read_yaml(study_path), study_path)
-    params, reference, inputs, _ = predict_inputs(trial, out=out, reference_path=reference_path,
-                                                  subject_path=subject_path, progress=progress, pipeline=pipeline)
-    inputs[str(study_path)] = sha256(study_path)
-    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
-    check_output_folder(root)
-    attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs)
-    return run_study(spec, root, params=params, reference=reference, subject=repr(params), attrs=attrs,
-                     workers=workers, force=force, scheduler=scheduler, progress=progress)
-
-
-def predict_trial(trial: Path | None, cfg, *, out: Path | None = None, reference_path: Path | None = None,
-                  subject_path: Path | None = None, init_path: Path | None = None,
-                  progress: ProgressCallback = no_progress, pipeline: PipelineConfig | None = None,
-                  plots: bool = True, starts: int = 1, seed: int = 0, workers: int | None = None,
-                  scheduler: str | None = None) -> PredictOutcome:
-    """``gait predict``: validate every input, predict (:func:`gaitcli.predict.stage.run_predict`; the optimal
-    prosthesis by :func:`gaitcli.predict.starts.predict_optimal`; ``starts`` > 1: the best of that many starts,
-    :func:`gaitcli.run.studies.best_of_starts`), write ``OUT/predict/`` whole (``predict.outputs``) with its
-    ``summary.json`` (and ``starts.csv``). Subject and reference as :func:`predict_inputs`."""
-    from gaitcli.run.config import configure
-    from gaitcli.core.registry import Progress
-    from gaitcli.predict.nlp import TIME_LIMIT_STATUS
-    from gaitcli.predict.prosthesis import CHOICES as PROSTHESIS_CHOICES
-    from gaitcli.predict.stage import run_predict, violated_groups
-    from gaitcli.predict.outputs import write_predict_outputs
-
-    # everything is validated before anything runs or is written
-    device = prosthesis_of(cfg)
-    init = _read_init(Path(init_path)) if init_path is not None else None
-    params, reference, inputs, folder = predict_inputs(trial, out=out, reference_path=reference_path,
-                                                       subject_path=subject_path, progress=progress,
-                                                       pipeline=pipeline)
-    root = Path(out) if out is not None else (Path(trial) / "gait_out" if trial is not None else Path("gait_out"))
-    check_output_folder(root)  # before the solve, which may take minutes
-    for p in (init_path, None if cfg.prosthesis in PROSTHESIS_CHOICES else Path(cfg.prosthesis)):
-        if p is not None:
-            inputs[str(p)] = sha256(p)
-
-    def iteration(k, objective, violation):
-        progress(Progress("predict", "IPOPT iterations", k + 1, cfg.max_iterations,
-                          detail=f"J {objective:.4g}, max violation {violation:.2g}"))
-
-    starts_table = None
-    if starts > 1:
-        from gaitcli.run.studies import best_of_starts
-
-        result, starts_table, agreed = best_of_starts(cfg, starts, params=params, reference=reference, device=device,
-                                                 seed=seed, workers=workers, scheduler=scheduler, progress=progress)
-    elif cfg.prosthesis == "optimal":
-        from gaitcli.predict.starts import predict_optimal
-
-        result = predict_optimal(cfg, params=params, reference=reference, init=init, report=iteration)
-    else:
-        result = run_predict(cfg, params=params, reference=reference, init=init, report=iteration, device=device)
-    target = root / "predict"
-    attrs = provenance(to_yaml(configure(None)) if pipeline is None else to_yaml(pipeline), inputs, result.history)
-    attrs["predict_config"] = json.dumps(dataclasses.asdict(cfg))
-    with stage_folder(target) as tmp:
-        summary = write_predict_outputs(tmp, result, attrs)
-        if starts_table is not None:
-            from gaitcli.io.outputs import write_table
-
-            write_table(tmp / "starts.csv", starts_table)
-            summary.update({"starts": starts, "starts_converged": int(sum(starts_table["converged"])),
-                            "starts_agreeing": agreed})
-        write_json(tmp / "summary.json", summary)
-        if plots:
-            from gaitcli.report.predict_plots import predict_figures
-
-            progress(Progress("predict", "figures", 0, 1))
-            predict_figures(tmp / "predict.h5", tmp / "plots", title=folder.folder.name if folder else "subject 1")
-            progress(Progress("predict", "figures", 1, 1))
-    message = ""
-    if not result.converged:
-        bad = violated_groups(result.violations)
-        parts = [f"{name} by {value:.3g}" for name, value in bad.items()]
-        status = (f"time limit of {cfg.time_limit_s:g} s reached" if result.status == TIME_LIMIT_STATUS
-                  else result.status)
-        message = (f"the prediction did not converge ({status}"
-                   + (f"; violated: {', '.join(parts)}" if parts else "") + ")")
-    return PredictOutcome(folder=target, summary=summary, converged=result.converged, message=message)

@@ -5,16 +5,30 @@ package's ``outputs.py``), its figures (``report/plots.py``) and the reader of
 its hand-off (``io/h5.py``). Adding a
 stage is one module with its config and run function plus one entry here
 (``docs/architecture.md``).
+
+``predict`` needs no trial; with one it asks for the trial's idyn output (an
+optional stage) only where it needs its reference or the subject's mass. Its
+entry resolves what a prediction starts from: the subject (the ``subject`` file
+named for the run, else the trial's, else the dissertation's subject 1), the
+reference (the ``reference`` file, else one built from the trial's idyn output,
+else the bundled one), the prostheses' curve and the ``init`` solution.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
 from gaitcli.core.container import Trial
-from gaitcli.core.registry import Stage, StageContext, register
+from gaitcli.core.registry import Progress, Stage, StageContext, register
 from gaitcli.dynamics.sagittal import SagittalExport
 from gaitcli.dynamics.stage import IdynConfig, run_idyn
+from gaitcli.errors import InputError
 from gaitcli.io.h5 import read_result
 from gaitcli.muscles.stage import MuscleResult, MusclesConfig, run_muscles_stage
+from gaitcli.predict.stage import PredictConfig, PredictResult
 from gaitcli.signal.stage import FilterConfig, filter_trial
 
 
@@ -75,3 +89,180 @@ MUSCLES = register(Stage(
     result=MuscleResult, h5_name="muscles.h5",
     plots=_figures("muscle_figures"), folder=lambda cfg: f"muscles/{cfg.method}",
     converged=lambda result: result.converged, unconverged=_unconverged_muscles))
+
+
+# ------------------------------------------------------------------------------------------------------- predict
+@dataclass(frozen=True)
+class PredictionInputs:
+    """What a prediction starts from besides its configuration: the subject's model parameters (None: subject
+    1), the reference of Jdev, the prostheses' curve of a commercial foot or a file (None otherwise) and a
+    design vector to start from (None: the default guess)."""
+
+    params: object
+    reference: object
+    device: object = None
+    init: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """The predict stage's result: the prediction, its configuration and, of ``--starts N``, every start's
+    figures (starts.csv's table) and how many starts reached the best J."""
+
+    result: PredictResult
+    cfg: PredictConfig
+    starts: dict | None = None
+    agreed: int = 0
+
+    @property
+    def history(self) -> tuple[str, ...]:
+        return self.result.history
+
+
+def read_init(path: Path):
+    """The design vector χ of an earlier ``predict.h5`` (the ``init`` file)."""
+    from gaitcli.io.h5 import read_field
+
+    try:
+        return np.asarray(read_field(path, PredictResult, "design", what="gait predict"), float)
+    except InputError as exc:  # not HDF5, no design, a link loop
+        if exc.field is not None:  # a design gaitcli will not read (too large): as io.h5 names it
+            raise
+    except (ValueError, TypeError):  # text where the design's numbers belong
+        pass
+    if not Path(path).exists():
+        raise InputError(path, "--init", "file not found (expected a predict.h5 of an earlier gait predict)")
+    raise InputError(path, "--init", "not a predict.h5 (expected result/design, the solution of an earlier "
+                                     "gait predict)")
+
+
+def prosthesis_curve(ctx: StageContext, cfg: PredictConfig):
+    """The prostheses' curve of ``cfg.prosthesis``: a commercial foot (Table A.7), a YAML file's (validated:
+    :func:`gaitcli.predict.prosthesis.curve_from_mapping`), or None (none, optimal)."""
+    from gaitcli.io.yamlfile import read_yaml
+    from gaitcli.predict.prosthesis import CHOICES, curve_for, curve_from_mapping
+
+    if cfg.prosthesis in CHOICES:
+        return curve_for(cfg.prosthesis)
+    path = Path(cfg.prosthesis)
+    curve = curve_from_mapping(read_yaml(path), path, cfg.monotone_range_rad())
+    ctx.uses(path)
+    return curve
+
+
+def prediction_subject(ctx: StageContext):
+    """The subject of a prediction: the ``subject`` file named for the run, else the trial's, else None (the
+    dissertation's subject 1); a named subject must give its mass."""
+    from gaitcli.kinematics.subject import load_subject
+
+    path = ctx.files.get("subject")
+    if path is None:
+        return ctx.subject
+    subject = load_subject(path)
+    ctx.uses(path)
+    if subject.mass_kg is None:
+        raise InputError(path, "mass_kg", "got 'auto' (expected the body mass in kg: gait predict has no force "
+                                          "plates to weigh the subject)")
+    return subject
+
+
+def prediction_inputs(ctx: StageContext, cfg: PredictConfig) -> PredictionInputs:
+    """Everything a prediction starts from (module docstring), read and checked before anything is solved."""
+    from gaitcli.dynamics.outputs import read_idyn_output
+    from gaitcli.predict.model import WalkerParameters
+    from gaitcli.predict.reference import read_reference, reference_from_idyn
+    from gaitcli.resources import bundled_reference
+
+    device = prosthesis_curve(ctx, cfg)
+    init = read_init(ctx.files["init"]) if "init" in ctx.files else None
+    given = ctx.files.get("reference")
+    reference = read_reference(given) if given is not None else None
+    for name in ("init", "reference"):
+        if name in ctx.files:
+            ctx.uses(ctx.files[name])
+    subject = prediction_subject(ctx)
+    mass = subject.mass_kg if subject is not None else None
+    if reference is None or (subject is not None and mass is None):
+        sagittal = ctx.optional("idyn")
+        if sagittal is not None:
+            if reference is None:
+                idyn = read_idyn_output(ctx.input_paths["idyn"])
+                reference, _, _ = reference_from_idyn([idyn], sources=[ctx.folder.resolve().name])
+            if mass is None:
+                mass = float(sagittal.body_mass_kg)
+    if reference is None:
+        reference = read_reference(bundled_reference())
+        ctx.uses(bundled_reference())
+    params = (WalkerParameters.from_subject(mass, subject.stature_m, subject.sex,
+                                            thigh_length_m=subject.thigh_length_m,
+                                            shank_length_m=subject.shank_length_m)
+              if subject is not None else WalkerParameters.subject_1())
+    return PredictionInputs(params, reference, device, init)
+
+
+def _predict(ctx: StageContext, cfg: PredictConfig) -> Prediction:
+    """A prediction (:func:`gaitcli.predict.stage.run_predict`); the optimal prosthesis by
+    :func:`gaitcli.predict.starts.predict_optimal`; ``starts`` > 1: the best of that many
+    (:func:`gaitcli.run.studies.best_of_starts`)."""
+    from gaitcli.predict.stage import run_predict
+    from gaitcli.predict.starts import predict_optimal
+
+    start = prediction_inputs(ctx, cfg)
+    if cfg.starts > 1:
+        from gaitcli.run.studies import best_of_starts
+
+        result, table, agreed = best_of_starts(cfg, params=start.params, reference=start.reference,
+                                               device=start.device, workers_count=ctx.workers, scheduler=ctx.scheduler,
+                                               progress=ctx.progress)
+        return Prediction(result, cfg, table, agreed)
+
+    def iteration(k, objective, violation):
+        ctx.progress(Progress("predict", "IPOPT iterations", k + 1, cfg.max_iterations,
+                              detail=f"J {objective:.4g}, max violation {violation:.2g}"))
+
+    if cfg.prosthesis == "optimal":
+        result = predict_optimal(cfg, params=start.params, reference=start.reference, init=start.init,
+                                 report=iteration)
+    else:
+        result = run_predict(cfg, params=start.params, reference=start.reference, init=start.init,
+                             report=iteration, device=start.device)
+    return Prediction(result, cfg)
+
+
+def _write_prediction(folder: Path, prediction: Prediction, attrs: dict) -> dict:
+    """The prediction's tables and predict.h5 (``predict.outputs``), and of ``--starts N`` starts.csv."""
+    from gaitcli.io.outputs import write_table
+    from gaitcli.predict.outputs import write_predict_outputs
+
+    summary = write_predict_outputs(folder, prediction.result, attrs)
+    if prediction.starts is not None:
+        write_table(folder / "starts.csv", prediction.starts)
+        summary.update({"starts": prediction.cfg.starts, "starts_converged": int(sum(prediction.starts["converged"])),
+                        "starts_agreeing": prediction.agreed})
+    return summary
+
+
+def _unconverged_prediction(prediction: Prediction) -> str:
+    """The prediction did not converge: why (IPOPT's status, or the time limit) and the violated constraint
+    groups."""
+    from gaitcli.predict.nlp import TIME_LIMIT_STATUS
+    from gaitcli.predict.stage import violated_groups
+
+    result = prediction.result
+    parts = [f"{name} by {value:.3g}" for name, value in violated_groups(result.violations).items()]
+    status = (f"time limit of {prediction.cfg.time_limit_s:g} s reached" if result.status == TIME_LIMIT_STATUS
+              else result.status)
+    return f"the prediction did not converge ({status}" + (f"; violated: {', '.join(parts)}" if parts else "") + ")"
+
+
+def _prediction_figures(h5_path, folder, title):
+    from gaitcli.report.predict_plots import predict_figures
+
+    return predict_figures(h5_path, folder, title=title or "subject 1")
+
+
+PREDICT = register(Stage(
+    name="predict", config=PredictConfig, optional=("idyn",), trial=False, run=_predict, write=_write_prediction,
+    read=lambda path: read_result(path, PredictResult), handoff=lambda prediction: prediction.result,
+    h5_name="predict.h5", plots=_prediction_figures,
+    converged=lambda prediction: prediction.result.converged, unconverged=_unconverged_prediction))

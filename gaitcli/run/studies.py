@@ -1,12 +1,23 @@
-"""``gait predict --study FILE.yaml`` and ``--starts N``: run the cases, write every case's folder, the study table
-and its figures (the edge of :mod:`gaitcli.predict.starts`).
+"""Prediction studies and multi-start (Diss. 5.3.2, 5.3.3): a study file's grid, its cases and their execution,
+and the best of ``gait predict --starts N``.
 
-A study's chains (one per speed, :func:`gaitcli.predict.starts.study_cases`) run in parallel
-worker processes; within a chain each case starts from the solutions it names. Every case is written whole
-into ``OUT/study/<case>/`` (the files of ``gait predict``) with a ``case_key``: the SHA-256 of its resolved
-configuration, the subject, the reference and the keys of the cases it started from. A case whose folder
-holds the same key is read back instead of solved again, so a rerun (or a run after an interrupt) does
-only what is missing. ``study.csv`` has one row per case, unconverged ones included and marked.
+A study file (``gait predict --study FILE.yaml``; ``pipelines/study_*.yaml``) names speeds (m/s) × weight sets ×
+conditions and the settings every case shares; each value is checked as the predict stage's own
+(:func:`gaitcli.core.validate.check_parameter`), an error naming the file and its key. :func:`study_cases`
+orders the cases in chains, one per speed: per weight set the normal case first (from the previous weight
+set's normal solution; the chain's first from the shipped normal solution retimed to its speed), every other
+case warm started from it, except the second and third commercial feet: they start from the first foot's
+solution when it converged (else from the normal one), and the optimal prosthesis last from the feet and the
+normal solution. Why the feet from a foot: the normal gait's ankle angles put Seattle's τ_s (a_p = −34020
+N·m/rad³) hundreds of N·m off, where IPOPT spends its iterations in inertia corrections; from the SACH
+solution it converges in a tenth of them (``benchmarks/README.md``).
+
+Every case is a task on the workers (:func:`gaitcli.run.cluster.workers`), started once the cases it starts
+from are done, and written whole into ``OUT/study/<case>/`` (the files of ``gait predict``) with a
+``case_key``: the SHA-256 of its resolved configuration, the subject, the reference and the keys of the cases
+it started from. A case whose folder holds the same key is read back instead of solved again, so a rerun (or
+a run after an interrupt) does only what is missing. ``study.csv`` has one row per case, unconverged ones
+included and marked.
 """
 
 from __future__ import annotations
@@ -16,25 +27,152 @@ import hashlib
 import json
 import os
 import time
-from concurrent.futures import as_completed
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from gaitcli.core.registry import Progress, ProgressCallback, no_progress
-from gaitcli.errors import InputError
-from gaitcli.io.h5 import read_result
+from gaitcli.core.validate import check_parameter, known_keys, one_of, replace_checked
+from gaitcli.errors import InputError, shown
+from gaitcli.io.atomic import check_output_folder, remove_stale
+from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
-from gaitcli.predict.prosthesis import COMMERCIAL_FEET
-from gaitcli.predict.stage import PredictResult, run_predict
-from gaitcli.predict.starts import (StudyCase, StudySpec, agreeing, pool, predict_optimal, retimed, run_starts,
-                                   stop, study_cases)
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET, FILE_KEYS
+from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
+from gaitcli.predict.starts import agreeing, predict_optimal, retimed, solve_start, start_seeds
 from gaitcli.resources import stored_solution
+from gaitcli.run.cluster import Task, Workers, completed, map_in_order, workers
+from gaitcli.run.config import PipelineConfig, to_yaml
 
+#: a study's conditions (5.3.2, 5.3.3)
+CONDITIONS = ("normal", "foot_mass", *COMMERCIAL_FEET, "optimal")
+#: Table 5.2/5.3's weight sets a)–d) (5.3.1), read as the predict stage reads its weights
+WEIGHT_SETS = {k: weight_pair(v) for k, v in {"a": "1,1", "b": "4/3,2/3", "c": "8/5,2/5", "d": "20/11,2/11"}.items()}
+#: the predict settings a study file may set for every case
+SHARED = ("nodes", "strength_scale", "starts", "max_iterations", "time_limit_s")
+#: a study file's keys
+KEYS = ("name", "speeds_m_s", "weights", "conditions", "foot_mass_kg", *SHARED)
+#: the foot_mass condition's added mass per foot, kg (5.3.2)
+FOOT_MASS_KG = 2.0
 #: study.csv's columns after the case's labels
 FIGURES = ("objective", "cost_of_transport_J_per_m", "deviation")
 
 
+def _field(name: str) -> dataclasses.Field:
+    return next(f for f in dataclasses.fields(PredictConfig) if f.name == name)
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A study file: speeds (m/s) × weight sets × conditions; ``weights``: (label, (w1, w2)) per set, the label
+    "a"–"d" for Table 5.2's sets, else the file's text; ``foot_mass_kg``: the foot_mass condition's added mass;
+    ``base``: what every case shares (the predict defaults with the file's :data:`SHARED` settings)."""
+
+    name: str
+    speeds_m_s: tuple[float, ...]
+    weights: tuple[tuple[str, tuple[float, float]], ...]
+    conditions: tuple[str, ...]
+    foot_mass_kg: float = FOOT_MASS_KG
+    base: PredictConfig = field(default_factory=PredictConfig)
+
+    @classmethod
+    def from_mapping(cls, data, path) -> StudySpec:
+        """The spec of a study file's contents (an InputError naming ``path`` and the key otherwise)."""
+        if not isinstance(data, dict):
+            raise InputError(path, "study", f"got {shown(data)} (expected a mapping: name, speeds_m_s, weights, "
+                                            "conditions)")
+        known_keys(data, KEYS, path=path)
+
+        def listed(key):
+            value = data.get(key)
+            if not isinstance(value, list) or not value:
+                raise InputError(path, key, f"got {shown(value)} (expected a non-empty list)")
+            return value
+
+        def weight_set(v):
+            if isinstance(v, str) and v in WEIGHT_SETS:
+                return v, WEIGHT_SETS[v]
+            pair = check_parameter(_field("weights"), v, where="weights", path=path)
+            label = next((k for k, w in WEIGHT_SETS.items() if w == pair), None)
+            return label or (v if isinstance(v, str) else ",".join(f"{w:g}" for w in pair)), pair
+
+        conditions = tuple(one_of(str(v), CONDITIONS, where="conditions", path=path) for v in listed("conditions"))
+        if "optimal" in conditions and not set(COMMERCIAL_FEET) <= set(conditions):
+            raise InputError(path, "conditions", f"optimal needs {', '.join(COMMERCIAL_FEET)} as well (its warm "
+                                                 "starts, 5.3.3)")
+        foot_mass = data.get("foot_mass_kg", FOOT_MASS_KG)
+        return cls(name=str(data.get("name", "study")),
+                   speeds_m_s=tuple(check_parameter(_field("speed_m_s"), v, where="speeds_m_s", path=path)
+                                    for v in listed("speeds_m_s")),
+                   weights=tuple(weight_set(v) for v in listed("weights")), conditions=conditions,
+                   foot_mass_kg=check_parameter(_field("foot_mass_kg"), foot_mass, where="foot_mass_kg", path=path),
+                   base=replace_checked(PredictConfig(), {k: data[k] for k in SHARED if k in data}, section=None,
+                                        path=path))
+
+
+def read_study(path: Path) -> StudySpec:
+    """The study file at ``path``, validated."""
+    from gaitcli.io.yamlfile import read_yaml
+
+    if not Path(path).is_file():
+        raise InputError(path, "--study", "file not found (expected a study YAML: name, speeds_m_s, weights, "
+                                          "conditions)")
+    return StudySpec.from_mapping(read_yaml(path), path)
+
+
+@dataclass(frozen=True)
+class StudyCase:
+    """One case of a study: its folder name, labels and configuration; ``starts_from``: the cases (of its chain)
+    whose solutions start it."""
+
+    name: str
+    speed_m_s: float
+    weight_set: str
+    condition: str
+    cfg: PredictConfig
+    starts_from: tuple[str, ...] = field(default=())
+
+
+def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
+    """The study's cases in chains, one per speed, in the order of the module docstring."""
+    chains = []
+    for speed in spec.speeds_m_s:
+        chain, previous = [], None
+        for label, weights in spec.weights:
+            base = dataclasses.replace(spec.base, speed_m_s=speed, weights=weights)
+            prefix = f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
+            normal = f"{prefix}_normal"
+            order = ["normal"] + [c for c in spec.conditions if c not in ("normal", "optimal")] + \
+                    (["optimal"] if "optimal" in spec.conditions else [])
+            for condition in order:
+                if condition == "normal":
+                    cfg, starts = base, (() if previous is None else (previous,))
+                elif condition == "foot_mass":
+                    cfg, starts = dataclasses.replace(base, foot_mass_kg=spec.foot_mass_kg), (normal,)
+                elif condition == "optimal":
+                    cfg = dataclasses.replace(base, prosthesis="optimal")
+                    starts = tuple(f"{prefix}_{f}" for f in COMMERCIAL_FEET) + (normal,)
+                else:  # the first foot from the normal solution, the others from the first foot's (module doc)
+                    feet = [c for c in order if c in COMMERCIAL_FEET]
+                    first_foot = f"{prefix}_{feet[0]}"
+                    cfg = dataclasses.replace(base, prosthesis=condition)
+                    starts = (normal,) if condition == feet[0] else (first_foot, normal)
+                chain.append(StudyCase(f"{prefix}_{condition}", speed, label, condition, cfg, starts))
+            previous = normal
+        chains.append(chain)
+    return chains
+
+
+def width(cases: list[StudyCase]) -> int:
+    """How many of ``cases`` can run at once: the most at one depth of their starts."""
+    depth: dict[str, int] = {}
+    for case in cases:  # every case after the cases it starts from
+        depth[case.name] = 1 + max((depth[n] for n in case.starts_from), default=-1)
+    return max(list(depth.values()).count(d) for d in set(depth.values()))
+
+
+# ---------------------------------------------------------------------------------------------------- one case
 def case_key(case: StudyCase, subject: str, reference_sha: str, start_keys: tuple[str, ...]) -> str:
     """The SHA-256 that says a case folder holds this case's result (module docstring)."""
     text = json.dumps({"cfg": dataclasses.asdict(case.cfg), "subject": subject, "reference": reference_sha,
@@ -79,8 +217,7 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
            "wall_time_s": float(wall_s), "reused": bool(reused), "starts_agreeing": int(agreed),
            "tau_s_at_minus_0.1_rad_Nm": _tau(result, -0.1), "tau_s_at_minus_0.2_rad_Nm": _tau(result, -0.2)}
     if result.prosthesis is not None:
-        row.update({f"prosthesis_{k}": float(v) for k, v in
-                    zip(("a_p", "b_p", "c0", "a_n", "b_n", "d_prosth"), result.prosthesis.coefficients())})
+        row.update({f"prosthesis_{k}": float(v) for k, v in zip(FILE_KEYS, result.prosthesis.coefficients())})
     return row
 
 
@@ -91,7 +228,13 @@ def _shipped_start(case: StudyCase) -> np.ndarray | None:
     return None if path is None else retimed(case.cfg, np.loadtxt(path))
 
 
-def _solve_case(case: StudyCase, spec: StudySpec, solved: dict, params, reference) -> tuple[PredictResult, int]:
+def first_start_keys(nodes: int) -> tuple[str, ...]:
+    """The key of a chain's first start: the shipped normal solution's SHA-256 (study cases are symmetric)."""
+    shipped = stored_solution(nodes, symmetric=True)
+    return (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
+
+
+def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[PredictResult, int]:
     """Solve one case from the solutions it starts from (``solved``: name → result of its chain so far)."""
     if case.condition == "optimal":
         feet = {name: solved[start] for name, start in zip(COMMERCIAL_FEET, case.starts_from)}
@@ -100,24 +243,17 @@ def _solve_case(case: StudyCase, spec: StudySpec, solved: dict, params, referenc
     # the first start that converged (a foot after the first: that foot's solution, else the normal one)
     starts = [solved[name] for name in case.starts_from]
     init = next((r for r in starts if r.converged), starts[0]).design if starts else _shipped_start(case)
-    if spec.starts > 1:  # start 0 from the chain's solution, the others from perturbed guesses
-        results = run_starts(case.cfg, spec.starts, params=params, reference=reference, workers=1, init=init)
-        agreed, best = agreeing(results)
+    if case.cfg.starts > 1:  # start 0 from the chain's solution, the others from perturbed guesses, one by one
+        with workers(1) as here:
+            agreed, best = agreeing(run_starts(case.cfg, here, params=params, reference=reference, init=init))
         return best, agreed
     return run_predict(case.cfg, params=params, reference=reference, init=init), 1
 
 
-def first_start_keys(spec: StudySpec) -> tuple[str, ...]:
-    """The key of a chain's first start: the shipped normal solution's SHA-256 (study cases are symmetric)."""
-    shipped = stored_solution(spec.nodes, symmetric=True)
-    return (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
-
-
-def run_case(case: StudyCase, spec: StudySpec, root: str, params, reference, subject: str, attrs: dict,
+def run_case(case: StudyCase, root: str, params, reference, subject: str, pipeline: PipelineConfig, inputs: dict,
              force: bool, first: tuple[str, ...], *starts: tuple) -> tuple[PredictResult, str, dict]:
     """Run (or read back) one case from its starts (what :func:`run_case` returned for each case it
-    ``starts_from``, in order): its result, its key and its study.csv row. A Dask task in a study on a cluster,
-    where the starts are the futures of the cases before it."""
+    ``starts_from``, in order): its result, its key and its study.csv row. A task on the study's workers."""
     start = time.perf_counter()
     solved = {name: done[0] for name, done in zip(case.starts_from, starts)}
     key = case_key(case, subject, reference.digest(), tuple(done[1] for done in starts) if case.starts_from else first)
@@ -125,98 +261,83 @@ def run_case(case: StudyCase, spec: StudySpec, root: str, params, reference, sub
     result = None if force else stored_case(folder, key)
     reused = result is not None
     if result is None:
-        result, agreed = _solve_case(case, spec, solved, params, reference)
+        result, agreed = _solve_case(case, solved, params, reference)
+        attrs = provenance(to_yaml(pipeline.replace_section("predict", case.cfg)), inputs, result.history)
         write_case(folder, result, {**attrs, "predict_config": json.dumps(dataclasses.asdict(case.cfg))},
                    {"case_key": key, "case": case.name, "condition": case.condition,
-                    "weight_set": case.weight_set, "starts": spec.starts, "starts_agreeing": agreed})
+                    "weight_set": case.weight_set, "starts": case.cfg.starts, "starts_agreeing": agreed})
     else:
         agreed = int(json.loads((folder / "summary.json").read_text()).get("starts_agreeing", 1))
     return result, key, case_row(case, result, reused=reused, wall_s=time.perf_counter() - start, agreed=agreed)
 
 
-def run_chain(chain: list[StudyCase], spec: StudySpec, root: str, params, reference, subject: str,
-              attrs: dict, force: bool) -> list[dict]:
-    """Run (or read back) one chain's cases in order; returns their study.csv rows. Runs in a worker process."""
-    done, rows = {}, []
-    first = first_start_keys(spec)
-    for case in chain:
-        done[case.name] = run_case(case, spec, root, params, reference, subject, attrs, force, first,
-                                   *(done[name] for name in case.starts_from))
-        rows.append(done[case.name][2])
-    return rows
-
-
-def run_study_on_cluster(client, chains: list[list[StudyCase]], spec: StudySpec, root: str, params, reference,
-                         subject: str, attrs: dict, force: bool, on_row=None) -> dict[str, dict]:
-    """Every case as a Dask task on ``client``'s cluster, the cases it starts from as its dependencies (so the
-    chains, and cases of one chain that do not depend on each other, run side by side). Rows by case name."""
-    from distributed import as_completed as completed
-
-    first = first_start_keys(spec)
-    futures = {}
-    for chain in chains:
-        for case in chain:
-            futures[case.name] = client.submit(run_case, case, spec, root, params, reference, subject, attrs, force,
-                                               first, *(futures[name] for name in case.starts_from), pure=False,
-                                               key=f"case-{case.name}-{hashlib.sha1(root.encode()).hexdigest()[:8]}")
-    names = {f.key: name for name, f in futures.items()}
-    rows = {}
-    for future in completed(list(futures.values())):
-        rows[names[future.key]] = future.result()[2]
-        if on_row is not None:
-            on_row(rows[names[future.key]])
-    return rows
-
-
-def run_study(spec: StudySpec, out: Path, *, params, reference, subject: str, attrs: dict,
-              workers: int | None = None, force: bool = False, scheduler: str | None = None,
-              progress: ProgressCallback = no_progress) -> tuple[list[dict], Path]:
-    """Every case of ``spec`` into ``out``/study/: the case folders, study.csv, study.png, curves.png. Returns
-    (rows in study order, the study folder). With ``scheduler`` (a Dask scheduler's address) every case is a
-    task on that cluster (:func:`run_study_on_cluster`); else the chains run in ``workers`` processes."""
-    chains = study_cases(spec)
-    root = Path(out) / "study"
-    root.mkdir(parents=True, exist_ok=True)
-    total = sum(len(c) for c in chains)
-    workers = max(1, min(len(chains), workers or os.cpu_count() or 1))
-    rows_by_chain: dict[int, list[dict]] = {}
-    progress(Progress("study", "cases", 0, total))
-    args = [(chain, spec, str(root), params, reference, subject, attrs, force) for chain in chains]
-    if scheduler is not None:  # the workers may run elsewhere, in other folders: absolute paths
-        from gaitcli.run.cluster import dask_client
-
-        root = root.resolve()
-
-        done = []
-
-        def case_done(row):
-            done.append(row)
-            progress(Progress("study", "cases", len(done), total))
-
-        with dask_client(1, scheduler) as client:
-            by_name = run_study_on_cluster(client, chains, spec, str(root), params, reference, subject, attrs, force,
-                                           on_row=case_done)
-        rows_by_chain = {k: [by_name[case.name] for case in chain] for k, chain in enumerate(chains)}
-    elif workers == 1:
-        for k, a in enumerate(args):
-            rows_by_chain[k] = run_chain(*a)
-            progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
-    else:
-        with pool(workers) as executor:
-            try:
-                futures = {executor.submit(run_chain, *a): k for k, a in enumerate(args)}
-                for future in as_completed(futures):
-                    rows_by_chain[futures[future]] = future.result()
-                    progress(Progress("study", "cases", sum(len(r) for r in rows_by_chain.values()), total))
-            except BaseException:
-                stop(executor)
-                raise
-    rows = [row for k in range(len(chains)) for row in rows_by_chain[k]]
-    write_table(root / "study.csv", {name: [r.get(name) for r in rows] for name in rows[0]})
+# ---------------------------------------------------------------------------------------------------- a study
+def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out: Path | None = None,
+              files: dict[str, Path] | None = None, workers_count: int | None = None, scheduler: str | None = None,
+              force: bool = False, progress: ProgressCallback = no_progress) -> tuple[list[dict], Path]:
+    """``gait predict --study FILE``: every case of the study file into ``OUT/study/``: the case folders,
+    study.csv and its figures. The subject and the reference are the predict stage's
+    (:func:`gaitcli.run.stages.prediction_inputs`). Returns (rows in study order, the study folder)."""
     from gaitcli.report.study_plots import study_figures
+    from gaitcli.run.pipeline import TrialRun
+    from gaitcli.run.stages import prediction_inputs
 
-    study_figures(rows, root, title=spec.name)
-    return rows, root
+    spec = read_study(study_path)
+    run = TrialRun(trial, out, cfg, files=files, needs_trial=False)
+    check_output_folder(run.out_root)
+    start = prediction_inputs(run.context("predict", progress=progress, plots=False), spec.base)
+    run.record("predict", Path(study_path))
+    inputs = {**run.inputs, **run.read.get("predict", {})}
+    chains = study_cases(spec)
+    cases = [case for chain in chains for case in chain]
+    root = (run.out_root / "study").resolve()  # the workers may run elsewhere, in other folders
+    root.mkdir(parents=True, exist_ok=True)
+    first = first_start_keys(spec.base.nodes)
+    tasks = {case.name: Task(run_case, (case, str(root), start.params, start.reference, repr(start.params), cfg,
+                                        inputs, force, first), case.starts_from) for case in cases}
+    rows: dict[str, dict] = {}
+    progress(Progress("study", "cases", 0, len(cases)))
+    count = min(workers_count or os.cpu_count() or 1, width(cases))
+    try:
+        with workers(count, scheduler) as pool:
+            for name, future in completed(pool, tasks):
+                rows[name] = future.result()[2]
+                progress(Progress("study", "cases", len(rows), len(cases)))
+    except BaseException:
+        for case in cases:  # what a stopped worker was writing
+            remove_stale(root / case.name)
+        raise
+    table = [rows[case.name] for case in cases]
+    write_table(root / "study.csv", {name: [r.get(name) for r in table] for name in table[0]})
+    study_figures(table, root, title=spec.name)
+    return table, root
+
+
+# ------------------------------------------------------------------------------------------------ multi-start
+def _start(cfg: PredictConfig, params, reference, device, init, seed: int | None) -> PredictResult:
+    return solve_start(cfg, params=params, reference=reference, seed=seed, device=device, init=init)
+
+
+def run_starts(cfg: PredictConfig, pool: Workers, *, params, reference, device=None, init: np.ndarray | None = None,
+               on_done=None) -> list[PredictResult]:
+    """``cfg.starts`` solves of ``cfg`` on ``pool``: start 0 from ``init`` (default: the default guess), start k
+    from a perturbed guess of seed ``cfg.seed + k`` (:func:`gaitcli.predict.starts.solve_start`).
+    ``on_done(k, result)`` as each finishes."""
+    return map_in_order(pool, _StartOf(cfg, params, reference, device, init), start_seeds(cfg), on_done=on_done)
+
+
+@dataclass(frozen=True)
+class _StartOf:
+    """``seed`` → :func:`_start` of the rest: a picklable task function."""
+
+    cfg: PredictConfig
+    params: object
+    reference: object
+    device: object
+    init: np.ndarray | None
+
+    def __call__(self, seed: int | None) -> PredictResult:
+        return _start(self.cfg, self.params, self.reference, self.device, self.init, seed)
 
 
 def starts_table(results: list[PredictResult]) -> dict:
@@ -228,29 +349,21 @@ def starts_table(results: list[PredictResult]) -> dict:
             "solve_time_s": [r.solve_time_s for r in results]}
 
 
-def best_of_starts(cfg, starts: int, *, params, reference, device, seed: int = 0, workers: int | None = None,
-                   scheduler: str | None = None,
-                   progress: ProgressCallback = no_progress) -> tuple[PredictResult, dict, int]:
-    """``--starts N``: the best converged of N starts (in worker processes, or as tasks on the Dask cluster at
-    ``scheduler``), starts.csv's table and how many starts agreed."""
+def best_of_starts(cfg: PredictConfig, *, params, reference, device, workers_count: int | None = None,
+                   scheduler: str | None = None, progress: ProgressCallback = no_progress,
+                   ) -> tuple[PredictResult, dict, int]:
+    """``--starts N``: the best converged of N starts (on :func:`gaitcli.run.cluster.workers`), starts.csv's
+    table and how many starts agreed."""
     done = []
 
     def on_done(k, result):
         done.append(k)
-        progress(Progress("predict", "starts", len(done), starts,
+        progress(Progress("predict", "starts", len(done), cfg.starts,
                           detail=f"start {k}: J {result.objective:.4g}{'' if result.converged else ' (unconverged)'}"))
 
-    if scheduler is not None:
-        from gaitcli.run.cluster import dask_client
-
-        with dask_client(1, scheduler) as client:
-            results = run_starts(cfg, starts, params=params, reference=reference, seed=seed, device=device,
-                                 on_done=on_done, executor=client.get_executor(pure=False))
-    else:
-        results = run_starts(cfg, starts, params=params, reference=reference, seed=seed, workers=workers,
-                             device=device, on_done=on_done)
+    with workers(min(cfg.starts, workers_count or os.cpu_count() or 1), scheduler) as pool:
+        results = run_starts(cfg, pool, params=params, reference=reference, device=device, on_done=on_done)
     agreed, best = agreeing(results)
     best = dataclasses.replace(best, history=best.history + (
-        f"predict: best of {starts} starts (seed {seed}); {agreed} reached its J within 1 %",))
+        f"predict: best of {cfg.starts} starts (seed {cfg.seed}); {agreed} reached its J within 1 %",))
     return best, starts_table(results), agreed
-

@@ -1,32 +1,32 @@
-"""Prediction studies (gaitcli/predict/starts.py): the bundled study files' grids, seeded perturbed starts, and the
-optimal prosthesis never reporting a higher J than the commercial foot it started from."""
+"""Prediction studies and starts (gaitcli/run/studies.py, gaitcli/predict/starts.py): the bundled study files'
+grids, seeded perturbed starts, and the optimal prosthesis never reporting a higher J than the commercial foot it
+started from."""
 
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gaitcli.errors import InputError
-from gaitcli.io.yamlfile import read_yaml
-from gaitcli.predict import starts as study
+from gaitcli.predict import starts
 from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.resources import bundled_reference, study_file
+from gaitcli.run import studies
+from gaitcli.run.cluster import workers
 
 
-def spec_of(name: str) -> study.StudySpec:
-    path = study_file(name)
-    return study.StudySpec.from_mapping(read_yaml(path), path)
+def spec_of(name: str) -> studies.StudySpec:
+    return studies.read_study(study_file(name))
 
 
 def test_the_prosthesis_study_is_table_5_3s_grid():
-    chains = study.study_cases(spec_of("prostheses"))
+    chains = studies.study_cases(spec_of("prostheses"))
     assert len(chains) == 2  # one per speed, 1.00 and 1.33 m/s
     previous = None
     for chain in chains:
@@ -48,7 +48,7 @@ def test_the_prosthesis_study_is_table_5_3s_grid():
 
 
 def test_the_foot_mass_study_is_table_5_2s_grid():
-    (chain,) = study.study_cases(spec_of("foot_mass"))
+    (chain,) = studies.study_cases(spec_of("foot_mass"))
     assert len(chain) == 8
     for k in range(0, 8, 2):
         normal, heavy = chain[k:k + 2]
@@ -63,14 +63,14 @@ def test_the_foot_mass_study_is_table_5_2s_grid():
 def test_a_bad_study_file_is_refused_naming_the_field(change, field):
     data = {"speeds_m_s": [1.0], "weights": ["b"], "conditions": ["normal"], **change}
     with pytest.raises(InputError) as caught:
-        study.StudySpec.from_mapping(data, "study.yaml")
+        studies.StudySpec.from_mapping(data, "study.yaml")
     assert caught.value.field == field
 
 
 def test_perturbed_starts_are_seeded_inside_the_bounds_and_keep_the_speed():
     cfg = PredictConfig(speed_m_s=1.2)
     reference = read_reference(bundled_reference())
-    a, b, c = (study.perturbed_guess(cfg, None, reference, seed) for seed in (3, 3, 4))
+    a, b, c = (starts.perturbed_guess(cfg, None, reference, seed) for seed in (3, 3, 4))
     np.testing.assert_array_equal(a, b)
     assert np.abs(a - c).max() > 0.01
     layout = DesignLayout.build(cfg.nodes, symmetric=True)
@@ -104,8 +104,8 @@ def test_the_optimal_prosthesis_never_ends_above_the_foot_it_started_from(monkey
         started.append((cfg.prosthesis, device.coefficients().tolist()))
         return Solved(next(runs), True, device)
 
-    monkeypatch.setattr(study, "run_predict", fake_run)
-    result = study.predict_optimal(PredictConfig(prosthesis="optimal"), params=None, reference=None, feet=feet,
+    monkeypatch.setattr(starts, "run_predict", fake_run)
+    result = starts.predict_optimal(PredictConfig(prosthesis="optimal"), params=None, reference=None, feet=feet,
                                    normal=Solved(4.0, True))
     assert result.objective == expected
     # from the normal solution too only when the start from Seattle's did not improve on it
@@ -120,7 +120,7 @@ def test_a_retimed_solution_walks_at_the_new_speed():
 
     x = np.loadtxt(stored_solution(18, symmetric=True))
     layout = DesignLayout.build(18, symmetric=True)
-    fast = study.retimed(PredictConfig(speed_m_s=1.33), x)
+    fast = starts.retimed(PredictConfig(speed_m_s=1.33), x)
     assert sum(layout.step_lengths(fast)) / layout.phase_durations(fast).sum() == pytest.approx(1.33, rel=1e-12)
     shares = layout.phase_durations(fast) / layout.phase_durations(x)
     np.testing.assert_allclose(shares, shares[0])  # every phase alike: the same stance and double support
@@ -128,10 +128,10 @@ def test_a_retimed_solution_walks_at_the_new_speed():
 
 
 def test_starts_run_the_guess_and_seeded_perturbations_and_count_the_agreeing(monkeypatch):
-    # --starts 4 (one process): start 0 from the given χ, starts 1–3 from perturbed_guess(seed + k); the best
-    # converged J is kept and the starts within 1 % of it are counted
+    # --starts 4 (one worker: this process): start 0 from the given χ, starts 1–3 from perturbed_guess(seed + k);
+    # the best converged J is kept and the starts within 1 % of it are counted
     reference = read_reference(bundled_reference())
-    cfg = PredictConfig()
+    cfg = PredictConfig(starts=4, seed=7)
     given = np.full(219, 0.5)
     objectives = {0: 10.0, 1: 10.05, 2: 9.0, 3: 8.0}
     converged = {0: True, 1: True, 2: True, 3: False}
@@ -139,53 +139,33 @@ def test_starts_run_the_guess_and_seeded_perturbations_and_count_the_agreeing(mo
 
     def fake_run(cfg, *, params, reference, init, device=None, report=None):
         k = next(k for k in range(4) if np.array_equal(init, given if k == 0 else
-                                                         study.perturbed_guess(cfg, None, reference, 7 + k)))
+                                                         starts.perturbed_guess(cfg, None, reference, 7 + k)))
         seen.append(k)
         return Solved(objectives[k], converged[k])
 
-    monkeypatch.setattr(study, "run_predict", fake_run)
-    results = study.run_starts(cfg, 4, params=None, reference=reference, seed=7, workers=1, init=given)
+    monkeypatch.setattr(starts, "run_predict", fake_run)
+    with workers(1) as here:
+        results = studies.run_starts(cfg, here, params=None, reference=reference, init=given)
     assert seen == [0, 1, 2, 3] and [r.objective for r in results] == [10.0, 10.05, 9.0, 8.0]
-    agreed, best = study.agreeing(results)
+    agreed, best = starts.agreeing(results)
     assert best.objective == 9.0 and agreed == 1  # start 3 is lower but unconverged
-    assert study.agreeing([Solved(9.0, True), Solved(9.05, True), Solved(9.2, True)])[0] == 2
+    assert starts.agreeing([Solved(9.0, True), Solved(9.05, True), Solved(9.2, True)])[0] == 2
 
 
-def test_workers_end_when_their_parent_is_killed(tmp_path):
-    """A study's parent killed outright (SIGKILL: no chance to stop its workers) leaves no worker solving the rest
-    of the queue: the kernel ends them with it (Linux; elsewhere the test is skipped)."""
-    import os
-    import signal
-    import subprocess
-    import sys
-    import time
-
-    if not sys.platform.startswith("linux"):
-        pytest.skip("PR_SET_PDEATHSIG is Linux's")
-    script = tmp_path / "parent.py"
-    script.write_text(
-        "import os, time\n"
-        "from gaitcli.predict.starts import pool\n"
-        "executor = pool(2)\n"
-        "futures = [executor.submit(time.sleep, 60) for _ in range(4)]\n"
-        "time.sleep(1.0)\n"
-        "print(' '.join(str(p) for p in executor._processes), flush=True)\n"
-        "time.sleep(60)\n")
-    parent = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
-    workers = [int(p) for p in parent.stdout.readline().split()]
-    assert len(workers) == 2
-    os.kill(parent.pid, signal.SIGKILL)
-    parent.wait(10)
-    parent.stdout.close()
-
-    def alive(pid):
-        try:
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            return False
-        return not Path(f"/proc/{pid}/stat").read_text().split()[2] == "Z"
-
-    deadline = time.monotonic() + 10
-    while any(alive(p) for p in workers) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    assert not any(alive(p) for p in workers)
+def test_a_study_file_is_checked_by_the_predict_stages_validator():
+    data = {"speeds_m_s": [1.0, 1.2], "weights": ["b", "3/2,1/2", [1, 1]], "conditions": ["normal", "foot_mass"],
+            "nodes": 12, "max_iterations": 40}
+    spec = studies.StudySpec.from_mapping(data, "study.yaml")
+    assert spec.weights == (("b", (4 / 3, 2 / 3)), ("3/2,1/2", (1.5, 0.5)), ("a", (1.0, 1.0)))
+    assert spec.base == PredictConfig(nodes=12, max_iterations=40) and spec.foot_mass_kg == 2.0
+    (chain, _) = studies.study_cases(spec)
+    assert [c.name for c in chain[:4]] == ["v1.00_b_normal", "v1.00_b_foot_mass", "v1.00_3_2-1_2_normal",
+                                           "v1.00_3_2-1_2_foot_mass"]
+    assert studies.width(chain) == 2  # each weight set's foot mass beside the next set's normal case
+    for change, message in [({"nodes": 13}, "study.yaml: nodes: got 13 (expected an even number"),
+                            ({"weights": ["1,2"]}, "study.yaml: weights: got '1,2' (expected two weights"),
+                            ({"foot_mass_kg": -1}, "study.yaml: foot_mass_kg: got -1"),
+                            ({"speed_m_s": [1.0]}, "study.yaml: speed_m_s: unknown key; did you mean 'speeds_m_s'?")]:
+        with pytest.raises(InputError) as caught:
+            studies.StudySpec.from_mapping({**data, **change}, "study.yaml")
+        assert str(caught.value).startswith(message), str(caught.value)
