@@ -1,4 +1,7 @@
-"""The import rules of docs/architecture.md, checked on the package's source (AST, imports inside functions too)."""
+"""The import rules of docs/architecture.md, checked on the package's source (AST, imports inside functions too).
+
+Every top-level part of the package has a rule (:data:`ALLOWED`): a new module or subpackage fails here until
+docs/architecture.md and this table say where it sits."""
 
 from __future__ import annotations
 
@@ -12,6 +15,34 @@ PACKAGE = Path(__file__).resolve().parent.parent / "gaitcli"
 STAGE_ORDER = ("signal", "kinematics", "dynamics", "muscles", "predict")
 #: the edges: what no stage package may import
 EDGES = ("cli", "progress", "run", "report", "synth")
+#: what every part may import: the package itself ("": ``from gaitcli import __version__``), and below it
+BASE = {"", "__init__", "errors"}
+#: what each top-level part may import (besides itself), from the top of the layers down
+ALLOWED = {
+    "cli": {"progress", "run", "report", "synth", *STAGE_ORDER, "io", "core", "resources"},
+    "progress": {"core"},  # the command line's progress display
+    "run": {"report", *STAGE_ORDER, "io", "core", "resources"},
+    "report": {*STAGE_ORDER, "io", "core", "resources"},
+    "synth": {*STAGE_ORDER, "io", "core", "resources"},
+    **{name: {*STAGE_ORDER[:k], "io", "core"} for k, name in enumerate(STAGE_ORDER)},
+    "io": {"core"},
+    "core": set(),
+    "resources": set(),
+    "errors": {""},
+    "__init__": set(),
+}
+#: modules of run/ with rules of their own: what each may import (run.X: a module of run/)
+RUN_ALLOWED = {
+    # output trees by their names and units, knowing no stage; the CLI maps its findings to exit codes
+    "compare": {"io", "core"},
+    # the workers know what they run no more than a pool does
+    "cluster": {"core", "run.dask_workers"},
+    "dask_workers": {"core"},
+    # trial folders: files and the subject, no stage
+    "trial": {"io", "core", "kinematics"},
+    # a batch runs the pipeline on its workers, as the command line does, without it or its figures
+    "batch": {"io", "core", "run.cluster", "run.config", "run.pipeline", "run.trial"},
+}
 
 
 def module_name(path: Path) -> str:
@@ -46,6 +77,17 @@ def first_part(module: str) -> str:
     return parts[1] if len(parts) > 1 else ""
 
 
+def run_part(module: str) -> str:
+    """A module's part, with run/'s modules told apart: "run.pipeline" for ``gaitcli.run.pipeline.run_stages``."""
+    parts = module.split(".")
+    return f"run.{parts[2]}" if first_part(module) == "run" and len(parts) > 2 else first_part(module)
+
+
+def top_level_parts() -> set[str]:
+    return {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir()
+            if (p.is_dir() and (p / "__init__.py").is_file()) or p.suffix == ".py"}
+
+
 def sources(package: str) -> list[Path]:
     folder = PACKAGE / package
     return sorted(folder.rglob("*.py")) if folder.is_dir() else [PACKAGE / f"{package}.py"]
@@ -54,6 +96,17 @@ def sources(package: str) -> list[Path]:
 def violations(package: str, forbidden: set[str]) -> list[str]:
     return [f"{path.relative_to(PACKAGE.parent)} imports {m}" for path in sources(package)
             for m in sorted(imported_modules(path)) if first_part(m) in forbidden]
+
+
+def test_every_top_level_part_has_a_rule():
+    assert top_level_parts() == set(ALLOWED), "a part without a rule (or a rule without its part)"
+    assert {p.stem for p in (PACKAGE / "run").glob("*.py")} >= set(RUN_ALLOWED)
+
+
+@pytest.mark.parametrize("part", sorted(ALLOWED))
+def test_each_part_imports_only_the_parts_below_it(part):
+    forbidden = top_level_parts() - ALLOWED[part] - BASE - {part}
+    assert not violations(part, forbidden)
 
 
 @pytest.mark.parametrize("package", STAGE_ORDER)
@@ -67,16 +120,19 @@ def test_io_imports_no_model_package():
 
 
 def test_core_imports_only_core_and_errors():
-    everything = {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir()
-                  if (p.is_dir() and (p / "__init__.py").is_file()) or p.suffix == ".py"}
-    assert not violations("core", everything - {"core", "errors", "__init__"})
+    assert not violations("core", top_level_parts() - {"core", "errors", "__init__"})
 
 
-def test_compare_imports_only_io_core_and_errors():
-    everything = {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir()
-                  if (p.is_dir() and (p / "__init__.py").is_file()) or p.suffix == ".py"}
-    assert (PACKAGE / "run" / "compare.py").is_file()
-    assert not violations("run/compare", everything - {"io", "core", "errors", "__init__"})
+def test_nothing_in_run_imports_the_command_line():
+    assert not violations("run", {"cli"})
+
+
+@pytest.mark.parametrize("module", sorted(RUN_ALLOWED))
+def test_run_modules_with_rules_of_their_own(module):
+    path = PACKAGE / "run" / f"{module}.py"
+    allowed = RUN_ALLOWED[module] | BASE | {f"run.{module}", "run"}
+    found = {run_part(m) for m in imported_modules(path)}
+    assert found <= allowed, f"run/{module}.py imports {sorted(found - allowed)}"
 
 
 def test_only_the_command_line_imports_its_progress_display():
@@ -123,7 +179,8 @@ def test_the_checker_sees_imports_inside_functions(tmp_path):
     # the rule must not be dodged by a local or relative import inside a function
     probe = tmp_path / "probe.py"
     probe.write_text("import numpy\n\ndef f():\n    from gaitcli.report import plots\n"
-                     "    if True:\n        from ..pipeline import run_stage\n")
+                     "    if True:\n        from ..run.pipeline import run_stage\n")
     found = imported_modules(probe, "gaitcli.signal.probe")
-    assert {"gaitcli.report", "gaitcli.report.plots", "gaitcli.pipeline", "gaitcli.pipeline.run_stage"} <= found
-    assert {first_part(m) for m in found} == {"report", "pipeline"}
+    assert {"gaitcli.report", "gaitcli.report.plots", "gaitcli.run.pipeline", "gaitcli.run.pipeline.run_stage"} <= found
+    assert {first_part(m) for m in found} == {"report", "run"}
+    assert {run_part(m) for m in found} == {"report", "run.pipeline"}
