@@ -106,3 +106,56 @@ def test_a_new_stage_gets_a_pipeline_section_and_runs_through_gait_run(registere
     bad.write_text("stages: [filter, cadence]\ncadence:\n  side: left\n")
     assert main(["--quiet", "run", str(trial), "--pipeline", str(bad)]) == 2
     assert "cadence.side: got 'left' (expected one of r, l" in capsys.readouterr().err
+
+
+@dataclass(frozen=True)
+class ProbeConfig:
+    label: str = parameter("a", help="Anything.")
+
+
+@dataclass(frozen=True)
+class Probe:
+    frames: int
+    source: str
+
+
+def _probe(ctx, cfg):
+    trial = ctx.optional("filter")
+    return Probe(frames=-1 if trial is None else trial.markers.n_frames,
+                 source="" if trial is None else ctx.input_paths["filter"].name)
+
+
+@pytest.fixture
+def probe():
+    register(Stage(name="probe", config=ProbeConfig, optional=("filter",), trial=False, result=Probe,
+                   h5_name="probe.h5", run=_probe))
+    yield
+    unregister("probe")
+
+
+def test_an_optional_stage_is_asked_for_only_with_a_trial(probe, tmp_path, monkeypatch):
+    from gaitcli.run.config import pipeline_from_dict
+    from gaitcli.run.pipeline import run_stages
+
+    cfg = pipeline_from_dict({"stages": ["filter", "probe"]})
+    monkeypatch.chdir(tmp_path)
+    (alone,) = run_stages(None, ["probe"], cfg, plots=False)  # no trial: nothing to ask for, no sample trial
+    assert alone.summary["frames"] == -1 and alone.folder == tmp_path / "gait_out" / "probe"
+    assert not (tmp_path / "gait_out" / "filter").exists()
+
+    trial = tmp_path / "normal"
+    shutil.copytree(sample_trial("normal"), trial, ignore=shutil.ignore_patterns("gait_out"))
+    both = run_stages(trial, ["filter", "probe"], cfg, plots=False)  # filter computed here: written first
+    assert [o.stage for o in both] == ["filter", "probe"] and all(o.status == "written" for o in both)
+    assert both[1].summary["frames"] > 100 and both[1].summary["source"] == "filter.h5"
+    with h5py.File(trial / "gait_out" / "probe" / "probe.h5", "r") as h5:
+        assert "filter.h5" in h5.attrs["input_sha256"]  # the output it read is its input
+    before = (trial / "gait_out" / "filter" / "filter.h5").stat().st_mtime_ns
+    (again,) = run_stages(trial, ["probe"], cfg, plots=False)  # read back, not filtered again
+    assert again.summary["frames"] == both[1].summary["frames"]
+    assert (trial / "gait_out" / "filter" / "filter.h5").stat().st_mtime_ns == before
+    changed = pipeline_from_dict({"filter": {"cutoff_hz": 5.0}})
+    from gaitcli.run.pipeline import TrialRun
+
+    run, other = TrialRun(trial, None, cfg), TrialRun(trial, None, changed)
+    assert run.fresh("probe") is not None and other.fresh("probe") is None  # its optional stage's configuration

@@ -121,8 +121,11 @@ class TrialRun:
         return self._recording
 
     def stage_key(self, name: str) -> str:
-        """What a stage's output depends on: input hashes and the configuration of it and earlier stages."""
-        cfg = {s: section_dict(self.cfg, s) for s in requirements(name)}
+        """What a stage's output depends on: input hashes and the configuration of it and earlier stages (with a
+        trial, its optional stages' too)."""
+        optional = stage(name).optional if self.trial is not None else ()
+        names = {s for n in (name, *optional) for s in requirements(n)}
+        cfg = {s: section_dict(self.cfg, s) for s in stage_names() if s in names}
         return json.dumps({"inputs": self.inputs, "config": cfg, "format": OUTPUT_FORMAT}, sort_keys=True)
 
     def attrs(self, name: str, history: tuple[str, ...] = ()) -> dict:
@@ -151,8 +154,9 @@ class TrialRun:
 
     def context(self, name: str, *, inputs: dict | None = None, input_paths: dict | None = None,
                 static_recording=None, progress: ProgressCallback = no_progress, plots: bool = True,
-                workers: int | None = None, scheduler: str | None = None) -> StageContext:
-        """The context of stage ``name`` in this run (``inputs``: the hand-offs of the stages it depends on)."""
+                workers: int | None = None, scheduler: str | None = None, written=None) -> StageContext:
+        """The context of stage ``name`` in this run (``inputs``: the hand-offs of the stages it depends on;
+        ``written(dep)``: the output of a stage this run computed, written now, or None)."""
         trial = self.trial
         input_paths = {} if input_paths is None else input_paths
 
@@ -161,7 +165,9 @@ class TrialRun:
                 raise LookupError(f"stage {name} asked for {dep}, which is not one of its optional stages")
             if trial is None:
                 return None
-            path = fresh_output(trial.folder, dep, self.cfg, out=self.out_root, progress=progress, plots=plots)
+            path = written(dep) if written is not None else None
+            if path is None:
+                path = fresh_output(trial.folder, dep, self.cfg, out=self.out_root, progress=progress, plots=plots)
             input_paths[dep] = path
             self.record(name, path)
             return _read(stage(dep), path)
@@ -226,7 +232,33 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     needed = needed_stages(names)
     run = TrialRun(trial, out, cfg, files=files, needs_trial=any(stage(n).trial for n in needed))
     check_output_folder(run.out_root)
-    handoffs, sources, outcomes, computed = {}, {}, [], []
+    handoffs, sources, outcomes, computed = {}, {}, [], {}
+
+    def write(name: str) -> StageOutcome:
+        """Write a computed stage's folder whole; its outcome."""
+        st = stage(name)
+        result, elapsed = computed.pop(name)
+        target = run.output_folder(name)
+        started = time.perf_counter()
+        with stage_folder(target) as tmp:
+            summary = _write(st, tmp, result, run.attrs(name, _history(result)))
+            if plots and st.plots is not None:
+                progress(Progress(name, "figures", 0, 1))
+                st.plots(tmp / st.h5_name, tmp / "plots", run.title)
+                progress(Progress(name, "figures", 1, 1))
+            summary["elapsed_s"] = round(elapsed + time.perf_counter() - started, 3)
+            write_json(tmp / "summary.json", summary)
+        converged = st.converged(result)
+        return StageOutcome(name, "written" if converged else "unconverged", target, summary, converged,
+                            "" if converged else st.unconverged(result), summary["elapsed_s"])
+
+    def write_early(name: str) -> Path | None:
+        """An optional stage this run computed, written now because a later stage asks for its output."""
+        if name not in computed:
+            return None
+        check_replaceable(run.output_folder(name))
+        outcomes.append(write(name))
+        return run.output_folder(name) / stage(name).h5_name
 
     def static_recording():
         # turned like the dynamic trial: by the axes its container recorded, else by reading the trial
@@ -248,28 +280,15 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
         started = time.perf_counter()
         ctx = run.context(name, inputs={d: handoffs[d] for d in st.depends},
                           input_paths={d: sources[d] for d in st.depends}, static_recording=static_recording,
-                          progress=progress, plots=plots, workers=workers, scheduler=scheduler)
+                          progress=progress, plots=plots, workers=workers, scheduler=scheduler, written=write_early)
         result = st.run(ctx, cfg.section(name))
         handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path if run.trial else None
-        computed.append((name, result, time.perf_counter() - started))
+        computed[name] = (result, time.perf_counter() - started)
 
-    for name, _, _ in computed:  # before the first write: a user's file in any folder to replace stops them all
+    for name in computed:  # before the first write: a user's file in any folder to replace stops them all
         check_replaceable(run.output_folder(name))
-    for name, result, elapsed in computed:
-        st = stage(name)
-        target = run.output_folder(name)
-        started = time.perf_counter()
-        with stage_folder(target) as tmp:
-            summary = _write(st, tmp, result, run.attrs(name, _history(result)))
-            if plots and st.plots is not None:
-                progress(Progress(name, "figures", 0, 1))
-                st.plots(tmp / st.h5_name, tmp / "plots", run.title)
-                progress(Progress(name, "figures", 1, 1))
-            summary["elapsed_s"] = round(elapsed + time.perf_counter() - started, 3)
-            write_json(tmp / "summary.json", summary)
-        converged = st.converged(result)
-        outcomes.append(StageOutcome(name, "written" if converged else "unconverged", target, summary, converged,
-                                     "" if converged else st.unconverged(result), summary["elapsed_s"]))
+    for name in list(computed):
+        outcomes.append(write(name))
     order = {n: i for i, n in enumerate(needed)}
     return sorted(outcomes, key=lambda o: order[o.stage])
 
