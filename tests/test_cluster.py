@@ -119,7 +119,7 @@ def _start_parent(tmp_path: Path, dask: bool) -> tuple[subprocess.Popen, list[in
 
 def _alive(pid: int) -> bool:
     try:
-        return open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
     except FileNotFoundError:
         return False
 
@@ -152,5 +152,5 @@ def test_workers_end_when_their_parent_is_killed(tmp_path, dask):
     parent, pids = _start_parent(tmp_path, dask)
     assert len(pids) >= 2, parent.communicate()[1]
     os.kill(parent.pid, signal.SIGKILL)
-    parent.wait(10)
+    parent.communicate(timeout=10)
     assert _gone(pids)
