@@ -123,13 +123,15 @@ def retimed(cfg: PredictConfig, x: np.ndarray) -> np.ndarray:
 
 
 def solve_start(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Reference, seed: int | None,
-                device: ProsthesisCurve | None = None, init: np.ndarray | None = None) -> PredictResult:
+                device: ProsthesisCurve | None = None, init: np.ndarray | None = None,
+                cache: NlpCache | None = None) -> PredictResult:
     """One start of ``--starts N``: from ``init`` (default: the default guess) when ``seed`` is None, else from
-    :func:`perturbed_guess` with that seed; the optimal prosthesis by :func:`predict_optimal`."""
+    :func:`perturbed_guess` with that seed; the optimal prosthesis by :func:`predict_optimal`. ``cache``: the
+    runner's built problems (:func:`~gaitcli.predict.stage.run_predict`)."""
     init = init if seed is None else perturbed_guess(cfg, params, reference, seed)
     if cfg.prosthesis == "optimal":
-        return predict_optimal(cfg, params=params, reference=reference, init=init)
-    return run_predict(cfg, params=params, reference=reference, init=init, device=device)
+        return predict_optimal(cfg, params=params, reference=reference, init=init, cache=cache)
+    return run_predict(cfg, params=params, reference=reference, init=init, device=device, cache=cache)
 
 
 def start_seeds(cfg: PredictConfig) -> list[int | None]:

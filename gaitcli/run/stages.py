@@ -245,7 +245,7 @@ def _write_prediction(folder: Path, prediction: Prediction, attrs: dict) -> dict
 def _unconverged_prediction(prediction: Prediction) -> str:
     """The prediction did not converge: why (IPOPT's status, or the time limit) and the violated constraint
     groups."""
-    from gaitcli.predict.nlp import TIME_LIMIT_STATUS
+    from gaitcli.predict.settings import TIME_LIMIT_STATUS
     from gaitcli.predict.stage import violated_groups
 
     result = prediction.result

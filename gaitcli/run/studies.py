@@ -23,6 +23,7 @@ included and marked.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import os
@@ -39,6 +40,7 @@ from gaitcli.io.atomic import check_output_folder, remove_stale
 from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET, FILE_KEYS
+from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
 from gaitcli.predict.starts import agreeing, predict_optimal, retimed, solve_start, start_seeds
 from gaitcli.resources import stored_solution
@@ -234,12 +236,21 @@ def first_start_keys(nodes: int) -> tuple[str, ...]:
     return (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
 
 
+@functools.lru_cache(maxsize=1)
+def worker_cache() -> NlpCache:
+    """The problems built in this worker process, kept for the next case or start it runs: a study's cases
+    share one problem per structure (speed, weights and a foot's coefficients are its parameters)."""
+    return NlpCache()
+
+
 def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[PredictResult, int]:
     """Solve one case from the solutions it starts from (``solved``: name → result of its chain so far)."""
+    cache = worker_cache()
     if case.condition == "optimal":
         feet = {name: solved[start] for name, start in zip(COMMERCIAL_FEET, case.starts_from)}
         normal = solved[case.starts_from[-1]]
-        return predict_optimal(case.cfg, params=params, reference=reference, feet=feet, normal=normal), 1
+        return predict_optimal(case.cfg, params=params, reference=reference, feet=feet, normal=normal,
+                               cache=cache), 1
     # the first start that converged (a foot after the first: that foot's solution, else the normal one)
     starts = [solved[name] for name in case.starts_from]
     init = next((r for r in starts if r.converged), starts[0]).design if starts else _shipped_start(case)
@@ -247,7 +258,7 @@ def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[Predi
         with workers(1) as here:
             agreed, best = agreeing(run_starts(case.cfg, here, params=params, reference=reference, init=init))
         return best, agreed
-    return run_predict(case.cfg, params=params, reference=reference, init=init), 1
+    return run_predict(case.cfg, params=params, reference=reference, init=init, cache=cache), 1
 
 
 def run_case(case: StudyCase, root: str, params, reference, subject: str, pipeline: PipelineConfig, inputs: dict,
@@ -315,7 +326,8 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
 
 # ------------------------------------------------------------------------------------------------ multi-start
 def _start(cfg: PredictConfig, params, reference, device, init, seed: int | None) -> PredictResult:
-    return solve_start(cfg, params=params, reference=reference, seed=seed, device=device, init=init)
+    return solve_start(cfg, params=params, reference=reference, seed=seed, device=device, init=init,
+                       cache=worker_cache())
 
 
 def run_starts(cfg: PredictConfig, pool: Workers, *, params, reference, device=None, init: np.ndarray | None = None,
