@@ -16,6 +16,7 @@ else the bundled one), the prostheses' curve and the ``init`` solution.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +29,7 @@ from gaitcli.dynamics.stage import IdynConfig, run_idyn
 from gaitcli.errors import InputError
 from gaitcli.io.h5 import read_result
 from gaitcli.muscles.stage import MuscleResult, MusclesConfig, run_muscles_stage
+from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult
 from gaitcli.signal.stage import FilterConfig, filter_trial
 
@@ -200,6 +202,14 @@ def prediction_inputs(ctx: StageContext, cfg: PredictConfig) -> PredictionInputs
     return PredictionInputs(params, reference, device, init)
 
 
+@functools.lru_cache(maxsize=1)
+def prediction_cache() -> NlpCache:
+    """The prediction problems built in this process, kept for the next prediction it runs (a study's cases,
+    ``--starts``, a test session's commands): one problem per structure, whose speed, weights and a foot's
+    coefficients are parameters (:class:`gaitcli.predict.solve.NlpCache`)."""
+    return NlpCache()
+
+
 def _predict(ctx: StageContext, cfg: PredictConfig) -> Prediction:
     """A prediction (:func:`gaitcli.predict.stage.run_predict`); the optimal prosthesis by
     :func:`gaitcli.predict.starts.predict_optimal`; ``starts`` > 1: the best of that many
@@ -222,10 +232,10 @@ def _predict(ctx: StageContext, cfg: PredictConfig) -> Prediction:
 
     if cfg.prosthesis == "optimal":
         result = predict_optimal(cfg, params=start.params, reference=start.reference, init=start.init,
-                                 report=iteration)
+                                 report=iteration, cache=prediction_cache())
     else:
         result = run_predict(cfg, params=start.params, reference=start.reference, init=start.init,
-                             report=iteration, device=start.device)
+                             report=iteration, device=start.device, cache=prediction_cache())
     return Prediction(result, cfg)
 
 

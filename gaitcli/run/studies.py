@@ -23,7 +23,6 @@ included and marked.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import hashlib
 import json
 import os
@@ -40,12 +39,12 @@ from gaitcli.io.atomic import check_output_folder, remove_stale
 from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET, FILE_KEYS
-from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
 from gaitcli.predict.starts import agreeing, predict_optimal, retimed, solve_start, start_seeds
 from gaitcli.resources import stored_solution
 from gaitcli.run.cluster import Task, Workers, completed, map_in_order, workers
 from gaitcli.run.config import PipelineConfig, to_yaml
+from gaitcli.run.stages import prediction_cache
 
 #: a study's conditions (5.3.2, 5.3.3)
 CONDITIONS = ("normal", "foot_mass", *COMMERCIAL_FEET, "optimal")
@@ -236,16 +235,9 @@ def first_start_keys(nodes: int) -> tuple[str, ...]:
     return (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
 
 
-@functools.lru_cache(maxsize=1)
-def worker_cache() -> NlpCache:
-    """The problems built in this worker process, kept for the next case or start it runs: a study's cases
-    share one problem per structure (speed, weights and a foot's coefficients are its parameters)."""
-    return NlpCache()
-
-
 def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[PredictResult, int]:
     """Solve one case from the solutions it starts from (``solved``: name → result of its chain so far)."""
-    cache = worker_cache()
+    cache = prediction_cache()
     if case.condition == "optimal":
         feet = {name: solved[start] for name, start in zip(COMMERCIAL_FEET, case.starts_from)}
         normal = solved[case.starts_from[-1]]
@@ -327,7 +319,7 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
 # ------------------------------------------------------------------------------------------------ multi-start
 def _start(cfg: PredictConfig, params, reference, device, init, seed: int | None) -> PredictResult:
     return solve_start(cfg, params=params, reference=reference, seed=seed, device=device, init=init,
-                       cache=worker_cache())
+                       cache=prediction_cache())
 
 
 def run_starts(cfg: PredictConfig, pool: Workers, *, params, reference, device=None, init: np.ndarray | None = None,
