@@ -122,7 +122,7 @@ def run_session(shared: Path, root: Path, *, with_subject_yaml: bool) -> Path:
     shutil.copy(shared / "Test.vsk", trial / "Test.vsk")
     if with_subject_yaml:
         (trial / "subject.yaml").write_text(SUBJECT)
-    run = subprocess.run([sys.executable, "-m", "gaitcli.cli", "-q", "idyn", str(trial), "--no-plots"],
+    run = subprocess.run([sys.executable, "-m", "gaitcli", "-q", "idyn", str(trial), "--no-plots"],
                          capture_output=True, text=True)
     if run.returncode != 0:
         sys.exit(f"gait idyn failed ({run.returncode}): {run.stderr.strip()}")

@@ -26,7 +26,7 @@ from gaitcli.synth.gait import ANKLE_DORSIFLEXION, HIP_FLEXION, KNEE_FLEXION, pe
 
 
 def gait(*args, cwd: Path) -> int:
-    return subprocess.run([sys.executable, "-m", "gaitcli.cli", *map(str, args)], cwd=cwd,
+    return subprocess.run([sys.executable, "-m", "gaitcli", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True).returncode
 
 

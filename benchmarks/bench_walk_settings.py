@@ -41,7 +41,8 @@ from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.reference import VARIABLES, Reference, read_reference
+from gaitcli.predict.reference import VARIABLES, read_reference
+from gaitcli.signal.bands import Band
 from gaitcli.predict.solve import NlpCache, solve_windowed
 from gaitcli.predict.stage import PredictConfig, evaluate_design, settings_of, violated_groups, walker_muscles
 from gaitcli.synth import predicted as walk
@@ -62,16 +63,12 @@ def walk_figures(x: np.ndarray) -> dict:
             "heel strike ankle deg": round(float(angles[0, 2]), 1), **winter_figures(phase, *angles[:, :3].T)}
 
 
-def sds_scaled(reference: Reference, joint_scale: float, grf_scale: float) -> Reference:
+def sds_scaled(reference: Band, joint_scale: float, grf_scale: float) -> Band:
     """``reference`` with its knee and ankle angles' SDs × ``joint_scale`` and its ground reactions' × ``grf_scale``
     (both legs)."""
-    sd = reference.sd.copy()
-    for k, name in enumerate(VARIABLES):
-        if name.startswith(("knee_", "ankle_")):
-            sd[:, k] *= joint_scale
-        elif name.startswith("grf_"):
-            sd[:, k] *= grf_scale
-    return dataclasses.replace(reference, sd=sd)
+    scale = {name: joint_scale if name.startswith(("knee_", "ankle_")) else grf_scale if name.startswith("grf_")
+             else 1.0 for name in VARIABLES}
+    return dataclasses.replace(reference, sd={name: sd * scale[name] for name, sd in reference.sd.items()})
 
 
 def main() -> None:

@@ -120,11 +120,11 @@ def write_stage(name: str, folder: Path, result, attrs: dict) -> dict:
 
 
 def gait_argv(*args) -> list[str]:
-    """The command line of ``gait ARGS``: the console script beside this Python, else ``python -c``."""
+    """The command line of ``gait ARGS``: the console script beside this Python, else ``python -m gaitcli``."""
     script = Path(sys.executable).with_name("gait")
     if script.is_file():
         return [str(script), *map(str, args)]
-    return [sys.executable, "-c", "import sys; from gaitcli.cli import main; sys.exit(main())", *map(str, args)]
+    return [sys.executable, "-m", "gaitcli", *map(str, args)]
 
 
 def run_gait(*args) -> subprocess.CompletedProcess:

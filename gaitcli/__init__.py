@@ -1,11 +1,3 @@
 """gaitcli: gait-lab processing from C3D trials to joint moments, muscle forces and predictive gait."""
 
-import os as _os
-
-# One BLAS/OpenMP thread unless the user says otherwise (set before numpy and CasADi load their OpenBLAS):
-# with two, IPOPT's MUMPS factorisations are not bit-reproducible and a prediction rerun can end in another
-# local optimum (measured: J 158.77 vs 162.54 after the same 60 iterations); batches run one process per core.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    _os.environ.setdefault(_var, "1")
-
 __version__ = "0.1.0"

@@ -361,13 +361,14 @@ def reference_command(console: Console, trials, out, pipeline, band):
     from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.io.outputs import write_table
     from gaitcli.run.pipeline import fresh_output
-    from gaitcli.predict.reference import reference_from_idyn
+    from gaitcli.predict.reference import FORCES, reference_from_idyn
 
     cfg = configure(pipeline)
     outputs = [fresh_output(trial, "idyn", cfg, plots=False) for trial in trials]
     names = [Path(t).resolve().name for t in trials]
     reference, right, left = reference_from_idyn([read_idyn_output(p) for p in outputs], sources=names)
     write_table(out, reference.columns())
+    forces = [reference.strides[v] for v in FORCES]
     if band is not None:
         from gaitcli.signal.bands import band_from_gait_cycles
 
@@ -376,7 +377,7 @@ def reference_command(console: Console, trials, out, pipeline, band):
         console.info(f"reference: wrote {band} (band of {len(normal.mean)} variables, "
                      f"{min(normal.strides.values())}–{max(normal.strides.values())} strides each)")
     console.info(f"reference: wrote {out} ({right} right and {left} left strides of {len(trials)} "
-                 f"trial(s); forces from {int(reference.strides[6:].min())}–{int(reference.strides[6:].max())} "
+                 f"trial(s); forces from {min(forces)}–{max(forces)} "
                  "strides per variable)")
 
 
@@ -565,11 +566,3 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         warnings.showwarning = previous
 
-
-if __name__ == "__main__":
-    sys.exit(main())
-
-
-def entry() -> None:
-    """``gait`` console script."""
-    sys.exit(main())

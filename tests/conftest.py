@@ -6,6 +6,10 @@ from pathlib import Path
 
 import pytest
 
+from gaitcli.__main__ import single_threaded_blas
+
+single_threaded_blas()  # as the gait command does, before any test module loads numpy (xdist workers inherit it)
+
 REPO = Path(__file__).resolve().parents[1]
 SHARED_C3D = REPO.parent / "shared" / "data" / "c3d"
 SHARED_PIG = REPO.parent / "shared" / "data" / "pig"

@@ -14,7 +14,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "gaitcli"
 #: the stage packages, each allowed to import only the ones before it
 STAGE_ORDER = ("signal", "kinematics", "dynamics", "muscles", "predict")
 #: the edges: what no stage package may import
-EDGES = ("cli", "progress", "run", "report", "synth")
+EDGES = ("__main__", "cli", "progress", "run", "report", "synth")
 #: what every part may import: the package itself ("": ``from gaitcli import __version__``), and below it
 BASE = {"", "__init__", "errors"}
 #: what each top-level part may import (besides itself), from the top of the layers down
@@ -30,6 +30,7 @@ ALLOWED = {
     "resources": set(),
     "errors": {""},
     "__init__": set(),
+    "__main__": {"cli"},  # the gait command: the thread counts, then the command line
 }
 #: modules of run/ with rules of their own: what each may import (run.X: a module of run/)
 RUN_ALLOWED = {

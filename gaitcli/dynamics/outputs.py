@@ -18,7 +18,7 @@ from gaitcli.kinematics.conventions import (ANATOMICAL_CONVENTION, CONVENTION, P
                                             anatomical_to_degrees, coordinates_to_clinical, moments_to_clinical,
                                             moments_to_plug_in_gait)
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS
-from gaitcli.signal.cycles import CYCLE_POINTS, Stride, normalise
+from gaitcli.signal.cycles import CYCLE_PCT, CYCLE_POINTS, Stride, normalise
 
 
 def coordinate_columns(result: IdynResult) -> dict:
@@ -111,7 +111,7 @@ def cycle_columns(result: IdynResult) -> dict:
     rows = []
     for k, stride in enumerate(result.strides):
         rows.append(normalise(values, result.time_s, stride))
-        blocks["cycle_pct"].append(np.arange(CYCLE_POINTS, dtype=float))
+        blocks["cycle_pct"].append(CYCLE_PCT)
         blocks["side"].append(np.full(CYCLE_POINTS, stride.side))
         blocks["stride"].append(np.full(CYCLE_POINTS, k + 1))
         blocks["start_s"].append(np.full(CYCLE_POINTS, stride.start_s))

@@ -186,7 +186,7 @@ def marker_residuals(states, markers: Markers, calibration: StaticCalibration) -
     return out
 
 
-def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = 9.81) -> float | None:
+def estimate_mass_kg(trial: Trial, *, gravity_m_s2: float = GRAVITY_M_S2) -> float | None:
     """Body mass (kg) from the plates: over a full stride each foot carries half the body's weight on average.
 
     For every stride of a foot (its heel strike to its next one) whose stance was recorded on the plates (timed by
@@ -285,7 +285,7 @@ MASS_CHECK_FRACTION = 0.05
 STANDING_STEADY_FRACTION = 0.05
 
 
-def standing_mass_kg(static: Recording | None, *, gravity_m_s2: float = 9.81) -> float | None:
+def standing_mass_kg(static: Recording | None, *, gravity_m_s2: float = GRAVITY_M_S2) -> float | None:
     """Body mass (kg) from quiet standing on the plates of the static trial: the median total vertical force
     of the middle half of the recording over g, when it is steady (interquartile range within 5 %) and above
     200 N; else None."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-BODY_WEIGHT_N_PER_KG = 9.81
+from gaitcli.core.physics import GRAVITY_M_S2
 
 
 def gait_checks(cycle_pct, knee_flexion_deg, grf_z_N_per_kg, grf_pct, ankle_moment_Nm, moment_pct,
@@ -29,7 +29,7 @@ def gait_checks(cycle_pct, knee_flexion_deg, grf_z_N_per_kg, grf_pct, ankle_mome
     pct, knee = np.asarray(cycle_pct, float), np.asarray(knee_flexion_deg, float)
     swing = pct >= stance_pct
     knee_peak = float(knee[swing].max()) if swing.any() else float("nan")
-    fz_pct, fz = np.asarray(grf_pct, float), np.asarray(grf_z_N_per_kg, float) / BODY_WEIGHT_N_PER_KG
+    fz_pct, fz = np.asarray(grf_pct, float), np.asarray(grf_z_N_per_kg, float) / GRAVITY_M_S2
     stance = fz_pct <= stance_pct
     s_pct, s_fz = fz_pct[stance], fz[stance]
     half = stance_pct / 2

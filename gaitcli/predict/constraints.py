@@ -54,7 +54,12 @@ from gaitcli.core.validate import number
 from gaitcli.predict.contact import PHASE_TABLE, PHASES
 from gaitcli.predict.dynamics import ContactPoint, LegInversion
 from gaitcli.predict.splines import continuity_matrix, is_casadi
-from gaitcli.predict.variables import DEVICE_SCALE, LIFTED_SCALE, REACTION_SCALE_N, Variables
+from gaitcli.predict.variables import (
+    DEVICE_SCALE,
+    LIFTED_SCALE,
+    REACTION_SCALE_N,
+    Variables,
+)
 
 CONTACT_POINTS = ("heel_r", "mtp_r", "heel_l", "mtp_l")
 FRICTION_COEFFICIENT = 0.8

@@ -10,8 +10,10 @@ import numpy as np
 
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
+from gaitcli.predict.reference import VARIABLES
 from gaitcli.predict.settings import PredictSettings
+from gaitcli.signal.bands import Band
+from gaitcli.signal.cycles import CYCLE_PCT
 
 #: m: the guess's step, about half of a 1.24 m stride at the dissertation's subject 1's speed
 GUESS_STEP_M = 0.62
@@ -23,7 +25,7 @@ GUESS_STRETCH = float(np.sqrt(0.1))
 GUESS_HIP_HEIGHT = 0.97
 
 
-def initial_guess(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
+def initial_guess(transcriber: Transcriber, reference: Band, settings: PredictSettings | None = None, *,
                   symmetric: bool = False) -> np.ndarray:
     """The default start χ: a walk read off the reference.
 
@@ -31,7 +33,7 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
     ----------
     transcriber : Transcriber
         The subject's model (its leg length) and node count.
-    reference : Reference
+    reference : Band
         Its mean hip and knee flexion and ankle dorsiflexion give the legs' angles (the HAT upright).
     settings : PredictSettings, optional
         Its speed sets the phase durations (a 60 % stance, steps of :data:`GUESS_STEP_M`).
@@ -49,7 +51,7 @@ def initial_guess(transcriber: Transcriber, reference: Reference, settings: Pred
     p = transcriber.model.params
     n = layout.nodes - 1
     pct = 100 * np.arange(n) / n
-    mean = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[:, k]) for k in range(len(VARIABLES))])
+    mean = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[v]) for v in VARIABLES])
     rad = np.radians
     hip_flex_r, knee_r, dorsi_r, hip_flex_l, knee_l, dorsi_l = (mean[:, VARIABLES.index(v)] for v in VARIABLES[:6])
     leg = p.limb.thigh_length_m + p.limb.shank_length_m + p.contact_below_ankle_m

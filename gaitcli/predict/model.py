@@ -38,7 +38,8 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from gaitcli.dynamics.planar import GRAVITY_M_S2, Joint, PlanarChain, Segment
+from gaitcli.core.physics import GRAVITY_M_S2
+from gaitcli.dynamics.planar import Joint, PlanarChain, Segment
 from gaitcli.kinematics.anthropometry import segment_parameters
 from gaitcli.muscles.limb import LimbParameters
 

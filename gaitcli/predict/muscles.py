@@ -22,7 +22,12 @@ import numpy as np
 
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.muscles.hill import MuscleModel
-from gaitcli.muscles.parameters import MUSCLE_NAMES, JointParameters, MuscleParameters, table_a1
+from gaitcli.muscles.parameters import (
+    MUSCLE_NAMES,
+    JointParameters,
+    MuscleParameters,
+    table_a1,
+)
 from gaitcli.muscles.passive import JointModel
 from gaitcli.predict.prosthesis import COEFFICIENTS, ProsthesisCurve
 

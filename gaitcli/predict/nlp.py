@@ -21,17 +21,32 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.predict import constraints as groups
-from gaitcli.predict.dynamics import contact_points, dynamics_residuals, invert_muscles, muscle_forces, path_residuals
+from gaitcli.predict.dynamics import (
+    contact_points,
+    dynamics_residuals,
+    invert_muscles,
+    muscle_forces,
+    path_residuals,
+)
 from gaitcli.predict.grid import instant_times
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.objective import energy, objective, tracking
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.reference import Reference
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
 from gaitcli.predict.splines import segment_of
-from gaitcli.predict.variables import (DEVICE_BOUNDS, DEVICE_SCALE, DURATION_SCALE_S, LIFTED_SCALE,
-                                       REACTION_SCALE_N, Variables, gait_function, half_spline, instant_splines)
+from gaitcli.predict.variables import (
+    DEVICE_BOUNDS,
+    DEVICE_SCALE,
+    DURATION_SCALE_S,
+    LIFTED_SCALE,
+    REACTION_SCALE_N,
+    Variables,
+    gait_function,
+    half_spline,
+    instant_splines,
+)
+from gaitcli.signal.bands import Band
 
 __all__ = ["NLP", "TIME_LIMIT_STATUS", "build_nlp", "instant_segments", "nlp_key"]
 
@@ -196,7 +211,7 @@ def instant_segments(transcriber: Transcriber, layout: DesignLayout, x: np.ndarr
     return out
 
 
-def nlp_key(transcriber: Transcriber, reference: Reference, settings: PredictSettings, *, symmetric: bool,
+def nlp_key(transcriber: Transcriber, reference: Band, settings: PredictSettings, *, symmetric: bool,
             segments: dict, reach: int) -> tuple:
     """What makes two problems the same: the subject's model and muscles, node count and grid
     (``Transcriber.key``), the reference, the settings that shape the problem (not speed, weights or IPOPT's
@@ -205,7 +220,7 @@ def nlp_key(transcriber: Transcriber, reference: Reference, settings: PredictSet
     return (transcriber.key, reference.digest(), repr(settings.structure()), symmetric, reach, windows)
 
 
-def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
+def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettings | None = None, *,
               symmetric: bool = False, segments: dict | None = None, reach: int | None = None) -> NLP:
     """The lifted NLP of one prediction (module docstring).
 
@@ -213,7 +228,7 @@ def build_nlp(transcriber: Transcriber, reference: Reference, settings: PredictS
     ----------
     transcriber : Transcriber
         The subject's model, muscles (a prosthetic model's included), node count and control grid.
-    reference : Reference
+    reference : Band
         What Jdev (5.28) tracks.
     settings : PredictSettings, optional
         What shapes the problem (tolerances, opt-in terms); its speed and weights are the parameters p, not

@@ -22,8 +22,10 @@ import numpy as np
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.cost import cost_of_transport, deviation
 from gaitcli.predict.dynamics import ContactPoint, LegInversion
-from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
+from gaitcli.predict.reference import VARIABLES
 from gaitcli.predict.variables import Variables
+from gaitcli.signal.bands import Band
+from gaitcli.signal.cycles import CYCLE_PCT
 
 #: the fraction of its stance over which a foot's centre of pressure is tracked from heel to MTP
 COP_PROGRESSION_STANCE = 0.85
@@ -50,7 +52,7 @@ def _per_side(v: Variables, table: dict, i: int) -> dict:
     return {"r": mirrored["l"], "l": mirrored["r"]}
 
 
-def reference_deviation(v: Variables, reference: Reference, points: list[ContactPoint], mass_kg: float) -> ca.SX:
+def reference_deviation(v: Variables, reference: Band, points: list[ContactPoint], mass_kg: float) -> ca.SX:
     """The dissertation's Jdev (5.28): joint angles and ground forces against ``reference``."""
     feet_at = {p.j: p.feet for p in points}
     rows = []
@@ -61,8 +63,9 @@ def reference_deviation(v: Variables, reference: Reference, points: list[Contact
         ground = [feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1]]
         rows.append(ca.horzcat(*[angle * 180 / np.pi for angle in angles], *[f / mass_kg for f in ground]))
     pct = 100 * v.fractions
-    means = ca.horzcat(*[f(pct) for f in _interpolants(reference.mean)])
-    sds = ca.horzcat(*[f(pct) for f in _interpolants(reference.sd)])
+    mean, sd = reference.arrays(VARIABLES)
+    means = ca.horzcat(*[f(pct) for f in _interpolants(mean)])
+    sds = ca.horzcat(*[f(pct) for f in _interpolants(sd)])
     return deviation(ca.vertcat(*rows), means, sds, v.times, v.period)
 
 
@@ -93,7 +96,7 @@ def trunk_rate(v: Variables, sd_deg_s: float) -> ca.SX:
     return deviation(rate, ca.DM.zeros(v.n_i, 1), ca.DM.ones(v.n_i, 1) * sd_deg_s, v.times, v.period)
 
 
-def tracking(v: Variables, reference: Reference, points: list[ContactPoint], settings, transcriber) -> ca.SX:
+def tracking(v: Variables, reference: Band, points: list[ContactPoint], settings, transcriber) -> ca.SX:
     """Jdev (5.28) with the opt-in terms of ``settings`` (module docstring)."""
     model = transcriber.model
     jdev = reference_deviation(v, reference, points, model.total_mass_kg)

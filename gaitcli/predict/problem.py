@@ -25,7 +25,13 @@ import numpy as np
 
 from gaitcli.predict.contact import ContactModel, ground_reactions, joint_moment_map
 from gaitcli.predict.cost import invert_muscles
-from gaitcli.predict.grid import ControlGrid, control_grid, cycle_period, instant_times, point_times
+from gaitcli.predict.grid import (
+    ControlGrid,
+    control_grid,
+    cycle_period,
+    instant_times,
+    point_times,
+)
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles

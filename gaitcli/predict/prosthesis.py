@@ -37,9 +37,10 @@ import numpy as np
 
 from gaitcli.predict.splines import is_casadi
 
-
-#: the curve's coefficients, in the order of Table A.7 (and of the optimal prosthesis's design variables)
-COEFFICIENTS = ("a_p", "b_p", "c0", "a_n", "b_n", "damping_Nms_per_rad")
+#: the curve's coefficients, Table A.7's names and order: the fields of :class:`ProsthesisCurve`, the optimal
+#: device's design variables, a prosthesis file's keys, the ``prosthesis_<name>`` figures of summary.json and
+#: study.csv
+COEFFICIENTS = ("a_p", "b_p", "c0", "a_n", "b_n", "d_prosth")
 #: the NLP's blend of the branches of (5.58): its largest departure from (5.58), N·m, and widest ε, rad
 #: (module docstring; the moment equations themselves are met to PredictSettings.moment_tolerance_Nm = 2 N·m)
 BLEND_ERROR_NM = 0.2
@@ -48,7 +49,8 @@ BLEND_MAX_RAD = 0.03
 
 @dataclass(frozen=True)
 class ProsthesisCurve:
-    """The coefficients of (5.58)–(5.59): N·m/rad³, N·m/rad², N·m/rad; damping N·m·s/rad."""
+    """The coefficients of (5.58)–(5.59), Table A.7: a_p, a_n N·m/rad³; b_p, b_n N·m/rad²; c0 N·m/rad; the
+    damping d_prosth N·m·s/rad."""
 
     name: str
     a_p: float
@@ -56,11 +58,15 @@ class ProsthesisCurve:
     c0: float
     a_n: float
     b_n: float
-    damping_Nms_per_rad: float
+    d_prosth: float
 
     def coefficients(self) -> np.ndarray:
         """(a_p, b_p, c0, a_n, b_n, d_prosth) as an array (:data:`COEFFICIENTS`)."""
         return np.array([getattr(self, k) for k in COEFFICIENTS], float)
+
+    def named(self, prefix: str = "") -> dict[str, float]:
+        """{``prefix`` + name: value} of :data:`COEFFICIENTS`."""
+        return {f"{prefix}{k}": float(getattr(self, k)) for k in COEFFICIENTS}
 
     def branch_blend_rad(self):
         """ε of the NLP's τ_s,ε for these coefficients (rad; numpy or CasADi coefficients; module docstring)."""
@@ -84,7 +90,7 @@ class ProsthesisCurve:
 
     def moment_Nm(self, y, y_rate, blend_rad: float = 0.0):
         """τ_prosth = τ_s(y) − d_prosth·ẏ (5.59), N·m (``blend_rad``: as :meth:`spring_moment_Nm`)."""
-        return self.spring_moment_Nm(y, blend_rad) - self.damping_Nms_per_rad * y_rate
+        return self.spring_moment_Nm(y, blend_rad) - self.d_prosth * y_rate
 
     def plantarflexor_moment_Nm(self, dorsiflexion_rad):
         """The spring's plantarflexor moment at a dorsiflexion angle in the product's convention
@@ -107,8 +113,6 @@ COMMERCIAL_FEET = {
 
 #: the ``--prosthesis`` choices besides a YAML file: none, a commercial foot, the optimal device (5.3.3)
 CHOICES = ("none", *COMMERCIAL_FEET, "optimal")
-#: a prosthesis file's keys: Table A.7's column names
-FILE_KEYS = ("a_p", "b_p", "c0", "a_n", "b_n", "d_prosth")
 
 
 def curve_from_mapping(mapping, path, monotone_range_rad: tuple[float, float]) -> ProsthesisCurve:
@@ -118,12 +122,12 @@ def curve_from_mapping(mapping, path, monotone_range_rad: tuple[float, float]) -
     from gaitcli.errors import InputError, shown
 
     if not isinstance(mapping, dict):
-        raise InputError(path, "prosthesis", f"got {shown(mapping)} (expected a mapping of {', '.join(FILE_KEYS)})")
-    unknown = sorted(set(mapping) - set(FILE_KEYS) - {"name"})
+        raise InputError(path, "prosthesis", f"got {shown(mapping)} (expected a mapping of {', '.join(COEFFICIENTS)})")
+    unknown = sorted(set(mapping) - set(COEFFICIENTS) - {"name"})
     if unknown:
-        raise InputError(path, str(unknown[0]), f"unknown key (expected {', '.join(FILE_KEYS)} and an optional name)")
+        raise InputError(path, str(unknown[0]), f"unknown key (expected {', '.join(COEFFICIENTS)} and an optional name)")
     values = []
-    for key in FILE_KEYS:
+    for key in COEFFICIENTS:
         value = mapping.get(key)
         if value is None:
             raise InputError(path, key, "missing (expected a number: the curve of (5.58)–(5.59), Table A.7's units)")

@@ -9,20 +9,21 @@ right stride contributes its angles, and its ground reactions where that foot's
 load was known throughout the stride. The dissertation's σ are inter-subject SDs
 (Winter); the strides of one subject vary far less, which would make Jdev
 explode and change what the weights mean, so every SD is raised to a floor
-(:data:`SD_FLOOR`, our choice: about the smallest of Winter's inter-subject SDs
+(:data:`gaitcli.signal.bands.SD_FLOOR`, our choice: about the smallest of Winter's inter-subject SDs
 over the cycle, 3° for the angles and 0.3 N/kg for the forces).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gaitcli.errors import InputError
+from gaitcli.signal.bands import Band, floor_of, read_band
+from gaitcli.signal.cycles import CYCLE_PCT
 
 if TYPE_CHECKING:  # annotations only: importing the idyn stage would slow the start of every prediction process
     from gaitcli.dynamics.outputs import IdynOutput
@@ -31,41 +32,12 @@ ANGLES = ("hip_r_flexion_deg", "knee_r_flexion_deg", "ankle_r_dorsiflexion_deg",
           "hip_l_flexion_deg", "knee_l_flexion_deg", "ankle_l_dorsiflexion_deg")
 FORCES = ("grf_x_r_N_per_kg", "grf_z_r_N_per_kg", "grf_x_l_N_per_kg", "grf_z_l_N_per_kg")
 VARIABLES = ANGLES + FORCES
-SD_FLOOR = {"deg": 3.0, "N_per_kg": 0.3}
-CYCLE_PCT = np.arange(101, dtype=float)
 
 
-@dataclass(frozen=True)
-class Reference:
-    """Mean and SD (101, 10) of :data:`VARIABLES` at ``cycle_pct`` (0…100); ``strides`` (10,): how many
-    strides each variable's statistics came from; ``sources``: the trials."""
-
-    cycle_pct: np.ndarray
-    mean: np.ndarray
-    sd: np.ndarray
-    strides: np.ndarray
-    sources: tuple[str, ...] = ()
-
-    def digest(self) -> str:
-        """SHA-256 of the mean and SD: what a prediction sees of the reference (cache and study keys)."""
-        import hashlib
-
-        return hashlib.sha256(np.ascontiguousarray(self.mean).tobytes()
-                              + np.ascontiguousarray(self.sd).tobytes()).hexdigest()
-
-    def columns(self) -> dict[str, np.ndarray]:
-        """The table of ``ref.csv``: ``cycle_pct``, then ``<variable>_mean`` and ``<variable>_sd``."""
-        out = {"cycle_pct": self.cycle_pct}
-        for k, name in enumerate(VARIABLES):
-            out[f"{name}_mean"] = self.mean[:, k]
-            out[f"{name}_sd"] = self.sd[:, k]
-        return out
-
-
-def sd_floors(floor: dict | None = None) -> np.ndarray:
-    """The SD floor of each variable (10,), by its unit."""
-    floor = {**SD_FLOOR, **(floor or {})}
-    return np.array([floor["deg"] if name.endswith("_deg") else floor["N_per_kg"] for name in VARIABLES])
+def as_reference(mean: np.ndarray, sd: np.ndarray, strides, source: str = "") -> Band:
+    """A reference of :data:`VARIABLES` from means and SDs (101, 10) in that order and stride counts (10,)."""
+    return Band({v: mean[:, k] for k, v in enumerate(VARIABLES)}, {v: sd[:, k] for k, v in enumerate(VARIABLES)},
+                source, {v: int(n) for v, n in zip(VARIABLES, strides)})
 
 
 LEG_VARIABLES = ("hip_{s}_flexion_deg", "knee_{s}_flexion_deg", "ankle_{s}_dorsiflexion_deg",
@@ -99,10 +71,11 @@ def _shift(curve: np.ndarray, offset_pct: float) -> np.ndarray:
 
 
 def build_reference(right: list[np.ndarray], left: list[np.ndarray], *, left_offset_pct: float = 50.0,
-                    floor: dict | None = None, sources=()) -> Reference:
+                    sources=()) -> Band:
     """The reference from each leg's strides over its own cycle ((101, 5) arrays in :data:`LEG_VARIABLES`
     order, NaN where a stride does not give a variable); the left leg's curves are moved to the right-heel-
-    strike cycle by ``left_offset_pct`` (where the left heel strikes in it). Each SD is raised to its floor."""
+    strike cycle by ``left_offset_pct`` (where the left heel strikes in it). Each SD is raised to its floor
+    (:data:`gaitcli.signal.bands.SD_FLOOR`)."""
     mean_r, sd_r, n_r = _side_statistics(right, "r")
     mean_l, sd_l, n_l = _side_statistics(left, "l")
     mean_l, sd_l = _shift(mean_l, left_offset_pct), _shift(sd_l, left_offset_pct)
@@ -111,7 +84,8 @@ def build_reference(right: list[np.ndarray], left: list[np.ndarray], *, left_off
     mean[:, order] = np.column_stack([mean_r, mean_l])
     sd[:, order] = np.column_stack([sd_r, sd_l])
     counts[order] = np.concatenate([n_r, n_l])
-    return Reference(CYCLE_PCT.copy(), mean, np.maximum(sd, sd_floors(floor)), counts, tuple(map(str, sources)))
+    floors = np.array([floor_of(v) for v in VARIABLES])
+    return as_reference(mean, np.maximum(sd, floors), counts, ", ".join(map(str, sources)))
 
 
 def leg_cycles(time_s, values, load_known, strides) -> list[np.ndarray]:
@@ -155,37 +129,29 @@ def idyn_reference_strides(idyn: IdynOutput) -> tuple[list[np.ndarray], list[np.
     return cycles["r"], cycles["l"], offsets
 
 
-def read_reference(path: str | Path) -> Reference:
-    """Read ``ref.csv`` (columns ``cycle_pct``, ``<variable>_mean``, ``<variable>_sd``); one-line errors."""
-    import pandas as pd
-
+def read_reference(path: str | Path) -> Band:
+    """Read ``ref.csv`` (columns ``cycle_pct``, ``<variable>_mean``, ``<variable>_sd`` for every one of
+    :data:`VARIABLES`, finite, SD > 0); one-line errors."""
     path = Path(path)
     if not path.is_file():
         raise InputError(path, None, "reference file not found")
-    try:
-        table = pd.read_csv(path)
-    except (ValueError, UnicodeDecodeError):
-        raise InputError(path, None, "not a CSV table (expected the columns gait reference writes)") from None
-    needed = ["cycle_pct"] + [f"{v}_{s}" for v in VARIABLES for s in ("mean", "sd")]
-    for name in needed:
-        if name not in table:
-            raise InputError(path, name, "missing column (expected cycle_pct and <variable>_mean, _sd for "
-                                         + ", ".join(VARIABLES) + ")")
-    values = table[needed].to_numpy(dtype=float)
-    if not np.all(np.isfinite(values)):
+    band = read_band(path, side_free=False)
+    missing = [v for v in VARIABLES if v not in band.mean]
+    if missing:
+        with path.open(encoding="utf-8", errors="replace") as f:
+            header = f.readline().strip().split(",")
+        column = next(f"{v}_{stat}" for v in missing for stat in ("mean", "sd") if f"{v}_{stat}" not in header)
+        raise InputError(path, column, "missing column (expected cycle_pct and <variable>_mean, _sd for "
+                                       + ", ".join(VARIABLES) + ")")
+    mean, sd = band.arrays(VARIABLES)
+    if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(sd))):
         raise InputError(path, None, "expected finite numbers in every column")
-    pct = values[:, 0]
-    if pct[0] != 0.0 or pct[-1] != 100.0 or np.any(np.diff(pct) <= 0):
-        raise InputError(path, "cycle_pct", "expected increasing values from 0 to 100")
-    mean, sd = values[:, 1::2], values[:, 2::2]
     if np.any(sd <= 0):
         raise InputError(path, "_sd columns", "expected standard deviations > 0")
-    grid = CYCLE_PCT
-    interp = (lambda v: np.column_stack([np.interp(grid, pct, v[:, k]) for k in range(v.shape[1])]))
-    return Reference(grid.copy(), interp(mean), interp(sd), np.zeros(len(VARIABLES), int), (str(path),))
+    return as_reference(mean, sd, np.zeros(len(VARIABLES), int), str(path))
 
 
-def reference_from_idyn(outputs: Sequence[IdynOutput], sources=()) -> tuple[Reference, int, int]:
+def reference_from_idyn(outputs: Sequence[IdynOutput], sources=()) -> tuple[Band, int, int]:
     """The reference of every stride in the trials' idyn ``outputs``, and how many right and left strides it
     has; the left leg moved by the mean offset of its heel strikes (50 % where none was seen)."""
     right, left, offsets = [], [], []

@@ -27,9 +27,9 @@ from gaitcli.core.ipopt import Outcome, outside_bounds
 from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.nlp import NLP, build_nlp, instant_segments, nlp_key
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.reference import Reference
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
 from gaitcli.predict.variables import DEVICE_SCALE
+from gaitcli.signal.bands import Band
 
 #: how many built problems a cache keeps: a study alternates between at most two structures (intact,
 #: prosthetic)
@@ -129,7 +129,7 @@ class NlpCache:
                 self._built.popitem(last=False)
         return self._built[key]
 
-    def nlp(self, transcriber: Transcriber, reference: Reference, settings: PredictSettings | None = None, *,
+    def nlp(self, transcriber: Transcriber, reference: Band, settings: PredictSettings | None = None, *,
             symmetric: bool = False, segments: dict, reach: int | None = None) -> NLP:
         """:func:`build_nlp`'s problem, built once per structure (:func:`gaitcli.predict.nlp.nlp_key`)."""
         s = settings or PredictSettings()
@@ -269,7 +269,7 @@ class PredictSolution:
     windows_hold: bool
 
 
-def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarray,
+def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
                    settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
                    options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
                    optimal_device: bool = False, deadline: float | None = None,
@@ -281,7 +281,7 @@ def solve_windowed(transcriber: Transcriber, reference: Reference, x0: np.ndarra
     ----------
     transcriber : Transcriber
         The case's model, muscles, node count and grid.
-    reference : Reference
+    reference : Band
         What Jdev tracks.
     x0 : array
         The start χ (clipped into its box bounds first; what lay outside is reported).

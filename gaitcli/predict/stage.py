@@ -18,22 +18,28 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.core.validate import number_pair, parameter
 from gaitcli.errors import InputError
-from gaitcli.kinematics.conventions import walker_moments_to_clinical, walker_to_clinical
+from gaitcli.kinematics.conventions import (
+    walker_moments_to_clinical,
+    walker_to_clinical,
+)
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
 from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, full_from_symmetric
-from gaitcli.predict.model import GRAVITY_M_S2, WalkerParameters, WalkingModel
+from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.nlp import build_nlp, instant_segments
 from gaitcli.predict.problem import Transcriber, gait_at
-from gaitcli.predict.prosthesis import CHOICES, FILE_KEYS, ProsthesisCurve, curve_for
-from gaitcli.predict.reference import CYCLE_PCT, VARIABLES, Reference
+from gaitcli.predict.prosthesis import CHOICES, COEFFICIENTS, ProsthesisCurve, curve_for
+from gaitcli.predict.reference import VARIABLES
 from gaitcli.predict.settings import PredictSettings
 from gaitcli.predict.solve import NlpCache, PredictSolution, solve_windowed
+from gaitcli.signal.bands import Band
+from gaitcli.signal.cycles import CYCLE_PCT
 
 #: phases with the right foot on the floor (HSr … TOr) and with both feet down (Fig. 5.3)
 RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
@@ -48,7 +54,7 @@ JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
 
 
 WEIGHTS_EXPECTED = "two weights W1,W2 ≥ 0 that sum to 2, (5.29); e.g. 4/3,2/3"
-PROSTHESIS_EXPECTED = f"{', '.join(CHOICES)} or a .yaml file of {', '.join(FILE_KEYS)}"
+PROSTHESIS_EXPECTED = f"{', '.join(CHOICES)} or a .yaml file of {', '.join(COEFFICIENTS)}"
 
 
 def weight_pair(value) -> tuple[float, float]:
@@ -93,7 +99,7 @@ def prosthesis_name(value) -> str:
         raise ValueError(PROSTHESIS_EXPECTED)
     if value.lower().endswith((".yaml", ".yml")):
         if not Path(value).is_file():
-            raise InputError(value, None, f"file not found (expected a YAML file of {', '.join(FILE_KEYS)})")
+            raise InputError(value, None, f"file not found (expected a YAML file of {', '.join(COEFFICIENTS)})")
         return value
     if value.lower() not in CHOICES:
         raise ValueError(PROSTHESIS_EXPECTED)
@@ -251,8 +257,7 @@ class PredictResult:
             "fine_grid": dict(self.fine_grid),
             "foot_mass_kg": float(self.foot_mass_kg), "strength_scale": float(self.strength_scale),
             "prosthesis": (None if self.prosthesis is None else
-                           {"name": self.prosthesis.name,
-                            **{k: float(v) for k, v in zip(FILE_KEYS, self.prosthesis.coefficients())}}),
+                           {"name": self.prosthesis.name, **self.prosthesis.named()}),
             "gait_checks": self.gait_checks(),
             "vertical_impulse_ratio": self.vertical_impulse_ratio(),
         }
@@ -295,7 +300,7 @@ def walker_muscles(cfg: PredictConfig, device: ProsthesisCurve | None) -> Walker
     return WalkerMuscles(prosthesis=device if cfg.prosthetic else None, strength_scale=cfg.strength())
 
 
-def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Reference,
+def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Band,
                 init: np.ndarray | None = None, report=None, device: ProsthesisCurve | None = None,
                 cache: NlpCache | None = None) -> PredictResult:
     """Predict one gait cycle (module docstring). ``params``: the subject (``cfg``'s foot mass is added here);
@@ -369,7 +374,7 @@ def _solve_notes(solved: PredictSolution, label: str) -> list[str]:
     return notes + [f"predict: {label}: {solved.outcome.status} after {solved.outcome.iterations} iterations"]
 
 
-def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model: WalkingModel,
+def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Band, model: WalkingModel,
              muscles: WalkerMuscles) -> tuple[dict, dict]:
     """The fields of a :class:`PredictResult` for the NLP's variables ``w`` (the gait transcribed anew with the
     exact heat-rate model and ``muscles``, whose device is the solution's) and every constraint group's largest
@@ -384,7 +389,7 @@ def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Reference, model
     return fields, violations
 
 
-def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Reference,
+def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Band,
                     params: WalkerParameters | None = None, device: ProsthesisCurve | None = None) -> PredictResult:
     """The :class:`PredictResult` of a given design vector χ ``x`` (e.g. a stored solution; ``device``: its
     prostheses' curve), without solving; ``converged`` says whether every constraint group holds there."""
@@ -414,7 +419,7 @@ def _ground_forces(tr: Transcriber, t) -> np.ndarray:
     return grf
 
 
-def _costs(tr: Transcriber, t, period: float, stride: float, reference: Reference,
+def _costs(tr: Transcriber, t, period: float, stride: float, reference: Band,
            grf: np.ndarray | None = None) -> tuple[float, float]:
     """Et (5.27, J/m) and Jdev (5.28) of a transcription on its grid's instants (``grf``: its
     :func:`_ground_forces`, where the caller has them)."""
@@ -423,13 +428,13 @@ def _costs(tr: Transcriber, t, period: float, stride: float, reference: Referenc
     pct = 100 * times / period
     grf = _ground_forces(tr, t) if grf is None else grf
     values = np.column_stack([walker_to_clinical(t.y[opening]), grf[opening] / tr.model.total_mass_kg])
-    means = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[:, k]) for k in range(len(VARIABLES))])
-    sds = np.column_stack([np.interp(pct, CYCLE_PCT, reference.sd[:, k]) for k in range(len(VARIABLES))])
+    means = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[v]) for v in VARIABLES])
+    sds = np.column_stack([np.interp(pct, CYCLE_PCT, reference.sd[v]) for v in VARIABLES])
     return (float(cost_of_transport(t.metabolic_rate_W, times, period, stride)),
             float(deviation(values, means, sds, times, period)))
 
 
-def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Reference, model: WalkingModel,
+def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Band, model: WalkingModel,
               muscles: WalkerMuscles | None = None, refinement: int = FINE_GRID_REFINEMENT) -> dict:
     """The design χ ``x`` on a grid ``refinement`` times finer than the control points' (each phase's
     intervals split alike; exact heat-rate model): Et, Jdev, J and the largest moment error, contact error and
@@ -450,7 +455,7 @@ def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Reference, model: Wa
             "min_excitation": float(np.nanmin(u)), "max_excitation": float(np.nanmax(u))}
 
 
-def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Reference, violations) -> dict:
+def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Band, violations) -> dict:
     grid = tr.grid
     opening = grid.instant_points
     period, stride = float(np.sum(durations)), float(sum(steps))
@@ -479,6 +484,7 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
         error.append(B_pinv @ e)
     residual_by_phase = np.array([max(np.linalg.norm(t.residual[j]) for j in range(grid.points)
                                       if int(grid.phase[j]) == p) for p in range(8)])
+    reference_mean, reference_sd = reference.arrays(VARIABLES)
     return dict(speed_m_s=cfg.speed_m_s, weights=weights, nodes=cfg.nodes, symmetric=cfg.symmetric,
                 time_s=times, cycle_pct=pct, coordinates=t.y[opening], clinical_angles_deg=angles,
                 muscle_names=tuple(np.array(tr.muscles.names)[present]),
@@ -492,7 +498,7 @@ def _result(cfg, weights, tr: Transcriber, t, durations, steps, reference: Refer
                 step_lengths_m=np.asarray(steps, float), body_mass_kg=mass, point_names=tuple(tr.model.point_names),
                 points_m=np.array([np.column_stack([np.ravel(np.array(v)) for v in tr.model.points(y)]).T
                                    for y in t.y[opening]]),
-                reference_mean=reference.mean, reference_sd=reference.sd, ankle_moment_Nm=ankle,
+                reference_mean=reference_mean, reference_sd=reference_sd, ankle_moment_Nm=ankle,
                 cost_of_transport_J_per_m=float(et),
                 deviation=float(jdev), objective=float(objective(et, jdev, weights)), violations=violations)
 

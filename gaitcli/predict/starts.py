@@ -22,9 +22,9 @@ from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import present_muscles
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
-from gaitcli.predict.reference import Reference
 from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of
+from gaitcli.signal.bands import Band
 
 #: two solutions "agree" when their objectives differ by less than this fraction of the better one
 AGREEMENT = 0.01
@@ -46,7 +46,7 @@ def as_optimal(start: PredictResult, note: str) -> PredictResult:
     return dataclasses.replace(start, prosthesis=curve, history=start.history + (note,))
 
 
-def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Reference,
+def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Band,
                     init: np.ndarray | None = None, report=None,
                     feet: dict[str, PredictResult] | None = None,
                     normal: PredictResult | None = None, cache: NlpCache | None = None) -> PredictResult:
@@ -85,7 +85,7 @@ or the default guess, each foot from it. The
     return dataclasses.replace(chosen, history=chosen.history + tuple(history))
 
 
-def perturbed_guess(cfg: PredictConfig, params: WalkerParameters | None, reference: Reference,
+def perturbed_guess(cfg: PredictConfig, params: WalkerParameters | None, reference: Band,
                     seed: int) -> np.ndarray:
     """The default initial guess χ with seeded perturbations of :data:`PERTURBATION` (normal noise, clipped
     into the bounds; the durations rescaled so that the speed holds)."""
@@ -122,7 +122,7 @@ def retimed(cfg: PredictConfig, x: np.ndarray) -> np.ndarray:
     return layout.pack(blocks)
 
 
-def solve_start(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Reference, seed: int | None,
+def solve_start(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Band, seed: int | None,
                 device: ProsthesisCurve | None = None, init: np.ndarray | None = None,
                 cache: NlpCache | None = None) -> PredictResult:
     """One start of ``--starts N``: from ``init`` (default: the default guess) when ``seed`` is None, else from

@@ -28,7 +28,7 @@ from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.h5 import file_attrs
 from gaitcli.io.outputs import plain_text
-from gaitcli.signal.bands import NormalBand
+from gaitcli.signal.bands import Band
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
 #: Wolf and Rettig), the literature values the dissertation compares Table 3.1 with
@@ -147,7 +147,7 @@ def _subject(trial_folder: Path | None) -> str:
     return f"{s.sex}, {mass}, {s.stature_m:g} m" + (f", marker set {s.marker_set}" if s.marker_set else "")
 
 
-def trial_body(root: Path, name: str, band: NormalBand | None, work: Path) -> str:
+def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
     """The sections of a trial output root's page (``root``: the folder holding filter/, idyn/, ...)."""
     from gaitcli.report.plots import filter_figures, idyn_figures, muscle_figures
 
@@ -292,7 +292,7 @@ def write_page(path: Path, title: str, body: str) -> Path:
     return path
 
 
-def write_report(out_dir: Path, band: NormalBand | None) -> list[Page]:
+def write_report(out_dir: Path, band: Band | None) -> list[Page]:
     """Write the report pages of ``out_dir`` (a trial's ``report.html`` in its output root, a study's in its
     folder, a batch's ``report.html`` index in the lab folder beside each trial's own page)."""
     kind, root = find_report(Path(out_dir).resolve())

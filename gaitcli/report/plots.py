@@ -21,7 +21,8 @@ from gaitcli.core.events import SIDE_NAMES  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
 from gaitcli.io.h5 import read_result  # noqa: E402
 from gaitcli.io.stage_files import IdynTables, read_filter_signals, read_idyn_tables  # noqa: E402
-from gaitcli.signal.bands import CYCLE_PCT, NormalBand  # noqa: E402
+from gaitcli.signal.bands import Band  # noqa: E402
+from gaitcli.signal.cycles import CYCLE_PCT  # noqa: E402
 
 SIDE_COLOUR = {"r": "tab:red", "l": "tab:blue"}
 
@@ -50,7 +51,7 @@ def mark_events(ax, events, *, sides=("r", "l")) -> None:
                           linewidths=0.8, alpha=0.6, linestyles=style)
 
 
-def draw_band(ax, band: NormalBand | None, variable: str, *, label: bool = True) -> bool:
+def draw_band(ax, band: Band | None, variable: str, *, label: bool = True) -> bool:
     """Grey mean ± 1 SD of ``variable`` behind whatever ``ax`` shows over 0–100 % (True when drawn)."""
     got = None if band is None else band.get(variable)
     if got is None:
@@ -162,7 +163,7 @@ def _cycle_figure(tables: IdynTables, strides, plane: str, *, title: str, band):
     time_s = tables.time_s
     rows = 2 if power is None else 3
     fig, axes = plt.subplots(rows, 3, figsize=(12, 3 * rows), sharex=True)
-    pct = np.arange(101)
+    pct = CYCLE_PCT
     banded = False
     for col, (joint, label, angle_senses, moment_senses) in enumerate(PLANES[plane]):
         angle_sense = _column(angle_columns, joint, "r", angle_senses)[1]

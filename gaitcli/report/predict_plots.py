@@ -8,8 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.io.h5 import read_result
 from gaitcli.report.plots import SIDE_COLOUR, plt, save
+from gaitcli.signal.cycles import CYCLE_PCT
 
 ANGLE_LABELS = ("hip flexion (°)", "knee flexion (°)", "ankle dorsiflexion (°)")
 GRF_LABELS = ("fore-aft GRF (N/kg)", "vertical GRF (N/kg)")
@@ -21,7 +23,7 @@ STICKS = (("hip", "hat_com"), ("hip", "knee_r"), ("knee_r", "ankle_r"), ("ankle_
 
 
 def _band(ax, reference_mean, reference_sd, k):
-    pct = np.arange(101)
+    pct = CYCLE_PCT
     m, s = reference_mean[:, k], reference_sd[:, k]
     ax.fill_between(pct, m - s, m + s, color="0.85", lw=0, label="reference ± SD")
     ax.plot(pct, m, color="0.55", lw=0.8)
@@ -39,7 +41,7 @@ def _against_reference(r, pct, values, first_reference, labels, path: Path, titl
             _band(ax, r.reference_mean, r.reference_sd, first_reference + columns * row + k)
             ax.plot(pct, values[:, columns * row + k], color=SIDE_COLOUR[side], lw=1.5)
             if body_weight and labels[k].startswith("vertical"):
-                ax.axhline(9.81, color="k", lw=0.6, ls=":")
+                ax.axhline(GRAVITY_M_S2, color="k", lw=0.6, ls=":")
             _stance_end(ax, r)
             ax.set_ylabel(f"{'right' if side == 'r' else 'left'} {labels[k]}", fontsize=9)
             ax.set_xlim(0, 100)

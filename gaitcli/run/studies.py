@@ -38,7 +38,7 @@ from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import check_output_folder, remove_stale
 from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
-from gaitcli.predict.prosthesis import COMMERCIAL_FEET, FILE_KEYS
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
 from gaitcli.predict.starts import agreeing, predict_optimal, retimed, solve_start, start_seeds
 from gaitcli.resources import stored_solution
@@ -218,7 +218,7 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
            "wall_time_s": float(wall_s), "reused": bool(reused), "starts_agreeing": int(agreed),
            "tau_s_at_minus_0.1_rad_Nm": _tau(result, -0.1), "tau_s_at_minus_0.2_rad_Nm": _tau(result, -0.2)}
     if result.prosthesis is not None:
-        row.update({f"prosthesis_{k}": float(v) for k, v in zip(FILE_KEYS, result.prosthesis.coefficients())})
+        row.update(result.prosthesis.named("prosthesis_"))
     return row
 
 

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.errors import InputError
+from gaitcli.signal.cycles import CYCLE_PCT
 
-CYCLE_PCT = np.arange(101, dtype=float)
 #: a gait_cycle.csv column a band pools over both legs: ``<joint>_<side>_<sense>`` (deg),
 #: ``<joint>_<side>_<sense>_moment_per_kg`` or ``<joint>_<side>_power_W_per_kg`` (the pelvis and lumbar columns
 #: have no side)
@@ -39,19 +39,39 @@ REFERENCE_COLUMNS = {"hip_r_flexion_deg": "hip_flexion_deg", "knee_r_flexion_deg
 
 
 @dataclass(frozen=True)
-class NormalBand:
-    """``mean``/``sd`` {variable: (101,)} over :data:`CYCLE_PCT`; ``source``: where it came from (for captions)."""
+class Band:
+    """Mean and SD {variable: (101,)} over :data:`CYCLE_PCT`, in the variables' own units: a normal band
+    behind a figure's curves, or the reference a prediction tracks (:mod:`gaitcli.predict.reference`).
+    ``source``: where it came from (captions); ``strides``: how many strides gave each variable."""
 
     mean: dict[str, np.ndarray]
     sd: dict[str, np.ndarray]
     source: str = ""
     strides: dict[str, int] = field(default_factory=dict)
 
+    @property
+    def variables(self) -> tuple[str, ...]:
+        return tuple(self.mean)
+
     def get(self, variable: str) -> tuple[np.ndarray, np.ndarray] | None:
         """(mean, SD) of ``variable`` or None when the band has none."""
         return (self.mean[variable], self.sd[variable]) if variable in self.mean else None
 
+    def arrays(self, variables=None) -> tuple[np.ndarray, np.ndarray]:
+        """Means and SDs (101, n) of ``variables`` (default: all, in the band's order), one column each."""
+        names = self.variables if variables is None else tuple(variables)
+        return (np.column_stack([self.mean[v] for v in names]), np.column_stack([self.sd[v] for v in names]))
+
+    def digest(self) -> str:
+        """SHA-256 of the means and SDs in the band's order: what a prediction sees of it (cache and study
+        keys)."""
+        import hashlib
+
+        mean, sd = self.arrays()
+        return hashlib.sha256(mean.tobytes() + sd.tobytes()).hexdigest()
+
     def columns(self) -> dict[str, np.ndarray]:
+        """The band file's table: ``cycle_pct``, then ``<variable>_mean`` and ``<variable>_sd``."""
         out = {"cycle_pct": CYCLE_PCT}
         for name in self.mean:
             out[f"{name}_mean"], out[f"{name}_sd"] = self.mean[name], self.sd[name]
@@ -59,10 +79,11 @@ class NormalBand:
 
 
 def floor_of(variable: str) -> float:
+    """The SD floor of ``variable`` by its unit suffix (:data:`SD_FLOOR`; 0 for other units)."""
     return next((v for suffix, v in SD_FLOOR.items() if variable.endswith(suffix)), 0.0)
 
 
-def band_from_gait_cycles(paths, *, source: str = "") -> NormalBand:
+def band_from_gait_cycles(paths, *, source: str = "") -> Band:
     """The band of every stride in idyn's ``gait_cycle.csv`` files (both legs pooled, each over its own cycle;
     at each percentage the strides that give the variable there: a moment where its foot's load is known, NaN
     where none does); each SD raised to its floor."""
@@ -94,11 +115,13 @@ def band_from_gait_cycles(paths, *, source: str = "") -> NormalBand:
         strides[name] = int(count.max())
     if not mean:
         raise InputError(None, "band", "no complete stride in the trials' gait_cycle.csv (expected idyn outputs)")
-    return NormalBand(mean, sd, source, strides)
+    return Band(mean, sd, source, strides)
 
 
-def read_band(path: str | Path) -> NormalBand:
-    """A band file, or a ``gait reference`` table (its right-leg sagittal angles and forces); one-line errors."""
+def read_band(path: str | Path, *, side_free: bool = True) -> Band:
+    """A band file, or a ``gait reference`` table; one-line errors. ``side_free``: of a reference table only
+    its right-leg sagittal angles and forces, under the band's side-free names (a figure's band); else every
+    column pair as it is named."""
     import pandas as pd
 
     path = Path(path)
@@ -113,7 +136,7 @@ def read_band(path: str | Path) -> NormalBand:
     pct = table["cycle_pct"].to_numpy(float)
     if pct.size < 2 or pct[0] != 0.0 or pct[-1] != 100.0 or np.any(np.diff(pct) <= 0):
         raise InputError(path, "cycle_pct", "expected increasing values from 0 to 100")
-    rename = REFERENCE_COLUMNS if any(f"{c}_mean" in table for c in REFERENCE_COLUMNS) else {}
+    rename = REFERENCE_COLUMNS if side_free and any(f"{c}_mean" in table for c in REFERENCE_COLUMNS) else {}
     mean, sd = {}, {}
     for column in table.columns:
         if not column.endswith("_mean") or f"{column[:-5]}_sd" not in table:
@@ -129,10 +152,10 @@ def read_band(path: str | Path) -> NormalBand:
         sd[rename.get(name, name)] = np.interp(CYCLE_PCT, pct, s)
     if not mean:
         raise InputError(path, None, "no <variable>_mean and _sd columns (expected a band or reference CSV)")
-    return NormalBand(mean, sd, path.name)
+    return Band(mean, sd, path.name)
 
 
-def default_band() -> NormalBand:
+def default_band() -> Band:
     """The package's band (the strides of ``gait synth``'s normative trial: Winter's curves)."""
     band = read_band(BAND_FILE)
-    return NormalBand(band.mean, band.sd, "gaitcli's band: Winter's adult curves (gait synth --gait normative)")
+    return Band(band.mean, band.sd, "gaitcli's band: Winter's adult curves (gait synth --gait normative)")

@@ -8,7 +8,9 @@ import numpy as np
 
 from gaitcli.core.events import Events
 
-CYCLE_POINTS = 101  # 0, 1, …, 100 % of the cycle
+#: points of a time-normalised cycle, and their percentages of the cycle: 0, 1, …, 100 %
+CYCLE_POINTS = 101
+CYCLE_PCT = np.arange(CYCLE_POINTS, dtype=float)
 
 
 @dataclass(frozen=True)

@@ -78,12 +78,12 @@ class Result:
 
 def gait(*args, cwd: Path, timeout_s: float = 180.0, fresh: bool = False) -> Result:
     """Run ``gait ARGS`` in ``cwd``: in one of this test process's runner processes (:func:`gait_many`), or with
-    ``fresh`` in a new ``python -m gaitcli.cli`` process (the installed command's code, imports included): for a
+    ``fresh`` in a new ``python -m gaitcli`` process (the installed command's code, imports included): for a
     test that times the run to aim a signal at a later one, itself a new process."""
     args = tuple(str(a) for a in args)
     if not fresh:
         return gait_many({"run": (args, cwd)}, timeout_s=timeout_s, workers=1)["run"]
-    done = subprocess.run([sys.executable, "-m", "gaitcli.cli", *args], cwd=cwd, env=ENV, capture_output=True,
+    done = subprocess.run([sys.executable, "-m", "gaitcli", *args], cwd=cwd, env=ENV, capture_output=True,
                           text=True, timeout=timeout_s)
     return Result(args, done.returncode, done.stdout, done.stderr, Path(cwd))
 

@@ -127,7 +127,7 @@ def test_a_worker_killed_mid_trial_leaves_no_half_written_output(dask_cluster, t
     address, client = dask_cluster
     lab = tmp_path / "lab"
     shutil.copytree(sample_trials_dir() / "normal", lab / "normal", ignore=shutil.ignore_patterns("gait_out"))
-    batch = subprocess.Popen([sys.executable, "-m", "gaitcli.cli", "batch", str(lab), "--scheduler", address],
+    batch = subprocess.Popen([sys.executable, "-m", "gaitcli", "batch", str(lab), "--scheduler", address],
                              cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     victim, deadline = None, time.monotonic() + 120
     while victim is None and time.monotonic() < deadline and batch.poll() is None:

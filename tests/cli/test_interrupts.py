@@ -22,7 +22,7 @@ from .conftest import ENV, MINIMAL_SUBJECT, copy_sample, gait, snapshot
 
 
 def start_gait(*args, cwd: Path) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "gaitcli.cli", *args], cwd=cwd, env=ENV, stdout=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "gaitcli", *args], cwd=cwd, env=ENV, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True,
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 

@@ -8,8 +8,9 @@ import pytest
 
 from gaitcli.errors import InputError
 from gaitcli.io.outputs import write_table
-from gaitcli.predict.reference import (CYCLE_PCT, SD_FLOOR, VARIABLES, build_reference, leg_cycles,
-                                       read_reference)
+from gaitcli.predict.reference import build_reference, leg_cycles, read_reference
+from gaitcli.signal.bands import SD_FLOOR
+from gaitcli.signal.cycles import CYCLE_PCT
 
 
 def strides(level: float, count: int = 2, spread: float = 10.0) -> list[np.ndarray]:
@@ -23,25 +24,24 @@ def strides(level: float, count: int = 2, spread: float = 10.0) -> list[np.ndarr
 
 def test_mean_sd_and_the_floor_by_hand():
     ref = build_reference(strides(0.0), strides(100.0), left_offset_pct=0.0)
-    hip_r, grf_z_r, hip_l = (VARIABLES.index(n) for n in ("hip_r_flexion_deg", "grf_z_r_N_per_kg",
-                                                           "hip_l_flexion_deg"))
-    np.testing.assert_allclose(ref.mean[:, hip_r], CYCLE_PCT / 10)  # the two strides' mean
-    np.testing.assert_allclose(ref.sd[:, hip_r], 10 / np.sqrt(2))  # ±5 about the mean, ddof 1: 7.07
-    np.testing.assert_allclose(ref.mean[:, grf_z_r], 4 + CYCLE_PCT / 10)
+    hip_r, grf_z_r, hip_l = "hip_r_flexion_deg", "grf_z_r_N_per_kg", "hip_l_flexion_deg"
+    np.testing.assert_allclose(ref.mean[hip_r], CYCLE_PCT / 10)  # the two strides' mean
+    np.testing.assert_allclose(ref.sd[hip_r], 10 / np.sqrt(2))  # ±5 about the mean, ddof 1: 7.07
+    np.testing.assert_allclose(ref.mean[grf_z_r], 4 + CYCLE_PCT / 10)
     # the left leg is moved as a periodic curve: its 100 % is its 0 % (this ramp is not periodic)
-    np.testing.assert_allclose(ref.mean[:100, hip_l], 100 + CYCLE_PCT[:100] / 10)
+    np.testing.assert_allclose(ref.mean[hip_l][:100], 100 + CYCLE_PCT[:100] / 10)
     one = build_reference(strides(0.0, count=1), strides(0.0, count=1), left_offset_pct=0.0)
-    np.testing.assert_allclose(one.sd[:, hip_r], SD_FLOOR["deg"])  # one stride: SD 0, raised to the floor
-    np.testing.assert_allclose(one.sd[:, grf_z_r], SD_FLOOR["N_per_kg"])
-    assert list(ref.strides) == [2] * 10
+    np.testing.assert_allclose(one.sd[hip_r], SD_FLOOR["_deg"])  # one stride: SD 0, raised to the floor
+    np.testing.assert_allclose(one.sd[grf_z_r], SD_FLOOR["_N_per_kg"])
+    assert list(ref.strides.values()) == [2] * 10
 
 
 def test_the_left_leg_moves_to_the_right_heel_strike_cycle():
     # a left curve over its own cycle, seen from a right-heel-strike cycle in which the left strikes at 50 %
     left = [np.column_stack([np.sin(2 * np.pi * CYCLE_PCT / 100) for _ in range(5)])]
     ref = build_reference(strides(0.0, count=1), left, left_offset_pct=50.0)
-    hip_l = VARIABLES.index("hip_l_flexion_deg")
-    np.testing.assert_allclose(ref.mean[:, hip_l], np.sin(2 * np.pi * (CYCLE_PCT - 50) / 100), atol=1e-12)
+    hip_l = "hip_l_flexion_deg"
+    np.testing.assert_allclose(ref.mean[hip_l], np.sin(2 * np.pi * (CYCLE_PCT - 50) / 100), atol=1e-12)
 
 
 def test_a_variable_no_stride_gives_is_an_error():
@@ -67,8 +67,8 @@ def test_csv_round_trip_and_errors(tmp_path):
     path = tmp_path / "ref.csv"
     write_table(path, ref.columns(), float_format="%.10g")
     back = read_reference(path)
-    np.testing.assert_allclose(back.mean, ref.mean, rtol=1e-9)
-    np.testing.assert_allclose(back.sd, ref.sd, rtol=1e-9)
+    np.testing.assert_allclose(back.arrays()[0], ref.arrays()[0], rtol=1e-9)
+    np.testing.assert_allclose(back.arrays()[1], ref.arrays()[1], rtol=1e-9)
     columns = ref.columns()
     del columns["knee_l_flexion_deg_sd"]
     write_table(tmp_path / "short.csv", columns)

@@ -9,7 +9,7 @@ import pytest
 
 from gaitcli.errors import InputError
 from gaitcli.report import plots
-from gaitcli.signal.bands import CYCLE_PCT, NormalBand
+from gaitcli.signal.bands import CYCLE_PCT, Band
 
 from . import synthetic
 
@@ -104,7 +104,7 @@ def test_coordinate_moments_are_labelled_by_their_own_sense(tmp_path):
 
 def test_the_normal_band_is_drawn_where_it_has_the_variable(idyn_h5):
     mean, sd = 30 + 0.1 * CYCLE_PCT, np.full(101, 4.0)
-    band = NormalBand({"hip_flexion_deg": mean}, {"hip_flexion_deg": sd}, "test band")
+    band = Band({"hip_flexion_deg": mean}, {"hip_flexion_deg": sd}, "test band")
     fig = plots.cycle_figure(idyn_h5, "sagittal", band=band)
     hip, knee = fig.axes[0], fig.axes[1]
     (fill,) = [c for c in hip.collections if c.get_label() == "normal ± 1 SD"]
