@@ -59,7 +59,7 @@ def main(argv=None) -> int:
     for method, phase, nodes, validate in rows:
         leg = legs[phase]
 
-        def solve():
+        def solve(leg=leg, method=method, nodes=nodes, validate=validate):
             return run_muscles(leg.motion, leg.limb, method=method, nodes=nodes, interval=leg.interval_s,
                                periodic=leg.periodic, validate=validate)
 

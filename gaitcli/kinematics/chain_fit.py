@@ -82,7 +82,7 @@ def fit_chain(q0: np.ndarray, markers: Markers, calibration: StaticCalibration) 
     if ok.any():
         qk = q[ok]
         subset = [(b, cluster, measured[ok]) for b, cluster, measured in sets]
-        for iterations in range(1, MAX_ITERATIONS + 1):
+        for _ in range(MAX_ITERATIONS):
             states = forward_kinematics(qk, params, jacobians=True)
             r, J, w = _residuals(states, subset)
             J = J[..., free].reshape(qk.shape[0], -1, int(free.sum()))

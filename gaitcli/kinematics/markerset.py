@@ -285,7 +285,7 @@ def standing_template(stature_m: float, *, with_virtual_joint_centres: bool = Fa
     for s, sign in (("l", 1.0), ("r", -1.0)):
         y = sign * 0.36 * pw  # hip, knee and ankle centres on one vertical line per leg
 
-        def at(x, dy_lateral, z):
+        def at(x, dy_lateral, z, y=y, sign=sign):
             return np.array([x, y + sign * dy_lateral, z])
 
         p[f"ASIS{s}"] = mid_asis + [0.0, sign * pw / 2, 0.0]

@@ -156,8 +156,8 @@ def reference_from_idyn(outputs: Sequence[IdynOutput], sources=()) -> tuple[Band
     has; the left leg moved by the mean offset of its heel strikes (50 % where none was seen)."""
     right, left, offsets = [], [], []
     for idyn in outputs:
-        r, l, o = idyn_reference_strides(idyn)
-        right, left, offsets = right + r, left + l, offsets + o
+        r, left_strides, o = idyn_reference_strides(idyn)
+        right, left, offsets = right + r, left + left_strides, offsets + o
     reference = build_reference(right, left, left_offset_pct=float(np.mean(offsets)) if offsets else 50.0,
                                 sources=list(sources))
     return reference, len(right), len(left)

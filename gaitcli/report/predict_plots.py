@@ -143,7 +143,7 @@ def prosthesis_figure(r, path: Path, caption: str) -> Path:
 
     dorsiflexion = np.linspace(-20.0, 30.0, 201)  # deg, clinical (y = −dorsiflexion)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for (name, foot), style in zip(COMMERCIAL_FEET.items(), (":", "--", "-.")):
+    for foot, style in zip(COMMERCIAL_FEET.values(), (":", "--", "-.")):
         ax.plot(dorsiflexion, foot.plantarflexor_moment_Nm(np.radians(dorsiflexion)), color="0.45", ls=style,
                 lw=1.1, label=f"{foot.name} (Table A.7)")
     ax.plot(dorsiflexion, r.prosthesis.plantarflexor_moment_Nm(np.radians(dorsiflexion)), color="k", lw=1.8,

@@ -56,7 +56,7 @@ def optimal_curves(rows: list[dict], path: Path, title: str) -> Path:
     speed) beside Table A.7's feet (grey)."""
     dorsiflexion = np.linspace(-20.0, 30.0, 201)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for (name, foot), style in zip(COMMERCIAL_FEET.items(), (":", "--", "-.")):
+    for foot, style in zip(COMMERCIAL_FEET.values(), (":", "--", "-.")):
         ax.plot(dorsiflexion, foot.plantarflexor_moment_Nm(np.radians(dorsiflexion)), color="0.6", ls=style, lw=1.2,
                 label=f"{foot.name} (Table A.7)")
     weights = list(dict.fromkeys(r["weights"] for r in rows))

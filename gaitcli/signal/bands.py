@@ -92,7 +92,7 @@ def band_from_gait_cycles(paths, *, source: str = "") -> Band:
     stacks: dict[str, list[np.ndarray]] = {}
     for path in paths:
         table = pd.read_csv(path, keep_default_na=False, na_values=["NaN"])
-        for (side, stride), block in table.groupby(["side", "stride"], sort=True):
+        for (side, _), block in table.groupby(["side", "stride"], sort=True):
             if len(block) != CYCLE_PCT.size:
                 continue
             for column in block.columns:

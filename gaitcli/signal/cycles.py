@@ -91,7 +91,9 @@ def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.nd
     are the fallback.
     """
     all_strides = strides(events)
-    mean = (lambda v: float(np.mean(v)) if len(v) else float("nan"))
+    def mean(v):
+        return float(np.mean(v)) if len(v) else float("nan")
+
     period = mean([st.period_s for st in all_strides])
     lengths = []
     for st in all_strides:

@@ -324,7 +324,7 @@ def _stair_sessions(pig: Path, root: Path) -> dict:
     import yaml
 
     folders = {"pig": root / "pig", "typed": root / "typed"}
-    for key, folder in folders.items():
+    for folder in folders.values():
         folder.mkdir()
         shutil.copy(pig / "Movement_trial.c3d", folder / "trial.c3d")  # links out of the folder are refused
         shutil.copy(pig / "Static_trial.c3d", folder / "static.c3d")

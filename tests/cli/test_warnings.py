@@ -186,8 +186,8 @@ def test_each_warning_is_printed_once_and_library_warnings_are_hidden(capsys):
         from gaitcli.errors import GaitWarning
 
         for _ in range(2):
-            w.warn("plate 2 never sees a load", GaitWarning)
-        w.warn("Mean of empty slice", RuntimeWarning)
+            w.warn("plate 2 never sees a load", GaitWarning, stacklevel=1)
+        w.warn("Mean of empty slice", RuntimeWarning, stacklevel=1)
         click.echo("done")
 
     try:

@@ -104,7 +104,7 @@ def test_so_matches_independent_solver(gait):
     for j in (0, 3, 7):
         arms, b = problem.arms[j], problem.required[j]
         res = minimize(lambda f: np.sum(f ** 3), np.full(8, 0.2), method="SLSQP", bounds=[(0, 1)] * 8,
-                       constraints={"type": "eq", "fun": lambda f: arms @ (f * f_max) - b},
+                       constraints={"type": "eq", "fun": lambda f, arms=arms, b=b: arms @ (f * f_max) - b},
                        options={"ftol": 1e-12, "maxiter": 500})
         assert res.success
         np.testing.assert_allclose(forces[j] / f_max, res.x, atol=2e-3)

@@ -169,7 +169,7 @@ def check_parameters(path: Path, offset: int, blocks: int, size: int) -> dict:
     while True:
         where = offset + at
 
-        def damaged(problem: str):
+        def damaged(problem: str, where: int = where):
             return InputError(path, "parameters", f"parameter section damaged at byte {where}: {problem}")
 
         if at + 2 > len(section):
