@@ -108,7 +108,7 @@ MONOTONE_RANGE_DEG = tuple(round(float(np.degrees(v)), 9) for v in PredictSettin
 class PredictConfig:
     """Parameters of ``gait predict`` (5.2.10, 5.3.1): numbers and pairs of numbers, parsed where they are given
     (the command line, a pipeline file's ``predict:`` section, a study file) by :func:`core.validate.check_parameter`.
-    The defaults of the problem's settings are :class:`~gaitcli.predict.nlp.PredictSettings`'s."""
+    The defaults of the problem's settings are :class:`~gaitcli.predict.settings.PredictSettings`'s."""
 
     speed_m_s: float = parameter(PredictSettings.speed_m_s, low=0.0, high=3.0, low_open=True,
                                  help="Mean walking speed, m/s (5.43).")
@@ -232,7 +232,8 @@ class PredictResult:
         return float(self.phase_durations_s.sum())
 
     def summary(self) -> dict:
-        """DESIGN.md's predict keys plus durations, steps, stance, double support, ‖e‖ per phase, violations."""
+        """summary.json: the predict keys of README.md's outputs table ("A tour of the CLI"): costs, durations, steps,
+        stance, double support, ‖e‖ per phase, violations, checks."""
         d, T = self.phase_durations_s, self.period_s
         return {
             "speed_m_s": float(self.speed_m_s), "cost_of_transport_J_per_m": float(self.cost_of_transport_J_per_m),
@@ -326,8 +327,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     cache = cache if cache is not None else NlpCache()
     solve_options = {"device": device, "optimal_device": optimal, "deadline": deadline, "cache": cache}
     if init is not None:
-        # a start from a solution (of a neighbouring case): windows of ±1 segment, a third of the
-        # factorisation's cost; a window that binds is moved and the problem solved again (solve_windowed)
+        # a start from a solution (of a neighbouring case): windows of ±1 segment, cheaper to factorise
+        # (benchmarks/README.md); a window that binds is moved and the problem solved again (solve_windowed)
         x0, settings = init, dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
     elif cfg.symmetric:
         x0 = initial_guess(transcriber, reference, settings, symmetric=True)
@@ -341,7 +342,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         history += _solve_notes(first, f"symmetric model (the full model's start), {label}")
         x0 = (full_from_symmetric(cfg.nodes, first.x) if first.outcome.converged
               else initial_guess(transcriber, reference, settings, symmetric=False))
-        if first.outcome.converged:  # near a solution: windows of ±1 segment (a third of the factorisation's cost)
+        if first.outcome.converged:  # near a solution: windows of ±1 segment, as for any start from a solution
             settings = dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
         if optimal and first.outcome.converged:
             solve_options["device"] = ProsthesisCurve("optimal", *first.device)

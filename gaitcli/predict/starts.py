@@ -1,8 +1,8 @@
 """The optimal prosthesis from its warm starts and multi-start (Diss. 5.3.2, 5.3.3): pure functions of one
 prediction's starts; running many of them at once is :mod:`gaitcli.run.studies`'s.
 
-- :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``variables.py``'s D), started
-  from the best commercial foot's solution and from the normal (intact) solution; the result is never worse
+- :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``variables.py``'s D),
+  started from the best commercial foot's solution and from the normal (intact) solution; the result is never worse
   than the best start, which is itself a feasible point of the optimal problem (its coefficients lie inside
   the bounds and its τ_s decreases over the declared range).
 - :func:`perturbed_guess`, :func:`solve_start` — ``--starts N``: seeded perturbations of the initial guess; the
@@ -52,12 +52,13 @@ def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, refe
                     normal: PredictResult | None = None, cache: NlpCache | None = None) -> PredictResult:
     """``--prosthesis optimal`` (5.3.3): the free device warm started from the best commercial foot's solution
     (its χ and its coefficients) and, when that run does not improve on the foot, from the normal solution (with
-    that foot's coefficients). ``feet``
-    (name → result) and ``normal`` are solved here when not given: the normal gait (same F_max) from ``init``
-or the default guess, each foot from it. The
-    result is the best of the optimal runs and of the best foot, which is itself a point of the optimal
-    problem: an optimal run never reports a higher J than the foot it started from. ``cache``: the runner's
-    (:func:`~gaitcli.predict.stage.run_predict`; default: one shared by these runs)."""
+    that foot's coefficients).
+
+    ``feet`` (name → result) and ``normal`` are solved here when not given: the normal gait (same F_max) from
+    ``init`` or the default guess, each foot from it. The result is the best of the optimal runs and of the best
+    foot, which is itself a point of the optimal problem: an optimal run never reports a higher J than the foot
+    it started from. ``cache``: the runner's (:func:`~gaitcli.predict.stage.run_predict`; default: one shared
+    by these runs)."""
     cache = cache if cache is not None else NlpCache()
     if normal is None:
         normal = run_predict(dataclasses.replace(cfg, prosthesis="none", strength_scale=cfg.strength()),
