@@ -40,7 +40,7 @@ from gaitcli.run.pipeline import needed_stages
 BATCH_SUMMARY = "batch_summary.csv"
 #: folders never searched for trials: outputs, and hidden or cache folders
 NOT_SEARCHED = ("gait_out", "__pycache__")
-#: summary.json figures copied into batch_summary.csv, per stage (DESIGN.md's keys)
+#: summary.json figures copied into batch_summary.csv, per stage (keys as README.md's outputs table lists them)
 KEY_FIGURES = {
     "filter": ("frames", "gaps_filled", "plates"),
     "idyn": ("speed_m_s", "stride_length_m", "period_s", "stance_right_pct", "stance_left_pct",
