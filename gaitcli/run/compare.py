@@ -1,9 +1,9 @@
 """Regression check of two output trees: every ``summary.json`` value and every CSV column, within tolerances.
 
-``gait compare A B`` (README.md, "Comparing two output trees") calls :func:`compare_trees`, which reads both trees and returns a
-:class:`Comparison`: the files it looked at and a tuple of :class:`Finding` (one per file, column or summary key
-that differs beyond its tolerance). It writes nothing and decides no exit code; the CLI prints the findings and
-exits 1 when there are any.
+``gait compare A B`` (README.md, "Comparing two output trees") calls :func:`compare_trees`, which reads both
+trees and returns a :class:`Comparison`: the files it looked at and a tuple of :class:`Finding` (one per file,
+column or summary key that differs beyond its tolerance). It writes nothing and decides no exit code; the CLI
+prints the findings and exits 1 when there are any.
 
 What is compared. Every ``*.csv`` and every ``summary.json`` under A is compared with the file of the same
 relative path under B, so a tree may be one trial's output root (``gait_out/`` with its stage folders), a trial

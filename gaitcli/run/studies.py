@@ -10,7 +10,7 @@ case warm started from it, except the second and third commercial feet: they sta
 solution when it converged (else from the normal one), and the optimal prosthesis last from the feet and the
 normal solution. Why the feet from a foot: the normal gait's ankle angles put Seattle's τ_s (a_p = −34020
 N·m/rad³) hundreds of N·m off, where IPOPT spends its iterations in inertia corrections; from the SACH
-solution it converges in a tenth of them (``benchmarks/README.md``).
+solution it converges many times faster (``benchmarks/README.md``, "Prediction").
 
 Every case is a task on the workers (:func:`gaitcli.run.cluster.workers`), started once the cases it starts
 from are done, and written whole into ``OUT/study/<case>/`` (the files of ``gait predict``) with a
