@@ -54,11 +54,27 @@ def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, refe
     (its χ and its coefficients) and, when that run does not improve on the foot, from the normal solution (with
     that foot's coefficients).
 
-    ``feet`` (name → result) and ``normal`` are solved here when not given: the normal gait (same F_max) from
-    ``init`` or the default guess, each foot from it. The result is the best of the optimal runs and of the best
-    foot, which is itself a point of the optimal problem: an optimal run never reports a higher J than the foot
-    it started from. ``cache``: the runner's (:func:`~gaitcli.predict.stage.run_predict`; default: one shared
-    by these runs)."""
+    Parameters
+    ----------
+    cfg : PredictConfig
+        The optimal case (``prosthesis: optimal``).
+    params, reference, report
+        As :func:`~gaitcli.predict.stage.run_predict`.
+    init : array, optional
+        Where the normal gait starts when ``normal`` is not given (default: the default guess).
+    feet : dict, optional
+        The commercial feet's results by name; solved here when not given, each from the normal solution.
+    normal : PredictResult, optional
+        The normal gait at the same F_max; solved here when not given.
+    cache : NlpCache, optional
+        The runner's (:func:`~gaitcli.predict.stage.run_predict`; default: one shared by these runs).
+
+    Returns
+    -------
+    PredictResult
+        The best of the optimal runs and of the best foot, which is itself a point of the optimal problem: an
+        optimal run never reports a higher J than the foot it started from.
+    """
     cache = cache if cache is not None else NlpCache()
     if normal is None:
         normal = run_predict(dataclasses.replace(cfg, prosthesis="none", strength_scale=cfg.strength()),

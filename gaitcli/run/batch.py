@@ -265,8 +265,30 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None =
               force: bool = False, plots: bool = True, on_rows: Callable[[list[BatchRow]], None] | None = None,
               on_start: Callable[[int, int, str | None], None] | None = None) -> BatchResult:
     """Run the pipeline over every trial below ``lab_dir`` (see the module docstring) and write
-    ``batch_summary.csv`` there. ``on_start(total trials, to run, dashboard address)`` and ``on_rows(rows of one
-    trial)`` report progress. An interrupt leaves the previous ``batch_summary.csv`` as it was."""
+    ``batch_summary.csv`` there. An interrupt leaves the previous ``batch_summary.csv`` as it was.
+
+    Parameters
+    ----------
+    lab_dir : str or Path
+        The folder searched for trial folders (:func:`find_trials`).
+    cfg : PipelineConfig
+        The pipeline every trial runs.
+    workers, scheduler
+        How many local workers, or the address of a Dask scheduler (:func:`gaitcli.run.cluster.workers`).
+    force : bool
+        Run every trial, also those whose outputs are current.
+    plots : bool
+        Draw each stage's figures.
+    on_rows : callable, optional
+        ``on_rows(rows)`` with one trial's rows as it ends (and the skipped trials' at the start).
+    on_start : callable, optional
+        ``on_start(total trials, trials to run, dashboard address or None)`` before any trial runs.
+
+    Returns
+    -------
+    BatchResult
+        Every row and the counts per trial.
+    """
     started = time.perf_counter()
     lab_dir = Path(lab_dir).resolve()  # the workers may run in other folders
     rows, todo = plan(lab_dir, cfg, force=force)
