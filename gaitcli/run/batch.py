@@ -280,7 +280,8 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None =
     plots : bool
         Draw each stage's figures.
     on_rows : callable, optional
-        ``on_rows(rows)`` with one trial's rows as it ends (and the skipped trials' at the start).
+        ``on_rows(rows)`` with one trial's rows as it ends; first those of the trials decided without a run
+        (current, or a kept failure).
     on_start : callable, optional
         ``on_start(total trials, trials to run, dashboard address or None)`` before any trial runs.
 
