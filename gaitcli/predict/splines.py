@@ -35,7 +35,8 @@ Variable layout
     signal. The design vector (5.24) is χ = [y_{1,1…N}, …, y_{f,1…N}, f^m_{1,1…N}, …,
     f^m_{m,1…N}, T_1 … T_8, L_r, L_l] (signal-major), so ``casadi.reshape(χ[:f*N], N, f)``
     (column-major) is the coordinates' matrix; size (f + m)(nn − 1) + 10
-    (:func:`design_vector_size`; 435 at f = 9, m = 16, nn = 18).
+    (:func:`design_vector_size`; 435 at f = 9, m = 16, nn = 18). The code's χ carries each muscle's
+    tendon stretch ŝ in place of its force f^m (``layout.py``; docs/prediction.md).
 
 Symbolic values, period and times (CasADi)
     Nodal values and T may be numpy arrays or CasADi SX/MX; the result is numpy only when all
