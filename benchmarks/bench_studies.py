@@ -8,7 +8,7 @@ solves everything again). Prints the whole study's wall time against the 30-minu
 dissertation's "about a day per case", our J, Et, Jdev beside the dissertation's for every case, and whether
 each ordering the issue names holds, with the numbers. Asserts nothing.
 
-Orderings (CHAPTER5_NOTES §2.2–2.3): Table 5.2 — with +2 kg per foot J and Jdev rise for all four weight sets
+Orderings (Diss. 5.3.2–5.3.3, as Tables 5.2–5.3 show them): Table 5.2 — with +2 kg per foot J and Jdev rise for all four weight sets
 and Et for a)–c); Table 5.3 at 1.00 and 1.33 m/s, weights b) and d) — Flex has the lowest Et and the highest
 Jdev of the three feet; in every case the optimal device has a lower J and Jdev than all three feet; its τ_s
 at −0.1 rad within ±40 % of Flex's 30.9 N·m and at −0.2 rad between Flex's 67.1 and Seattle's 131.1 N·m.

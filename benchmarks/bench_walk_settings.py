@@ -10,13 +10,11 @@ dissertation's Jdev, heel-off (% of the cycle), and the right leg's angles again
 :func:`winter_figures`). The shipped walk (made by ``make_walk``) is printed first for comparison.
 ``--joint-sd-scale k``: the second solve tracks the reference's knee and ankle angles with their SDs × k (k < 1:
 a stiffer hold on the kinematics; Jdev is still reported against the reference as it is); ``--grf-sd-scale k``
-its ground reactions' (k > 1: a looser hold on the reference's, which come from a 0.88 m/s walk; measured
-2026-12-05, k = 3 with all of WALK_TRACKING: loading knee 35.5°, stance dorsiflexion 22.0°, heel strike −11.1°:
-the reference's slower walk is not why the walk crouches).
+its ground reactions' (k > 1: a looser hold on the reference's, which come from a 0.88 m/s walk; what k = 3
+showed is in benchmarks/README.md, "The synthetic walk").
 ``--mumps-scaling``: MUMPS with its own row/column scaling (IPOPT's defaults 7 and 77; ``gait predict`` turns it
-off, faster on its default problems): without it some of these solves stall in MUMPS's factorization after
-50–125 iterations (measured 2026-12-05: εm 2 N·m with the rest of WALK_TRACKING, and GRF SD × 3, each still
-factorizing after 8–15 minutes; with it the first converged in 190 s, 220 iterations).
+off, faster on its default problems): without it some of these solves stall in MUMPS's factorization
+(benchmarks/README.md, "The synthetic walk").
 Run: ``python benchmarks/bench_walk_settings.py [--scale 0.65] [--variants shipped cop hip swing moment trunk]
 [--start plain.csv] [--joint-sd-scale 0.5] [--grf-sd-scale 3] [--mumps-scaling]`` (``--start``: a plain start
 saved by an earlier run's ``--save-start``; each solve takes 2–10 minutes on one core, some variants longer).

@@ -405,7 +405,8 @@ def run_command(console: Console, trial, out, pipeline, no_plots):
               help="With --baseline: a tolerance YAML as for gait compare.")
 @click.pass_context
 def batch_command(ctx, lab_dir, pipeline, workers, scheduler, force, no_plots, baseline, tolerances):
-    """Run the pipeline on every trial folder below LAB_DIR as Dask tasks; batch_summary.csv in LAB_DIR."""
+    """Run the pipeline on every trial folder below LAB_DIR in parallel (Dask, else a process pool); batch_summary.csv
+    in LAB_DIR."""
     import os
 
     from gaitcli.run.batch import BATCH_SUMMARY, run_batch, stages_of

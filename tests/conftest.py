@@ -32,7 +32,7 @@ def shared_pig_dir() -> Path:
     return SHARED_PIG
 
 
-#: the test files that take longest (seconds of test time on 2 cores, measured 2026-12-05), run first and longest
+#: the test files that take longest (seconds of test time on 2 cores, as measured), run first and longest
 #: first so that ``pytest -n 2`` (pyproject: ``--dist loadfile --no-loadscope-reorder``, whole files in this order)
 #: ends with short files on both workers rather than one long file on one
 HEAVY_FILES = {

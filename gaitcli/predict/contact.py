@@ -1,6 +1,6 @@
 """The eight contact phases of a walking cycle and their ground reactions (Diss. 5.2.3, 5.2.8).
 
-Phases (Fig. 5.3; CHAPTER5_NOTES §1.3): 1 right heel strike → right foot flat,
+Phases (Fig. 5.3, 5.2.3): 1 right heel strike → right foot flat,
 2 → left toe off, 3 → right heel off, 4 → left heel strike, and 5–8 the same
 with the sides exchanged. In each phase the contact points in touch with the
 floor are pinned (5.6–5.9): heel A_x, A_z, MTP B_x, B_z at the places the step
@@ -19,10 +19,10 @@ place in phase 1:
 
 The reactions λ_ph are the point-force components of those rows (the ground
 on the foot, N). Where a foot stands on B alone (right in 4, 5; left in 8, 1)
-an MTP moment m_B (N·m, clockwise-positive like the model's angles; the notes'
-bounds −10 … 0 N·m) is one more reaction (CHAPTER5_NOTES §3 item 3): without it
-phases 4 and 8 leave the whole body's moment balance about the stance MTP
-point unconstrained (2 + 6 < 9 unknowns).
+an MTP moment m_B (N·m, clockwise-positive like the model's angles; bounded
+to −10 … 0 N·m by 5.2.2) is one more reaction: without it phases 4 and 8 leave
+the whole body's moment balance about the stance MTP point unconstrained
+(2 + 6 < 9 unknowns; docs/prediction.md, "MTP moment").
 
 Ground reactions by the pseudoinverse (5.30): with ``G = [C_phᵀ, m_B column]``
 and ``rhs = M ÿ + k − q_r − R f_m``, ``λ* = G⁺ rhs`` and the residual (5.31)

@@ -3,7 +3,7 @@
 Inversion (5.25–5.26; as EID, 4.10–4.19): at the cycle's distinct control
 instants (times t_j, s; the grid of ``grid.py``) the muscle forces F (N) give
 the tendon length l_se(F) (2.20), its rate by the unequal-step differences of
-the grid (notes §1.6), fibre length and velocity (4.15, 4.17), the activation
+the grid (5.2.6), fibre length and velocity (4.15, 4.17), the activation
 from the force–length–velocity relation (4.18), its rate by the same
 differences, and the excitation from (2.17) (the root of 4.3.3). Everything is
 the muscle stage's one compiled model (:class:`gaitcli.muscles.hill.MuscleModel`),

@@ -1,28 +1,27 @@
 """Control points of the predictive gait NLP (5.2.5, 5.2.10) and the unequal-step time derivative on them (5.2.6).
 
-Control points (notes §1.5, §3 item 7)
+Control points (5.2.5, 5.2.10; docs/prediction.md, "Control points")
     Independent of the spline nodes and uniform within each of the 8 phases: phase ph of
     duration T_ph (s) has n_c,ph points at t = t0_ph + T_ph·i/(n_c,ph − 1), i = 0 … n_c,ph − 1,
     t0_ph = Σ_{q<ph} T_q, time 0 at the cycle's first instant (HSr). The default counts
     5, 10, 21, 8, 5, 10, 21, 8 include both end points, so a transition instant is an
     evaluation point of both adjacent phases: Σn_c,ph = 88 points, Σ(n_c,ph − 1) = 80 distinct
-    instants per cycle. Deviation: 5.2.10 has 4 points in phases 4 and 8 (HOr→HSl); with the phases'
-    durations free, the optimizer lengthened that sparsest phase (to 319 ms: 106 ms between points)
-    and hid the push-off's muscle work between its points (measured on a Flex-Foot solution at 1.00 m/s:
-    −118 W mean metabolic rate at the points, 1473 W on a 4× finer grid). 8 points there, and no phase
-    longer than :data:`MAX_POINT_SPACING_S` per interval (``layout.box_bounds``), keep the points dense: the
-    default prediction's Et is then 352.0 J/m at the points and 352.3 J/m on the 4× grid, its largest moment
-    error there 3.5 N·m (with 5.2.10's counts: 279.5 and 397 J/m, 213 N·m). The contact-dependent quantities (λ, joint moments, e_m, c_ph,
+    instants per cycle. The contact-dependent quantities (λ, joint moments, e_m, c_ph,
     clearance, friction) are evaluated at all 88 points, a transition once with each adjacent
     phase's constraint set; the continuous ones (muscle forces, activations) at the 80
     instants (:attr:`ControlGrid.instant`). The last point of phase 8 is the instant t = T,
     which is instant 0 of the next cycle.
 
+    Deviation: 5.2.10 has 4 points in phases 4 and 8 (HOr→HSl). With the durations free the
+    optimizer lengthened that sparsest phase and hid the push-off's muscle work between its
+    points; 8 points there, and no phase longer than :data:`MAX_POINT_SPACING_S` per interval
+    (``layout.box_bounds``), keep the points dense (docs/decisions.md, "Control points").
+
     Every point's time is linear in the durations: t_j = W_j · [T_1 … T_8] with the constant
     matrix W = :attr:`ControlGrid.time_weights`, so the times are numpy or CasADi expressions
     alike (:func:`point_times`, :func:`instant_times`).
 
-Unequal-step derivative (notes §1.6)
+Unequal-step derivative (5.2.6)
     At instant j with h1 = t_j − t_{j−1}, h2 = t_{j+1} − t_j (second order, exact on quadratics,
     the central difference when h1 = h2):
 
@@ -153,7 +152,7 @@ def unequal_step_weights(times, period):
 
 
 def periodic_derivative(values, times, period):
-    """ẋ at the periodic ``times`` (I distinct instants, s) of ``values`` (I,) or (I, n) (notes §1.6).
+    """ẋ at the periodic ``times`` (I distinct instants, s) of ``values`` (I,) or (I, n) (5.2.6).
 
     With a grid: ``periodic_derivative(x, instant_times(grid, T_ph), cycle_period(T_ph))``. Numpy in,
     numpy out; any CasADi input gives an (I × n) CasADi expression.

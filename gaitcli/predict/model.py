@@ -2,7 +2,7 @@
 
 Bodies: HAT (pelvis, trunk, head and arms as one body), and per leg thigh,
 shank and foot. Coordinates ``y = (y1 … y9)`` (5.2), in the dissertation's
-reading (CHAPTER5_NOTES §1.2, §3 item 1), SI units:
+reading (Fig. 5.2 is lost; docs/model_constants.md §13), SI units:
 
     y1, y2   hip joint centre x (forward) and z (up), m (both hips at one point)
     y3       HAT angle from upright, rad
@@ -26,9 +26,10 @@ Segment parameters: de Leva (1996) for the subject, as the muscle stage's limb
 (:meth:`gaitcli.muscles.limb.LimbParameters.from_anthropometry`: thigh, shank,
 foot); the 2-D HAT composes the 3-D model's pelvis and HAT (head, trunk, arms
 crossed; :func:`gaitcli.kinematics.anthropometry.segment_parameters`) about the
-hip centre, whose sagittal inertia I_yy it keeps (CHAPTER5_NOTES §3 item 14).
-Contact points per foot (§3 item 15, MODEL_CONSTANTS H, gait2dc's ratios):
-heel A 0.033·H behind and MTP B 0.091·H ahead of the ankle, both 0.039·H below it.
+hip centre, whose sagittal inertia I_yy it keeps (docs/prediction.md, "The 2-D HAT").
+Contact points per foot (Fig. 5.4 is lost; gait2dc's, scaled by stature H:
+docs/model_constants.md §12): heel A 0.033·H behind and MTP B 0.091·H ahead of
+the ankle, both 0.039·H below it.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ COORDINATES = ("hip_x", "hip_z", "hat_angle", "thigh_r", "knee_r", "ankle_r", "t
 SIDES = ("r", "l")
 #: the dissertation's subject 1 (Tables A.4–A.5): body mass, stature, measured thigh and shank lengths
 SUBJECT_1 = {"mass_kg": 73.0, "stature_m": 1.792, "sex": "male", "thigh_length_m": 0.475, "shank_length_m": 0.429}
-#: contact points relative to the ankle, per stature (MODEL_CONSTANTS H: gait2dc at H = 1.8 m)
+#: contact points relative to the ankle, per stature (gait2dc's at H = 1.8 m: docs/model_constants.md §12)
 HEEL_BEHIND_ANKLE_PER_STATURE = 0.060 / 1.8
 MTP_AHEAD_OF_ANKLE_PER_STATURE = 0.1636 / 1.8
 CONTACT_BELOW_ANKLE_PER_STATURE = 0.039  # Winter's ankle height
@@ -107,10 +108,10 @@ class WalkerParameters:
                    notes=limb.notes + ("2-D HAT: the 3-D model's pelvis (de Leva lower trunk) and HAT (head, upper "
                                        "and middle trunk, arms crossed) composed about the hip centre, I_yy",
                                        "heel and MTP points: gait2dc's 0.033·H and 0.091·H from the ankle, "
-                                       "0.039·H below it (MODEL_CONSTANTS H)"))
+                                       "0.039·H below it (docs/model_constants.md §12)"))
 
     def with_foot_mass(self, mass_kg: float, at_m: tuple[float, float] | None = None) -> WalkerParameters:
-        """The same subject with ``mass_kg`` added to each foot (5.3.2; CHAPTER5_NOTES §3 item 17).
+        """The same subject with ``mass_kg`` added to each foot (5.3.2; docs/prediction.md, "Added foot mass").
 
         Default: a point mass at the foot's CoM, the foot's inertia unchanged. ``at_m`` = (forward of the
         ankle, below the ankle) in the foot frame, m: a band there with Table A.2's weight-band inertia

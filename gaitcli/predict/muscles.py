@@ -9,7 +9,7 @@ coordinates y. Generalized forces in y follow from the power balance:
 ``Q = (∂ψ/∂y)ᵀ τ_ψ``; for the muscles ``R(y) = −∂l_m/∂yᵀ`` (A.11), 9 × 16, right
 muscles first, so that the muscles' contribution to (5.1) is ``R(y)·f_m``.
 
-With bilateral transtibial prostheses (5.3.3; CHAPTER5_NOTES §1.12, §3 item 16) soleus and tibialis
+With bilateral transtibial prostheses (5.3.3; docs/prediction.md, "The prosthesis") soleus and tibialis
 anterior are removed (:attr:`WalkerMuscles.present`), the gastrocnemius keeps its knee action with its
 length at a neutral ankle, the Riener–Edrich ankle moment goes and their knee moment is evaluated at a
 neutral ankle; the device's moment (5.59) acts on y6 and y9 in their own sense.
@@ -56,7 +56,7 @@ class WalkerMuscles:
     - ``passive(y, yd) → Q_p = Q_t + Q_d`` with the given ``prosthesis``.
 
     ``prosthesis``: bilateral transtibial prostheses with this curve (module docstring); ``strength_scale``:
-    every F_max times this (5.3.3: 1.5; muscle masses follow, (A.13), CHAPTER5_NOTES §3 item 13).
+    every F_max times this (5.3.3: 1.5; muscle masses follow, (A.13): docs/prediction.md, "Stronger muscles").
     """
 
     def __init__(self, muscles: MuscleParameters | None = None, joints: JointParameters | None = None, *,

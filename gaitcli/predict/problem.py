@@ -1,10 +1,11 @@
-"""The predictive-gait NLP, transcribed (Diss. 5.2.4–5.2.9): design vector → everything at the control points.
+"""The predictive gait transcribed numerically (Diss. 5.2.4–5.2.9): χ → everything at the control points.
 
-:func:`transcribe` evaluates, for a design vector χ (numpy or CasADi; layout
-:class:`gaitcli.predict.layout.DesignLayout`, full model), at the P control points
+:class:`Transcriber` evaluates, for a design vector χ (called on χ: numpy or CasADi; layout
+:class:`gaitcli.predict.layout.DesignLayout`, full model) or for a gait given by its values at the
+instants (:meth:`Transcriber.at`, e.g. the symmetric model's, :func:`gait_at`), at the P control points
 of the phase-wise grid (``grid.py``): the coordinates and their rates from the
 quartic splines (y1 with the drift ΔS/T), the 16 muscle forces from the cubic
-splines, the equations of motion's right-hand side
+tendon-stretch splines, the equations of motion's right-hand side
 
     rhs = M(y) ÿ + k(y, ẏ) − g(y) − Q_p(y, ẏ) − R(y) f_m                     (5.1)
 
@@ -12,8 +13,12 @@ the ground reactions λ = G_ph⁺ rhs and residual e = rhs − G_ph λ (5.30–5
 joint-moment error B⁺ e = τm* − τm (5.49–5.51; R = B·A), the contact error c_ph
 (5.57), the clearance of the points not in contact and the per-foot reactions;
 and, at the I distinct instants, the muscle states by inversion (5.25–5.26) and
-the metabolic rates. The result is a :class:`Transcription` of (P, …) arrays or
-expressions that the NLP's constraint groups and cost are made from.
+the metabolic rates, in a :class:`Transcription`.
+
+The NLP (``nlp.py``) does not use these expressions: it states the same quantities as lifted variables.
+This transcription is independent of it: it gives the NLP its start (``NLP.lifted_start``) and evaluates a
+solution anew (``stage.evaluate_design``, the fine grid), λ by the pseudoinverse. A :class:`Transcriber`
+also holds what both share: the model, contact, muscles, grid and splines of one subject and node count.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
-"""Passive transtibial prosthetic ankles (Diss. 5.3.3, Appendix A.7; CHAPTER5_NOTES §1.12, §2.4, §3 item 1).
+"""Passive transtibial prosthetic ankles (Diss. 5.3.3, Appendix A.7; docs/prediction.md, "The prosthesis").
 
 The ankle moment of a prosthetic foot is a function of the model's ankle angle y (y6 or y9, rad; y < 0 is
-dorsiflexion) and its rate:
+dorsiflexion: docs/prediction.md, "The ankle's sign") and its rate:
 
     τ_s(y) = a_p y³ + b_p y² + c0 y   (y > 0),    a_n y³ + b_n y² + c0 y   (y ≤ 0)        (5.58)
     τ_prosth = τ_s(y) − d_prosth ẏ                                                    (5.59)
@@ -11,21 +11,18 @@ and its slope is c0 from both sides. The three commercial feet are Table A.7's f
 
 Deviation in the NLP (:meth:`ProsthesisCurve.branch_blend_rad`): the two branches meet at y = 0 with equal
 value and slope but not curvature (SACH: 2·b_p = −1280, 2·b_n = 12792 N·m/rad²), so the exact Hessian jumps
-there, and IPOPT crawls wherever an instant's ankle rests at neutral (a prosthetic ankle does through swing).
-Measured on SACH at 1.33 m/s, weights b): more than 1500 iterations at μ ≈ 4·10⁻⁶ with the objective fixed to
-6 digits and no convergence; with the branches blended over ±0.01 rad, 363 iterations. The NLP therefore uses
-σ(y) = ½(1 + tanh(y/ε)):
+there, and IPOPT crawls wherever an instant's ankle rests at neutral (a prosthetic ankle does through swing;
+docs/decisions.md, "The prosthesis's branches blended"). The NLP therefore uses σ(y) = ½(1 + tanh(y/ε)):
 
     τ_s,ε(y) = σ(y)·plantar(y) + (1 − σ(y))·dorsal(y)
 
 which differs from (5.58) by at most B ε² + A ε³, B = 0.121·|b_p − b_n|, A = 0.161·|a_p − a_n|, and (for the
-three feet) by less than 10⁻⁶ N·m beyond |y| = 0.2 rad. ε is as wide as an error budget of :data:`BLEND_ERROR_NM` allows, at most
-:data:`BLEND_MAX_RAD`: ε = ε_max / √(1 + (B + A ε_max) ε_max² / δ), which keeps B ε² + A ε³ ≤ δ. Seattle's
-and Flex's branches differ less in curvature than SACH's, so they get a wider blend (ε = 0.0197, 0.0200 rad;
-SACH 0.0136). Why not one narrow ε: Seattle at 1.00 m/s, weights a), from the SACH solution, creeps on for
-over 300 s at ε = 0.01 rad with J fixed to 5 digits, and converges in 83 iterations (25 s, J 22.48) at 0.02.
-The free device of the optimal prosthesis gets the same ε as a smooth function of its coefficients. Every
-output (prosthesis.csv, the plots, the tables) uses (5.58) itself.
+three feet) by less than 10⁻⁶ N·m beyond |y| = 0.2 rad. ε is as wide as an error budget of :data:`BLEND_ERROR_NM`
+allows, at most :data:`BLEND_MAX_RAD`: ε = ε_max / √(1 + (B + A ε_max) ε_max² / δ), which keeps
+B ε² + A ε³ ≤ δ. Seattle's and Flex's branches differ less in curvature than SACH's, so they get a wider blend
+(ε = 0.0197, 0.0200 rad; SACH 0.0136): one narrow ε for all feet converges slowly. The free device of the
+optimal prosthesis gets the same ε as a smooth function of its coefficients. Every output (prosthesis.csv,
+the plots, the tables) uses (5.58) itself.
 """
 
 from __future__ import annotations
@@ -94,7 +91,7 @@ class ProsthesisCurve:
 
     def plantarflexor_moment_Nm(self, dorsiflexion_rad):
         """The spring's plantarflexor moment at a dorsiflexion angle in the product's convention
-        (dorsiflexion positive, y = −δ; τ_s is already positive plantarflexing): CHAPTER5_NOTES §3 item 1."""
+        (dorsiflexion positive, y = −δ; τ_s is positive plantarflexing): docs/prediction.md, "The ankle's sign"."""
         return self.spring_moment_Nm(-np.asarray(dorsiflexion_rad, float))
 
     def is_monotone(self, low_rad: float, high_rad: float, samples: int = 401) -> bool:

@@ -1,7 +1,7 @@
 """Reference gait for the deviation term Jdev (Diss. 5.2.7, 5.28): mean and SD over the gait cycle.
 
 Ten variables over the cycle from right heel strike to the next (0–100 %,
-101 points), in clinical signs (CHAPTER5_NOTES §3 item 11): the hip and knee
+101 points), in clinical signs (docs/prediction.md, "Jdev"): the hip and knee
 flexion and ankle dorsiflexion of both legs in degrees, and each foot's
 fore-aft and vertical ground reaction in N per kg of body mass. A reference is
 made from the idyn outputs of one or more trials (``gait reference``): every

@@ -28,8 +28,8 @@ class PredictSettings:
     max_iterations: int = 3000
     window_reach: int = 3  # segments either side of its own that an instant may move to within one solve
     tolerance: float = 1e-6
-    # IPOPT's "acceptable" stop: 10 iterations in a row within 1e-4 (scaled) whose cost changes by < 1e-6
-    # (relative); the full model's tail otherwise creeps on for hundreds of iterations at J changes of 1e-7
+    # IPOPT's "acceptable" stop (acceptable_tol, acceptable_obj_change_tol, acceptable_iter): without it the full
+    # model's tail creeps on at relative changes of J far below what the outputs show
     acceptable_tolerance: float = 1e-4
     acceptable_objective_change: float = 1e-6
     acceptable_iterations: int = 10

@@ -15,13 +15,13 @@ What
     (degree, N), computed once (:func:`quartic`, :func:`cubic`, cached); time derivatives are
     d^r/dt^r = Δt^−r · d^r/dτ^r.
 
-Singularity (5.2.4; notes §1.4, §3 item 5)
+Singularity (5.2.4; docs/prediction.md, "Spline parity")
     The periodic quartic system is singular exactly when N is even ("an odd number of
     nodes"): :func:`quartic` rejects an odd nn with a one-line InputError naming ``nodes``.
     The same holds for a half-period quartic (symmetry): its node count must be even too.
     The periodic cubic system is regular for every N.
 
-Hip x (notes §3 item 4)
+Hip x (5.43; docs/prediction.md, "Hip x and the speed")
     y1(t) = periodic(t) + v·t with v = ΔS/T (ΔS = L_r + L_l), so y1(t + T) = y1(t) + ΔS
     (:func:`hip_x`); t is the time since t_1 and is not wrapped in the drift term.
 
@@ -35,7 +35,8 @@ Variable layout
     signal. The design vector (5.24) is χ = [y_{1,1…N}, …, y_{f,1…N}, f^m_{1,1…N}, …,
     f^m_{m,1…N}, T_1 … T_8, L_r, L_l] (signal-major), so ``casadi.reshape(χ[:f*N], N, f)``
     (column-major) is the coordinates' matrix; size (f + m)(nn − 1) + 10
-    (:func:`design_vector_size`; 435 at f = 9, m = 16, nn = 18).
+    (:func:`design_vector_size`; 435 at f = 9, m = 16, nn = 18). The code's χ carries each muscle's
+    tendon stretch ŝ in place of its force f^m (``layout.py``; docs/prediction.md).
 
 Symbolic values, period and times (CasADi)
     Nodal values and T may be numpy arrays or CasADi SX/MX; the result is numpy only when all

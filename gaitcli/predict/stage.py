@@ -114,7 +114,7 @@ MONOTONE_RANGE_DEG = tuple(round(float(np.degrees(v)), 9) for v in PredictSettin
 class PredictConfig:
     """Parameters of ``gait predict`` (5.2.10, 5.3.1): numbers and pairs of numbers, parsed where they are given
     (the command line, a pipeline file's ``predict:`` section, a study file) by :func:`core.validate.check_parameter`.
-    The defaults of the problem's settings are :class:`~gaitcli.predict.nlp.PredictSettings`'s."""
+    The defaults of the problem's settings are :class:`~gaitcli.predict.settings.PredictSettings`'s."""
 
     speed_m_s: float = parameter(PredictSettings.speed_m_s, low=0.0, high=3.0, low_open=True,
                                  help="Mean walking speed, m/s (5.43).")
@@ -238,7 +238,8 @@ class PredictResult:
         return float(self.phase_durations_s.sum())
 
     def summary(self) -> dict:
-        """DESIGN.md's predict keys plus durations, steps, stance, double support, ‖e‖ per phase, violations."""
+        """summary.json: the predict keys of README.md's outputs table ("A tour of the CLI"): costs, durations, steps,
+        stance, double support, ‖e‖ per phase, violations, checks."""
         d, T = self.phase_durations_s, self.period_s
         return {
             "speed_m_s": float(self.speed_m_s), "cost_of_transport_J_per_m": float(self.cost_of_transport_J_per_m),
@@ -303,12 +304,33 @@ def walker_muscles(cfg: PredictConfig, device: ProsthesisCurve | None) -> Walker
 def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Band,
                 init: np.ndarray | None = None, report=None, device: ProsthesisCurve | None = None,
                 cache: NlpCache | None = None) -> PredictResult:
-    """Predict one gait cycle (module docstring). ``params``: the subject (``cfg``'s foot mass is added here);
-    ``init``: a design vector χ of the same layout to start from; ``device``: the prostheses' curve (a
-    commercial foot's or a file's; for ``prosthesis: optimal`` the start of the free coefficients; default the
-    commercial foot ``cfg.prosthesis`` names); ``report(iteration, objective, violation)`` after every IPOPT
-    iteration; ``cache``: the runner's built problems and compiled solvers (default: one for this call; a
-    runner that solves many cases keeps one per process and passes it to each)."""
+    """Predict one gait cycle (module docstring).
+
+    Parameters
+    ----------
+    cfg : PredictConfig
+        The problem and its settings (speed, weights, nodes, prosthesis, foot mass, F_max scale, …).
+    params : WalkerParameters, optional
+        The subject (default: the dissertation's subject 1); ``cfg``'s foot mass is added here.
+    reference : Reference
+        What Jdev (5.28) tracks.
+    init : array, optional
+        A design vector χ of the same layout to start from (default: the default initial guess).
+    report : callable, optional
+        ``report(iteration, objective, violation)`` after every IPOPT iteration, counted over all solves.
+    device : ProsthesisCurve, optional
+        The prostheses' curve (a commercial foot's or a file's; for ``prosthesis: optimal`` the start of the
+        free coefficients); default the commercial foot ``cfg.prosthesis`` names.
+    cache : NlpCache, optional
+        The runner's built problems and compiled solvers (default: one for this call; a runner that solves
+        many cases keeps one per process and passes it to each).
+
+    Returns
+    -------
+    PredictResult
+        The transcribed solution, its costs and violations; ``converged`` False when IPOPT did not converge
+        or a constraint group is violated.
+    """
     weights = cfg.weights
     settings = settings_of(cfg)
     device = device if device is not None else curve_for(cfg.prosthesis)
@@ -331,8 +353,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     cache = cache if cache is not None else NlpCache()
     solve_options = {"device": device, "optimal_device": optimal, "deadline": deadline, "cache": cache}
     if init is not None:
-        # a start from a solution (of a neighbouring case): windows of ±1 segment, a third of the
-        # factorisation's cost; a window that binds is moved and the problem solved again (solve_windowed)
+        # a start from a solution (of a neighbouring case): windows of ±1 segment, cheaper to factorise
+        # (benchmarks/README.md); a window that binds is moved and the problem solved again (solve_windowed)
         x0, settings = init, dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
     elif cfg.symmetric:
         x0 = initial_guess(transcriber, reference, settings, symmetric=True)
@@ -346,7 +368,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         history += _solve_notes(first, f"symmetric model (the full model's start), {label}")
         x0 = (full_from_symmetric(cfg.nodes, first.x) if first.outcome.converged
               else initial_guess(transcriber, reference, settings, symmetric=False))
-        if first.outcome.converged:  # near a solution: windows of ±1 segment (a third of the factorisation's cost)
+        if first.outcome.converged:  # near a solution: windows of ±1 segment, as for any start from a solution
             settings = dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
         if optimal and first.outcome.converged:
             solve_options["device"] = ProsthesisCurve("optimal", *first.device)
@@ -391,8 +413,26 @@ def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Band, model: Wal
 
 def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Band,
                     params: WalkerParameters | None = None, device: ProsthesisCurve | None = None) -> PredictResult:
-    """The :class:`PredictResult` of a given design vector χ ``x`` (e.g. a stored solution; ``device``: its
-    prostheses' curve), without solving; ``converged`` says whether every constraint group holds there."""
+    """The :class:`PredictResult` of a given design vector χ, without solving.
+
+    Parameters
+    ----------
+    cfg : PredictConfig
+        The problem χ belongs to (its layout, model and settings).
+    x : array
+        χ, e.g. a stored solution.
+    reference : Reference
+        What Jdev (5.28) is evaluated against.
+    params : WalkerParameters, optional
+        The subject (default: subject 1).
+    device : ProsthesisCurve, optional
+        The prostheses' curve (default the commercial foot ``cfg.prosthesis`` names).
+
+    Returns
+    -------
+    PredictResult
+        ``converged`` says whether every constraint group holds at χ; no iterations.
+    """
     device = device if device is not None else curve_for(cfg.prosthesis)
     model = WalkingModel(cfg.walker_parameters(params))
     muscles = walker_muscles(cfg, device)
@@ -436,9 +476,18 @@ def _costs(tr: Transcriber, t, period: float, stride: float, reference: Band,
 
 def fine_grid(cfg: PredictConfig, x: np.ndarray, reference: Band, model: WalkingModel,
               muscles: WalkerMuscles | None = None, refinement: int = FINE_GRID_REFINEMENT) -> dict:
-    """The design χ ``x`` on a grid ``refinement`` times finer than the control points' (each phase's
-    intervals split alike; exact heat-rate model): Et, Jdev, J and the largest moment error, contact error and
-    excitation range there — how far the optimum, which sees the control points only, holds between them."""
+    """The design χ ``x`` on a grid ``refinement`` times finer than the control points': how far the optimum,
+    which sees the control points only, holds between them.
+
+    Each phase's intervals are split alike; the heat rates are the exact model's. ``model`` and ``muscles``
+    are the case's (default muscles: Table A.1's, intact).
+
+    Returns
+    -------
+    dict
+        ``refinement``, Et (``cost_of_transport_J_per_m``), Jdev (``deviation``), J (``objective``), the
+        largest moment error (N·m) and contact error (m), and the excitation range there.
+    """
     counts = tuple(refinement * (c - 1) + 1 for c in DEFAULT_CONTROL_POINTS)
     fine = Transcriber(cfg.nodes, model=model, muscles=muscles, grid=control_grid(counts), smoothing=0.0)
     layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)

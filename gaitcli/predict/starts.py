@@ -1,8 +1,8 @@
 """The optimal prosthesis from its warm starts and multi-start (Diss. 5.3.2, 5.3.3): pure functions of one
 prediction's starts; running many of them at once is :mod:`gaitcli.run.studies`'s.
 
-- :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``variables.py``'s D), started
-  from the best commercial foot's solution and from the normal (intact) solution; the result is never worse
+- :func:`predict_optimal` — ``--prosthesis optimal``: the device's six coefficients free (``variables.py``'s D),
+  started from the best commercial foot's solution and from the normal (intact) solution; the result is never worse
   than the best start, which is itself a feasible point of the optimal problem (its coefficients lie inside
   the bounds and its τ_s decreases over the declared range).
 - :func:`perturbed_guess`, :func:`solve_start` — ``--starts N``: seeded perturbations of the initial guess; the
@@ -52,12 +52,29 @@ def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, refe
                     normal: PredictResult | None = None, cache: NlpCache | None = None) -> PredictResult:
     """``--prosthesis optimal`` (5.3.3): the free device warm started from the best commercial foot's solution
     (its χ and its coefficients) and, when that run does not improve on the foot, from the normal solution (with
-    that foot's coefficients). ``feet``
-    (name → result) and ``normal`` are solved here when not given: the normal gait (same F_max) from ``init``
-or the default guess, each foot from it. The
-    result is the best of the optimal runs and of the best foot, which is itself a point of the optimal
-    problem: an optimal run never reports a higher J than the foot it started from. ``cache``: the runner's
-    (:func:`~gaitcli.predict.stage.run_predict`; default: one shared by these runs)."""
+    that foot's coefficients).
+
+    Parameters
+    ----------
+    cfg : PredictConfig
+        The optimal case (``prosthesis: optimal``).
+    params, reference, report
+        As :func:`~gaitcli.predict.stage.run_predict`.
+    init : array, optional
+        Where the normal gait starts when ``normal`` is not given (default: the default guess).
+    feet : dict, optional
+        The commercial feet's results by name; solved here when not given, each from the normal solution.
+    normal : PredictResult, optional
+        The normal gait at the same F_max; solved here when not given.
+    cache : NlpCache, optional
+        The runner's (:func:`~gaitcli.predict.stage.run_predict`; default: one shared by these runs).
+
+    Returns
+    -------
+    PredictResult
+        The best of the optimal runs and of the best foot, which is itself a point of the optimal problem: an
+        optimal run never reports a higher J than the foot it started from.
+    """
     cache = cache if cache is not None else NlpCache()
     if normal is None:
         normal = run_predict(dataclasses.replace(cfg, prosthesis="none", strength_scale=cfg.strength()),

@@ -12,7 +12,7 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-# titles at a fixed height: matplotlib's automatic placement measures every axis (a third of the drawing time)
+# titles at a fixed height: matplotlib's automatic placement measures every axis (benchmarks/README.md, "Figures")
 matplotlib.rcParams["axes.titley"] = 1.0
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402

@@ -227,7 +227,7 @@ def _walk_gif(r, index, opening, path: Path) -> Path:
         title.set_text(f"{r.cycle_pct[i]:5.1f} % of the cycle")
 
     # blitted by hand: the axes, ticks and labels are drawn once; each frame restores them and draws only the
-    # moving artists (measured: 80 frames in 1.9 s instead of 10.5 s redrawing everything)
+    # moving artists, several times faster than redrawing everything (benchmarks/README.md, "Figures")
     moving = [*sticks, floor, forces, title]
     for artist in moving:
         artist.set_animated(True)

@@ -40,7 +40,7 @@ from gaitcli.run.pipeline import needed_stages
 BATCH_SUMMARY = "batch_summary.csv"
 #: folders never searched for trials: outputs, and hidden or cache folders
 NOT_SEARCHED = ("gait_out", "__pycache__")
-#: summary.json figures copied into batch_summary.csv, per stage (DESIGN.md's keys)
+#: summary.json figures copied into batch_summary.csv, per stage (keys as README.md's outputs table lists them)
 KEY_FIGURES = {
     "filter": ("frames", "gaps_filled", "plates"),
     "idyn": ("speed_m_s", "stride_length_m", "period_s", "stance_right_pct", "stance_left_pct",
@@ -265,8 +265,31 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None =
               force: bool = False, plots: bool = True, on_rows: Callable[[list[BatchRow]], None] | None = None,
               on_start: Callable[[int, int, str | None], None] | None = None) -> BatchResult:
     """Run the pipeline over every trial below ``lab_dir`` (see the module docstring) and write
-    ``batch_summary.csv`` there. ``on_start(total trials, to run, dashboard address)`` and ``on_rows(rows of one
-    trial)`` report progress. An interrupt leaves the previous ``batch_summary.csv`` as it was."""
+    ``batch_summary.csv`` there. An interrupt leaves the previous ``batch_summary.csv`` as it was.
+
+    Parameters
+    ----------
+    lab_dir : str or Path
+        The folder searched for trial folders (:func:`find_trials`).
+    cfg : PipelineConfig
+        The pipeline every trial runs.
+    workers, scheduler
+        How many local workers, or the address of a Dask scheduler (:func:`gaitcli.run.cluster.workers`).
+    force : bool
+        Run every trial, also those whose outputs are current.
+    plots : bool
+        Draw each stage's figures.
+    on_rows : callable, optional
+        ``on_rows(rows)`` with one trial's rows as it ends; first those of the trials decided without a run
+        (current, or a kept failure).
+    on_start : callable, optional
+        ``on_start(total trials, trials to run, dashboard address or None)`` before any trial runs.
+
+    Returns
+    -------
+    BatchResult
+        Every row and the counts per trial.
+    """
     started = time.perf_counter()
     lab_dir = Path(lab_dir).resolve()  # the workers may run in other folders
     rows, todo = plan(lab_dir, cfg, force=force)

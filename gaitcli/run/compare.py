@@ -1,9 +1,9 @@
 """Regression check of two output trees: every ``summary.json`` value and every CSV column, within tolerances.
 
-``gait compare A B`` (DESIGN.md) calls :func:`compare_trees`, which reads both trees and returns a
-:class:`Comparison`: the files it looked at and a tuple of :class:`Finding` (one per file, column or summary key
-that differs beyond its tolerance). It writes nothing and decides no exit code; the CLI prints the findings and
-exits 1 when there are any.
+``gait compare A B`` (README.md, "Comparing two output trees") calls :func:`compare_trees`, which reads both
+trees and returns a :class:`Comparison`: the files it looked at and a tuple of :class:`Finding` (one per file,
+column or summary key that differs beyond its tolerance). It writes nothing and decides no exit code; the CLI
+prints the findings and exits 1 when there are any.
 
 What is compared. Every ``*.csv`` and every ``summary.json`` under A is compared with the file of the same
 relative path under B, so a tree may be one trial's output root (``gait_out/`` with its stage folders), a trial
@@ -138,7 +138,8 @@ UNIT_RULES: tuple[tuple[str, str, str, float], ...] = (
     (r"_s$", "time", "s", 1.0),
     (r"_hz$", "frequency", "Hz", 1.0),
     (r"_pct$", "percent", "%", 1.0),
-    # kinematics.csv, coordinates.csv and gait_cycle.csv name angles without a unit (DESIGN.md): m and deg
+    # kinematics.csv, coordinates.csv and gait_cycle.csv name angles without a unit (README.md's outputs table):
+    # m and deg
     (r"^pelvis_[xyz]$", "length", "m", 1000.0),
     (r"(^pelvis_rot_[xyz]|_flexion|_adduction|_rotation|_dorsiflexion|_tilt|_obliquity|_inversion|_progression)$",
      "angle", "deg", 1.0),

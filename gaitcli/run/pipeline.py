@@ -221,12 +221,36 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     The named stages always run; a stage they depend on is read back from its
     output where that is fresh. Nothing is written until every stage has been
     computed, except an optional stage a stage asks for (``StageContext.optional``),
-    which is made and written first when its output is not fresh. ``trial`` None:
-    no trial when no stage needed needs one, else the bundled sample. ``files``:
-    files named for the run (``StageContext.files``); ``workers``, ``scheduler``:
-    where a stage may run work in parallel. Raises
-    :class:`~gaitcli.errors.InputError` for bad input (nothing written); an
-    unconverged optimization is written and reported in its outcome.
+    which is made and written first when its output is not fresh.
+
+    Parameters
+    ----------
+    trial : Path or None
+        The trial folder; None: no trial when no stage needed needs one, else the bundled sample.
+    names : iterable of str
+        The stages to run.
+    cfg : PipelineConfig
+        The resolved configuration.
+    out : Path, optional
+        The output root (default: the trial's ``gait_out/``).
+    progress : callable
+        Receives :class:`~gaitcli.core.registry.Progress` reports.
+    plots : bool
+        Draw each stage's figures.
+    files : dict, optional
+        Files named for the run (``StageContext.files``), e.g. predict's ``reference``.
+    workers, scheduler
+        Where a stage may run work in parallel (:func:`gaitcli.run.cluster.workers`).
+
+    Returns
+    -------
+    list of StageOutcome
+        One per stage touched: written, unconverged (written) or reused.
+
+    Raises
+    ------
+    InputError
+        Bad input; nothing is written.
     """
     names = tuple(names)
     needed = needed_stages(names)

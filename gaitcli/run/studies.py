@@ -10,7 +10,7 @@ case warm started from it, except the second and third commercial feet: they sta
 solution when it converged (else from the normal one), and the optimal prosthesis last from the feet and the
 normal solution. Why the feet from a foot: the normal gait's ankle angles put Seattle's τ_s (a_p = −34020
 N·m/rad³) hundreds of N·m off, where IPOPT spends its iterations in inertia corrections; from the SACH
-solution it converges in a tenth of them (``benchmarks/README.md``).
+solution it converges many times faster (``benchmarks/README.md``, "Prediction").
 
 Every case is a task on the workers (:func:`gaitcli.run.cluster.workers`), started once the cases it starts
 from are done, and written whole into ``OUT/study/<case>/`` (the files of ``gait predict``) with a
@@ -279,8 +279,34 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
               files: dict[str, Path] | None = None, workers_count: int | None = None, scheduler: str | None = None,
               force: bool = False, progress: ProgressCallback = no_progress) -> tuple[list[dict], Path]:
     """``gait predict --study FILE``: every case of the study file into ``OUT/study/``: the case folders,
-    study.csv and its figures. The subject and the reference are the predict stage's
-    (:func:`gaitcli.run.stages.prediction_inputs`). Returns (rows in study order, the study folder)."""
+    study.csv and its figures.
+
+    Parameters
+    ----------
+    trial : Path or None
+        The trial whose subject and idyn output may give the subject and the reference; the subject and the
+        reference are the predict stage's (:func:`gaitcli.run.stages.prediction_inputs`).
+    study_path : Path
+        The study file.
+    cfg : PipelineConfig
+        The run's configuration, recorded in each case's provenance with the case's own ``predict`` section
+        (the cases' settings are the study file's).
+    out : Path, optional
+        The output root.
+    files : dict, optional
+        Files named for the run (``subject``, ``reference``, ``init``).
+    workers_count, scheduler
+        Where the cases run (:func:`gaitcli.run.cluster.workers`).
+    force : bool
+        Solve every case again, also those already in their folders with the same key.
+    progress : callable
+        Receives one report per case done.
+
+    Returns
+    -------
+    (list of dict, Path)
+        study.csv's rows in study order, and the study folder.
+    """
     from gaitcli.report.study_plots import study_figures
     from gaitcli.run.pipeline import TrialRun
     from gaitcli.run.stages import prediction_inputs
@@ -356,8 +382,15 @@ def starts_table(results: list[PredictResult]) -> dict:
 def best_of_starts(cfg: PredictConfig, *, params, reference, device, workers_count: int | None = None,
                    scheduler: str | None = None, progress: ProgressCallback = no_progress,
                    ) -> tuple[PredictResult, dict, int]:
-    """``--starts N``: the best converged of N starts (on :func:`gaitcli.run.cluster.workers`), starts.csv's
-    table and how many starts agreed."""
+    """``--starts N``: the best converged of ``cfg.starts`` starts, solved on :func:`gaitcli.run.cluster.workers`
+    (``workers_count``, ``scheduler``) for the subject ``params``, the ``reference`` and the prostheses'
+    ``device``; ``progress`` receives one report per start done.
+
+    Returns
+    -------
+    (PredictResult, dict, int)
+        The best result, starts.csv's table, and how many starts reached its J (:func:`agreeing`).
+    """
     done = []
 
     def on_done(k, result):

@@ -44,7 +44,7 @@ FILTER_FILES = ("markers_filtered.csv", "grf.csv", "events.csv", "filter.h5", "s
 MUSCLES = ("iliopsoas", "rectus_femoris", "glutei", "hamstrings", "vasti", "gastrocnemius", "tibialis_anterior",
            "soleus")
 MUSCLE_FILES = ("forces.csv", "activations.csv", "excitations.csv", "metabolics.csv", "muscles.h5", "summary.json")
-#: DESIGN.md's summary.json keys of the muscle stage
+#: the muscle stage's summary.json keys (README.md's outputs table)
 MUSCLE_SUMMARY_KEYS = ("method", "nodes", "solve_time_s", "converged", "metabolic_cost_J",
                        "cost_of_transport_J_per_m", "min_excitation", "max_excitation", "max_moment_error_Nm")
 MINIMAL_SUBJECT = "mass_kg: 70.0\nstature_m: 1.70\nsex: male\n"

@@ -21,7 +21,7 @@ from .conftest import Runner, copy_sample, gait_many, snapshot
 #: a first IPOPT solver takes 10–20 s to build)
 DASK_WORKERS = 1
 PREDICT_FILES = ("motion.csv", "grf.csv", "moments.csv", "muscles.csv", "predict.h5", "summary.json")
-#: DESIGN.md's summary.json keys of the predict stage
+#: the predict stage's summary.json keys (README.md's outputs table)
 PREDICT_SUMMARY_KEYS = ("speed_m_s", "cost_of_transport_J_per_m", "deviation", "objective", "weights",
                         "max_moment_error_Nm", "max_contact_error_m", "min_excitation", "max_excitation",
                         "converged", "iterations", "solve_time_s")

@@ -2,7 +2,7 @@
 OpenSim's walking2.c3d with docs/examples/walking2/subject.yaml (marker set, mass, stature, sex; no marker_map,
 no static trial, no static_frames).
 
-Measured (2026-12-02): speed 1.667 m/s (pelvis markers 1.64 m/s), stride 1.601 m, period 0.960 s, stance
+Measured: speed 1.667 m/s (pelvis markers 1.64 m/s), stride 1.601 m, period 0.960 s, stance
 62.7 % right and 62.3 % left, double stance 25 %; calibrated on file frame 652 (auto). The right heel lands
 behind plate 1 and its marker stays more than 2 cm behind the plate's edge until file frame 693: the right foot's
 load is unknown (partly off the plate, warned) over the first 22 % of its stance. From there, sagittal moments

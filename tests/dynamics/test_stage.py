@@ -19,7 +19,7 @@ plate), seeds 0–9 (measured through the CLI):
 | knee | 0.028–0.037 | 0.071–0.076 |
 | ankle | 0.030–0.036 | 0.031–0.040 |
 
-(re-measured 2026-12-01 after the double-support COP fix of the generator.)
+(measured after the generator's double-support COP fix.)
 With the noise read as 2 mm per axis (3.5 mm RMS in 3-D) the hip measured 0.084–0.128. The left
 leg's swing includes the first and last frames of the trial, where the 6 Hz filter and the spline
 ends are least accurate. Pelvis residuals in the frames where every contact is measured: RMS

@@ -69,8 +69,8 @@ def test_eid_cost_unchanged(results):
     """The EID cost of the synthetic cycle stays what it was (1e-4 relative).
 
     The EID optimum is flat: perturbing the inverse-dynamics moments by 2e-14 N·m (round-off) moves
-    IPOPT's answer by ~3e-5 relative. With the libraries of 2026-12-02 (numpy 2.4.6, scipy 1.17.1,
-    casadi 3.8.2) the same code gives 190.59693 J, 2.9e-5 below the recorded value: round-off of
+    IPOPT's answer by ~3e-5 relative. With numpy 2.4.6, scipy 1.17.1 and
+    casadi 3.8.2 the same code gives 190.59693 J, 2.9e-5 below the recorded value: round-off of
     another build, not a change of the model; hence 1e-4, three times the round-off effect
     (test_limb.py checks the Functions themselves to 1e-10).
     """

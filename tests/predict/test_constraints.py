@@ -1,5 +1,5 @@
 """Inequality constraints of the predictive gait (gaitcli/predict/constraints.py): the corrected phase lists
-(notes §1.9, §3 item 8), friction's two inequalities, and the smooth max of the gait-shape constraints."""
+(5.33–5.42; docs/prediction.md, "Contact lists"), friction's two inequalities, and the smooth max of the gait-shape constraints."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ from gaitcli.predict.constraints import (GAIT_SHAPE, clearance_phases, feet_in_c
                                          smooth_max)
 
 
-def test_clearance_and_unilateral_lists_are_the_notes():
-    # §1.9 groups 2 and 3 as printed (these two lists are right)
+def test_clearance_and_unilateral_lists_are_the_dissertations():
+    # (5.33–5.36) and (5.37–5.40) as printed (these two lists are right)
     assert {p: in_contact(p) for p in ("heel_r", "mtp_r", "heel_l", "mtp_l")} == {
         "heel_r": (1, 2, 3), "mtp_r": (2, 3, 4, 5, 6), "heel_l": (5, 6, 7), "mtp_l": (1, 2, 6, 7, 8)}
     assert {p: clearance_phases(p) for p in ("heel_r", "mtp_r", "heel_l", "mtp_l")} == {
@@ -21,7 +21,7 @@ def test_clearance_and_unilateral_lists_are_the_notes():
 
 
 def test_friction_applies_where_the_foot_is_down_not_the_printed_phases():
-    # printed (5.41–5.42): right 1–7, left 1, 2, 3, 5–8 — typos (§3 item 8):
+    # printed (5.41–5.42): right 1–7, left 1, 2, 3, 5–8 — typos (docs/prediction.md):
     # the right foot is down in 1–6, the left in 5–8, 1, 2
     right = tuple(n for n in range(1, 9) if "r" in feet_in_contact(n))
     left = tuple(n for n in range(1, 9) if "l" in feet_in_contact(n))

@@ -1,6 +1,7 @@
-"""Contact phases and ground reactions (gaitcli/predict/contact.py): the phase table against the notes'
-lists, constraints and their Jacobians, the pseudoinverse (5.30) on consistent states, and the rank gap of
-phases 4 and 8 that the MTP moment closes (CHAPTER5_NOTES §1.3, §1.9, §3 item 3, §4 items 3, 5, 8)."""
+"""Contact phases and ground reactions (gaitcli/predict/contact.py): the phase table against the
+dissertation's lists (5.6–5.9, 5.33–5.40), constraints and their Jacobians, the pseudoinverse (5.30) on
+consistent states, and the rank gap of phases 4 and 8 that the MTP moment closes (docs/prediction.md,
+"MTP moment")."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ def test_rows_per_phase():
     assert [p.number for p in PHASE_TABLE] == list(PHASES)
 
 
-# (5.37–5.40) with the phases of §1.9 group 3, and (5.33–5.36) group 2: the complement
+# (5.37–5.40) with their printed phases, and (5.33–5.36) with theirs: the complement
 IN_CONTACT = {"heel_r": {1, 2, 3}, "mtp_r": {2, 3, 4, 5, 6}, "heel_l": {5, 6, 7}, "mtp_l": {1, 2, 6, 7, 8}}
 CLEARANCE = {"heel_r": {4, 5, 6, 7, 8}, "mtp_r": {1, 7, 8}, "heel_l": {1, 2, 3, 4, 8}, "mtp_l": {3, 4, 5}}
 
@@ -75,7 +76,7 @@ def test_pseudoinverse_returns_the_reactions_of_a_consistent_state(contact, phas
     Gm = np.array(contact.reaction_matrix[phase](y))
     lam = RNG.normal(scale=300.0, size=Gm.shape[1])
     if contact.phase(phase).mtp_moment_side:
-        lam[-1] = -6.0  # within the notes' −10 … 0 N·m
+        lam[-1] = -6.0  # within 5.2.2's −10 … 0 N·m
     tau = RNG.normal(scale=50.0, size=6)
     B = joint_moment_map()
     M = np.array(model.mass_matrix(y))

@@ -1,5 +1,6 @@
-"""Inversion and cost of a predicted gait (gaitcli/predict/cost.py): known answers (notes §4 item 7), the
-inversion's consistency with activation dynamics (2.17), and numpy = CasADi."""
+"""Inversion and cost of a predicted gait (gaitcli/predict/cost.py): known answers (Jdev 0 at the mean and
+n_d·T one SD away, Et of constant activation the maintenance heat), the inversion's consistency with activation
+dynamics (2.17), and numpy = CasADi."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Control points uniform within each phase (5.2.5) and the unequal-step derivative (5.2.6; notes §4 items 2, 6)."""
+"""Control points uniform within each phase (5.2.5) and the unequal-step derivative (5.2.6)."""
 
 from __future__ import annotations
 

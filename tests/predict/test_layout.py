@@ -1,5 +1,5 @@
-"""The design vector (gaitcli/predict/layout.py): sizes of the full (5.24) and the symmetric model (notes §3
-item 6), the half-cycle parity, pack/unpack round trips in numpy and CasADi, and the symmetric χ expanded into
+"""The design vector (gaitcli/predict/layout.py): sizes of the full (5.24) and the symmetric model (5.3.1;
+docs/prediction.md), the half-cycle parity, pack/unpack round trips in numpy and CasADi, and the symmetric χ expanded into
 the full model's."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from gaitcli.predict.splines import cubic, design_vector_size, evaluate_fraction
                                                   (18, 435, 219), (20, 485, 3 * 19 + 8 * 19 + 3 * 11 + 5)])
 def test_sizes(nodes, full, symmetric):
     assert DesignLayout.build(nodes, symmetric=False).size == full == design_vector_size(nodes)
-    assert DesignLayout.build(nodes, symmetric=True).size == symmetric  # notes §3 item 6: 219 at nn = 18
+    assert DesignLayout.build(nodes, symmetric=True).size == symmetric  # 219 at nn = 18 (layout.py's table)
 
 
 def test_half_cycle_interval_counts_are_odd():

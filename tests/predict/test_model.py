@@ -23,7 +23,7 @@ def random_state(rng=RNG):
 
 
 def test_subject_1_parameters_are_the_dissertations():
-    # Tables A.4–A.5 (CHAPTER5_NOTES §1.2): thigh 10.34 kg, CoM 0.195 m; shank 3.16 kg, CoM 0.188 m; foot 1.00 kg;
+    # Tables A.4–A.5: thigh 10.34 kg, CoM 0.195 m; shank 3.16 kg, CoM 0.188 m; foot 1.00 kg;
     # the 2-D HAT is the rest, 44.0 kg
     p = WalkerParameters.subject_1()
     assert p.limb.thigh_mass_kg == pytest.approx(10.34, abs=0.005)
@@ -154,7 +154,7 @@ def test_coordinates_are_named_in_order():
 
 
 def test_added_foot_mass_at_the_foot_centre_of_mass():
-    # 5.3.2's +2 kg per foot, at the foot's CoM (CHAPTER5_NOTES §3 item 17): mass, CoM and inertia by hand
+    # 5.3.2's +2 kg per foot, at the foot's CoM (docs/prediction.md, "Added foot mass"): mass, CoM and inertia by hand
     p = WalkerParameters.subject_1()
     heavy = p.with_foot_mass(2.0)
     assert heavy.limb.foot_mass_kg == pytest.approx(p.limb.foot_mass_kg + 2.0)

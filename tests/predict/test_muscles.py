@@ -83,7 +83,7 @@ def test_hip_angle_is_relative_to_the_hat(muscles):
 
 
 def test_a_prosthetic_ankle_removes_soleus_tibialis_and_the_ankle_structures():
-    # 5.3.3 (CHAPTER5_NOTES §1.12, §3 item 16): Sol and TA gone, Gas at the knee only with its length at a
+    # 5.3.3 (docs/prediction.md, "The prosthesis"): Sol and TA gone, Gas at the knee only with its length at a
     # neutral ankle, no Riener–Edrich ankle moment and their knee moment at a neutral ankle; the device's
     # moment (5.59) on y6 and y9
     from gaitcli.muscles.parameters import JointParameters
@@ -119,7 +119,7 @@ def test_a_prosthetic_ankle_removes_soleus_tibialis_and_the_ankle_structures():
 
 
 def test_strength_scale_scales_every_fmax_and_with_it_the_muscle_mass():
-    # 5.3.3's F_max +50 %; muscle mass ∝ F_max (A.13), CHAPTER5_NOTES §3 item 13
+    # 5.3.3's F_max +50 %; muscle mass ∝ F_max (A.13): docs/prediction.md, "Stronger muscles"
     base, strong = WalkerMuscles(), WalkerMuscles(strength_scale=1.5)
     np.testing.assert_allclose(strong.muscle.params.max_isometric_force_N, 1.5 * base.muscle.params.max_isometric_force_N)
     np.testing.assert_allclose(strong.muscle.params.muscle_mass_kg, 1.5 * base.muscle.params.muscle_mass_kg)

@@ -76,5 +76,5 @@ def test_the_physics_holds_between_the_control_points(prediction):
     assert fine["deviation"] == pytest.approx(prediction.deviation, rel=0.05)
     assert fine["max_moment_error_Nm"] <= 5.0 and fine["max_contact_error_m"] <= 0.003
     # between the points the excitations leave [0, 1] by a little (measured −0.20 … 1.28; −0.13 … 1.30 on the
-    # solution against the reference before 2026-12-03)
+    # solution against an earlier bundled reference)
     assert -0.25 <= fine["min_excitation"] and fine["max_excitation"] <= 1.4

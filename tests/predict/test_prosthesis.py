@@ -1,5 +1,5 @@
-"""Prosthetic ankle curves (gaitcli/predict/prosthesis.py, (5.58)–(5.59)) against the known-answer table of
-CHAPTER5_NOTES §2.4, computed there from Table A.7 independently of this code."""
+"""Prosthetic ankle curves (gaitcli/predict/prosthesis.py, (5.58)–(5.59)) against known answers:
+(5.58) evaluated by hand with Table A.7's and A.8's coefficients, independently of this code."""
 
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def test_the_blend_is_widest_where_the_branches_agree_and_smooth_in_the_coeffici
 
 
 def test_the_product_convention_gives_sach_a_plantarflexor_moment_at_dorsiflexion():
-    """0.2 rad of dorsiflexion (y = −0.2): SACH resists with a 283.4 N·m plantarflexor moment (§3 item 1)."""
+    """0.2 rad of dorsiflexion (y = −0.2): SACH resists with a 283.4 N·m plantarflexor moment (docs/prediction.md, "The ankle's sign")."""
     assert COMMERCIAL_FEET["sach"].plantarflexor_moment_Nm(0.2) == pytest.approx(283.4, abs=0.1)
     # dorsiflexion stiffness SACH > Seattle > Flex, as 5.3.3 says
     moments = [COMMERCIAL_FEET[k].plantarflexor_moment_Nm(0.2) for k in ("sach", "seattle", "flex")]
@@ -90,7 +90,7 @@ def test_damping_and_monotonicity():
     assert flex.moment_Nm(-0.1, 2.0) == pytest.approx(30.9 - 2.0, abs=0.1)  # (5.59), d = 1 N·m·s/rad
     limit = np.radians(28.6)
     assert flex.is_monotone(-limit, limit) and COMMERCIAL_FEET["seattle"].is_monotone(-limit, limit)
-    # SACH's curve turns upward beyond +21.7° of plantarflexion (notes §2.4)
+    # SACH's curve turns upward beyond +21.7° of plantarflexion (Table A.7's coefficients)
     assert not COMMERCIAL_FEET["sach"].is_monotone(-limit, limit)
     assert COMMERCIAL_FEET["sach"].is_monotone(-limit, np.radians(21.0))
 
@@ -130,7 +130,7 @@ def test_a_bad_prosthesis_file_is_refused_naming_the_field(change, field, words)
 
 
 def test_sach_turns_beyond_the_declared_range_only():
-    # CHAPTER5_NOTES §2.4: SACH is monotone up to +21.7° of y and not beyond
+    # Table A.7: SACH is monotone up to +21.7° of y and not beyond
     sach = COMMERCIAL_FEET["sach"]
     assert sach.is_monotone(np.radians(-28.6), np.radians(21.5))
     assert not sach.is_monotone(np.radians(-28.6), np.radians(22.5))

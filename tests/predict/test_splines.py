@@ -1,4 +1,4 @@
-"""Periodic quartic/cubic splines (5.10–5.23): interpolation, continuity, accuracy, CasADi (notes §4 1, 6, 11)."""
+"""Periodic quartic/cubic splines (5.10–5.23): interpolation, continuity, accuracy, CasADi."""
 
 from __future__ import annotations
 
