@@ -22,9 +22,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from gaitcli.resources import sample_trials_dir
 from gaitcli.run.batch import run_batch
 from gaitcli.run.config import configure
-from gaitcli.resources import sample_trials_dir
 
 
 def rss_mb() -> float:

@@ -68,11 +68,11 @@ def child(folder: Path, plots: bool) -> dict:
         import_module(module)
         imports[f"import {module}"] = time.perf_counter() - start
 
+    from gaitcli.muscles import eid, so
+    from gaitcli.muscles import outputs as muscles_outputs
+    from gaitcli.muscles import stage as muscle_stage
     from gaitcli.run import pipeline, stages
     from gaitcli.run.config import configure
-    from gaitcli.muscles import eid, so
-    from gaitcli.muscles import stage as muscle_stage
-    from gaitcli.muscles import outputs as muscles_outputs
 
     figures = {}
     with Stopwatch() as w:

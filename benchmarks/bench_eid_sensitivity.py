@@ -27,10 +27,10 @@ import textwrap
 import time
 from pathlib import Path
 
+import numpy as np
+
 # timing first, before numpy: one thread, Agg backend (its import sets the environment)
 from timing import one_core, sample_legs
-
-import numpy as np
 
 from gaitcli.muscles.stage import run_muscles
 

@@ -27,11 +27,11 @@ from pathlib import Path
 from timing import REPO, copy_sample, median_s, one_core, stage_attrs, time_gait, write_stage
 
 from gaitcli.errors import GaitWarning
-from gaitcli.run.pipeline import load_recording
 from gaitcli.report import plots
 from gaitcli.resources import sample_trial
-from gaitcli.signal.stage import FilterConfig, filter_trial
+from gaitcli.run.pipeline import load_recording
 from gaitcli.run.trial import open_trial
+from gaitcli.signal.stage import FilterConfig, filter_trial
 
 SAMPLES = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")
 SHARED_C3D = REPO.parent / "shared" / "data" / "c3d"

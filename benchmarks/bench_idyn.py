@@ -32,26 +32,32 @@ import tracemalloc
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 # timing first, before numpy: one thread, Agg backend (its import sets the environment)
 from timing import copy_sample, median_s, one_core, sample_outputs, time_gait
 
-import numpy as np
-
-from gaitcli.run.config import configure
 from gaitcli.core.container import FootLoad, Trial
 from gaitcli.core.events import Events
 from gaitcli.core.recording import Markers
 from gaitcli.core.registry import stage
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.dynamics.inverse import inverse_dynamics
-from gaitcli.dynamics.stage import (IdynConfig, body_mass, external_wrenches, inverse_dynamics_stage, reference_frames,
-                                    static_calibration)
+from gaitcli.dynamics.stage import (
+    IdynConfig,
+    body_mass,
+    external_wrenches,
+    inverse_dynamics_stage,
+    reference_frames,
+    static_calibration,
+)
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.coordinates import poses_to_coordinates, track_segments
+from gaitcli.run.config import configure
 from gaitcli.run.pipeline import load_static, run_stage, run_stages
-from gaitcli.synth import MARKER_RATE_HZ, simulate_trial
 from gaitcli.run.trial import open_trial
+from gaitcli.synth import MARKER_RATE_HZ, simulate_trial
 
 MASS_KG, STATURE_M = 75.0, 1.78
 

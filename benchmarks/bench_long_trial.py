@@ -22,7 +22,6 @@ from pathlib import Path
 import numpy as np
 from timing import gait_argv, one_core
 
-
 _PEAK = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, capture_output=True); "
          "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
 
@@ -63,9 +62,9 @@ def compare_memory(sizes_mb: list[float]) -> None:
 
 
 def ceilings() -> None:
-    from gaitcli.run.compare import CHUNK_CELLS
     from gaitcli.io.c3d.header import C3D_MAX_NUMBERS
     from gaitcli.io.h5 import H5_MAX_BYTES
+    from gaitcli.run.compare import CHUNK_CELLS
 
     print(f"C3D data section: {C3D_MAX_NUMBERS} numbers (frames x (4 x markers + analog samples per frame))")
     print(f"HDF5 dataset: {H5_MAX_BYTES} bytes decompressed")

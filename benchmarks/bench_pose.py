@@ -26,9 +26,9 @@ from gaitcli.kinematics.conventions import moments_to_clinical
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.markerset import marker_set, with_fixed_points
 from gaitcli.kinematics.model import JOINTS, MOMENTS
+from gaitcli.kinematics.subject import Subject
 from gaitcli.signal.stage import FilterConfig, filter_trial
 from gaitcli.synth import simulate_trial
-from gaitcli.kinematics.subject import Subject
 
 MASS_KG, STATURE_M = 75.0, 1.78
 #: the hip centres' displacement (m: forward, outward, up)

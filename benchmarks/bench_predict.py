@@ -20,14 +20,13 @@ from __future__ import annotations
 import argparse
 import time
 
-from timing import one_core
-
 import casadi as ca
+from timing import one_core
 
 from gaitcli.predict.nlp import build_nlp
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.stage import PredictConfig, run_predict
 from gaitcli.predict.reference import read_reference
+from gaitcli.predict.stage import PredictConfig, run_predict
 from gaitcli.resources import bundled_reference
 
 TABLE_5_1_HOURS = {14: 11.3, 16: 15.9, 18: 22.3, 20: 28.9}

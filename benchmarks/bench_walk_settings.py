@@ -28,11 +28,11 @@ import json
 import time
 from pathlib import Path
 
-# timing first, before numpy: one thread, Agg backend (its import sets the environment)
-from timing import one_core
-
 import numpy as np
 from bench_synth_walk import winter_figures
+
+# timing first, before numpy: one thread, Agg backend (its import sets the environment)
+from timing import one_core
 
 from gaitcli.kinematics.conventions import walker_to_clinical
 from gaitcli.predict.guess import initial_guess
@@ -40,9 +40,9 @@ from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import VARIABLES, read_reference
-from gaitcli.signal.bands import Band
 from gaitcli.predict.solve import NlpCache, solve_windowed
 from gaitcli.predict.stage import PredictConfig, evaluate_design, settings_of, violated_groups, walker_muscles
+from gaitcli.signal.bands import Band
 from gaitcli.synth import predicted as walk
 
 #: the second solve's variants: WALK_TRACKING's settings kept (each alone, or all)

@@ -74,8 +74,8 @@ def sample_outputs(tmp: Path, stages=("idyn",), *, sample: str = "normal", plots
     Returns (trial folder, {stage: HDF5 path}) for every stage written or reused; outputs go to the
     copy's ``gait_out``, as ``gait`` writes them.
     """
-    from gaitcli.run.config import configure
     from gaitcli.core.registry import stage
+    from gaitcli.run.config import configure
     from gaitcli.run.pipeline import run_stages
 
     folder = copy_sample(sample, Path(tmp) / sample)

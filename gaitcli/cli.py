@@ -19,17 +19,17 @@ from pathlib import Path
 import click
 
 from gaitcli import __version__
-from gaitcli.run.config import configure
 from gaitcli.core.interrupts import terminate_as_interrupt
 from gaitcli.core.validate import check_parameter, expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import GaitError, GaitWarning, InputError, NotConvergedError
+from gaitcli.kinematics.subject import SEXES
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
+from gaitcli.run.config import configure
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.synth.gait import CONDITIONS
 from gaitcli.synth.recording import DEFAULT_NOISE_MM, SYNTH_GAITS, SYNTH_MARKER_SETS
-from gaitcli.kinematics.subject import SEXES
 
 
 class Console:
@@ -214,8 +214,8 @@ def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, momen
                     filter={"events": events})
     if exports:  # the export names checked before any stage runs: a name too long stops it with nothing written
         from gaitcli.io.atomic import check_output_file
-        from gaitcli.run.pipeline import TrialRun
         from gaitcli.io.exports import export_targets
+        from gaitcli.run.pipeline import TrialRun
 
         run = TrialRun(trial, out, cfg)
         for path in export_targets(run.out_root, set(exports), trial_name=run.trial.folder.resolve().name):
@@ -360,8 +360,8 @@ def reference_command(console: Console, trials, out, pipeline, band):
     """A reference gait (mean and SD over the cycle) from the idyn outputs of one or more trials."""
     from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.io.outputs import write_table
-    from gaitcli.run.pipeline import fresh_output
     from gaitcli.predict.reference import FORCES, reference_from_idyn
+    from gaitcli.run.pipeline import fresh_output
 
     cfg = configure(pipeline)
     outputs = [fresh_output(trial, "idyn", cfg, plots=False) for trial in trials]
@@ -409,9 +409,9 @@ def batch_command(ctx, lab_dir, pipeline, workers, scheduler, force, no_plots, b
     in LAB_DIR."""
     import os
 
+    from gaitcli.progress import BatchProgress
     from gaitcli.run.batch import BATCH_SUMMARY, run_batch, stages_of
     from gaitcli.run.compare import DEFAULT_TOLERANCES, compare_trees, outputs_only, read_tolerances
-    from gaitcli.progress import BatchProgress
 
     console: Console = ctx.obj
     if workers is not None and scheduler is not None:
@@ -477,10 +477,9 @@ def _print_findings(result) -> None:
 
     rows = finding_rows(result)
     if sys.stderr.isatty():
+        from rich import box
         from rich.console import Console as RichConsole
         from rich.table import Table
-
-        from rich import box
 
         table = Table(title=f"A {result.a}  ·  B {result.b}", title_justify="left", box=box.SIMPLE_HEAD)
         for name in TABLE_HEADER:
@@ -504,8 +503,8 @@ def _print_findings(result) -> None:
 @click.pass_obj
 def report_command(console: Console, out_dir, reference, exports):
     """A self-contained HTML page per trial, prediction or study in OUT_DIR (and an index for a batch)."""
-    from gaitcli.signal.bands import default_band, read_band
     from gaitcli.report.html import find_report, write_report
+    from gaitcli.signal.bands import default_band, read_band
 
     band = default_band() if reference is None else read_band(reference)
     pages = write_report(out_dir, band)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-
 #: the longest piece of an input that an error message repeats
 SHOWN_CHARACTERS = 80
 

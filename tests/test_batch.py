@@ -10,9 +10,9 @@ import io
 import os
 import shutil
 
+from gaitcli.resources import sample_trial
 from gaitcli.run.batch import plan, run_trial
 from gaitcli.run.config import load_pipeline
-from gaitcli.resources import sample_trial
 
 
 def test_an_unreadable_trial_file_is_planned_and_fails_in_its_own_rows(tmp_path, monkeypatch):

@@ -9,9 +9,17 @@ from pathlib import Path
 
 import pytest
 
-from gaitcli.run.compare import (DEFAULT_TOLERANCES, FAMILIES, VOLATILE_KEYS, compare_trees, finding_rows,
-                             read_tolerances, split_path, unit_of)
 from gaitcli.errors import InputError
+from gaitcli.run.compare import (
+    DEFAULT_TOLERANCES,
+    FAMILIES,
+    VOLATILE_KEYS,
+    compare_trees,
+    finding_rows,
+    read_tolerances,
+    split_path,
+    unit_of,
+)
 
 MOMENTS = ("time_s,hip_r_flexion_moment,hip_r_flexion_moment_per_kg,knee_r_flexion,side\n"
            "0,10.0,0.1333,5.0,r\n"

@@ -7,14 +7,14 @@ import dataclasses
 import pytest
 import yaml
 
-from gaitcli.run.config import PipelineConfig, configure, load_pipeline, pipeline_from_dict, to_yaml, with_overrides
 from gaitcli.core.registry import stage_names
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import InputError
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
-from gaitcli.signal.stage import FilterConfig
 from gaitcli.resources import pipeline_file
+from gaitcli.run.config import PipelineConfig, configure, load_pipeline, pipeline_from_dict, to_yaml, with_overrides
+from gaitcli.signal.stage import FilterConfig
 
 SECTIONS = {"filter": FilterConfig, "idyn": IdynConfig, "muscles": MusclesConfig, "predict": PredictConfig}
 
@@ -203,8 +203,8 @@ def test_configs_are_frozen():
 
 
 def test_an_empty_stage_list_is_an_error():
-    from gaitcli.run.config import pipeline_from_dict
     from gaitcli.errors import InputError
+    from gaitcli.run.config import pipeline_from_dict
 
     with pytest.raises(InputError, match="non-empty list"):
         pipeline_from_dict({"stages": []}, "p.yaml")

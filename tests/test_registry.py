@@ -14,14 +14,13 @@ import numpy as np
 import pytest
 
 from gaitcli.cli import main
-from gaitcli.run.config import PipelineConfig, load_pipeline
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDES
 from gaitcli.core.registry import Stage, register, requirements, stage, stage_names, unregister
 from gaitcli.core.validate import parameter
 from gaitcli.errors import InputError
 from gaitcli.resources import sample_trial
-
+from gaitcli.run.config import PipelineConfig, load_pipeline
 
 # --- the example stage of docs/architecture.md, executed from the page itself --------------------------------
 ARCHITECTURE = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"

@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from gaitcli.errors import InputError
-from gaitcli.resources import sample_trial
 from gaitcli.kinematics.subject import KEYS, load_subject, subject_from_dict
+from gaitcli.resources import sample_trial
 from gaitcli.run.trial import open_trial, sha256
 
 BASE = {"mass_kg": 75.0, "stature_m": 1.78, "sex": "male"}

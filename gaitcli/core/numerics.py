@@ -13,6 +13,7 @@ import numpy as np
 
 from gaitcli.core.validate import integer, one_of
 
+
 def true_runs(mask) -> tuple[np.ndarray, np.ndarray]:
     """Start and stop (exclusive) indices of the runs of ``True`` in the 1-D boolean array ``mask``."""
     edges = np.diff(np.concatenate([[0], np.asarray(mask, dtype=np.int8), [0]]))

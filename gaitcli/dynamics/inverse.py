@@ -32,8 +32,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitcli.core.physics import GRAVITY_M_S2
-from gaitcli.dynamics.equations import (CHUNK_FRAMES, check_external_wrenches, check_motion, dalembert_body_wrenches,
-                                       distal_bodies, project)
+from gaitcli.dynamics.equations import (
+    CHUNK_FRAMES,
+    check_external_wrenches,
+    check_motion,
+    dalembert_body_wrenches,
+    distal_bodies,
+    project,
+)
 from gaitcli.kinematics.forward import N_COORDINATES, N_JOINTS, forward_kinematics
 from gaitcli.kinematics.model import JOINT_CHILD, JOINT_PARENT, BodyParameters
 

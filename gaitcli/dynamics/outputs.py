@@ -11,12 +11,19 @@ import numpy as np
 from gaitcli.dynamics.sagittal import SagittalExport, sagittal_columns
 from gaitcli.dynamics.stage import IdynResult
 from gaitcli.io.h5 import Dataset, read_result, record_datasets, write_h5
-from gaitcli.io.stage_files import IdynTables, read_idyn_tables
 from gaitcli.io.outputs import write_table
+from gaitcli.io.stage_files import IdynTables, read_idyn_tables
 from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
-from gaitcli.kinematics.conventions import (ANATOMICAL_CONVENTION, CONVENTION, PIG_CONVENTION, PIG_MOMENTS,
-                                            anatomical_to_degrees, coordinates_to_clinical, moments_to_clinical,
-                                            moments_to_plug_in_gait)
+from gaitcli.kinematics.conventions import (
+    ANATOMICAL_CONVENTION,
+    CONVENTION,
+    PIG_CONVENTION,
+    PIG_MOMENTS,
+    anatomical_to_degrees,
+    coordinates_to_clinical,
+    moments_to_clinical,
+    moments_to_plug_in_gait,
+)
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS
 from gaitcli.signal.cycles import CYCLE_PCT, CYCLE_POINTS, Stride, normalise
 

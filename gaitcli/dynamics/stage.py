@@ -16,11 +16,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDE_NAMES, SIDES, Events
-from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.numerics import frame_spans
+from gaitcli.core.physics import GRAVITY_M_S2
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.validate import parameter
 from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.dynamics.equations import ExternalWrench
@@ -32,9 +32,9 @@ from gaitcli.kinematics import cgm
 from gaitcli.kinematics.anatomical import anatomical_angles
 from gaitcli.kinematics.calibration import StaticCalibration, calibrate, least_flexed_frames, static_landmarks
 from gaitcli.kinematics.chain_fit import fit_chain
-from gaitcli.kinematics.joint_centres import JointWidths, functional_joint_centre
 from gaitcli.kinematics.coordinates import missing_frame_messages, poses_to_coordinates, track_segments
 from gaitcli.kinematics.forward import forward_kinematics
+from gaitcli.kinematics.joint_centres import JointWidths, functional_joint_centre
 from gaitcli.kinematics.markerset import VIRTUAL_JOINT_CENTRES, with_fixed_points
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINTS, BodyParameters
 from gaitcli.signal.cycles import GaitFeatures, Stride, gait_features, strides

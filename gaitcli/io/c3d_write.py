@@ -34,13 +34,13 @@ import ezc3d
 import numpy as np
 
 from gaitcli.core.events import Events
+from gaitcli.core.recording import ForcePlate, Markers
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.c3d import plate_axes
 from gaitcli.io.c3d.events import EVENT_CONTEXTS, EVENT_LABELS
 from gaitcli.io.c3d.header import as_text
 from gaitcli.io.c3d.long import write_frame_count
-from gaitcli.core.recording import ForcePlate, Markers
 
 __all__ = ["write_c3d", "add_points", "set_events", "DEFAULT_ORIGIN_MM"]
 

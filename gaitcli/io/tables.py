@@ -37,11 +37,11 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.recording import ForcePlate, Markers, Recording
 from gaitcli.errors import GaitWarning, InputError, shown
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.axes import LOAD_THRESHOLD_N, apply_rotation, infer_lab_to_model
 from gaitcli.io.c3d.markers import LAB_REACH_M
-from gaitcli.core.recording import ForcePlate, Markers, Recording
 
 __all__ = [
     "PLATE_SIZE_M",

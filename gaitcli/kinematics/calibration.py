@@ -39,19 +39,24 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.core.events import SIDE_NAMES
+from gaitcli.core.numerics import true_runs
+from gaitcli.core.recording import Markers
 from gaitcli.core.validate import one_of
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
 from gaitcli.kinematics.anthropometry import SegmentInertia, normalise_sex, rotate_segment, segment_parameters
 from gaitcli.kinematics.disturbances import Disturbance, apply_disturbances, resolve_disturbances
-from gaitcli.kinematics.markerset import (LANDMARKS, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, MarkerSet,
-                                          required_landmarks,
-                                          tracking_landmarks)
+from gaitcli.kinematics.markerset import (
+    LANDMARKS,
+    SEGMENT_MARKERS,
+    VIRTUAL_JOINT_CENTRES,
+    MarkerSet,
+    required_landmarks,
+    tracking_landmarks,
+)
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS, BodyParameters
 from gaitcli.kinematics.pose import MIN_MARKERS
 from gaitcli.kinematics.rotations import rot_z
-from gaitcli.core.recording import Markers
-from gaitcli.core.numerics import true_runs
 
 _PURPOSE = {"ASIS": "the pelvis frame and hip joint centres", "PSIS": "the pelvis frame and hip joint centres",
             "LEF": "the knee joint centre", "MEF": "the knee joint centre", "LM": "the ankle joint centre",

@@ -20,8 +20,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gaitcli.kinematics.anatomical import PIG_FOOT_AXES
-from gaitcli.kinematics.joint_centres import (chord_joint_centre, davis_hip_joint_centres, pelvis_frame, shank_frame,
-                                             thigh_frame, unit)
+from gaitcli.kinematics.joint_centres import (
+    chord_joint_centre,
+    davis_hip_joint_centres,
+    pelvis_frame,
+    shank_frame,
+    thigh_frame,
+    unit,
+)
 from gaitcli.kinematics.rotations import rot_x, rot_y, rot_z
 
 SIDES = ("r", "l")

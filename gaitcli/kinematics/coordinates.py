@@ -17,12 +17,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gaitcli.core.numerics import frame_spans
+from gaitcli.core.recording import Markers
 from gaitcli.core.validate import one_of
 from gaitcli.kinematics.calibration import StaticCalibration
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT
 from gaitcli.kinematics.pose import fit_rigid_pose
 from gaitcli.kinematics.rotations import matrix_to_cardan_xyz, matrix_to_joint_angles
-from gaitcli.core.recording import Markers
 
 
 @dataclass

@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.core.events import SIDE_NAMES
+from gaitcli.core.recording import Markers
 from gaitcli.core.validate import known_keys, one_of
 from gaitcli.errors import InputError
 from gaitcli.io.yamlfile import read_yaml
 from gaitcli.kinematics.model import BODIES
-from gaitcli.core.recording import Markers
 
 SIDES = ("r", "l")
 

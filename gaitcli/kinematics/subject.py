@@ -17,10 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from gaitcli.io.vsk import VskSubject
-from gaitcli.io.yamlfile import read_yaml
 from gaitcli.core.validate import known_keys, number, one_of
 from gaitcli.errors import InputError, shown
+from gaitcli.io.vsk import VskSubject
+from gaitcli.io.yamlfile import read_yaml
 from gaitcli.kinematics.disturbances import Disturbance
 from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
 

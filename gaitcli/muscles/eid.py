@@ -32,8 +32,7 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.core.ipopt import Outcome, solve
-from gaitcli.core.numerics import (MOMENT_SCALE_NM, finite_difference_matrix, force_from_stretch,
-                                   stretch_from_force)
+from gaitcli.core.numerics import MOMENT_SCALE_NM, finite_difference_matrix, force_from_stretch, stretch_from_force
 from gaitcli.core.validate import one_of
 
 from .problem import Problem

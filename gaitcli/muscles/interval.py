@@ -8,11 +8,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitcli.core.events import Events
+from gaitcli.dynamics.sagittal import SagittalExport, SagittalMotion
 from gaitcli.errors import InputError
 from gaitcli.signal.cycles import strides
-from gaitcli.core.events import Events
-
-from gaitcli.dynamics.sagittal import SagittalExport, SagittalMotion
 
 from .limb import LimbParameters
 

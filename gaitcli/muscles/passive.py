@@ -12,6 +12,7 @@ their angle; the conversions are those of :mod:`gaitcli.kinematics.conventions`.
 from __future__ import annotations
 
 import casadi as ca
+
 from gaitcli.kinematics.conventions import riener_edrich_angles, riener_edrich_moments
 
 from .evaluation import evaluate

@@ -12,11 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitcli.dynamics.sagittal import SagittalMotion
 from gaitcli.errors import InputError
 
 from .hill import MuscleModel
-from gaitcli.dynamics.sagittal import SagittalMotion
-
 from .limb import LimbModel, LimbParameters, MotionInterpolant, MotionSamples
 from .parameters import JointParameters, MuscleParameters
 from .passive import JointModel

@@ -28,13 +28,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 
-from gaitcli.run.config import PipelineConfig, to_yaml
 from gaitcli.core.registry import stage_names
-from gaitcli.run.cluster import Task, completed
-from gaitcli.run.cluster import workers as cluster_workers
 from gaitcli.errors import GaitError, InputError
 from gaitcli.io.atomic import atomic_path, remove_stale
 from gaitcli.io.outputs import plain_text, spreadsheet_text
+from gaitcli.run.cluster import Task, completed
+from gaitcli.run.cluster import workers as cluster_workers
+from gaitcli.run.config import PipelineConfig, to_yaml
 from gaitcli.run.pipeline import needed_stages
 
 BATCH_SUMMARY = "batch_summary.csv"

@@ -17,11 +17,11 @@ from typing import Any
 
 import yaml
 
-from gaitcli.run import stages as _builtin_stages  # noqa: F401  (registers the built-in stages)
 from gaitcli.core.registry import stage, stage_names
 from gaitcli.core.validate import known_keys, replace_checked
 from gaitcli.errors import InputError, shown
 from gaitcli.io.yamlfile import read_yaml
+from gaitcli.run import stages as _builtin_stages  # noqa: F401  (registers the built-in stages)
 
 #: what ``gait run`` does without a pipeline file (``pipelines/standard.yaml``)
 DEFAULT_STAGES = ("filter", "idyn")

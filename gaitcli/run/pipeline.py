@@ -18,16 +18,23 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from gaitcli.run.config import PipelineConfig, section_dict, to_yaml
-from gaitcli.core.recording import Recording
 from gaitcli.core.container import Trial
-from gaitcli.core.registry import (Progress, ProgressCallback, StageContext, no_progress, requirements, stage,
-                                   stage_names)
+from gaitcli.core.recording import Recording
+from gaitcli.core.registry import (
+    Progress,
+    ProgressCallback,
+    StageContext,
+    no_progress,
+    requirements,
+    stage,
+    stage_names,
+)
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import check_output_folder, check_replaceable
 from gaitcli.io.h5 import file_attrs, provenance, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
+from gaitcli.run.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.run.trial import TrialFolder, open_trial, sha256
 
 #: bump when a stage's output files change, so that older outputs count as stale

@@ -22,7 +22,6 @@ import math
 import numpy as np
 
 from gaitcli.core.numerics import true_runs
-
 from gaitcli.errors import InputError, shown
 
 __all__ = ["correction_factor", "design_frequency_hz", "design_sos", "pad_length", "lowpass"]

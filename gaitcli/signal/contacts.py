@@ -34,8 +34,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from gaitcli.core.events import SIDES
-from gaitcli.errors import InputError, shown
 from gaitcli.core.numerics import true_runs
+from gaitcli.errors import InputError, shown
 from gaitcli.signal.forceplates import PlateLoad
 
 __all__ = ["Contact", "plate_contacts", "assign_contacts", "plate_owner"]

@@ -41,9 +41,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitcli.errors import InputError, shown
-from gaitcli.core.recording import ForcePlate
 from gaitcli.core.numerics import true_runs
+from gaitcli.core.recording import ForcePlate
+from gaitcli.errors import InputError, shown
 from gaitcli.signal.butterworth import lowpass
 
 #: the filtered vertical force, as a fraction of the threshold, above which a frame counts as loaded: the

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from gaitcli.errors import InputError, shown
 from gaitcli.core.numerics import true_runs
+from gaitcli.errors import InputError, shown
 
 __all__ = ["Gap", "find_gaps", "fill_gaps"]
 

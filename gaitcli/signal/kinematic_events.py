@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from gaitcli.core.events import SIDES, Events
+from gaitcli.core.numerics import true_runs
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
-from gaitcli.core.numerics import true_runs
 
 __all__ = ["kinematic_events"]
 

@@ -16,8 +16,8 @@ import numpy as np
 
 from gaitcli.core.container import FootLoad, Trial, load_known_frames
 from gaitcli.core.events import SIDE_NAMES, SIDES, Events
-from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.numerics import frame_spans
+from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.validate import parameter
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.signal.butterworth import design_frequency_hz, lowpass

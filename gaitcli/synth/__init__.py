@@ -8,8 +8,16 @@ ground reactions exactly consistent with it, split between the feet
 """
 
 from gaitcli.synth.folder import subject_yaml, write_trial
-from gaitcli.synth.gait import (ANALOG_RATE_HZ, CONDITIONS, Condition, GaitDesign, Geometry, balanced_gait,
-                                design_gait, leg_angles)
+from gaitcli.synth.gait import (
+                                ANALOG_RATE_HZ,
+                                CONDITIONS,
+                                Condition,
+                                GaitDesign,
+                                Geometry,
+                                balanced_gait,
+                                design_gait,
+                                leg_angles,
+)
 from gaitcli.synth.ground import ground_reactions, split_between_feet, whole_body_cop
 from gaitcli.synth.recording import MARKER_BODY, MARKER_RATE_HZ, SyntheticTrial, simulate_trial
 

@@ -22,10 +22,10 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.kinematics.conventions import SIGNS, walker_joint_angles
 from gaitcli.kinematics.model import JOINTS
 from gaitcli.synth.gait import ANALOG_RATE_HZ, Condition, GaitDesign
-from gaitcli.core.physics import GRAVITY_M_S2
 
 #: the shipped prediction: subject, speed and step it was solved for
 WALK_FILE = Path(__file__).resolve().parent / "data" / "normal_walk_nn18.csv"

@@ -13,14 +13,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from gaitcli.core.recording import ForcePlate, Markers
 from gaitcli.core.numerics import true_runs
+from gaitcli.core.recording import ForcePlate, Markers
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
 from gaitcli.synth.gait import ANALOG_RATE_HZ, CONDITIONS, GaitDesign, Geometry, balanced_gait
-from gaitcli.synth.predicted import predicted_gait, predicted_period_s
 from gaitcli.synth.ground import ground_reactions
+from gaitcli.synth.predicted import predicted_gait, predicted_period_s
 
 MARKER_RATE_HZ = 100.0
 #: the markers' default white noise, RMS 3-D error, mm: still well above an optical system's own (a Vicon

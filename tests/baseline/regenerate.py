@@ -12,10 +12,10 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from gaitcli.resources import sample_trials_dir
 from gaitcli.run.batch import run_batch
 from gaitcli.run.compare import outputs_only, tree_files
 from gaitcli.run.config import configure
-from gaitcli.resources import sample_trials_dir
 
 BASELINE = Path(__file__).resolve().parent
 SAMPLES = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")

@@ -11,7 +11,6 @@ in-process (tests/test_trial.py, tests/test_config.py) to keep this module quick
 from __future__ import annotations
 
 import re
-
 import shutil
 from dataclasses import dataclass
 from pathlib import Path

@@ -20,6 +20,7 @@ from tests.conftest import SHARED_C3D
 
 from .conftest import copy_sample, gait_many
 
+
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     root = tmp_path_factory.mktemp("file_events")

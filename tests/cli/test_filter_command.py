@@ -27,9 +27,19 @@ from gaitcli import __version__
 from gaitcli.resources import sample_trial
 
 from .conftest import FILTER_FILES, Result, build_once, copy_sample, gait_many, snapshot
-from .truth import (COP_M, FREE_MOMENT_NM, GRF_FRACTION_OF_PEAK, KINEMATIC_HEEL_STRIKE_FRAMES,
-                    KINEMATIC_TOE_OFF_FRAMES, PLATE_EVENT_FRAMES, event_errors, grf_errors, plate_feet, read_table,
-                    read_truth)
+from .truth import (
+    COP_M,
+    FREE_MOMENT_NM,
+    GRF_FRACTION_OF_PEAK,
+    KINEMATIC_HEEL_STRIKE_FRAMES,
+    KINEMATIC_TOE_OFF_FRAMES,
+    PLATE_EVENT_FRAMES,
+    event_errors,
+    grf_errors,
+    plate_feet,
+    read_table,
+    read_truth,
+)
 
 CSVS = ("markers_filtered.csv", "grf.csv", "events.csv")
 SUMMARY_KEYS = ("frames", "marker_rate_hz", "analog_rate_hz", "cutoff_hz", "gaps_filled", "events")

@@ -16,8 +16,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gaitcli.run.batch import BatchRow, read_summary, write_summary
 from gaitcli.resources import sample_trial
+from gaitcli.run.batch import BatchRow, read_summary, write_summary
 
 from .conftest import Result, build_once, gait_many, snapshot
 

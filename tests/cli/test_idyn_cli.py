@@ -36,13 +36,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from gaitcli.core.recording import Markers
 from gaitcli.errors import GaitWarning
 from gaitcli.io.c3d import read_c3d
 from gaitcli.io.c3d_write import write_c3d
 from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
 from gaitcli.kinematics.conventions import PIG_MOMENTS
 from gaitcli.kinematics.model import BODIES, COORDINATES, MOMENTS, RESIDUALS
-from gaitcli.core.recording import Markers
 
 from .conftest import SAMPLES, Result, build_once, copy_sample, gait, gait_many
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from gaitcli.signal.bands import BAND_FILE
 from gaitcli.resources import bundled_reference
+from gaitcli.signal.bands import BAND_FILE
 
 from .conftest import gait, gait_many
 

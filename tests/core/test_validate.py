@@ -7,8 +7,16 @@ from dataclasses import dataclass
 
 import pytest
 
-from gaitcli.core.validate import (check_parameter, integer, known_keys, number, one_of, parameter, parameter_spec,
-                                   replace_checked)
+from gaitcli.core.validate import (
+    check_parameter,
+    integer,
+    known_keys,
+    number,
+    one_of,
+    parameter,
+    parameter_spec,
+    replace_checked,
+)
 from gaitcli.errors import InputError
 
 

@@ -36,23 +36,28 @@ import warnings
 import numpy as np
 import pytest
 
-from gaitcli.dynamics.stage import IdynConfig
-from gaitcli.signal.stage import FilterConfig
-from gaitcli.dynamics.derivatives import coordinate_derivatives
 from gaitcli.core.container import FootLoad, Trial, load_known_frames
-from gaitcli.dynamics.stage import (body_mass, estimate_mass_kg, inverse_dynamics_stage, run_idyn,
-                                   static_calibration, stride_period_s)
+from gaitcli.core.events import Events
+from gaitcli.core.recording import ForcePlate, Markers, Recording
+from gaitcli.dynamics.derivatives import coordinate_derivatives
+from gaitcli.dynamics.stage import (
+    IdynConfig,
+    body_mass,
+    estimate_mass_kg,
+    inverse_dynamics_stage,
+    run_idyn,
+    static_calibration,
+    stride_period_s,
+)
 from gaitcli.errors import GaitWarning
 from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
-from gaitcli.kinematics.markerset import marker_set, with_fixed_points
 from gaitcli.kinematics.forward import forward_kinematics
+from gaitcli.kinematics.markerset import marker_set, with_fixed_points
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINTS, MOMENTS
-from gaitcli.core.recording import ForcePlate, Markers, Recording
-from gaitcli.core.events import Events
-from gaitcli.signal.stage import filter_trial
-from gaitcli.synth import simulate_trial
 from gaitcli.kinematics.subject import Subject
+from gaitcli.signal.stage import FilterConfig, filter_trial
+from gaitcli.synth import simulate_trial
 from tests.signal.conftest import make_walk
 from tests.signal.test_stage import _recording as walk_recording
 

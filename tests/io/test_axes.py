@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcli.io.axes import apply_rotation, infer_lab_to_model, snap_to_axis, vertical_from_markers
 from gaitcli.core.recording import ForcePlate, Markers, Recording
+from gaitcli.io.axes import apply_rotation, infer_lab_to_model, snap_to_axis, vertical_from_markers
 
 # 6 markers of a standing body in model axes (x forward, y left, z up): head, shoulders, pelvis, feet.
 BODY_M = np.array([

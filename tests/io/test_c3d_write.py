@@ -6,11 +6,11 @@ import ezc3d
 import numpy as np
 import pytest
 
+from gaitcli.core.recording import ForcePlate, Markers
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.c3d import read_c3d
 from gaitcli.io.c3d.header import check_parameters
 from gaitcli.io.c3d_write import DEFAULT_ORIGIN_MM, add_points, write_c3d
-from gaitcli.core.recording import ForcePlate, Markers
 
 RATE_HZ, SUB, N_FRAMES = 100.0, 10, 60
 Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # model_to_lab: model z -> lab +y

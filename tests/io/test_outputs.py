@@ -19,8 +19,8 @@ import yaml
 
 from gaitcli import __version__
 from gaitcli.errors import InputError
-from gaitcli.io.h5 import Dataset, provenance, write_h5
 from gaitcli.io.atomic import MANIFEST, check_output_folder, check_replaceable
+from gaitcli.io.h5 import Dataset, provenance, write_h5
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 
 

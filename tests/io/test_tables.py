@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gaitcli.core.recording import Markers
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.tables import (
     PLATE_SIZE_M,
@@ -15,7 +16,6 @@ from gaitcli.io.tables import (
     write_mot,
     write_trc,
 )
-from gaitcli.core.recording import Markers
 
 RATE_HZ, FORCE_RATE_HZ, N = 100.0, 500.0, 80
 # the CSV lab: z up, the subject walks along lab -y, so model x = -lab y, model y = lab x

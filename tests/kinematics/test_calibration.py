@@ -7,13 +7,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gaitcli.core.recording import Markers
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
 from gaitcli.kinematics.calibration import calibrate, least_flexed_frames, static_landmarks
 from gaitcli.kinematics.markerset import landmarks_to_markers, marker_set, standing_template
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINT_PARENT, JOINTS
 from gaitcli.kinematics.rotations import cardan_xyz_to_matrix, rot_z
-from gaitcli.core.recording import Markers
 
 SUBJECT = dict(mass_kg=73.0, stature_m=1.792)
 

@@ -5,15 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gaitcli.core.numerics import frame_ranges
+from gaitcli.core.recording import Markers
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics.calibration import calibrate
-from gaitcli.core.numerics import frame_ranges
-from gaitcli.kinematics.coordinates import (convert_frames, missing_frame_messages,
-                                            poses_to_coordinates, track_segments, unwrap_angles)
+from gaitcli.kinematics.coordinates import (
+    convert_frames,
+    missing_frame_messages,
+    poses_to_coordinates,
+    track_segments,
+    unwrap_angles,
+)
 from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINT_PARENT
 from gaitcli.kinematics.rotations import cardan_xyz_to_matrix, joint_angles_to_matrix, matrix_to_joint_angles
-from gaitcli.core.recording import Markers
 
 RATE_HZ = 100.0
 

@@ -7,8 +7,15 @@ import pytest
 
 from gaitcli.errors import InputError
 from gaitcli.kinematics.anthropometry import segment_parameters
-from gaitcli.kinematics.disturbances import (DISTURBANCE_TABLE, WEIGHT_BAND_ABOVE_ANKLE_M, Disturbance, add_disturbance,
-                                             apply_disturbances, combine, preset_disturbances)
+from gaitcli.kinematics.disturbances import (
+    DISTURBANCE_TABLE,
+    WEIGHT_BAND_ABOVE_ANKLE_M,
+    Disturbance,
+    add_disturbance,
+    apply_disturbances,
+    combine,
+    preset_disturbances,
+)
 from gaitcli.kinematics.model import BODIES
 
 SUBJECT1 = dict(mass_kg=73.0, stature_m=1.792)  # Tables A.4-A.5

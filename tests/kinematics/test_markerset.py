@@ -7,13 +7,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from gaitcli.core.recording import Markers
 from gaitcli.errors import InputError
 from gaitcli.kinematics.calibration import calibrate
-from gaitcli.kinematics.markerset import (LANDMARKS, MARKERS, SEGMENT_MARKERS, VIRTUAL_JOINT_CENTRES, apply_marker_map,
-                                          body_of_marker, landmarks_to_markers, marker_set, marker_set_names,
-                                          required_landmarks, standing_template, tracking_landmarks)
+from gaitcli.kinematics.markerset import (
+    LANDMARKS,
+    MARKERS,
+    SEGMENT_MARKERS,
+    VIRTUAL_JOINT_CENTRES,
+    apply_marker_map,
+    body_of_marker,
+    landmarks_to_markers,
+    marker_set,
+    marker_set_names,
+    required_landmarks,
+    standing_template,
+    tracking_landmarks,
+)
 from gaitcli.kinematics.model import BODIES
-from gaitcli.core.recording import Markers
 
 
 def test_table_a6_has_28_markers_each_on_one_body():

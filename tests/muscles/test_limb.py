@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from gaitcli.errors import InputError
 from gaitcli.dynamics.sagittal import SagittalMotion
+from gaitcli.errors import InputError
 from gaitcli.muscles import LimbModel, LimbParameters, MotionInterpolant
 from gaitcli.muscles.evaluation import evaluate
 

@@ -8,11 +8,19 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from gaitcli.errors import InputError
 from gaitcli.dynamics.sagittal import SagittalMotion
-from gaitcli.muscles import (LimbParameters, Models, MotionInterpolant, MuscleOptions,
-                             SolverSettings, build_problem, ralston_cost_of_transport, run_muscles,
-                             validate_forward)
+from gaitcli.errors import InputError
+from gaitcli.muscles import (
+    LimbParameters,
+    Models,
+    MotionInterpolant,
+    MuscleOptions,
+    SolverSettings,
+    build_problem,
+    ralston_cost_of_transport,
+    run_muscles,
+    validate_forward,
+)
 from gaitcli.muscles.eid import moment_shortfall, solve_eid
 from gaitcli.muscles.so import solve_so
 

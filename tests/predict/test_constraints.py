@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from gaitcli.errors import InputError
-from gaitcli.predict.constraints import (GAIT_SHAPE, clearance_phases, feet_in_contact, friction, in_contact,
-                                         smooth_max)
+from gaitcli.predict.constraints import GAIT_SHAPE, clearance_phases, feet_in_contact, friction, in_contact, smooth_max
 
 
 def test_clearance_and_unilateral_lists_are_the_dissertations():
@@ -72,8 +71,13 @@ def tiny():
 def _group_sizes(transcriber, symmetric, settings):
     """Each constraint group function's row count, called one by one as build_nlp calls them."""
     from gaitcli.predict import constraints as c
-    from gaitcli.predict.dynamics import (contact_points, dynamics_residuals, invert_muscles, muscle_forces,
-                                          path_residuals)
+    from gaitcli.predict.dynamics import (
+        contact_points,
+        dynamics_residuals,
+        invert_muscles,
+        muscle_forces,
+        path_residuals,
+    )
     from gaitcli.predict.layout import DesignLayout
     from gaitcli.predict.variables import Variables, instant_splines
 

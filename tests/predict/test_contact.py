@@ -8,8 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcli.predict.contact import (PHASE_TABLE, PHASES, ContactModel, foot_rotation, ground_reactions,
-                                     joint_moment_map)
+from gaitcli.predict.contact import PHASE_TABLE, PHASES, ContactModel, foot_rotation, ground_reactions, joint_moment_map
 from gaitcli.predict.model import WalkingModel
 
 RNG = np.random.default_rng(11)

@@ -10,8 +10,14 @@ import pytest
 
 from gaitcli.errors import InputError
 from gaitcli.muscles.hill import MuscleModel
-from gaitcli.predict.cost import (check_weights, cost_of_transport, deviation, invert_muscles, objective,
-                                  trapezoid_periodic)
+from gaitcli.predict.cost import (
+    check_weights,
+    cost_of_transport,
+    deviation,
+    invert_muscles,
+    objective,
+    trapezoid_periodic,
+)
 from gaitcli.predict.grid import control_grid, cycle_period, instant_times
 
 DURATIONS = np.array([0.05, 0.09, 0.28, 0.16, 0.05, 0.09, 0.28, 0.16])  # s, phases 1–8 (a 1.16 s cycle)

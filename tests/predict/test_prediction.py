@@ -4,7 +4,6 @@ law holds over the cycle (∫ΣF_z dt = m·g·T within 1 %), and the gait is one
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 

@@ -117,8 +117,8 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     import h5py
 
     from gaitcli.predict.layout import full_from_symmetric
-    from gaitcli.predict.stage import evaluate_design
     from gaitcli.predict.outputs import write_predict_outputs
+    from gaitcli.predict.stage import evaluate_design
 
     stored = stored_solution(18, symmetric=True)
     x = full_from_symmetric(18, np.loadtxt(stored))

@@ -17,7 +17,7 @@ from gaitcli.dynamics.sagittal import SagittalExport, SagittalMotion
 from gaitcli.io.h5 import Dataset, record_datasets, write_h5
 from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
 from gaitcli.kinematics.conventions import PIG_CONVENTION, PIG_MOMENTS
-from gaitcli.kinematics.model import BodyParameters, COORDINATES, JOINTS, MOMENTS
+from gaitcli.kinematics.model import COORDINATES, JOINTS, MOMENTS, BodyParameters
 from gaitcli.signal.cycles import Stride
 
 RATE_HZ = 100.0

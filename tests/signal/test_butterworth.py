@@ -7,8 +7,7 @@ import pytest
 from scipy.signal import sosfiltfilt, sosfreqz
 
 from gaitcli.errors import InputError
-from gaitcli.signal.butterworth import (correction_factor, design_frequency_hz, design_sos, lowpass,
-                                        pad_length)
+from gaitcli.signal.butterworth import correction_factor, design_frequency_hz, design_sos, lowpass, pad_length
 
 RATES_HZ = (100.0, 200.0, 1000.0)
 HALF_POWER_DB = 10 * np.log10(0.5)  # -3.0103 dB

@@ -16,8 +16,8 @@ import warnings
 import pytest
 
 from gaitcli.run.pipeline import load_recording
-from gaitcli.signal.stage import FilterConfig, filter_trial
 from gaitcli.run.trial import open_trial
+from gaitcli.signal.stage import FilterConfig, filter_trial
 from tests.conftest import REPO
 
 pytestmark = pytest.mark.shared

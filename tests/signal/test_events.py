@@ -19,8 +19,14 @@ from gaitcli.errors import InputError
 from gaitcli.signal.contacts import partly_off, plate_owner
 from gaitcli.signal.events import detect_events
 from gaitcli.signal.stage import calibrate_kinematic_events
-from tests.signal.conftest import (CENTRED_PLATE, EVENT_RATE_HZ, EVENT_THRESHOLD_N, event_errors_frames,
-                                   true_event_times, walk_loads)
+from tests.signal.conftest import (
+    CENTRED_PLATE,
+    EVENT_RATE_HZ,
+    EVENT_THRESHOLD_N,
+    event_errors_frames,
+    true_event_times,
+    walk_loads,
+)
 
 
 def _assert_all_truth_found_once(events, walk, margin_s=0.15):

@@ -5,12 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcli.errors import InputError
 from gaitcli.core.recording import ForcePlate
+from gaitcli.errors import InputError
 from gaitcli.signal.butterworth import lowpass
 from gaitcli.signal.events import detect_events
-from gaitcli.signal.forceplates import (PlateLoad, centre_of_pressure, combine_loads, plate_load,
-                                        resample_to_frames)
+from gaitcli.signal.forceplates import PlateLoad, centre_of_pressure, combine_loads, plate_load, resample_to_frames
 
 ANALOG_HZ = 1000.0
 MARKER_HZ = 100.0

@@ -26,17 +26,26 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gaitcli.signal.stage import FilterConfig
-from gaitcli.errors import GaitWarning
-from gaitcli.run.pipeline import load_recording
 from gaitcli.core.recording import Markers, Recording
-from gaitcli.signal.outputs import event_columns, grf_columns
+from gaitcli.errors import GaitWarning
 from gaitcli.resources import sample_trial
-from gaitcli.signal.stage import filter_trial
+from gaitcli.run.pipeline import load_recording
 from gaitcli.run.trial import open_trial
-from tests.cli.truth import (COP_M, FREE_MOMENT_NM, GRF_FRACTION_OF_PEAK, KINEMATIC_HEEL_STRIKE_FRAMES,
-                             KINEMATIC_TOE_OFF_FRAMES, PLATE_EVENT_FRAMES, event_errors, grf_errors, plate_feet,
-                             read_truth, truth_load_edges)
+from gaitcli.signal.outputs import event_columns, grf_columns
+from gaitcli.signal.stage import FilterConfig, filter_trial
+from tests.cli.truth import (
+    COP_M,
+    FREE_MOMENT_NM,
+    GRF_FRACTION_OF_PEAK,
+    KINEMATIC_HEEL_STRIKE_FRAMES,
+    KINEMATIC_TOE_OFF_FRAMES,
+    PLATE_EVENT_FRAMES,
+    event_errors,
+    grf_errors,
+    plate_feet,
+    read_truth,
+    truth_load_edges,
+)
 
 CONDITIONS = ("normal", "ankle_weight", "knee_orthosis", "ankle_fixed", "ski_boot")
 REGULAR = tuple(c for c in CONDITIONS if c != "knee_orthosis")

@@ -14,8 +14,17 @@ from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 from gaitcli.kinematics.model import JOINTS
 from gaitcli.synth import ground_reactions
 from gaitcli.synth.gait import CONDITIONS
-from gaitcli.synth.predicted import (STEP_WIDTH_PER_STATURE, STRIDE_PER_STATURE, WALK_FILE, WALK_SPEED_M_S,
-                                     WALK_SUBJECT, phase_of, predicted_gait, predicted_period_s, walker_cycle)
+from gaitcli.synth.predicted import (
+    STEP_WIDTH_PER_STATURE,
+    STRIDE_PER_STATURE,
+    WALK_FILE,
+    WALK_SPEED_M_S,
+    WALK_SUBJECT,
+    phase_of,
+    predicted_gait,
+    predicted_period_s,
+    walker_cycle,
+)
 from gaitcli.synth.recording import MARKER_BODY, MARKER_RATE_HZ
 
 MASS_KG, STATURE_M = WALK_SUBJECT["mass_kg"], WALK_SUBJECT["stature_m"]
