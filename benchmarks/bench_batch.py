@@ -38,7 +38,8 @@ def rss_mb() -> float:
 def lab_of(root: Path, copies: int) -> Path:
     lab = root / f"lab{copies}"
     for k in range(copies):
-        shutil.copytree(sample_trials_dir() / "normal", lab / f"trial{k:04d}", ignore=shutil.ignore_patterns("gait_out"))
+        shutil.copytree(sample_trials_dir() / "normal", lab / f"trial{k:04d}",
+                        ignore=shutil.ignore_patterns("gait_out"))
     return lab
 
 
@@ -76,8 +77,8 @@ def main(argv=None) -> int:
         at = {pct: samples[max(0, int(n * pct / 100) - 1)] for pct in (10, 50, 100)}
         print(f"client memory over {n} trials (filter, 2 workers, {elapsed:.0f} s, {result.line()}): before "
               f"{before:.0f} MB; after 10 % {at[10]:.0f} MB, 50 % {at[50]:.0f} MB, 100 % {at[100]:.0f} MB; "
-              f"growth 10 % → 100 %: {at[100] - at[10]:+.1f} MB ({(at[100] - at[10]) / max(n - n // 10, 1) * 1024:+.1f} "
-              f"kB per trial)")
+              f"growth 10 % → 100 %: {at[100] - at[10]:+.1f} MB "
+              f"({(at[100] - at[10]) / max(n - n // 10, 1) * 1024:+.1f} kB per trial)")
     return 0
 
 

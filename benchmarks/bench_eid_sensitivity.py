@@ -80,7 +80,8 @@ def main(argv=None) -> int:
 
     print(f"sample_trials/normal, side {args.side}, stride {start:.2f}–{end:.2f} s (periodic: {leg.periodic}), "
           f"EID on {args.nodes} nodes; one core")
-    header = f"{'input':34} {'E (J)':>12} {'iter':>5} {'conv.':>6} {'samples changed':>16} {'max |Δ| (rad)':>14} {'s':>5}"
+    header = (f"{'input':34} {'E (J)':>12} {'iter':>5} {'conv.':>6} {'samples changed':>16} "
+              f"{'max |Δ| (rad)':>14} {'s':>5}")
     print(header)
     print("-" * len(header))
 

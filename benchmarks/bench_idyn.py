@@ -16,9 +16,9 @@ function alone (``inverse_dynamics_stage`` on the filtered trial: the four kerne
 kinematics, events, gait features and the sagittal export), and ``pipeline.run_stage(trial, "idyn")``
 in this process, with and without figures (input hashes, filter.h5 read back, static calibration,
 the stage, CSV/HDF5/JSON writers, and the figures drawn from idyn.h5; the filter stage's output is
-made once beforehand and is fresh, so it is read, not recomputed), each with its peak traced memory. ``--cli`` adds the wall time of ``gait -q idyn`` in a new process (imports, filter
-stage and plots included). Threads are limited to one and the process to one core. Prints; asserts
-nothing.
+made once beforehand and is fresh, so it is read, not recomputed), each with its peak traced memory.
+``--cli`` adds the wall time of ``gait -q idyn`` in a new process (imports, filter stage and plots
+included). Threads are limited to one and the process to one core. Prints; asserts nothing.
 """
 
 from __future__ import annotations

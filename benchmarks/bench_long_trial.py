@@ -37,7 +37,8 @@ def _run(*args) -> tuple[float, float]:
 
 def _read(path: Path) -> tuple[float, float]:
     """Wall time (s) and peak RSS (MB) of reading ``path`` with gaitcli's C3D reader in a process of its own."""
-    code = ("import resource, sys, warnings; warnings.simplefilter('ignore'); from gaitcli.io.c3d import read_c3d_here; "
+    code = ("import resource, sys, warnings; warnings.simplefilter('ignore'); "
+            "from gaitcli.io.c3d import read_c3d_here; "
             "read_c3d_here(sys.argv[1]); print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)")
     start = time.perf_counter()
     out = subprocess.run([sys.executable, "-c", code, str(path)], check=True, capture_output=True, text=True)

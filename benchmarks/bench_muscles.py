@@ -2,10 +2,11 @@
 
 Run from the repository root: ``python benchmarks/bench_muscles.py [--repeat N] [--side r|l]``.
 The filter and idyn stages run once on a copy of ``sample_trials/normal`` (55 kg, 1.65 m,
-0.88 m/s) and the leg is read back from idyn.h5 (``stage("idyn").read``, ``prepare_leg``); then, on the first stride whose stance is on a plate (periodic, 4.3.5), with the
-8 muscles of Table A.1: SO and MSO on every 100 Hz frame of the stride (as Table 4.2 solves
-one small problem per frame) and on the 50 EID nodes ("so 50", "mso 50"), EID on 50 nodes (400
-force variables, as Table 4.2), and EID on the swing phase with the forward validation of 4.5.4. Threads are limited to one and the process
+0.88 m/s) and the leg is read back from idyn.h5 (``stage("idyn").read``, ``prepare_leg``); then, on
+the first stride whose stance is on a plate (periodic, 4.3.5), with the 8 muscles of Table A.1: SO
+and MSO on every 100 Hz frame of the stride (as Table 4.2 solves one small problem per frame) and
+on the 50 EID nodes ("so 50", "mso 50"), EID on 50 nodes (400 force variables, as Table 4.2), and
+EID on the swing phase with the forward validation of 4.5.4. Threads are limited to one and the process
 to one core. Prints median wall time of ``--repeat`` runs (the whole ``run_muscles`` call: model
 set-up, NLP construction, solve, inversions, energetics), IPOPT iterations, metabolic cost of one
 leg, cost of transport (both legs) beside Ralston's (4.5), the largest moment-equation error, and

@@ -1,4 +1,5 @@
-"""Predictive-gait timings (``gaitcli.predict.nlp``, ``gaitcli.predict.solve``) beside the dissertation's Table 5.1 and two peers.
+"""Predictive-gait timings (``gaitcli.predict.nlp``, ``gaitcli.predict.solve``) beside the dissertation's Table 5.1
+and two peers.
 
 Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--iterations N]
 [--model symmetric full]``. For each node count and model: ``run_predict`` on normal walking (subject 1,
@@ -6,8 +7,9 @@ the bundled reference, weights 4/3, 2/3, 1.1275 m/s) from the default initial gu
 symmetric model's solution, whose solve its figures include): the lifted NLP solved
 by IPOPT with exact derivatives, its windows moved and re-solved while they bind (``solve_windowed``).
 Prints the build time (the CasADi expressions and the sparsity counts), the whole call's wall time
-(IPOPT's derivative functions included) with its IPOPT iterations and solves, the exit status, J, Et and Jdev of the last iterate, the
-constraint Jacobian's and Lagrangian Hessian's non-zeros, and the ratio to the dissertation's hours.
+(IPOPT's derivative functions included) with its IPOPT iterations and solves, the exit status, J, Et and Jdev
+of the last iterate, the constraint Jacobian's and Lagrangian Hessian's non-zeros, and the ratio to the
+dissertation's hours.
 Threads limited to one, the process to one core. Asserts nothing.
 
 Peers: Moco's example2DWalking prediction, 15 mesh intervals, 1379 s / 412

@@ -8,10 +8,11 @@ solves everything again). Prints the whole study's wall time against the 30-minu
 dissertation's "about a day per case", our J, Et, Jdev beside the dissertation's for every case, and whether
 each ordering the issue names holds, with the numbers. Asserts nothing.
 
-Orderings (Diss. 5.3.2–5.3.3, as Tables 5.2–5.3 show them): Table 5.2 — with +2 kg per foot J and Jdev rise for all four weight sets
-and Et for a)–c); Table 5.3 at 1.00 and 1.33 m/s, weights b) and d) — Flex has the lowest Et and the highest
-Jdev of the three feet; in every case the optimal device has a lower J and Jdev than all three feet; its τ_s
-at −0.1 rad within ±40 % of Flex's 30.9 N·m and at −0.2 rad between Flex's 67.1 and Seattle's 131.1 N·m.
+Orderings (Diss. 5.3.2–5.3.3, as Tables 5.2–5.3 show them): Table 5.2 — with +2 kg per foot J and Jdev rise for
+all four weight sets and Et for a)–c); Table 5.3 at 1.00 and 1.33 m/s, weights b) and d) — Flex has the lowest Et
+and the highest Jdev of the three feet; in every case the optimal device has a lower J and Jdev than all three
+feet; its τ_s at −0.1 rad within ±40 % of Flex's 30.9 N·m and at −0.2 rad between Flex's 67.1 and Seattle's
+131.1 N·m.
 """
 
 from __future__ import annotations
@@ -30,17 +31,25 @@ TABLE_5_2 = {"a": ((14.17, 468.8, 10.04), (22.00, 547.2, 17.46)), "b": ((14.22, 
 #: Table 5.3: (speed, weight set, condition) → (J, Et, Jdev); ∗ entries (local minima) included as printed
 TABLE_5_3 = {}
 for _w, _rows in {
-    "a": {"sach": ((15.97, 467.7, 12.05), (23.79, 586.8, 18.56)), "seattle": ((15.05, 437.2, 11.07), (25.29, 520.8, 21.00)),
-          "flex": ((21.96, 373.2, 18.91), (29.71, 489.7, 25.83)), "optimal": ((9.87, 294.3, 7.31), (12.46, 352.0, 9.44)),
+    "a": {"sach": ((15.97, 467.7, 12.05), (23.79, 586.8, 18.56)),
+          "seattle": ((15.05, 437.2, 11.07), (25.29, 520.8, 21.00)),
+          "flex": ((21.96, 373.2, 18.91), (29.71, 489.7, 25.83)),
+          "optimal": ((9.87, 294.3, 7.31), (12.46, 352.0, 9.44)),
           "normal": ((6.94, 375.2, 3.41), (8.57, 439.0, 4.40))},
-    "b": {"sach": ((12.18, 350.6, 11.85), (19.78, 550.7, 19.34)), "seattle": ((11.93, 362.0, 11.60), (15.00, 453.2, 14.16)),
-          "flex": ((17.46, 341.7, 20.31), (20.85, 417.3, 23.95)), "optimal": ((9.99, 317.9, 9.12), (11.15, 323.5, 10.88)),
+    "b": {"sach": ((12.18, 350.6, 11.85), (19.78, 550.7, 19.34)),
+          "seattle": ((11.93, 362.0, 11.60), (15.00, 453.2, 14.16)),
+          "flex": ((17.46, 341.7, 20.31), (20.85, 417.3, 23.95)),
+          "optimal": ((9.99, 317.9, 9.12), (11.15, 323.5, 10.88)),
           "normal": ((8.01, 310.6, 4.36), (8.51, 401.4, 5.13))},
-    "c": {"sach": ((10.75, 367.0, 13.19), (16.48, 512.2, 21.54)), "seattle": ((10.28, 350.7, 12.21), (14.30, 425.8, 20.16)),
-          "flex": ((12.43, 256.1, 21.83), (14.89, 334.7, 24.82)), "optimal": ((6.39, 188.7, 8.87), (10.37, 289.5, 15.42)),
+    "c": {"sach": ((10.75, 367.0, 13.19), (16.48, 512.2, 21.54)),
+          "seattle": ((10.28, 350.7, 12.21), (14.30, 425.8, 20.16)),
+          "flex": ((12.43, 256.1, 21.83), (14.89, 334.7, 24.82)),
+          "optimal": ((6.39, 188.7, 8.87), (10.37, 289.5, 15.42)),
           "normal": ((6.39, 270.5, 5.59), (7.78, 306.3, 7.77))},
-    "d": {"sach": ((10.37, 391.9, 19.36), (13.01, 447.9, 27.76)), "seattle": ((8.11, 290.2, 17.82), (10.54, 428.0, 24.61)),
-          "flex": ((7.68, 191.3, 24.13), (10.03, 286.2, 27.90)), "optimal": ((6.08, 199.7, 14.68), (6.44, 218.5, 14.56)),
+    "d": {"sach": ((10.37, 391.9, 19.36), (13.01, 447.9, 27.76)),
+          "seattle": ((8.11, 290.2, 17.82), (10.54, 428.0, 24.61)),
+          "flex": ((7.68, 191.3, 24.13), (10.03, 286.2, 27.90)),
+          "optimal": ((6.08, 199.7, 14.68), (6.44, 218.5, 14.56)),
           "normal": ((5.42, 208.4, 9.66), (6.76, 229.1, 15.36))}}.items():
     for _condition, (_slow, _fast) in _rows.items():
         TABLE_5_3[(1.00, _w, _condition)], TABLE_5_3[(1.33, _w, _condition)] = _slow, _fast
@@ -54,13 +63,14 @@ def _check(label: str, holds: bool, numbers: str) -> None:
 
 
 def _print_table(rows, dissertation) -> None:
-    print(f"  {'case':<22} {'J':>7} {'Et':>7} {'Jdev':>6} | {'diss. J':>7} {'Et':>7} {'Jdev':>6} | iters  wall s  status")
+    print(f"  {'case':<22} {'J':>7} {'Et':>7} {'Jdev':>6} | {'diss. J':>7} {'Et':>7} {'Jdev':>6} | "
+          "iters  wall s  status")
     for r in rows:
         d = dissertation(r)
         theirs = f"{d[0]:>7.2f} {d[1]:>7.1f} {d[2]:>6.2f}" if d else f"{'–':>7} {'–':>7} {'–':>6}"
         status = ("ok" if r["converged"] else "NOT CONVERGED") + (", reused" if r["reused"] else "")
-        print(f"  {r['case']:<22} {r['objective']:>7.2f} {r['cost_of_transport_J_per_m']:>7.1f} {r['deviation']:>6.2f} |"
-              f" {theirs} | {r['iterations']:>5} {r['wall_time_s']:>7.0f}  {status}")
+        print(f"  {r['case']:<22} {r['objective']:>7.2f} {r['cost_of_transport_J_per_m']:>7.1f} "
+              f"{r['deviation']:>6.2f} | {theirs} | {r['iterations']:>5} {r['wall_time_s']:>7.0f}  {status}")
 
 
 def foot_mass(rows) -> None:
@@ -95,7 +105,8 @@ def prostheses(rows) -> None:
                            all(optimal[key] < feet[f][key] for f in FEET),
                            f"optimal {optimal[key]:.2f}; " + ", ".join(f"{f} {feet[f][key]:.2f}" for f in FEET))
                 t1, t2 = optimal["tau_s_at_minus_0.1_rad_Nm"], optimal["tau_s_at_minus_0.2_rad_Nm"]
-                _check(f"optimal τ_s(−0.1) within ±40 % of Flex's 30.9 N·m, {case}", 18.5 <= t1 <= 43.3, f"{t1:.1f} N·m")
+                _check(f"optimal τ_s(−0.1) within ±40 % of Flex's 30.9 N·m, {case}", 18.5 <= t1 <= 43.3,
+                       f"{t1:.1f} N·m")
                 _check(f"optimal τ_s(−0.2) between Flex's 67.1 and Seattle's 131.1 N·m, {case}", 67.1 <= t2 <= 131.1,
                        f"{t2:.1f} N·m")
 

@@ -2,8 +2,8 @@
 environment says otherwise, set before numpy and CasADi load their OpenBLAS, then :func:`gaitcli.cli.main`.
 
 Why one thread: with two, IPOPT's MUMPS factorisations are not bit-reproducible and a rerun of a prediction
-can end in another local optimum (docs/decisions.md, "One BLAS/OpenMP thread per process"); batches and studies run one process
-per core instead. Importing gaitcli as a library changes no environment variable.
+can end in another local optimum (docs/decisions.md, "One BLAS/OpenMP thread per process"); batches and
+studies run one process per core instead. Importing gaitcli as a library changes no environment variable.
 """
 
 import os

@@ -171,7 +171,8 @@ FILE_WRITERS = {"gaitcli.io.outputs", "gaitcli.io.atomic", "gaitcli.io.h5.write_
 @pytest.mark.parametrize("package", STAGE_ORDER)
 def test_in_a_stage_package_only_outputs_writes_files(package):
     # the stage's writer lives beside it in outputs.py; every other module of the package stays pure
-    writing = [f"{path.relative_to(PACKAGE.parent)} imports {m}" for path in sources(package) if path.name != "outputs.py"
+    writing = [f"{path.relative_to(PACKAGE.parent)} imports {m}"
+               for path in sources(package) if path.name != "outputs.py"
                for m in sorted(imported_modules(path)) if m in FILE_WRITERS or m.rsplit(".", 1)[0] in FILE_WRITERS]
     assert not writing
 

@@ -103,7 +103,8 @@ def _global_inertia(states: BodyStates, params: BodyParameters):
     return np.einsum("nbij,bjk,nblk->nbil", S, np.asarray(params.inertia_kgm2, dtype=float), S)
 
 
-def applied_body_wrenches(states: BodyStates, params: BodyParameters, external=(), *, gravity_m_s2: float = GRAVITY_M_S2):
+def applied_body_wrenches(states: BodyStates, params: BodyParameters, external=(), *,
+                          gravity_m_s2: float = GRAVITY_M_S2):
     """Stacked applied forces ``f^e`` (n, 8, 3) in N and moments ``l^e`` about each CoM (n, 8, 3) in N·m.
 
     This is the ``q̄e`` of (2.10): gravity plus the external wrenches.

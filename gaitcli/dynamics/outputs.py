@@ -62,7 +62,8 @@ def displayed_moments(result: IdynResult, moments_Nm: np.ndarray | None = None) 
 
 def known_shown_moments_Nm(result: IdynResult) -> np.ndarray:
     """:func:`displayed_moments` (n, 21) with NaN where the load they depend on is unknown."""
-    source = result.joint_moments_anatomical_Nm if result.moment_convention == "plug_in_gait" else result.joint_moments_Nm
+    source = (result.joint_moments_anatomical_Nm if result.moment_convention == "plug_in_gait"
+              else result.joint_moments_Nm)
     return displayed_moments(result, np.where(result.moment_known[..., None], source, np.nan))[0]
 
 

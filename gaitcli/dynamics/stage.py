@@ -434,8 +434,8 @@ def static_only_note(subject: Subject, absent: tuple[str, ...], hip_from_file: b
 #: SCORE's uncertainty along its weakest direction above which the result is warned about, m
 SCORE_SPREAD_M = 0.01
 #: subject.yaml's ``hip_joint_centre`` → the calibration's method
-HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "davis": "davis", "from_file": "from_file",
-              "score": "bell1990"}  # score: Bell first, then functional_hip_centres
+HIP_METHOD = {"bell": "bell1990", "harrington": "harrington", "hara": "hara", "davis": "davis",
+              "from_file": "from_file", "score": "bell1990"}  # score: Bell first, then functional_hip_centres
 
 
 def plug_in_gait_model(subject: Subject, markers: Markers, frames: np.ndarray | None,

@@ -243,8 +243,8 @@ def atomic_folder(target: str | Path):
 
     A file (not a folder) at ``target``, or a file in it that gait did not write (:func:`check_replaceable`),
     is the user's: an InputError, and nothing is moved. The files written go into the folder's manifest
-    (:data:`MANIFEST`) with their digests, so that the next run replaces only those, unchanged. Leftovers of killed runs are removed first
-    (:func:`remove_stale`).
+    (:data:`MANIFEST`) with their digests, so that the next run replaces only those, unchanged. Leftovers of killed
+    runs are removed first (:func:`remove_stale`).
     """
     target = Path(target)
     make_parent(target)

@@ -14,9 +14,10 @@ plates gave it (zero) and its point the origin: OpenSim cannot know either.
 per side — ``RPelvisAngles``, ``RHipAngles``, ``RKneeAngles``, ``RAnkleAngles``, ``RFootProgressAngles`` (deg),
 ``RHipMoment``, ``RKneeMoment``, ``RAnkleMoment`` (N·mm/kg) and ``RHipPower`` … (W/kg in Z), in Vicon's
 components and signs (:func:`c3d_points`); POINT:ANGLES, POINT:MOMENTS, POINT:POWERS (the file's own lists
-extended), their units and GAITCLI:CONVENTION (the convention idyn.h5 records for its shown moments) say so. Points of these names the trial already holds (a Nexus
-trial's own Plug-in Gait outputs) are replaced, one label each, and a warning names them. Moments and powers where the foot's load is unknown are invalid points. Its EVENT group
-holds the gait events the filter used (the file's own or detected), as Vicon Nexus writes them ("Foot Strike"/
+extended), their units and GAITCLI:CONVENTION (the convention idyn.h5 records for its shown moments) say so.
+Points of these names the trial already holds (a Nexus trial's own Plug-in Gait outputs) are replaced, one label
+each, and a warning names them. Moments and powers where the foot's load is unknown are invalid points. Its EVENT
+group holds the gait events the filter used (the file's own or detected), as Vicon Nexus writes them ("Foot Strike"/
 "Foot Off", "Left"/"Right"); the copy's text parameters are made writable
 (:func:`gaitcli.io.c3d_write.add_points`).
 """
@@ -111,7 +112,8 @@ def c3d_points(idyn: IdynTables) -> tuple[dict[str, np.ndarray], dict[str, str]]
     for s, prefix in (("r", "R"), ("l", "L")):
         mirror = 1.0 if s == "r" else -1.0
         if anatomical:
-            points[f"{prefix}PelvisAngles"] = np.column_stack([column["pelvis_tilt"], mirror * column["pelvis_obliquity"],
+            points[f"{prefix}PelvisAngles"] = np.column_stack([column["pelvis_tilt"],
+                                                               mirror * column["pelvis_obliquity"],
                                                                mirror * column["pelvis_rotation"]])
             zero = np.zeros_like(column["pelvis_tilt"])
             points[f"{prefix}FootProgressAngles"] = np.column_stack([zero, zero, column[f"foot_{s}_progression"]])

@@ -17,9 +17,9 @@ Two ankle conventions:
   about the foot's vertical axis.
 
 All angles in rad with the clinical senses on both sides: hip and knee flexion, ankle dorsiflexion, adduction,
-ankle inversion (the sole turned medially) and internal rotation positive; the pelvis as Plug-in Gait reports the right side (anterior
-tilt, right side up, right side forward positive; the left side's obliquity and rotation are the negatives);
-foot progression internal (toes in) positive.
+ankle inversion (the sole turned medially) and internal rotation positive; the pelvis as Plug-in Gait reports the
+right side (anterior tilt, right side up, right side forward positive; the left side's obliquity and rotation are
+the negatives); foot progression internal (toes in) positive.
 """
 
 from __future__ import annotations

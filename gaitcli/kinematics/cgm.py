@@ -41,8 +41,8 @@ class CgmMeasurements:
     ``asis_trochanter_m`` None: Davis's regression 0.1288·LL − 48.56 mm; ``inter_asis_m`` None: measured between
     the ASIS markers. ``thigh_rotation_rad``/``shank_rotation_rad``: Plug-in Gait's rotation offsets, the chord
     planes of the knee and ankle centres turned about the chord from the wands' to the knee alignment device's
-    (:func:`kad_rotation_offsets`). ``flat_foot``: the foot's long axis in the static is made horizontal (the sole is flat on
-    the floor), ``sole_delta_m`` raising the ankle centre for a shoe's heel.
+    (:func:`kad_rotation_offsets`). ``flat_foot``: the foot's long axis in the static is made horizontal (the sole is
+    flat on the floor), ``sole_delta_m`` raising the ankle centre for a shoe's heel.
     """
 
     leg_length_m: Mapping[str, float]

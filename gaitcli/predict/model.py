@@ -130,7 +130,8 @@ class WalkerParameters:
             com = (m0 * com0 + m * band) / (m0 + m)
             inertia = (limb.foot_inertia_kgm2 + m0 * float(np.sum((com0 - com) ** 2))
                        + WEIGHT_BAND[1] * m / WEIGHT_BAND[0] + m * float(np.sum((band - com) ** 2)))
-        where = "at the foot's CoM" if at_m is None else f"as a band at {at_m[0]:g} m forward, {at_m[1]:g} m below the ankle"
+        where = ("at the foot's CoM" if at_m is None
+                 else f"as a band at {at_m[0]:g} m forward, {at_m[1]:g} m below the ankle")
         limb = replace(limb, foot_mass_kg=m0 + m, foot_com_forward_m=float(com[0]), foot_com_down_m=float(com[1]),
                        foot_inertia_kgm2=float(inertia), body_mass_kg=limb.body_mass_kg + 2 * m)
         return replace(self, limb=limb, body_mass_kg=self.body_mass_kg + 2 * m,

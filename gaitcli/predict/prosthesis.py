@@ -122,7 +122,8 @@ def curve_from_mapping(mapping, path, monotone_range_rad: tuple[float, float]) -
         raise InputError(path, "prosthesis", f"got {shown(mapping)} (expected a mapping of {', '.join(COEFFICIENTS)})")
     unknown = sorted(set(mapping) - set(COEFFICIENTS) - {"name"})
     if unknown:
-        raise InputError(path, str(unknown[0]), f"unknown key (expected {', '.join(COEFFICIENTS)} and an optional name)")
+        raise InputError(path, str(unknown[0]),
+                         f"unknown key (expected {', '.join(COEFFICIENTS)} and an optional name)")
     values = []
     for key in COEFFICIENTS:
         value = mapping.get(key)

@@ -39,7 +39,8 @@ FEATURES = (("speed_m_s", "walking speed", "m/s", 2), ("stride_length_m", "strid
             ("double_stance_pct", "double stance", "% of cycle", 1))
 STYLE = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1250px; color: #222; }
-h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.15em; margin-top: 1.8em; border-bottom: 1px solid #ccc; }
+h1 { font-size: 1.5em; margin-bottom: 0.2em; } \
+h2 { font-size: 1.15em; margin-top: 1.8em; border-bottom: 1px solid #ccc; }
 table { border-collapse: collapse; margin: 0.5em 0; } td, th { padding: 0.2em 0.8em; border-bottom: 1px solid #eee;
 text-align: right; } th { background: #f4f4f4; } td:first-child, th:first-child { text-align: left; }
 figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
@@ -220,7 +221,8 @@ def predict_section(folder: Path, name: str, work: Path) -> str:
             ("objective J", _number(summary.get("objective"), 3), "")]
     captions = {
         "angles.png": "Predicted hip, knee and ankle angles (deg) over the cycle against the reference (grey, mean ± "
-                      "1 SD).", "grf.png": "Predicted ground reactions (N/kg) against the reference (grey, mean ± 1 SD).",
+                      "1 SD).",
+        "grf.png": "Predicted ground reactions (N/kg) against the reference (grey, mean ± 1 SD).",
         "moments.png": "Joint moments (N·m): inverse dynamics of the predicted motion and the muscles' and passive "
                        "structures' moments.", "muscles.png": "Muscle activations over the cycle (0–1).",
         "stick.png": "Stick figure of the predicted cycle.", "walk.gif": "The predicted gait, animated.",

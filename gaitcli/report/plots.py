@@ -176,7 +176,8 @@ def _cycle_figure(tables: IdynTables, strides, plane: str, *, title: str, band):
             ks = [s for s in strides if s.side == side]
             a_col = _column(angle_columns, joint, side, angle_senses)[0]
             m_col = _column(moment_columns, joint, side, moment_senses, "_moment")[0]
-            curves = [[normalise(kin[:, a_col], time_s, s) for s in ks], [normalise(mom[:, m_col], time_s, s) for s in ks]]
+            curves = [[normalise(kin[:, a_col], time_s, s) for s in ks],
+                      [normalise(mom[:, m_col], time_s, s) for s in ks]]
             if power is not None:
                 p_col = power_joints.index(f"{joint}_{side}")
                 curves.append([normalise(power[:, p_col], time_s, s) for s in ks])

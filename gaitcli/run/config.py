@@ -72,7 +72,8 @@ def pipeline_from_dict(data: dict | None, path: str | Path | None = None) -> Pip
     known_keys(data, ("stages", *names), path=path)
     chosen = data.get("stages", DEFAULT_STAGES)
     if not isinstance(chosen, (list, tuple)) or not chosen or not all(s in names for s in chosen):
-        raise InputError(path, "stages", f"got {shown(chosen)} (expected a non-empty list drawn from {', '.join(names)})")
+        raise InputError(path, "stages",
+                         f"got {shown(chosen)} (expected a non-empty list drawn from {', '.join(names)})")
     return PipelineConfig(stages=tuple(s for s in names if s in chosen),
                           sections={name: _section(path, name, data.get(name)) for name in names})
 

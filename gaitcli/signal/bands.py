@@ -145,7 +145,8 @@ def read_band(path: str | Path, *, side_free: bool = True) -> Band:
         if rename and name not in rename:
             continue
         m, s = table[column].to_numpy(float), table[f"{name}_sd"].to_numpy(float)
-        if not (np.isfinite(m).any() and np.array_equal(np.isfinite(m), np.isfinite(s)) and np.all(s[np.isfinite(s)] >= 0)):
+        if not (np.isfinite(m).any() and np.array_equal(np.isfinite(m), np.isfinite(s))
+                and np.all(s[np.isfinite(s)] >= 0)):
             raise InputError(path, f"{name}_sd", "expected means and standard deviations ≥ 0 (NaN where a band has "
                                                  "no stride, in both)")
         mean[rename.get(name, name)] = np.interp(CYCLE_PCT, pct, m)

@@ -197,8 +197,8 @@ def without_partial_feet(owner: np.ndarray, plates: list[PlateLoad], markers: Ma
             names = [plates[k].name for k in range(len(plates)) if np.any((owner[k] == side) & frames)]
             owner[:, frames] = np.where(owner[:, frames] == side, "", owner[:, frames])
             warnings.warn(f"{', '.join(names)}: the {SIDE_NAMES[side]} foot stands partly off the plates in frames "
-                          f"{frame_spans(np.flatnonzero(frames), markers.first_frame)} (a heel or toe marker on the ground outside them): "
-                          "its load there is unknown", GaitWarning, stacklevel=3)
+                          f"{frame_spans(np.flatnonzero(frames), markers.first_frame)} (a heel or toe marker on the "
+                          "ground outside them): its load there is unknown", GaitWarning, stacklevel=3)
     return owner
 
 

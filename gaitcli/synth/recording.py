@@ -60,7 +60,8 @@ class SyntheticTrial:
     design: GaitDesign
     joint_moments_Nm: np.ndarray  # (frames, 7, 3) in the distal segment frame
     split_clip: float
-    metadata: dict = field(default_factory=dict)  # C3D subject parameters {"PROCESSING:RightKneeWidth": mm, ...} (Plug-in Gait)
+    # C3D subject parameters {"PROCESSING:RightKneeWidth": mm, ...} (Plug-in Gait)
+    metadata: dict = field(default_factory=dict)
     anatomical_angles_rad: np.ndarray | None = None  # (frames, 23) true anatomical angles (synth.anatomy)
     angle_convention: str = "isb"  # "plug_in_gait" or "isb": the definition of the anatomical frames
 

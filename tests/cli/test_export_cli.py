@@ -32,7 +32,8 @@ def test_the_opensim_files_read_back_to_idyns_tables(exported):
     _, labels, _, markers = read_trc(folder / "markers.trc")
     filtered = pd.read_csv(out / "filter" / "markers_filtered.csv")
     lab = labels[0]
-    np.testing.assert_allclose(markers[:, 0, 0], 1000 * filtered[f"{lab}_x_m"], atol=0.01)  # the CSV: 6 significant digits
+    # the CSV: 6 significant digits
+    np.testing.assert_allclose(markers[:, 0, 0], 1000 * filtered[f"{lab}_x_m"], atol=0.01)
     np.testing.assert_allclose(markers[:, 0, 1], 1000 * filtered[f"{lab}_z_m"], atol=0.01)  # y up
     np.testing.assert_allclose(markers[:, 0, 2], -1000 * filtered[f"{lab}_y_m"], atol=0.01)  # z right
     header, motion = read_motion(folder / "coordinates.mot")

@@ -41,7 +41,8 @@ STUDY_CSV = ("case,speed_m_s,weights,condition,objective,cost_of_transport_J_per
 HOSTILE_NUMBERS = ("1" + "0" * 399, "-" + "9" * 5000, "1e400", "-1e400", ".nan", ".inf", "-.inf", "NaN",
                    "Infinity", "1e40", "-0", "0x7fffffffffffffff", "1_000", "4e-400", "0.0000001")
 HOSTILE_TOKENS = ("\0", "\x1b", "\x07", "\x0c", "\ufeff", "\u202e", "\t", "\r", "&a", "*a",
-                  "!!python/object/apply:os.system ['true']", "<<: *b", "? ", "- ", "{", "[", "]", "}", "~", "'", '"', "\\", ":", ",", "#", "%YAML 1.1\n---\n",
+                  "!!python/object/apply:os.system ['true']", "<<: *b", "? ", "- ", "{", "[", "]", "}", "~", "'", '"',
+                  "\\", ":", ",", "#", "%YAML 1.1\n---\n",
                   "!!binary aGVsbG8=", "!!set {a, b}", "2001-12-14t21:59:43.10-05:00", "../../../etc/passwd")
 
 

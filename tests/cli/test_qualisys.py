@@ -14,8 +14,8 @@ residual RMS 82 N and 36 N·m over 175 frames. Sagittal moments over the plate s
 
 The runs here detect the events (``filter.events: detect``; by default gaitcli takes the file's own,
 see test_file_events_cli.py). The lab's own events (the file's EVENT group) give periods of 0.945 s
-(left) and 0.98 s (right) and stances of 59 % (left) and 61 % (right). gaitcli's kinematic heel strikes are late here: the
-left foot loads from about 1.01 s (the vertical residual rises from there; the lab says 1.015 s),
+(left) and 0.98 s (right) and stances of 59 % (left) and 61 % (right). gaitcli's kinematic heel strikes are late
+here: the left foot loads from about 1.01 s (the vertical residual rises from there; the lab says 1.015 s),
 its event is at 1.050 s (right: 1.528 s, the lab 1.51 s), which lengthens the period by 2 % and
 leaves 8 loaded frames flagged as all contacts measured (without them the residual RMS is 71 N);
 and the 20 N plate threshold ends the left stance 23 ms before the lab's toe off. Hence the

@@ -33,7 +33,8 @@ def _build(root: Path, prediction: Path) -> dict:
     trial = root / "normal"
     shutil.copytree(sample_trials_dir() / "normal", trial, ignore=shutil.ignore_patterns("gait_out"))
     lab = root / "lab"
-    shutil.copytree(sample_trials_dir() / "ankle_weight", lab / "ankle_weight", ignore=shutil.ignore_patterns("gait_out"))
+    shutil.copytree(sample_trials_dir() / "ankle_weight", lab / "ankle_weight",
+                    ignore=shutil.ignore_patterns("gait_out"))
     (lab / "broken").mkdir()
     shutil.copy(trial / "subject.yaml", lab / "broken" / "subject.yaml")
     (lab / "broken" / "trial.c3d").write_text("not a C3D\n")

@@ -59,7 +59,8 @@ def test_gait_idyn_runs_on_the_session_without_subject_yaml(session):
     assert any(n.startswith("anatomical angles: Plug-in Gait's (CGM 1.0) frames per frame") for n in idyn["notes"])
     for c in ("KJC", "AJC"):
         for s in "rl":
-            assert [n for n in idyn["notes"] if n.startswith(f"{c}{s}:")] == [f"{c}{s}: virtual marker from the lab file"]
+            assert ([n for n in idyn["notes"] if n.startswith(f"{c}{s}:")]
+                    == [f"{c}{s}: virtual marker from the lab file"])
     filt = json.loads((out / "filter" / "summary.json").read_text())
     for notes in (idyn["notes"], filt["notes"]):
         merged = [n for n in notes if n.startswith("subject measurements: Test.vsk ('PlugInGait FullBody Ai'): "

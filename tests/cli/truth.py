@@ -28,8 +28,9 @@ AXES = ("x", "y", "z")
 # event times); tests/signal/test_stage.py tabulates them per trial.
 PLATE_EVENT_FRAMES = 2  # plate heel strike / toe off: measured +0.7…+0.8 / −0.4…−0.5 frame (knee_orthosis
 #   −0.03…+1.3); the bound is 2 frames
-KINEMATIC_HEEL_STRIKE_FRAMES = (-2.0, 2.0)  # Zeni heel strike after removing its bias against the plate events (stage.calibrate_kinematic_events); the raw Zeni bias was −2.6 … −4.0 frames
-#   frames (the heel's forward excursion from the pelvis peaks 25–40 ms before the foot lands)
+KINEMATIC_HEEL_STRIKE_FRAMES = (-2.0, 2.0)  # Zeni heel strike after removing its bias against the plate events
+#   (stage.calibrate_kinematic_events); the raw Zeni bias was −2.6 … −4.0 frames (the heel's forward excursion from
+#   the pelvis peaks 25–40 ms before the foot lands)
 KINEMATIC_TOE_OFF_FRAMES = 2.0  # Zeni toe off after the same bias correction (raw: −1.7 … +1.3 frames)
 GRF_FRACTION_OF_PEAK = 0.03  # per-foot force vs the truth filtered alike (truth.lowpass_reference), max over the
 #   frames the plate is given to its foot, as a fraction of the stance's peak Fz. Derivation: the 6 Hz filter is

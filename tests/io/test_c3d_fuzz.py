@@ -1,7 +1,7 @@
 """Damaged C3D files (issue 9): seeded single-byte mutations of the header and the parameter section of a
-sample trial and of c3d.org's Eb015pi.c3d (integer storage, another writer), each read by ``read_c3d``. Every read must end in a recording or a
-one-line InputError, within its time limit: no crash (once a segfault of the C3D library killed gait), no
-hang, no runaway allocation (once 12.7 GB for a 0.5 MB file), no other exception."""
+sample trial and of c3d.org's Eb015pi.c3d (integer storage, another writer), each read by ``read_c3d``. Every
+read must end in a recording or a one-line InputError, within its time limit: no crash (once a segfault of the
+C3D library killed gait), no hang, no runaway allocation (once 12.7 GB for a 0.5 MB file), no other exception."""
 
 from __future__ import annotations
 

@@ -15,7 +15,8 @@ def test_a_trc_file_has_opensims_header_and_reads_back(tmp_path):
     path = write_trc(tmp_path / "walk.trc", ("RASI", "LASI"), positions, 100.0, first_frame=11)
     lines = path.read_text().splitlines()
     assert lines[0] == "PathFileType\t4\t(X/Y/Z)\twalk.trc"
-    assert lines[1] == "DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\tOrigNumFrames"
+    assert lines[1] == ("DataRate\tCameraRate\tNumFrames\tNumMarkers\tUnits\tOrigDataRate\tOrigDataStartFrame\t"
+                        "OrigNumFrames")
     assert lines[2] == "100\t100\t7\t2\tmm\t100\t11\t7"
     assert lines[3] == "Frame#\tTime\tRASI\t\t\tLASI" and lines[4] == "\t\tX1\tY1\tZ1\tX2\tY2\tZ2" and lines[5] == ""
     assert lines[6].startswith("11\t0.00000\t") and lines[9].endswith("\t\t\t")
@@ -26,7 +27,8 @@ def test_a_trc_file_has_opensims_header_and_reads_back(tmp_path):
 
 
 def test_mot_and_sto_files_have_opensims_header_and_read_back(tmp_path):
-    columns = {"time": np.arange(5) / 100.0, "hip_r_flexion": RNG.normal(0, 20, 5), "knee_r_flexion": RNG.normal(0, 20, 5)}
+    columns = {"time": np.arange(5) / 100.0, "hip_r_flexion": RNG.normal(0, 20, 5),
+               "knee_r_flexion": RNG.normal(0, 20, 5)}
     for name, degrees in (("coordinates.mot", True), ("joint_moments.sto", False)):
         path = write_motion(tmp_path / name, columns, in_degrees=degrees)
         lines = path.read_text().splitlines()

@@ -158,7 +158,8 @@ def test_a_file_at_the_output_folder_is_refused_and_kept(tmp_path):
 
 def test_a_run_replaces_only_the_files_its_manifest_names(tmp_path):
     """A folder gait wrote lists its files with their digests (``.gait_files``); any other file, even with one
-    of gait's suffixes, or one of its files changed since, is the user's: refused before anything moves. A folder without a manifest keeps the suffix rule."""
+    of gait's suffixes, or one of its files changed since, is the user's: refused before anything moves. A folder
+    without a manifest keeps the suffix rule."""
     target = tmp_path / "out" / "filter"
     with stage_folder(target) as tmp:
         write_json(tmp / "summary.json", {"frames": 20})

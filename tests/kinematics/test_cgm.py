@@ -143,8 +143,8 @@ def _landmarks(labels, points, *, mean=False):
 
 def test_vicon_plug_in_gait_angles_and_static_offsets_are_reproduced(shared_pig_dir):
     """Vicon's RHipAngles … LFootProgressAngles from the file's own markers (progression along lab −x) to 0.01°,
-    and the static foot offsets Nexus wrote into PROCESSING to 5e-5 rad (it averages per-frame offsets, we the markers) (its signs: plantarflexion positive,
-    the left rotation mirrored)."""
+    and the static foot offsets Nexus wrote into PROCESSING to 5e-5 rad (it averages per-frame offsets, we the
+    markers) (its signs: plantarflexion positive, the left rotation mirrored)."""
     s_labels, s_points, _ = _vicon(shared_pig_dir / "Static_trial.c3d")
     labels, points, metadata = _vicon(shared_pig_dir / "Movement_trial.c3d")
     m = cgm.measurements_from(metadata)

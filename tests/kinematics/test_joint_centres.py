@@ -213,7 +213,8 @@ def test_davis_hip_centres_equal_the_hand_evaluated_equations():
     np.testing.assert_allclose(got[0], R[0] @ right + t[0], atol=1e-12)
     landmarks = dict(zip(("ASISr", "ASISl", "PSISr", "PSISl"), (asis_r, asis_l, psis_r, psis_l)))
     landmarks.update({f"{n}{s}": np.zeros(3) for n in ("LEF", "MEF", "LM", "MM") for s in "rl"})
-    out = jcm.joint_centres(landmarks, hip_method="davis", leg_length=0.9, widths=jcm.JointWidths(marker_diameter_m=0.014))
+    out = jcm.joint_centres(landmarks, hip_method="davis", leg_length=0.9,
+                            widths=jcm.JointWidths(marker_diameter_m=0.014))
     np.testing.assert_allclose(out["HJCr"], right, atol=1e-12)
 
 

@@ -1,5 +1,6 @@
 """Inequality constraints of the predictive gait (gaitcli/predict/constraints.py): the corrected phase lists
-(5.33–5.42; docs/prediction.md, "Contact lists"), friction's two inequalities, and the smooth max of the gait-shape constraints."""
+(5.33–5.42; docs/prediction.md, "Contact lists"), friction's two inequalities, and the smooth max of the gait-shape
+constraints."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The design vector (gaitcli/predict/layout.py): sizes of the full (5.24) and the symmetric model (5.3.1;
-docs/prediction.md), the half-cycle parity, pack/unpack round trips in numpy and CasADi, and the symmetric χ expanded into
-the full model's."""
+docs/prediction.md), the half-cycle parity, pack/unpack round trips in numpy and CasADi, and the symmetric χ expanded
+into the full model's."""
 
 from __future__ import annotations
 

@@ -121,5 +121,6 @@ def test_a_prosthetic_ankle_removes_soleus_tibialis_and_the_ankle_structures():
 def test_strength_scale_scales_every_fmax_and_with_it_the_muscle_mass():
     # 5.3.3's F_max +50 %; muscle mass ∝ F_max (A.13): docs/prediction.md, "Stronger muscles"
     base, strong = WalkerMuscles(), WalkerMuscles(strength_scale=1.5)
-    np.testing.assert_allclose(strong.muscle.params.max_isometric_force_N, 1.5 * base.muscle.params.max_isometric_force_N)
+    np.testing.assert_allclose(strong.muscle.params.max_isometric_force_N,
+                               1.5 * base.muscle.params.max_isometric_force_N)
     np.testing.assert_allclose(strong.muscle.params.muscle_mass_kg, 1.5 * base.muscle.params.muscle_mass_kg)

@@ -200,7 +200,8 @@ def test_steady_trunk_and_centre_of_pressure_terms_add_their_integrals(built, tr
     gait = nlp.gait(w0)
     t, durations = transcriber.at(*gait), gait[0]
     grid, names = transcriber.grid, transcriber.contact.reaction_names
-    strikes, stance, delta = {"r": 0.0, "l": durations[:4].sum()}, durations[:6].sum(), transcriber.contact.heel_to_mtp_m
+    strikes, stance, delta = ({"r": 0.0, "l": durations[:4].sum()}, durations[:6].sum(),
+                              transcriber.contact.heel_to_mtp_m)
     trunk, cop = [], []
     for i, j in enumerate(grid.instant_points):
         trunk.append(np.degrees(t.yd[j, 2]) / 10.0)

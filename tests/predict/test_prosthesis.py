@@ -78,7 +78,8 @@ def test_the_blend_is_widest_where_the_branches_agree_and_smooth_in_the_coeffici
 
 
 def test_the_product_convention_gives_sach_a_plantarflexor_moment_at_dorsiflexion():
-    """0.2 rad of dorsiflexion (y = −0.2): SACH resists with a 283.4 N·m plantarflexor moment (docs/prediction.md, "The ankle's sign")."""
+    """0.2 rad of dorsiflexion (y = −0.2): SACH resists with a 283.4 N·m plantarflexor moment (docs/prediction.md,
+    "The ankle's sign")."""
     assert COMMERCIAL_FEET["sach"].plantarflexor_moment_Nm(0.2) == pytest.approx(283.4, abs=0.1)
     # dorsiflexion stiffness SACH > Seattle > Flex, as 5.3.3 says
     moments = [COMMERCIAL_FEET[k].plantarflexor_moment_Nm(0.2) for k in ("sach", "seattle", "flex")]

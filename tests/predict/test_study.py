@@ -95,7 +95,8 @@ class Solved:
 def test_the_optimal_prosthesis_never_ends_above_the_foot_it_started_from(monkeypatch, optimal_objectives, expected):
     # Seattle (J 7.0) is the best foot; the optimal runs from it and from the normal gait end at the given Js:
     # the result is the best of them and of Seattle's solution, which is a point of the optimal problem
-    feet = {"sach": Solved(8.0, True, COMMERCIAL_FEET["sach"]), "seattle": Solved(7.0, True, COMMERCIAL_FEET["seattle"]),
+    feet = {"sach": Solved(8.0, True, COMMERCIAL_FEET["sach"]),
+            "seattle": Solved(7.0, True, COMMERCIAL_FEET["seattle"]),
             "flex": Solved(9.0, True, COMMERCIAL_FEET["flex"])}
     runs = iter(optimal_objectives)
     started = []

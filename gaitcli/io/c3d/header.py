@@ -17,7 +17,8 @@ from pathlib import Path
 
 from gaitcli.errors import GaitWarning, InputError
 
-__all__ = ["C3D_MAX_NUMBERS", "check_file", "check_parameters", "data_layout", "one_line", "warn", "param", "strings", "as_text"]
+__all__ = ["C3D_MAX_NUMBERS", "check_file", "check_parameters", "data_layout", "one_line", "warn", "param", "strings",
+           "as_text"]
 
 _MIPS_MESSAGE = (
     "cannot read C3D: MIPS/SGI processor format is not supported; expected Intel or DEC (re-export the file)"
