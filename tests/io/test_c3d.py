@@ -479,3 +479,20 @@ def test_an_unreadable_file_is_an_input_error(tmp_path):
     path.chmod(0)
     with pytest.raises(InputError, match="cannot be read \\(permission denied\\)"):
         read_c3d(path)
+
+
+def test_a_busy_read_is_stopped_at_its_processor_time(monkeypatch):
+    """A read that computes for ever ends at its processor-time limit (SIGXCPU), however loaded the machine."""
+    import multiprocessing
+
+    import gaitcli.io.c3d as c3d_module
+
+    def spin():
+        while True:
+            pass
+
+    monkeypatch.setattr(c3d_module, "READ_TIME_S", 1.0)
+    _misbehaving_reader(monkeypatch, spin)
+    with pytest.raises(InputError, match=r"took longer than \d+ s of processor time"):
+        read_c3d(_sample_path())
+    assert not multiprocessing.active_children()

@@ -138,7 +138,7 @@ def test_starts_run_the_guess_and_seeded_perturbations_and_count_the_agreeing(mo
     converged = {0: True, 1: True, 2: True, 3: False}
     seen = []
 
-    def fake_run(cfg, *, params, reference, init, device=None, report=None):
+    def fake_run(cfg, *, params, reference, init, device=None, report=None, cache=None):
         k = next(k for k in range(4) if np.array_equal(init, given if k == 0 else
                                                          starts.perturbed_guess(cfg, None, reference, 7 + k)))
         seen.append(k)

@@ -11,8 +11,10 @@ rotation comes from :mod:`gaitcli.io.axes`.
 from __future__ import annotations
 
 import faulthandler
+import math
 import multiprocessing
 import os
+import signal
 import warnings
 from pathlib import Path
 
@@ -37,11 +39,14 @@ from gaitcli.io.c3d.plates import PLATFORM_SAMPLES, plate_axes, plates_from, pla
 __all__ = ["read_c3d", "read_c3d_here", "MODEL_OUTPUT_GROUPS", "plate_axes"]
 
 
-#: limits of one C3D read in its child process: wall time (plus a second per MB: the library's Python layer
-#: converts frame by frame, ~0.4 s per MB of a trial with two 1 kHz plates) and address space above the
+#: limits of one C3D read in its child process: processor time (plus a second per MB: the library's Python layer
+#: converts frame by frame, ~0.4 s per MB of a trial with two 1 kHz plates; READ_WALL_FACTOR times that in wall
+#: time for a child that waits instead of computing, so that a loaded machine does not cut a good read short),
+#: and address space above the
 #: parent's (plus READ_BYTES_PER_BYTE of file: the library's objects for one part at most, PART_NUMBERS, and the
 #: trial's arrays twice, as built and as sent); the file's bytes counted up to what C3D_MAX_NUMBERS allows
 READ_TIME_S = 10.0
+READ_WALL_FACTOR = 5.0
 READ_MEMORY_BYTES = 1 << 30
 READ_BYTES_PER_BYTE = 24
 
@@ -62,18 +67,23 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     context = multiprocessing.get_context("fork")
     receive, send = context.Pipe(duplex=False)
     memory_bytes = READ_MEMORY_BYTES + READ_BYTES_PER_BYTE * size
-    child = context.Process(target=_child_read, daemon=True,
-                            args=(path, to_model_axes, header_frames, send, receive, memory_bytes, os.getpid()))
+    cpu_s = READ_TIME_S + size / 1e6
+    child = context.Process(target=_child_read, daemon=True, args=(path, to_model_axes, header_frames, send,
+                                                                   receive, memory_bytes, cpu_s, os.getpid()))
     child.start()
     send.close()
     try:
-        if not receive.poll(READ_TIME_S + size / 1e6):
-            raise InputError(path, None, f"cannot read C3D: reading it took longer than "
-                                         f"{READ_TIME_S + size / 1e6:.0f} s (a damaged parameter section?)")
+        wall_s = (READ_WALL_FACTOR if resource is not None else 1.0) * cpu_s
+        if not receive.poll(wall_s):
+            raise InputError(path, None, f"cannot read C3D: reading it took longer than {wall_s:.0f} s "
+                                         "(a damaged parameter section?)")
         try:
             kind, *payload = receive.recv()
         except EOFError:
             child.join(5.0)
+            if child.exitcode == -signal.SIGXCPU:
+                raise InputError(path, None, f"cannot read C3D: reading it took longer than {cpu_s:.0f} s of "
+                                             "processor time (a damaged parameter section?)") from None
             raise InputError(path, None, f"cannot read C3D: the C3D library crashed on it (exit "
                                          f"{child.exitcode}; a damaged parameter section?)") from None
     finally:
@@ -94,12 +104,13 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     return recording
 
 
-def _child_read(path: Path, to_model_axes: bool, header_frames, send, receive, memory_bytes: int,
+def _child_read(path: Path, to_model_axes: bool, header_frames, send, receive, memory_bytes: int, cpu_s: float,
                 parent_pid: int) -> None:
-    """In the child: cap the address space, read, send ("ok", recording, warnings) or what went wrong. The
-    library's own output and a crash report go nowhere: the parent says what happened, in one line. The child
-    ends with its parent (killed with it, and its pipe's read end closed here, so that a send to a dead parent
-    fails instead of waiting for ever on a reader that is itself)."""
+    """In the child: cap the address space and the processor time (SIGXCPU ends it), read, send ("ok",
+    recording, warnings) or what went wrong. The library's own output and a crash report go nowhere: the parent
+    says what happened, in one line. The child ends with its parent (killed with it, and its pipe's read end
+    closed here, so that a send to a dead parent fails instead of waiting for ever on a reader that is
+    itself)."""
     try:
         end_with_parent(parent_pid)
         receive.close()
@@ -110,6 +121,8 @@ def _child_read(path: Path, to_model_axes: bool, header_frames, send, receive, m
         if resource is not None:
             cap = _address_space() + memory_bytes
             resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+            seconds = math.ceil(cpu_s)  # a forked child's count starts at zero
+            resource.setrlimit(resource.RLIMIT_CPU, (seconds, seconds + 5))
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             recording = read_c3d_here(path, to_model_axes=to_model_axes, header_frames=header_frames)
