@@ -181,3 +181,23 @@ def test_the_cleveland_preset_finds_walking2s_landmarks_clusters_and_joint_centr
             lateral = (out.get(f"VM{side}")[:, 1] - out.get(f"FM{side}")[:, 1]) * (1 if side == "l" else -1)
             behind = out.get(f"FM{side}")[:, 0] - out.get(f"VM{side}")[:, 0]
         assert 0.06 < np.nanmedian(lateral) < 0.11 and 0.0 < np.nanmedian(behind) < 0.04
+
+
+def test_a_new_preset_is_one_yaml_file(tmp_path, monkeypatch):
+    """A lab's marker set added as one file beside the bundled ones is a ``marker_set:`` choice of subject.yaml
+    with its labels, and nothing else changes."""
+    import shutil
+
+    from gaitcli.kinematics import markerset
+    from gaitcli.kinematics.subject import subject_from_dict
+
+    folder = tmp_path / "marker_sets"
+    shutil.copytree(markerset.MARKER_SETS_DIR, folder)
+    text = (markerset.MARKER_SETS_DIR / "dissertation.yaml").read_text()
+    text = text.replace("name: dissertation", "name: our_lab").replace("ASISr: [ASISr]", "ASISr: [R_ASIS_OURS]")
+    (folder / "our_lab.yaml").write_text(text)
+    monkeypatch.setattr(markerset, "MARKER_SETS_DIR", folder)
+    assert "our_lab" in marker_set_names()
+    subject = subject_from_dict({"mass_kg": 70.0, "stature_m": 1.7, "sex": "male", "marker_set": "our_lab"})
+    ours = subject.markers
+    assert ours.name == "our_lab" and ours.landmarks["ASISr"][0] == "R_ASIS_OURS"
