@@ -55,7 +55,6 @@ from gaitcli.predict.contact import PHASE_TABLE, PHASES
 from gaitcli.predict.dynamics import ContactPoint, LegInversion
 from gaitcli.predict.splines import continuity_matrix, is_casadi
 from gaitcli.predict.variables import (
-    DEVICE_SCALE,
     LIFTED_SCALE,
     REACTION_SCALE_N,
     Variables,
@@ -306,13 +305,13 @@ def hip_bound_rows(v: Variables, settings, model, muscles, forces: list) -> Rows
 
 
 def monotone_rows(v: Variables, settings) -> Rows:
-    """dτ_s/dy = 3·a3·y² + 2·a2·y + c0 ≤ 0 (per c0's scale) at ``monotone_samples`` ankle angles of
-    ``monotone_range_rad`` (the prosthetic models' D, 5.3.3: a spring that stiffens, never turns)."""
+    """dτ_s/dy ≤ 0 (per the law's SLOPE_SCALE; (5.58): 3·a·y² + 2·b·y + c0) at ``monotone_samples`` ankle
+    angles of ``monotone_range_rad`` (the prosthetic models' D, 5.3.3: a spring that stiffens, never turns)."""
     rows = Rows()
     if v.device is None:
         return rows
-    c = v.coefficients
+    law = v.device_law
+    curve = law.from_values("symbolic", [v.coefficients[k] for k in range(len(law.COEFFICIENTS))])
     for angle in np.linspace(*settings.monotone_range_rad, settings.monotone_samples):
-        a3, a2, c0 = ((c[0], c[1]) if angle > 0 else (c[3], c[4])) + (c[2],)
-        rows.add((3 * a3 * angle ** 2 + 2 * a2 * angle + c0) / DEVICE_SCALE[2], -np.inf, 0.0)
+        rows.add(curve.slope_Nm_per_rad(float(angle)) / law.SLOPE_SCALE, -np.inf, 0.0)
     return rows

@@ -29,7 +29,8 @@ from gaitcli.muscles.parameters import (
     table_a1,
 )
 from gaitcli.muscles.passive import JointModel
-from gaitcli.predict.prosthesis import COEFFICIENTS, ProsthesisCurve
+from gaitcli.predict.ankle_law import ProsthesisLaw
+from gaitcli.predict.prosthesis import DEFAULT_LAW
 
 #: (HAT, thigh, knee, ankle) indices of y per side
 LEG_COORDINATES = {"r": (2, 3, 4, 5), "l": (2, 6, 7, 8)}
@@ -50,9 +51,9 @@ class WalkerMuscles:
     - ``lengths(y) → l_m`` (16, m) and ``velocities(y, yd) → v_m`` (16, m/s), right leg first;
     - ``moment_arms(y) → R`` (9 × 16): generalized force per newton of muscle force (A.11);
     - ``tissue(y, yd) → Q_t`` (9): Riener–Edrich moments and hip/knee damping as generalized forces;
-    - ``device(y, yd, c) → Q_d`` (9): the prostheses' moments (5.59) for coefficients ``c`` (6, the order of
-      :data:`gaitcli.predict.prosthesis.COEFFICIENTS`), τ_s's branches blended over ±ε(c)
-      (``ProsthesisCurve.branch_blend_rad``); zero without prostheses;
+    - ``device(y, yd, c) → Q_d`` (9): the prostheses' moments for coefficients ``c`` of their law (its
+      ``COEFFICIENTS``, :meth:`~gaitcli.predict.ankle_law.ProsthesisLaw.nlp_moment_Nm`: (5.59) with τ_s's
+      branches blended over ±ε(c) for the dissertation's law); zero without prostheses;
     - ``passive(y, yd) → Q_p = Q_t + Q_d`` with the given ``prosthesis``.
 
     ``prosthesis``: bilateral transtibial prostheses with this curve (module docstring); ``strength_scale``:
@@ -60,7 +61,7 @@ class WalkerMuscles:
     """
 
     def __init__(self, muscles: MuscleParameters | None = None, joints: JointParameters | None = None, *,
-                 prosthesis: ProsthesisCurve | None = None, strength_scale: float = 1.0):
+                 prosthesis: ProsthesisLaw | None = None, strength_scale: float = 1.0):
         params = muscles if muscles is not None else table_a1()
         if strength_scale != 1.0:
             params = params.with_options(max_isometric_force_N=strength_scale * params.max_isometric_force_N)
@@ -73,7 +74,8 @@ class WalkerMuscles:
         self.names = tuple(f"{name}_{s}" for s in ("r", "l") for name in self.muscle.names)
         #: (16,) which muscles the model has (False: removed with the ankle)
         self.present = present_muscles(prosthesis is not None, self.muscle.names)
-        y, yd, c = ca.SX.sym("y", 9), ca.SX.sym("yd", 9), ca.SX.sym("c", len(COEFFICIENTS))
+        law = type(prosthesis) if prosthesis is not None else DEFAULT_LAW
+        y, yd, c = ca.SX.sym("y", 9), ca.SX.sym("yd", 9), ca.SX.sym("c", len(law.COEFFICIENTS))
         psi = {s: ca.vertcat(*walker_joint_angles(*(y[i] for i in LEG_COORDINATES[s]))) for s in ("r", "l")}
         psi_rate = {s: ca.jtimes(psi[s], y, yd) for s in psi}
         # the muscles' paths (A.9): with a prosthesis, the ankle at neutral (Gas at the knee only)
@@ -82,10 +84,10 @@ class WalkerMuscles:
         tissue = sum(ca.jacobian(psi[s], y).T @ self.joints.total(psi[s], psi_rate[s]) for s in ("r", "l"))
         device = ca.SX.zeros(9)
         if prosthesis is not None:
-            curve = ProsthesisCurve("symbolic", *ca.vertsplit(c))
+            curve = law.from_values("symbolic", ca.vertsplit(c))
             for s in ("r", "l"):
                 ankle = LEG_COORDINATES[s][3]
-                device[ankle] = curve.moment_Nm(y[ankle], yd[ankle], curve.branch_blend_rad())  # τ_s,ε
+                device[ankle] = curve.nlp_moment_Nm(y[ankle], yd[ankle])  # cubic: τ_s,ε
         F = ca.Function
         self.joint_angles = F("joint_angles", [y], [psi["r"], psi["l"]], ["y"], ["psi_r", "psi_l"])
         self.lengths = F("lengths", [y], [lengths], ["y"], ["l_m"])
@@ -93,9 +95,14 @@ class WalkerMuscles:
         self.moment_arms = F("moment_arms", [y], [-ca.jacobian(lengths, y).T], ["y"], ["R"])
         self.tissue = F("tissue", [y, yd], [tissue], ["y", "yd"], ["Q_t"])
         self.device = F("device", [y, yd, c], [device], ["y", "yd", "c"], ["Q_d"])
-        fixed = ca.DM(prosthesis.coefficients() if prosthesis is not None else np.zeros(len(COEFFICIENTS)))
+        fixed = ca.DM(prosthesis.coefficients() if prosthesis is not None else np.zeros(len(law.COEFFICIENTS)))
         self.passive = F("passive", [y, yd], [tissue + self.device(y, yd, fixed)], ["y", "yd"], ["Q_p"])
 
     @property
     def prosthetic(self) -> bool:
         return self.prosthesis is not None
+
+    @property
+    def device_law(self) -> str:
+        """The prostheses' law (``""`` without): what makes two prosthetic models' problems differ."""
+        return self.prosthesis.law if self.prosthesis is not None else ""

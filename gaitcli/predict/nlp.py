@@ -36,8 +36,6 @@ from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
 from gaitcli.predict.splines import segment_of
 from gaitcli.predict.variables import (
-    DEVICE_BOUNDS,
-    DEVICE_SCALE,
     DURATION_SCALE_S,
     LIFTED_SCALE,
     REACTION_SCALE_N,
@@ -80,6 +78,7 @@ class NLP:
     lifted: tuple
     parameters: ca.SX = field(default_factory=lambda: ca.SX.sym("p", 0))
     device_size: int = 0
+    device_law: type | None = None
     parts: dict = field(default_factory=dict)
     intervals: dict = field(default_factory=dict)
     blocks: dict = field(default_factory=dict)
@@ -90,10 +89,14 @@ class NLP:
         return settings.parameter_values()
 
     def device_bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
-        """Bounds on D: fixed at ``curve``'s coefficients (a ProsthesisCurve), or the optimal prosthesis's box."""
+        """Bounds on D: fixed at ``curve``'s coefficients (a device of the problem's law), or the optimal
+        prosthesis's box (the law's BOUNDS)."""
+        law = self.device_law
         if curve is None:
-            return DEVICE_BOUNDS[0] / DEVICE_SCALE, DEVICE_BOUNDS[1] / DEVICE_SCALE
-        c = curve.coefficients() / DEVICE_SCALE
+            return law.BOUNDS[0] / law.SCALE, law.BOUNDS[1] / law.SCALE
+        if type(curve) is not law:
+            raise ValueError(f"a {curve.law} device in a problem built for the {law.law} law")
+        c = curve.scaled()
         return c, c
 
     def bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
@@ -115,9 +118,9 @@ class NLP:
         return tuple(float(v) for v in out)
 
     def device(self, w) -> np.ndarray:
-        """The device coefficients (a_p, b_p, c0, a_n, b_n, d_prosth) of w (empty without a device)."""
+        """The device coefficients of w in its law's order (empty without a device)."""
         w = np.asarray(w, float).ravel()
-        return w[w.size - self.device_size:] * DEVICE_SCALE if self.device_size else np.zeros(0)
+        return w[w.size - self.device_size:] * self.device_law.SCALE if self.device_size else np.zeros(0)
 
     @property
     def spline_size(self) -> int:
@@ -148,7 +151,7 @@ class NLP:
         """w for χ ``x`` (inside its box): the coefficients of its splines, the lifted values and λ from
         ``transcriber``'s (default the NLP's) transcription of that gait (``problem.py``, λ = G⁺ rhs); the
         activations as transcribed (or clipped into ``activation_range``), undefined values 0; D from
-        ``device`` (a ProsthesisCurve, that of the transcriber's muscles by default). The removed muscles'
+        ``device`` (a ProsthesisLaw, that of the transcriber's muscles by default). The removed muscles'
         values are 0."""
         transcriber = transcriber or self.transcriber
         head = self.coefficients_of(x)
@@ -176,7 +179,7 @@ class NLP:
         w[:self.lbw.size] = np.where(self.lbw == self.ubw, self.lbw, w[:self.lbw.size])  # removed muscles: 0
         if self.device_size:
             curve = device if device is not None else transcriber.muscles.prosthesis
-            w = np.concatenate([w, curve.coefficients() / DEVICE_SCALE])
+            w = np.concatenate([w, curve.scaled()])
         return w
 
     def design(self, w) -> np.ndarray:
@@ -275,7 +278,8 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     return NLP(w=v.w, cost=objective(v, et, jdev), constraints=g, lbg=lbg, ubg=ubg, groups=slices, lbw=lbw, ubw=ubw,
                transcriber=transcriber, layout=layout, splines=v.splines, segments=segments, reach=reach,
                values=gait_function(v, at_instants), lifted=v.lifted_blocks, parameters=v.parameters,
-               device_size=6 if muscles.prosthetic else 0, parts={"Et": et, "Jdev": jdev},
+               device_size=0 if v.device is None else v.device.numel(), device_law=v.device_law,
+               parts={"Et": et, "Jdev": jdev},
                intervals=v.intervals, blocks=v.blocks(),
                key=nlp_key(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach))
 

@@ -90,7 +90,7 @@ class Transcriber:
         self.joint_map_pinv = np.linalg.pinv(joint_moment_map())
         self.metabolic = self.muscles.muscle.smoothed_metabolic_rate(smoothing)
         #: what makes two transcribers' problems the same (the NLP cache's key): subject, muscles, grid
-        self.key = (nodes, repr(self.model.params), repr(self.muscles.muscle.params), self.muscles.prosthetic,
+        self.key = (nodes, repr(self.model.params), repr(self.muscles.muscle.params), self.muscles.device_law,
                     tuple(self.grid.counts), smoothing, self.model.gravity_m_s2)
 
     def design(self, x) -> tuple:

@@ -28,7 +28,6 @@ from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.nlp import NLP, build_nlp, instant_segments, nlp_key
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
-from gaitcli.predict.variables import DEVICE_SCALE
 from gaitcli.signal.bands import Band
 
 #: how many built problems a cache keeps: a study alternates between at most two structures (intact,
@@ -195,10 +194,10 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
         Further IPOPT/CasADi options.
     report : callable, optional
         ``report(iteration, objective, violation)`` after every IPOPT iteration.
-    device : ProsthesisCurve, optional
+    device : ProsthesisLaw, optional
         Prosthetic models: where D starts and, unless ``optimal_device``, stays (default the transcriber's).
     optimal_device : bool
-        D free within DEVICE_BOUNDS.
+        D free within its law's BOUNDS.
     deadline : float, optional
         On time.perf_counter's clock: past it IPOPT stops with status :data:`TIME_LIMIT_STATUS`, unconverged.
     cache : NlpCache, optional
@@ -225,7 +224,7 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
     else:
         start = w0
         if nlp.device_size and device is not None:  # D starts at the given device
-            start = np.concatenate([start[:start.size - nlp.device_size], device.coefficients() / DEVICE_SCALE])
+            start = np.concatenate([start[:start.size - nlp.device_size], device.scaled()])
     lbw, ubw = nlp.bounds(None if optimal_device else (device or transcriber.muscles.prosthesis))
     lam_g0, lam_x0 = multipliers if multipliers is not None else (None, None)
     out = ipopt.solve(solver, start, lbw, ubw, nlp.lbg, nlp.ubg, s.parameter_values(), lam_g0=lam_g0,

@@ -25,6 +25,7 @@ from gaitcli.kinematics.conventions import (
     walker_moments_to_clinical,
     walker_to_clinical,
 )
+from gaitcli.predict.ankle_law import ProsthesisLaw
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
 from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
@@ -34,7 +35,7 @@ from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.nlp import build_nlp, instant_segments
 from gaitcli.predict.problem import Transcriber, gait_at
-from gaitcli.predict.prosthesis import CHOICES, COEFFICIENTS, ProsthesisCurve, curve_for
+from gaitcli.predict.prosthesis import CHOICES, COEFFICIENTS, curve_for
 from gaitcli.predict.reference import VARIABLES
 from gaitcli.predict.settings import PredictSettings
 from gaitcli.predict.solve import NlpCache, PredictSolution, solve_windowed
@@ -141,7 +142,8 @@ class PredictConfig:
                                 metavar="|".join(CHOICES[1:]) + "|FILE",
                                 help="Bilateral transtibial prostheses (5.3.3): a commercial foot of Table A.7, the "
                                      "optimal device, or a YAML file of a_p, b_p, c0, a_n, b_n, d_prosth "
-                                     "(N·m/rad³, /rad², /rad, N·m·s/rad).")
+                                     "(N·m/rad³, /rad², /rad, N·m·s/rad; or `law:` and another law's "
+                                     "coefficients).")
     strength_scale: float = parameter(0.0, low=0.0, high=5.0,
                                       help="Every F_max times this (5.3.3: 1.5; default 0 = 1.5 with a "
                                            "prosthesis, 1 without).")
@@ -229,7 +231,7 @@ class PredictResult:
     rounds: int = 0
     solve_time_s: float = 0.0
     history: tuple[str, ...] = ()
-    prosthesis: ProsthesisCurve | None = None  # the curve of a prosthetic run (the optimal one when optimal)
+    prosthesis: ProsthesisLaw | None = None  # the curve of a prosthetic run (the optimal one when optimal)
     foot_mass_kg: float = 0.0
     strength_scale: float = 1.0
 
@@ -292,7 +294,7 @@ def settings_of(cfg: PredictConfig) -> PredictSettings:
                            monotone_range_rad=cfg.monotone_range_rad())
 
 
-def walker_muscles(cfg: PredictConfig, device: ProsthesisCurve | None) -> WalkerMuscles:
+def walker_muscles(cfg: PredictConfig, device: ProsthesisLaw | None) -> WalkerMuscles:
     """The muscles of ``cfg``: intact, or with prostheses of curve ``device`` (the optimal run's start), F_max
     scaled by ``cfg.strength()``."""
     if cfg.prosthetic and device is None:
@@ -302,7 +304,7 @@ def walker_muscles(cfg: PredictConfig, device: ProsthesisCurve | None) -> Walker
 
 
 def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Band,
-                init: np.ndarray | None = None, report=None, device: ProsthesisCurve | None = None,
+                init: np.ndarray | None = None, report=None, device: ProsthesisLaw | None = None,
                 cache: NlpCache | None = None) -> PredictResult:
     """Predict one gait cycle (module docstring).
 
@@ -318,7 +320,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         A design vector χ of the same layout to start from (default: the default initial guess).
     report : callable, optional
         ``report(iteration, objective, violation)`` after every IPOPT iteration, counted over all solves.
-    device : ProsthesisCurve, optional
+    device : ProsthesisLaw, optional
         The prostheses' curve (a commercial foot's or a file's; for ``prosthesis: optimal`` the start of the
         free coefficients); default the commercial foot ``cfg.prosthesis`` names.
     cache : NlpCache, optional
@@ -371,11 +373,11 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         if first.outcome.converged:  # near a solution: windows of ±1 segment, as for any start from a solution
             settings = dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
         if optimal and first.outcome.converged:
-            solve_options["device"] = ProsthesisCurve("optimal", *first.device)
+            solve_options["device"] = device.with_values("optimal", first.device)
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report,
                             **solve_options)
     solve_time = time.perf_counter() - start
-    final = (ProsthesisCurve("optimal", *solved.device) if optimal else device) if cfg.prosthetic else None
+    final = (device.with_values("optimal", solved.device) if optimal else device) if cfg.prosthetic else None
     muscles = walker_muscles(cfg, final)
     result, violations = describe(cfg, solved.nlp, solved.outcome.x, reference, model, muscles)
     converged = solved.outcome.converged and solved.windows_hold and not violated_groups(violations)
@@ -412,7 +414,7 @@ def describe(cfg: PredictConfig, nlp, w: np.ndarray, reference: Band, model: Wal
 
 
 def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Band,
-                    params: WalkerParameters | None = None, device: ProsthesisCurve | None = None) -> PredictResult:
+                    params: WalkerParameters | None = None, device: ProsthesisLaw | None = None) -> PredictResult:
     """The :class:`PredictResult` of a given design vector χ, without solving.
 
     Parameters
@@ -425,7 +427,7 @@ def evaluate_design(cfg: PredictConfig, x: np.ndarray, *, reference: Band,
         What Jdev (5.28) is evaluated against.
     params : WalkerParameters, optional
         The subject (default: subject 1).
-    device : ProsthesisCurve, optional
+    device : ProsthesisLaw, optional
         The prostheses' curve (default the commercial foot ``cfg.prosthesis`` names).
 
     Returns

@@ -16,12 +16,13 @@ import dataclasses
 
 import numpy as np
 
+from gaitcli.predict.ankle_law import ProsthesisLaw
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import present_muscles
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of
 from gaitcli.signal.bands import Band
@@ -42,7 +43,7 @@ def better(a: PredictResult | None, b: PredictResult | None) -> PredictResult | 
 def as_optimal(start: PredictResult, note: str) -> PredictResult:
     """A commercial-foot (or other) solution as the optimal problem's result: its coefficients are a feasible
     device, and the optimal run did not improve on it."""
-    curve = ProsthesisCurve(f"optimal (= {start.prosthesis.name})", *start.prosthesis.coefficients())
+    curve = start.prosthesis.with_values(f"optimal (= {start.prosthesis.name})", start.prosthesis.coefficients())
     return dataclasses.replace(start, prosthesis=curve, history=start.history + (note,))
 
 
@@ -86,7 +87,7 @@ def predict_optimal(cfg: PredictConfig, *, params: WalkerParameters | None, refe
     for result in feet.values():
         best_foot = better(best_foot, result)
     device = best_foot.prosthesis
-    optimal_device = ProsthesisCurve("optimal", *device.coefficients())
+    optimal_device = device.with_values("optimal", device.coefficients())
     chosen, history = None, []
     for label, start in ((f"the {device.name} solution", best_foot), ("the normal solution", normal)):
         if start is None or (chosen is not None and chosen.converged and chosen.objective < best_foot.objective):
@@ -140,7 +141,7 @@ def retimed(cfg: PredictConfig, x: np.ndarray) -> np.ndarray:
 
 
 def solve_start(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Band, seed: int | None,
-                device: ProsthesisCurve | None = None, init: np.ndarray | None = None,
+                device: ProsthesisLaw | None = None, init: np.ndarray | None = None,
                 cache: NlpCache | None = None) -> PredictResult:
     """One start of ``--starts N``: from ``init`` (default: the default guess) when ``seed`` is None, else from
     :func:`perturbed_guess` with that seed; the optimal prosthesis by :func:`predict_optimal`. ``cache``: the

@@ -24,8 +24,8 @@ grid (:meth:`Variables.blocks` gives each block's place in w):
                                               rhs (9)
     Λ      Σ widths (324)   first half's (162)  the ground reactions λ_j of every stated control  N, N·m / 100
                                               point in grid order (the phase's reaction names)
-    D      6 (prosthetic models only)         the device's (a_p, b_p, c0, a_n, b_n, d_prosth)    DEVICE_SCALE
-                                              of (5.58)–(5.59)
+    D      6 (prosthetic models only)         the device's coefficients in its law's order:       the law's SCALE
+                                              (a_p, b_p, c0, a_n, b_n, d_prosth) of (5.58)–(5.59)
     w      10 187 (10 193 with D)  5 101 (5 107 with D)
 
 The nodal values of χ (5.13) are the coefficients p_{k,0} (rows 0, 5, 10, … of a C block). Units of Q:
@@ -47,6 +47,7 @@ import numpy as np
 
 from gaitcli.predict.grid import instant_times
 from gaitcli.predict.layout import DesignLayout, box_bounds, half_cycle_intervals
+from gaitcli.predict.prosthesis import DEFAULT_LAW
 from gaitcli.predict.splines import PeriodicSpline, quartic, window_values
 
 REACTION_SCALE_N = 100.0
@@ -59,11 +60,6 @@ FULL_LIFTED = (("Q", "instants", (("y", 9), ("yd", 9), ("ydd", 9), ("stretch", 1
 SYMMETRIC_LIFTED = (("Q", "instants", (("y", 3), ("yd", 3), ("ydd", 3), ("stretch", 8), ("l_m", 8), ("v_m", 8),
                                        ("a", 8))),
                     ("P", "half", (("y", 3), ("yd", 3), ("ydd", 3), ("rhs", 9))))
-#: scale of the device coefficients a_p, b_p, c0, a_n, b_n (N·m/rad³, /rad², /rad) and d_prosth (N·m·s/rad)
-DEVICE_SCALE = np.array([1e4, 1e3, 1e2, 1e3, 1e3, 1.0])
-#: bounds of the optimal prosthesis's coefficients: they contain Table A.7's feet and Table A.8's optima;
-#: c0 ≤ 0 (a restoring spring), 0 ≤ d_prosth ≤ 2 (docs/prediction.md, "The prosthesis")
-DEVICE_BOUNDS = (np.array([-6e4, -1.2e4, -500.0, -1e4, -2e3, 0.0]), np.array([6e4, 1.2e4, 0.0, 1e4, 8e3, 2.0]))
 #: the lifted quantities of the full cycle's 9 coordinates (the rest are the 16 muscles')
 COORDINATE_QUANTITIES = ("y", "yd", "ydd")
 
@@ -97,7 +93,7 @@ class Variables:
     ``durations`` (8,) s, ``steps_r``, ``steps_l`` m, ``period`` T, ``stride`` ΔS, ``times`` (I,) s and
     ``fractions`` t/T of the instants; ``values[name][i]`` the full model's column of quantity ``name`` ("y",
     "yd", "ydd": 9; "stretch", "l_m", "v_m", "a": 16) at instant i and ``generalized_forces[i]`` its rhs (9);
-    ``reactions[j]`` λ (N) at stated control point j; ``coefficients`` the device's (6, zero without one);
+    ``reactions[j]`` λ (N) at stated control point j; ``coefficients`` the device's (its law's, zero without one);
     ``parameters`` p = (v, w1, w2); ``intervals`` the spline intervals of the segment lists that place the
     windows ("cycle": N; "half": N_h, symmetric model).
 
@@ -119,8 +115,12 @@ class Variables:
         self.present = muscles.present[self.muscle_columns]
         self.kept = [k for k in range(8) if self.present[k]]  # of each leg's 8 muscles, those the model has
         self.columns = [k for k in range(self.muscle_columns.stop) if muscles.present[k]]  # of the modelled ones
-        self.device = ca.SX.sym("D", 6) if muscles.prosthetic else None
-        self.coefficients = self.device * ca.DM(DEVICE_SCALE) if muscles.prosthetic else ca.DM.zeros(6)
+        #: the prostheses' law (None without), their scaled coefficients D and the coefficients themselves
+        self.device_law = type(muscles.prosthesis) if muscles.prosthetic else None
+        law = self.device_law or DEFAULT_LAW
+        self.device = ca.SX.sym("D", len(law.COEFFICIENTS)) if muscles.prosthetic else None
+        self.coefficients = (self.device * ca.DM(law.SCALE) if muscles.prosthetic
+                             else ca.DM.zeros(len(law.COEFFICIENTS)))
         self._lift()
         self._ground_reactions(transcriber.contact)
         self.values = {name: self._cycle_values(name) for name in ("y", "yd", "ydd", "stretch", "l_m", "v_m", "a")}
@@ -213,7 +213,7 @@ class Variables:
         sizes = [(names[b.name], b.coefficients.numel()) for b in self.splines]
         sizes += [("T", self.durations_z.numel()), ("L", self.steps.numel())]
         sizes += [(block, q.numel()) for (block, _, _), q in zip(self.lifted_blocks, self.lifted_symbols)]
-        sizes += [("Λ", self.lam.numel())] + ([("D", 6)] if self.device is not None else [])
+        sizes += [("Λ", self.lam.numel())] + ([("D", self.device.numel())] if self.device is not None else [])
         out, start = {}, 0
         for name, size in sizes:
             out[name], start = slice(start, start + size), start + size

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gaitcli.predict.prosthesis import COEFFICIENTS, COMMERCIAL_FEET, ProsthesisCurve
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET, DEFAULT_LAW
 from gaitcli.report.plots import plt, save
 
 #: bar colours per condition (the normal gait black, the optimal device dark grey, the feet lighter)
@@ -65,7 +65,7 @@ def optimal_curves(rows: list[dict], path: Path, title: str) -> Path:
     for r in rows:
         if r["condition"] != "optimal":
             continue
-        curve = ProsthesisCurve("optimal", *(r[f"prosthesis_{k}"] for k in COEFFICIENTS))
+        curve = DEFAULT_LAW.from_values("optimal", [r[f"prosthesis_{k}"] for k in DEFAULT_LAW.COEFFICIENTS])
         colour = plt.get_cmap("viridis")(weights.index(r["weights"]) / max(1, len(weights) - 1))
         ax.plot(dorsiflexion, curve.plantarflexor_moment_Nm(np.radians(dorsiflexion)), color=colour,
                 ls=styles[speeds.index(r["speed_m_s"]) % len(styles)], lw=1.5,

@@ -129,7 +129,9 @@ def prosthetic(reference):
 
 
 def test_prosthetic_nlp_removes_two_muscles_and_its_start_solves_the_defining_equations(prosthetic, reference):
-    from gaitcli.predict.variables import DEVICE_SCALE
+    from gaitcli.predict.cubic_ankle import ProsthesisCurve
+
+    DEVICE_SCALE = ProsthesisCurve.SCALE
 
     transcriber, nlp = prosthetic
     grid = transcriber.grid
@@ -157,8 +159,10 @@ def test_prosthetic_nlp_removes_two_muscles_and_its_start_solves_the_defining_eq
 
 
 def test_monotonicity_rows_accept_the_commercial_feet_and_refuse_a_rising_curve(prosthetic, reference):
-    from gaitcli.predict.prosthesis import COMMERCIAL_FEET, ProsthesisCurve
-    from gaitcli.predict.variables import DEVICE_SCALE
+    from gaitcli.predict.cubic_ankle import ProsthesisCurve
+    from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+
+    DEVICE_SCALE = ProsthesisCurve.SCALE
 
     transcriber, nlp = prosthetic
     w0 = nlp.start(initial_guess(transcriber, reference, symmetric=True))

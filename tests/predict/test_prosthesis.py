@@ -7,7 +7,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from gaitcli.predict.prosthesis import BLEND_ERROR_NM, BLEND_MAX_RAD, COMMERCIAL_FEET, ProsthesisCurve
+from gaitcli.predict.cubic_ankle import BLEND_ERROR_NM, BLEND_MAX_RAD, ProsthesisCurve
+from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 
 ANGLES_RAD = (-0.3, -0.2, -0.1, 0.1, 0.2)
 KNOWN_NM = {"sach": (603.2, 283.4, 80.5, -22.3, -48.2), "seattle": (246.6, 131.1, 50.0, -44.5, -243.2),
