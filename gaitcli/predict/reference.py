@@ -135,14 +135,17 @@ def read_reference(path: str | Path) -> Band:
     path = Path(path)
     if not path.is_file():
         raise InputError(path, None, "reference file not found")
+    import pandas as pd
+
+    try:
+        header = set(pd.read_csv(path, nrows=0).columns)
+    except (ValueError, UnicodeDecodeError):
+        raise InputError(path, None, "not a CSV table (expected the columns gait reference writes)") from None
+    for column in ["cycle_pct"] + [f"{v}_{stat}" for v in VARIABLES for stat in ("mean", "sd")]:
+        if column not in header:
+            raise InputError(path, column, "missing column (expected cycle_pct and <variable>_mean, _sd for "
+                                           + ", ".join(VARIABLES) + ")")
     band = read_band(path, side_free=False)
-    missing = [v for v in VARIABLES if v not in band.mean]
-    if missing:
-        with path.open(encoding="utf-8", errors="replace") as f:
-            header = f.readline().strip().split(",")
-        column = next(f"{v}_{stat}" for v in missing for stat in ("mean", "sd") if f"{v}_{stat}" not in header)
-        raise InputError(path, column, "missing column (expected cycle_pct and <variable>_mean, _sd for "
-                                       + ", ".join(VARIABLES) + ")")
     mean, sd = band.arrays(VARIABLES)
     if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(sd))):
         raise InputError(path, None, "expected finite numbers in every column")

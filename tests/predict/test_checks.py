@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from gaitcli.predict.checks import gait_checks
-from gaitcli.predict.reference import VARIABLES, read_reference
+from gaitcli.predict.reference import read_reference
 from gaitcli.resources import bundled_reference
 
 PCT = np.arange(101.0)
@@ -21,7 +21,7 @@ TEXTBOOK_FZ = 9.81 * np.interp(PCT, [0, 5, 13, 30, 48, 57, 62, 100], [0, 0.6, 1.
 @pytest.fixture(scope="module")
 def normal():
     ref = read_reference(bundled_reference())
-    knee, fz = ref.mean[:, VARIABLES.index("knee_r_flexion_deg")], ref.mean[:, VARIABLES.index("grf_z_r_N_per_kg")]
+    knee, fz = ref.mean["knee_r_flexion_deg"], ref.mean["grf_z_r_N_per_kg"]
     stance = float(PCT[np.flatnonzero(fz > 0.2)[-1]])
     return knee, TEXTBOOK_FZ, stance
 
