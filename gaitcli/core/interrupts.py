@@ -47,9 +47,9 @@ def terminate_as_interrupt():
 
 
 @contextmanager
-def interrupts_raised():
-    """Run a solver so that an interrupt during it raises KeyboardInterrupt once the solver returns, whatever
-    the solver made of it (see the module docstring)."""
+def _interrupts_to(handler):
+    """Within it SIGINT and SIGTERM go to ``handler(signum)``; after it the previous handlers are back and,
+    if either came, KeyboardInterrupt is raised (main thread only; elsewhere nothing changes)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -57,34 +57,32 @@ def interrupts_raised():
 
     def on_interrupt(signum, frame):
         interrupted.append(signum)
-        raise KeyboardInterrupt  # what stops IPOPT (CasADi checks for it between iterations)
+        handler(signum)
 
     previous = {s: signal.signal(s, on_interrupt) for s in INTERRUPTS}
     try:
         yield
     finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+        for s, restored in previous.items():
+            signal.signal(s, restored)
     if interrupted:
         raise KeyboardInterrupt
 
 
-@contextmanager
+def _raise_interrupt(signum):
+    raise KeyboardInterrupt  # what stops IPOPT (CasADi checks for it between iterations)
+
+
+def interrupts_raised():
+    """Run a solver so that an interrupt during it raises KeyboardInterrupt once the solver returns, whatever
+    the solver made of it (see the module docstring)."""
+    return _interrupts_to(_raise_interrupt)
+
+
 def interrupts_deferred():
     """Within it an interrupt waits: it raises KeyboardInterrupt when the block ends (main thread only). For
     a short step that must not stop half-way, such as starting the workers a run will have to stop."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    interrupted = []
-    previous = {s: signal.signal(s, lambda signum, frame: interrupted.append(signum)) for s in INTERRUPTS}
-    try:
-        yield
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
-    if interrupted:
-        raise KeyboardInterrupt
+    return _interrupts_to(lambda signum: None)
 
 
 #: prctl's option that has the kernel signal a process when its parent dies (linux/prctl.h)
