@@ -206,8 +206,25 @@ def _read_value(node, hint):
     return checked(node)[()]
 
 
+def _written_class(group: h5py.Group, cls):
+    """The dataclass a record was written from: ``cls``, or the subclass of it (imported, at any depth) that
+    its ``.type`` names, as a field typed by a base class holds one of its kinds (a prosthesis law)."""
+    if ".type" not in group:
+        return cls
+    name = str(group[".type"].asstr()[()])
+    kinds = list(cls.__subclasses__())
+    while kinds and name != cls.__name__:
+        kind = kinds.pop()
+        if kind.__name__ == name and dataclasses.is_dataclass(kind):
+            return kind
+        kinds.extend(kind.__subclasses__())
+    return cls
+
+
 def read_record(group: h5py.Group, cls):
-    """Rebuild the dataclass ``cls`` from the group :func:`record_datasets` wrote (missing fields: defaults)."""
+    """Rebuild the dataclass ``cls`` (or the subclass the record names) from the group :func:`record_datasets`
+    wrote (missing fields: defaults)."""
+    cls = _written_class(group, cls)
     hints = typing.get_type_hints(cls)
     values = {}
     for f in dataclasses.fields(cls):

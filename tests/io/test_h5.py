@@ -36,6 +36,27 @@ class Record:
     extra: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class Kind(Leaf):
+    """A kind of Leaf: a field typed Leaf may hold one."""
+
+    stiffness_Nm_per_rad: float = 0.0
+
+
+@dataclass(frozen=True)
+class Holder:
+    leaf: Leaf | None = None
+
+
+def test_a_field_typed_by_a_base_class_reads_back_the_kind_it_held(tmp_path):
+    path = tmp_path / "k.h5"
+    write_h5(path, record_datasets("result", Holder(Kind(np.ones(2), "spring", -300.0))), {})
+    back = read_result(path, Holder).leaf
+    assert type(back) is Kind and back.stiffness_Nm_per_rad == -300.0 and back.label == "spring"
+    write_h5(path, record_datasets("result", Holder(Leaf(np.ones(2), "plain"))), {})
+    assert type(read_result(path, Holder).leaf) is Leaf
+
+
 @pytest.mark.parametrize("name,unit", [("force_N", "N"), ("cop_m", "m"), ("free_moment_Nm", "N*m"),
                                        ("speed_m_s", "m/s"), ("cost_of_transport_J_per_m", "J/m"),
                                        ("inertia_kgm2", "kg*m^2"), ("time_s", "s"), ("activations", "1")])
