@@ -37,6 +37,10 @@ from gaitcli.errors import InputError
 ALLOWED_WORKER_DEATHS = 1
 #: how long the pool's workers get to unwind (remove their temporary folders) before they are killed, s
 STOP_GRACE_S = 1.0
+#: s, the longest the main thread waits on the workers at a time: Python runs a signal's handler in the main
+#: thread, and a SIGTERM the kernel delivers to another thread (Dask's event loop, a queue feeder) does not
+#: wake a main thread blocked in an untimed wait: one such SIGTERM was lost, the study running on
+SIGNAL_POLL_S = 0.2
 
 
 class InProcess(Executor):
@@ -115,7 +119,9 @@ def completed(pool: Workers, tasks: Mapping[Hashable, Task], *, in_flight: int |
 
     yield from submit_ready()
     while pending:
-        done, _ = wait(list(pending), return_when=FIRST_COMPLETED)
+        done: set = set()
+        while not done:  # in short waits: a signal the kernel gave another thread runs its handler here
+            done, _ = wait(list(pending), timeout=SIGNAL_POLL_S, return_when=FIRST_COMPLETED)
         for future in sorted(done, key=lambda f: list(pending).index(f)):
             key = pending.pop(future)
             if future.exception() is not None:
