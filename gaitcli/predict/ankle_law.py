@@ -20,6 +20,7 @@ The dissertation's law is (5.58)–(5.59) (:class:`gaitcli.predict.cubic_ankle.P
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 from typing import ClassVar
 
@@ -27,7 +28,7 @@ import numpy as np
 
 
 @dataclasses.dataclass(frozen=True)
-class ProsthesisLaw:
+class ProsthesisLaw(abc.ABC):
     """Base of the prosthetic ankle laws (module docstring); ``name`` says which device (captions, tables)."""
 
     name: str
@@ -59,14 +60,17 @@ class ProsthesisLaw:
         """{``prefix`` + name: value} of :attr:`COEFFICIENTS`."""
         return {f"{prefix}{k}": float(getattr(self, k)) for k in self.COEFFICIENTS}
 
+    @abc.abstractmethod
     def spring_moment_Nm(self, y):
-        raise NotImplementedError
+        """τ_s(y), N·m, at ankle angles ``y`` (rad; numpy or CasADi)."""
 
+    @abc.abstractmethod
     def moment_Nm(self, y, y_rate):
-        raise NotImplementedError
+        """τ_prosth(y, ẏ), N·m: the spring's moment and the damping's."""
 
+    @abc.abstractmethod
     def slope_Nm_per_rad(self, y):
-        raise NotImplementedError
+        """dτ_s/dy, N·m/rad, at ``y`` (numpy arrays, or numbers with numeric or CasADi coefficients)."""
 
     def nlp_moment_Nm(self, y, y_rate):
         """The moment the NLP states (default: :meth:`moment_Nm`; a law whose moment is not twice
