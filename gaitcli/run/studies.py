@@ -343,11 +343,6 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
 
 
 # ------------------------------------------------------------------------------------------------ multi-start
-def _start(cfg: PredictConfig, params, reference, device, init, seed: int | None) -> PredictResult:
-    return solve_start(cfg, params=params, reference=reference, seed=seed, device=device, init=init,
-                       cache=prediction_cache())
-
-
 def run_starts(cfg: PredictConfig, pool: Workers, *, params, reference, device=None, init: np.ndarray | None = None,
                on_done=None) -> list[PredictResult]:
     """``cfg.starts`` solves of ``cfg`` on ``pool``: start 0 from ``init`` (default: the default guess), start k
@@ -358,7 +353,8 @@ def run_starts(cfg: PredictConfig, pool: Workers, *, params, reference, device=N
 
 @dataclass(frozen=True)
 class _StartOf:
-    """``seed`` → :func:`_start` of the rest: a picklable task function."""
+    """``seed`` → that start's :func:`~gaitcli.predict.starts.solve_start` with the process's built problems: a
+    picklable task function."""
 
     cfg: PredictConfig
     params: object
@@ -367,7 +363,8 @@ class _StartOf:
     init: np.ndarray | None
 
     def __call__(self, seed: int | None) -> PredictResult:
-        return _start(self.cfg, self.params, self.reference, self.device, self.init, seed)
+        return solve_start(self.cfg, params=self.params, reference=self.reference, seed=seed, device=self.device,
+                           init=self.init, cache=prediction_cache())
 
 
 def starts_table(results: list[PredictResult]) -> dict:
