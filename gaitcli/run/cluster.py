@@ -256,7 +256,9 @@ def _local_dask(count: int, dashboard: bool, before: set) -> Iterator[Workers]:
 def _stop_dask(cluster, client, before: set) -> None:
     """End a local cluster now: no nanny restarts its worker, every worker process is killed, then the
     cluster closes (quickly: nothing is left to wait for; a close that does not end in time is left to the
-    exit, whose workers are gone)."""
+    exit, whose workers are gone). distributed's own loggers are silenced first: the comms its killed workers
+    leave closed are logged with a traceback, which is no news to a lab that pressed Ctrl-C."""
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
     for nanny in list(cluster.workers.values()):
         nanny.close_gracefully()
     for process in _started_since(before):
