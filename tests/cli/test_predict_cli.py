@@ -93,13 +93,13 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
         assert abs(float(h5["result/body_mass_kg"][()]) - 75.0) < 0.5
 
     # SIGTERM during the next run: "gait: interrupted", exit 130, the unconverged result above untouched
-    # and no half-written folder. Without an iteration limit the run would go on for minutes. Where the process
-    # keeps no NlpCache across commands the signal may come while the problem is built rather than in IPOPT's
-    # iterations; an interrupt inside IPOPT is tests/core/test_ipopt.py's and test_interrupts.py's (EID), every
-    # solve going through core/ipopt.solve.
+    # and no half-written folder. Without an iteration limit the run would go on for minutes. The runner keeps
+    # the problem it built for the run above (its NlpCache), so 3 s on the signal comes in IPOPT's iterations;
+    # an interrupt inside IPOPT is also tests/core/test_ipopt.py's and test_interrupts.py's (EID), every solve
+    # going through core/ipopt.solve.
     earlier = snapshot(tmp_path / "normal" / "gait_out")
     runner.send(trial_args, tmp_path)
-    time.sleep(6.0)
+    time.sleep(3.0)
     assert runner.proc.poll() is None
     runner.proc.send_signal(signal.SIGTERM)
     interrupted = runner.receive(timeout_s=60)
@@ -112,18 +112,22 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     # two cases stopped after one IPOPT iteration (6 nodes): both in study.csv, marked, exit 3; the rerun reads
     # both back (the same inputs and configuration). (--starts: tests/predict/test_study.py.) The same study on a
     # Dask cluster (every case a task, the sach case depending on the normal one's future) gives the same case
-    # keys, which chain the start keys, and objectives; --starts 2 there writes both starts.
+    # keys, which chain the start keys, and objectives. --starts goes to the cluster by the same
+    # run.cluster.workers: given a scheduler nobody serves, it says so before building anything (a start solved
+    # there would build two more problems, 10 s each).
     address, _ = dask_cluster
     (tmp_path / "tiny.yaml").write_text("name: tiny\nspeeds_m_s: [1.0]\nweights: [b]\nconditions: [normal, sach]\n"
                                         "nodes: 6\nmax_iterations: 1\n")
     jobs = {"study": (("predict", "--study", "tiny.yaml", "-o", "out", "--workers", "1"), tmp_path)}
     runs = gait_many({**jobs, "dask": (("predict", "--study", "tiny.yaml", "-o", "dask", "--scheduler", address),
                                        tmp_path),
-                      "starts": (("predict", "--nodes", "6", "--max-iterations", "1", "--starts", "2", "-o", "starts",
-                                  "--scheduler", address, "--no-plots"), tmp_path)}, workers=3)
-    for name in ("dask", "starts"):
-        assert runs[name].returncode == 3, runs[name].describe()
-    assert len(pd.read_csv(tmp_path / "starts" / "predict" / "starts.csv")) == 2
+                      "starts": (("predict", "--nodes", "6", "--starts", "2", "-o", "starts",
+                                  "--scheduler", "tcp://127.0.0.1:1"), tmp_path)}, workers=3)
+    assert runs["dask"].returncode == 3, runs["dask"].describe()
+    starts = runs["starts"]
+    assert starts.returncode == 2 and len(starts.stderr_lines) == 1, starts.describe()
+    assert "--scheduler: cannot reach the Dask scheduler at tcp://127.0.0.1:1" in starts.stderr
+    assert not (tmp_path / "starts").exists()
     on_cluster = pd.read_csv(tmp_path / "dask" / "study" / "study.csv")
     for case in ("v1.00_b_normal", "v1.00_b_sach"):
         keys = [json.loads((tmp_path / name / "study" / case / "summary.json").read_text())["case_key"]

@@ -12,16 +12,24 @@ import pytest
 from gaitcli.errors import InputError
 from gaitcli.predict.cost import objective
 from gaitcli.predict.reference import read_reference
+from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, run_predict
 from gaitcli.resources import bundled_reference, stored_solution
 
 
 @pytest.fixture(scope="module")
-def stopped():
+def cache():
+    """One NlpCache for the module, as a runner keeps one per process: the 6-node problem (10 s to build, most
+    of it the Hessian) is built once for every test here."""
+    return NlpCache()
+
+
+@pytest.fixture(scope="module")
+def stopped(cache):
     seen = []
     cfg = PredictConfig(nodes=6, max_iterations=2)
     result = run_predict(cfg, reference=read_reference(bundled_reference()),
-                         report=lambda k, f, v: seen.append((k, f, v)))
+                         report=lambda k, f, v: seen.append((k, f, v)), cache=cache)
     return result, seen
 
 
@@ -44,7 +52,7 @@ def test_the_result_parts_agree(stopped):
     assert result.excitations.shape == (80, 16) and result.grf_N.shape == (88, 4)
 
 
-def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives():
+def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(cache):
     """Another IPOPT option set builds another solver from the first one's ∇J, Jacobian and Hessian of the
     Lagrangian (not derived anew): from the same start both take the same iterates, as if each had derived
     its own (a mismatch of CasADi's conventions for them — a triangle, the sign of λ — would show here). Both
@@ -55,7 +63,7 @@ def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives():
     from gaitcli.predict.model import WalkingModel
     from gaitcli.predict.nlp import instant_segments
     from gaitcli.predict.problem import Transcriber
-    from gaitcli.predict.solve import NlpCache, solve
+    from gaitcli.predict.solve import solve
     from gaitcli.predict.stage import settings_of, walker_muscles
 
     cfg = PredictConfig(nodes=6, max_iterations=2)
@@ -63,7 +71,7 @@ def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives():
     transcriber = Transcriber(6, model=WalkingModel(cfg.walker_parameters(None)), muscles=walker_muscles(cfg, None))
     x0 = initial_guess(transcriber, reference, settings, symmetric=True)
     segments = instant_segments(transcriber, DesignLayout.build(6, symmetric=True), x0)
-    cache = NlpCache()
+    problems = len(cache)
     nlp = cache.nlp(transcriber, reference, settings, symmetric=True, segments=segments)
     first = solve(nlp, x0, settings, cache=cache)
     assert set(cache.derivatives(nlp)) == {"grad_f", "jac_g", "hess_lag"}
@@ -73,7 +81,8 @@ def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives():
     np.testing.assert_array_equal(again.x, first.x)
     assert isinstance(first, Outcome) and not first.converged and first.status == "Maximum_Iterations_Exceeded"
     faster = dataclasses.replace(settings, speed_m_s=1.3, max_iterations=5)  # a parameter, not the structure
-    assert cache.nlp(transcriber, reference, faster, symmetric=True, segments=segments) is nlp and len(cache) == 1
+    assert cache.nlp(transcriber, reference, faster, symmetric=True, segments=segments) is nlp
+    assert len(cache) == problems + (problems == 0)  # this problem, built here or by the tests before
 
     # a start with the right knee hyperextended beyond its bound (0 rad): reported per block of χ, then clipped
     start, rows, _ = DesignLayout.build(6, symmetric=True).blocks["right_leg"]
@@ -132,11 +141,11 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     assert json.loads(json.dumps(summary, default=float))["fine_grid"]["refinement"] == 4
 
 
-def test_a_solve_past_its_time_limit_stops_unconverged_and_says_why():
+def test_a_solve_past_its_time_limit_stops_unconverged_and_says_why(cache):
     """The limit counts from the start of the prediction: 1 µs is spent before IPOPT's first iteration, so the
     iteration callback stops it there (not the 50-iteration limit)."""
     from gaitcli.predict.settings import TIME_LIMIT_STATUS
 
     result = run_predict(PredictConfig(nodes=6, max_iterations=50, time_limit_s=1e-6),
-                         reference=read_reference(bundled_reference()))
+                         reference=read_reference(bundled_reference()), cache=cache)
     assert result.status == TIME_LIMIT_STATUS and result.iterations == 0 and not result.converged
