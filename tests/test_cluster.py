@@ -87,21 +87,26 @@ def _pid_after(delay_s: float) -> int:
     return os.getpid()
 
 
-#: a parent with two workers busy for a minute, which prints their pids once both run
+#: a parent with two workers busy for a minute, which prints their pids once both run a task (each task leaves
+#: a file named by its process's pid as it starts)
 PARENT = textwrap.dedent("""
     import multiprocessing, os, sys, time
+    from pathlib import Path
     from gaitcli.core.interrupts import terminate_as_interrupt
     from gaitcli.run.cluster import workers
+
+    def busy(folder):
+        (Path(folder) / f"{{os.getpid()}}.running").touch()
+        time.sleep(60)
 
     if __name__ == "__main__":  # not again in a worker that Dask spawns
         with terminate_as_interrupt():
             try:
                 with workers(2, dask={dask}) as pool:
-                    futures = [pool.submit(time.sleep, 60) for _ in range(4)]
+                    futures = [pool.submit(busy, os.getcwd()) for _ in range(4)]
                     deadline = time.monotonic() + 60
-                    while len(multiprocessing.active_children()) < 2 and time.monotonic() < deadline:
-                        time.sleep(0.05)
-                    time.sleep(3.0)  # both workers set up and running their first task
+                    while len(list(Path.cwd().glob("*.running"))) < 2 and time.monotonic() < deadline:
+                        time.sleep(0.02)
                     print(" ".join(str(p.pid) for p in multiprocessing.active_children()), flush=True)
                     time.sleep(60)
             except KeyboardInterrupt:
