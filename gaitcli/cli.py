@@ -218,7 +218,7 @@ def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, momen
         from gaitcli.run.pipeline import TrialRun
 
         run = TrialRun(trial, out, cfg)
-        for path in export_targets(run.out_root, set(exports), trial_name=run.trial.folder.resolve().name):
+        for path in export_targets(run.out_root, set(exports), trial_name=run.trial.name):
             check_output_file(path)
     console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
     if exports:
@@ -332,16 +332,29 @@ def predict_command(console: Console, trial, out, reference, subject, init, work
               help="predicted: the shipped muscle-driven prediction (1.30 m/s at 1.78 m, period 1.07 s scaled by "
                    "√stature; no locked joints); normative: Winter's curves re-timed over the "
                    "stance foot.  [default: predicted for normal walking, normative for the other conditions]")
+@click.option("--session", is_flag=True,
+              help="A session folder as Nexus leaves one: Static 01.c3d, Walking 01.c3d … (--walks), one "
+                   "subject.yaml; walk k has the seed SEED + k - 1.")
+@click.option("--walks", type=click.IntRange(min=1, max=99), default=3, show_default=True,
+              help="With --session: the number of walks.")
 @click.pass_obj
 def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides,
-                  mass_kg, stature_m, sex, period_s, marker_set, gait_kind):
-    """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/)."""
+                  mass_kg, stature_m, sex, period_s, marker_set, gait_kind, session, walks):
+    """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/), or with
+    --session a session folder of several walks."""
     from gaitcli.synth import write_trial
+    from gaitcli.synth.folder import write_session
 
     gait_kind = gait_kind or ("predicted" if condition == "normal" else "normative")
-    trial = write_trial(out_dir, condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
-                        plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
-                        sex=sex, period_s=period_s, marker_set=marker_set, gait=gait_kind)
+    options = {"condition": condition, "noise_mm": noise_mm, "artefact_mm": artefact_mm,
+               "plate_noise_N": plate_noise_N, "strides": strides, "mass_kg": mass_kg, "stature_m": stature_m,
+               "sex": sex, "period_s": period_s, "marker_set": marker_set, "gait": gait_kind}
+    if session:
+        written = write_session(out_dir, walks=walks, seed=seed, **options)
+        console.info(f"synth: wrote {out_dir} ({condition}, a static and {len(written)} walks of "
+                     f"{written[0].design.speed_m_s:.2f} m/s)")
+        return
+    trial = write_trial(out_dir, seed=seed, **options)
     console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames, "
                  f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates)")
 
@@ -385,9 +398,52 @@ def reference_command(console: Console, trials, out, pipeline, band):
 @_trial_options
 @click.pass_obj
 def run_command(console: Console, trial, out, pipeline, no_plots):
-    """Run every stage of the pipeline on a trial, in order."""
+    """Run every stage of the pipeline on a trial, in order; on a session folder, on every walk (in parallel)
+    and then the session's strides pooled into gait_out/session/."""
+    from gaitcli.run.session import session_folder
+
     cfg = configure(pipeline)
+    if trial is not None and session_folder(trial) is not None:
+        if out is not None:
+            raise click.UsageError("-o/--out is for one trial: a session's outputs go to SESSION/gait_out/")
+        _run_session(console, trial, cfg, plots=not no_plots)
+        return
     console.run(trial, cfg.stages, cfg, out=out, plots=not no_plots)
+
+
+def _run_session(console: Console, folder: Path, cfg, *, plots: bool) -> None:
+    """``gait run SESSION``: the walks as a batch with its progress display, then one line per failed walk and
+    the session's; a failed or unconverged walk → its exit code (the highest)."""
+    import os
+
+    from gaitcli.progress import BatchProgress
+    from gaitcli.run.batch import stages_of
+    from gaitcli.run.session import run_session
+
+    with BatchProgress(stages_of(cfg), enabled=not console.quiet) as progress:
+        def started(total, to_run, dashboard):
+            progress.start(total)
+            if to_run:
+                console.info(f"session: {to_run} of {total} walks to run")
+
+        done = run_session(folder, cfg, workers=os.cpu_count() or 1, plots=plots, on_rows=progress,
+                           on_start=started)
+    failed = {r.trial: r for r in done.batch.rows if r.status in ("failed", "unconverged")}
+    for walk, row in failed.items():
+        console.info(f"session: {walk}: {row.status}: {row.reason}")
+    if done.pooled is not None:
+        info = done.pooled.summary()
+        used = {side: info["strides"][side]["used"] + info["strides"][side]["kinematics only"] for side in "rl"}
+        console.info(f"session: wrote {done.output} ({info['walks']} walks; {used['r']} right and {used['l']} left "
+                     f"strides, {info['per_stride']['speed_m_s_mean']:.2f} m/s)")
+    click.echo(f"{done.batch.line()} ({done.batch.elapsed_s:.1f} s)")
+    if failed:  # the first failure as the command's error: bad input 2, unconverged 3, an internal error 1
+        walk, row = min(failed.items(), key=lambda item: {2: 0, 1: 1, 3: 2}.get(item[1].exit_code, 1))
+        message = f"{len(failed)} of {len(done.walks)} walks {'did not converge' if row.exit_code == 3 else 'failed'}"
+        if row.exit_code == 2:
+            raise InputError(folder / walk, None, f"{message}; this one: {row.reason}")
+        error = NotConvergedError if row.exit_code == 3 else GaitError
+        raise error(f"{message} (listed above; {folder / 'gait_out' / 'batch_summary.csv'})")
 
 
 @gait.command("batch")

@@ -41,7 +41,8 @@ class Subject:
     shank_length_m: float | None = None
     leg_length_m: float | None = None  # ASIS to medial malleolus, for the Harrington and Hara hip centres
     trial: str | None = None
-    static: str | None = None
+    static: str | None = None  # a file name; in a session folder also a glob matching one file
+    trials: tuple[str, ...] = ()  # a session's walks: globs in its folder (empty: every C3D but the static)
     static_frames: tuple[int, int] | str | None = None  # [first, last] file frames, "auto", or None (static.c3d)
     marker_map: dict[str, str] = field(default_factory=dict)
     disturbances: tuple[Disturbance, ...] = ()  # added masses (Tables A.2–A.3), in segment axes
@@ -66,7 +67,7 @@ class Subject:
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
         "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances", "knee_width_mm",
-        "ankle_width_mm", "marker_diameter_mm", "vsk")
+        "ankle_width_mm", "marker_diameter_mm", "vsk", "trials")
 #: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
 #: (2007); Hara et al. (2016); Davis et al. (1991, Plug-in Gait's); functional (SCORE, Ehrig et al. 2006, from the
 #: trial's hip motion); the lab's points
@@ -130,6 +131,12 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     for key in ("trial", "static", "vsk"):
         if data.get(key) is not None and not isinstance(data[key], str):
             raise InputError(path, key, f"got {shown(data[key])} (expected a file name)")
+    trials = data.get("trials")
+    trials = [trials] if isinstance(trials, str) else trials
+    if trials is not None and (not isinstance(trials, list) or not trials
+                               or not all(isinstance(t, str) and t.strip() for t in trials)):
+        raise InputError(path, "trials", f"got {shown(data['trials'])} (expected a file name or glob, e.g. "
+                                         "'Walking *.c3d', or a list of them)")
     frames = data.get("static_frames")
     if frames is not None and frames != "auto":
         ok = (isinstance(frames, (list, tuple)) and len(frames) == 2
@@ -175,7 +182,7 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
         widths["marker_diameter_mm"] = _number(path, "marker_diameter_mm", data["marker_diameter_mm"], low=0,
                                                high=40, expected="a marker diameter in mm, > 0 and ≤ 40")
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
-                   vsk=data.get("vsk"), static_frames=frames, marker_map=dict(marker_map),
+                   trials=tuple(trials or ()), vsk=data.get("vsk"), static_frames=frames, marker_map=dict(marker_map),
                    disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, **lengths, **widths)
 
 

@@ -1,7 +1,7 @@
 """Many trials at once (``gait batch``), on the workers of :func:`gaitcli.run.cluster.workers`.
 
-:func:`find_trials` finds every trial folder below a lab folder (a folder with ``subject.yaml``; ``gait_out``
-and hidden folders are not searched). :func:`plan` decides, in this process and before any worker starts, what
+:func:`find_trials` finds every trial below a lab folder (a folder with ``subject.yaml``, or each walk of such a
+folder that is a session; ``gait_out`` and hidden folders are not searched). :func:`plan` decides, in this process and before any worker starts, what
 is current: a trial whose every stage's output was made from the same inputs and configuration is ``skipped``
 (its key figures read from the outputs' ``summary.json``), and a trial that failed on bad input (exit 2) in the
 previous batch with the same files and configuration (``batch_summary.csv``'s ``input_key``) keeps its failure
@@ -36,6 +36,7 @@ from gaitcli.run.cluster import Task, completed
 from gaitcli.run.cluster import workers as cluster_workers
 from gaitcli.run.config import PipelineConfig, to_yaml
 from gaitcli.run.pipeline import needed_stages
+from gaitcli.run.trial import is_walk, open_trial, output_root, session_walks
 
 BATCH_SUMMARY = "batch_summary.csv"
 #: folders never searched for trials: outputs, and hidden or cache folders
@@ -97,8 +98,10 @@ class BatchResult:
 
 
 def find_trials(lab_dir: str | Path) -> list[Path]:
-    """Every folder at or below ``lab_dir`` holding a ``subject.yaml``, sorted; outputs and hidden folders are
-    not searched."""
+    """Every trial at or below ``lab_dir``: each folder holding a ``subject.yaml`` (a trial folder), or each walk
+    of such a folder that is a session (:func:`gaitcli.run.trial.session_walks`); sorted. Outputs and hidden
+    folders are not searched. A folder whose subject.yaml cannot be read counts as one trial (running it
+    gives the reason)."""
     lab_dir = Path(lab_dir)
     if not lab_dir.is_dir():
         raise InputError(lab_dir, None, "lab folder not found (expected a folder of trial folders)")
@@ -106,7 +109,11 @@ def find_trials(lab_dir: str | Path) -> list[Path]:
     for root, dirs, files in os.walk(lab_dir):
         dirs[:] = sorted(d for d in dirs if d not in NOT_SEARCHED and not d.startswith("."))
         if "subject.yaml" in files:
-            found.append(Path(root))
+            try:
+                walks = session_walks(Path(root))
+            except GaitError:
+                walks = None
+            found += walks if walks else [Path(root)]
     return sorted(found)
 
 
@@ -121,10 +128,18 @@ def failure_rows(name: str, key: str, cfg: PipelineConfig, code: int, reason: st
     return [BatchRow(name, s, "failed", code, reason, round(wall_s, 3), key) for s in stages_of(cfg)]
 
 
-def input_key(folder: Path, cfg: PipelineConfig) -> str:
-    """SHA-256 of the trial folder's files (names and contents; not its outputs) and the resolved configuration."""
+def input_key(ref: Path, cfg: PipelineConfig) -> str:
+    """SHA-256 of a trial's files (names and contents; not its outputs) and the resolved configuration: every file
+    of a trial folder; a walk's own C3D and the session's subject and static files."""
     digest = hashlib.sha256(to_yaml(cfg).encode())
-    for path in sorted(p for p in folder.iterdir() if p.is_file()):
+    if is_walk(ref):
+        try:
+            files = open_trial(ref).input_files()
+        except GaitError:  # the walk's run says why in its own rows
+            files = [ref]
+    else:
+        files = [p for p in ref.iterdir() if p.is_file()]
+    for path in sorted(files):
         digest.update(path.name.encode())
         try:
             with open(path, "rb") as f:
@@ -195,11 +210,11 @@ def run_trial(folder: str, name: str, cfg: PipelineConfig, key: str, stale: Sequ
     return rows
 
 
-def remove_stale_parts(folder: Path, cfg: PipelineConfig) -> None:
+def remove_stale_parts(ref: Path, cfg: PipelineConfig) -> None:
     """Remove what killed runs left of this trial's stage folders (hidden ``.part`` folders)."""
     from gaitcli.core.registry import stage
 
-    out = folder / "gait_out"
+    out = output_root(ref)
     if out.is_dir():
         for name in stages_of(cfg):
             remove_stale(out / stage(name).output_folder(cfg.section(name)))
@@ -237,11 +252,12 @@ def write_summary(path: Path, rows: Sequence[BatchRow]) -> Path:
     return path
 
 
-def plan(lab_dir: Path, cfg: PipelineConfig, *, force: bool = False) -> tuple[list[BatchRow], list[tuple]]:
+def plan(lab_dir: Path, cfg: PipelineConfig, *, force: bool = False,
+         summary_path: Path | None = None) -> tuple[list[BatchRow], list[tuple]]:
     """What is current (rows) and what must run (``(folder, name, key, stale stages)`` per trial), decided in the
-    client."""
+    client; ``summary_path`` the previous batch's summary (default ``lab_dir/batch_summary.csv``)."""
     trials = find_trials(lab_dir)
-    previous = {} if force else read_summary(lab_dir / BATCH_SUMMARY)
+    previous = {} if force else read_summary(summary_path or lab_dir / BATCH_SUMMARY)
     rows, todo = [], []
     for folder in trials:
         name = folder.relative_to(lab_dir).as_posix() if folder != lab_dir else "."
@@ -263,7 +279,8 @@ def plan(lab_dir: Path, cfg: PipelineConfig, *, force: bool = False) -> tuple[li
 
 def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None = None, scheduler: str | None = None,
               force: bool = False, plots: bool = True, on_rows: Callable[[list[BatchRow]], None] | None = None,
-              on_start: Callable[[int, int, str | None], None] | None = None) -> BatchResult:
+              on_start: Callable[[int, int, str | None], None] | None = None,
+              summary_path: Path | None = None) -> BatchResult:
     """Run the pipeline over every trial below ``lab_dir`` (see the module docstring) and write
     ``batch_summary.csv`` there. An interrupt leaves the previous ``batch_summary.csv`` as it was.
 
@@ -284,6 +301,8 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None =
         (current, or a kept failure).
     on_start : callable, optional
         ``on_start(total trials, trials to run, dashboard address or None)`` before any trial runs.
+    summary_path : Path, optional
+        Where ``batch_summary.csv`` goes (default: ``lab_dir``; a session's: its ``gait_out/session/``).
 
     Returns
     -------
@@ -292,7 +311,8 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None =
     """
     started = time.perf_counter()
     lab_dir = Path(lab_dir).resolve()  # the workers may run in other folders
-    rows, todo = plan(lab_dir, cfg, force=force)
+    summary_path = Path(summary_path) if summary_path is not None else lab_dir / BATCH_SUMMARY
+    rows, todo = plan(lab_dir, cfg, force=force, summary_path=summary_path)
     dashboard = None
     if on_rows is not None and rows:
         for name in dict.fromkeys(r.trial for r in rows):
@@ -319,7 +339,8 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None =
             for folder, *_ in todo:  # what a stopped worker was writing
                 remove_stale_parts(Path(folder), cfg)
             raise
-    write_summary(lab_dir / BATCH_SUMMARY, rows)
+    summary_path.parent.mkdir(parents=True, exist_ok=True)
+    write_summary(summary_path, rows)
     return BatchResult(rows, round(time.perf_counter() - started, 3), dashboard)
 
 

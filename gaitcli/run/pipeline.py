@@ -107,7 +107,7 @@ class TrialRun:
         bundled = trial is None
         self.trial = open_trial(sample_trial() if bundled else trial) if trial is not None or needs_trial else None
         if out is None:
-            out = Path.cwd() / "gait_out" if bundled else self.trial.folder / "gait_out"
+            out = Path.cwd() / "gait_out" if bundled else self.trial.out_root
         self.out_root = Path(out)
         self.cfg = cfg
         self.files = {k: Path(v) for k, v in (files or {}).items() if v is not None}
@@ -117,8 +117,8 @@ class TrialRun:
 
     @property
     def title(self) -> str:
-        """The figures' title: the trial folder's name ("" without a trial)."""
-        return self.trial.folder.resolve().name if self.trial is not None else ""
+        """The figures' title: the trial folder's name, and a walk's ("" without a trial)."""
+        return self.trial.title if self.trial is not None else ""
 
     def recording(self) -> Recording:
         if self.trial is None:
@@ -138,7 +138,7 @@ class TrialRun:
     def attrs(self, name: str, history: tuple[str, ...] = ()) -> dict:
         attrs = provenance(to_yaml(self.cfg), {**self.inputs, **self.read.get(name, {})}, history)
         attrs["stage_key"] = self.stage_key(name)
-        attrs["trial"] = self.title or None
+        attrs["trial"] = self.trial.name if self.trial is not None else None
         return attrs
 
     def output_folder(self, name: str) -> Path:
@@ -174,7 +174,7 @@ class TrialRun:
                 return None
             path = written(dep) if written is not None else None
             if path is None:
-                path = fresh_output(trial.folder, dep, self.cfg, out=self.out_root, progress=progress, plots=plots)
+                path = fresh_output(trial.ref, dep, self.cfg, out=self.out_root, progress=progress, plots=plots)
             input_paths[dep] = path
             self.record(name, path)
             return _read(stage(dep), path)

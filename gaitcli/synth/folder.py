@@ -100,3 +100,37 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
                                     marker_set=marker_set))
     write_truth(out / "truth", trial)
     return trial
+
+
+#: the names a Nexus session gives its trials
+SESSION_STATIC, SESSION_WALK = "Static 01.c3d", "Walking {:02d}.c3d"
+
+
+def write_session(out_dir: str | Path, *, walks: int = 3, seed: int = 0, **options) -> list[SyntheticTrial]:
+    """``gait synth --session``: a session folder as Nexus leaves one: ``Static 01.c3d``, ``Walking 01.c3d`` …
+    (walk k with the seed ``seed + k - 1``), one subject.yaml, and each walk's truth in ``truth/Walking 0k/``.
+
+    ``options``: those of :func:`write_trial`; returns the walks written.
+    """
+    from gaitcli.io.atomic import atomic_path, make_parent
+    from gaitcli.io.c3d_write import write_c3d
+
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(out, None, "is a file (expected the session folder to write)")
+    settings = {"condition": "normal", "mass_kg": 75.0, "stature_m": 1.78, "sex": "male",
+                "marker_set": "dissertation", "gait": "normative", **options}
+    written = []
+    for k in range(1, walks + 1):
+        trial = simulate_trial(seed=seed + k - 1, **settings)
+        name = SESSION_WALK.format(k)
+        make_parent(out / name)
+        write_c3d(out / name, trial.markers, trial.plates, metadata=trial.metadata)
+        if k == 1:
+            write_c3d(out / SESSION_STATIC, trial.static, [], metadata=trial.metadata)
+            with atomic_path(out / "subject.yaml") as tmp:
+                tmp.write_text(subject_yaml(trial, **{key: settings[key] for key in
+                                                      ("condition", "mass_kg", "stature_m", "sex", "marker_set")}))
+        write_truth(out / "truth" / Path(name).stem, trial)
+        written.append(trial)
+    return written

@@ -1,0 +1,91 @@
+"""A session (``gait run SESSION``): every walk of a session folder through the pipeline on the workers of
+:func:`gaitcli.run.batch.run_batch`, each walk's outputs in ``gait_out/<walk>/``, then the session's own in
+``gait_out/session/``: ``strides.csv`` (every stride of every walk and why one is not used), ``cycle.csv``
+(mean ± SD per side over the used strides), ``walks.csv`` (Table 3.1 per walk, their mean and SD),
+``summary.json`` (:mod:`gaitcli.signal.session`); the walks' batch summary in ``gait_out/batch_summary.csv``."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from gaitcli.core.events import Events
+from gaitcli.core.registry import stage
+from gaitcli.errors import InputError
+from gaitcli.io.atomic import check_output_folder, check_replaceable
+from gaitcli.io.outputs import stage_folder, write_json, write_table
+from gaitcli.run.batch import BATCH_SUMMARY, BatchResult, run_batch, stages_of
+from gaitcli.run.config import PipelineConfig
+from gaitcli.run.trial import SESSION_OUTPUT, output_root, session_walks
+from gaitcli.signal.session import SessionStrides, Walk, pool
+
+
+@dataclass(frozen=True)
+class SessionRun:
+    """What ``gait run SESSION`` did: the walks' batch, and the pooled strides (None without idyn in the
+    pipeline or without a walk whose idyn output exists)."""
+
+    folder: Path
+    walks: list[Path]
+    batch: BatchResult
+    pooled: SessionStrides | None
+
+    @property
+    def output(self) -> Path:
+        return self.folder / "gait_out" / SESSION_OUTPUT
+
+
+def session_folder(folder: str | Path) -> list[Path] | None:
+    """The walks of ``folder`` when it is a session folder (at least one walk), else None (a trial folder)."""
+    walks = session_walks(Path(folder)) if Path(folder).is_dir() else None
+    return walks or None
+
+
+def read_walk(ref: Path, cfg: PipelineConfig) -> Walk | None:
+    """A walk's filter and idyn outputs as :class:`~gaitcli.signal.session.Walk` (None where idyn wrote none)."""
+    root = output_root(ref)
+    idyn = root / stage("idyn").output_folder(cfg.section("idyn"))
+    filtered = root / stage("filter").output_folder(cfg.section("filter"))
+    if not (idyn / "gait_cycle.csv").is_file() or not (filtered / "events.csv").is_file():
+        return None
+    events = pd.read_csv(filtered / "events.csv")
+    coordinates = pd.read_csv(idyn / "coordinates.csv", usecols=["time_s", "pelvis_x"])
+    return Walk(name=ref.stem, events=Events(frame=events.frame, time_s=events.time_s, side=events.side,
+                                             kind=events.event, source=events.source),
+                time_s=coordinates.time_s.to_numpy(), pelvis_x_m=coordinates.pelvis_x.to_numpy(),
+                cycles=pd.read_csv(idyn / "gait_cycle.csv"), features=json.loads((idyn / "summary.json").read_text()))
+
+
+def write_session(folder: Path, pooled: SessionStrides) -> Path:
+    """``gait_out/session/`` whole (replacing the previous one)."""
+    target = folder / "gait_out" / SESSION_OUTPUT
+    check_replaceable(target)
+    with stage_folder(target) as tmp:
+        for name, table in (("strides.csv", pooled.strides), ("cycle.csv", pooled.cycle), ("walks.csv", pooled.walks)):
+            write_table(tmp / name, {c: table[c].to_numpy() for c in table.columns})
+        write_json(tmp / "summary.json", pooled.summary())
+    return target
+
+
+def run_session(folder: str | Path, cfg: PipelineConfig, **batch) -> SessionRun:
+    """Run the pipeline on every walk of the session ``folder`` (``batch``: the options of
+    :func:`gaitcli.run.batch.run_batch`), then pool its strides (module docstring)."""
+    folder = Path(folder).resolve()
+    walks = session_folder(folder)
+    if walks is None:
+        raise InputError(folder, None, "no walks (expected the session's walking C3Ds beside its static, or "
+                                       "`trials:` in subject.yaml naming them)")
+    check_output_folder(folder / "gait_out" / SESSION_OUTPUT)
+    summary_path = folder / "gait_out" / BATCH_SUMMARY
+    result = run_batch(folder, cfg, summary_path=summary_path, **batch)
+    pooled = None
+    if "idyn" in stages_of(cfg):
+        read = [read_walk(w, cfg) for w in walks]
+        read = [w for w in read if w is not None]
+        if read:
+            pooled = pool(read)
+            write_session(folder, pooled)
+    return SessionRun(folder, walks, result, pooled)
