@@ -535,3 +535,76 @@ def test_the_real_session_without_subject_yaml(shared_pig_dir, tmp_path):
     assert (m["PROCESSING:RightAnkleWidth"], m["PROCESSING:LeftAnkleWidth"]) == (89.0, 85.0)
     assert (m["PROCESSING:RightLegLength"], m["PROCESSING:LeftLegLength"], m["PROCESSING:InterAsisDistance"]) == \
         (866.0, 877.0, 306.0)
+
+
+# ------------------------------------------------------------------------------------------ session folders
+
+def _session(tmp_path, names, subject=None):
+    """A session folder of empty files named ``names`` (discovery reads no C3D) and a subject.yaml."""
+    folder = tmp_path / "Session 1"
+    folder.mkdir()
+    (folder / "subject.yaml").write_text(yaml.safe_dump(subject or BASE))
+    for name in names:
+        (folder / name).write_bytes(b"")
+    return folder
+
+
+def test_a_session_finds_its_walks_in_natural_order_and_its_static(tmp_path):
+    from gaitcli.run.trial import session_walks
+
+    folder = _session(tmp_path, ["Walking 10.c3d", "Walking 02.c3d", "Static 01.c3d", "Walking 01.C3D", ".x.c3d",
+                                 "notes.txt"])
+    assert [p.name for p in session_walks(folder)] == ["Walking 01.C3D", "Walking 02.c3d", "Walking 10.c3d"]
+    walk = open_trial(folder / "Walking 02.c3d")
+    assert walk.walk and walk.name == "Walking 02" and walk.static_path == folder / "Static 01.c3d"
+    assert walk.out_root == folder / "gait_out" / "Walking 02" and walk.ref == folder / "Walking 02.c3d"
+    assert walk.title == "Session 1 / Walking 02"
+    assert walk.input_files() == [folder / "subject.yaml", folder / "Walking 02.c3d", folder / "Static 01.c3d"]
+    with pytest.raises(InputError, match=r"a session of 3 walks \('Walking 01.C3D' …\): `gait run .*` runs every "
+                                         r"walk; a command runs one walk named by its file"):
+        open_trial(folder)
+
+
+def test_a_trial_folder_is_no_session_and_one_walk_is_taken(tmp_path):
+    from gaitcli.run.trial import session_walks
+
+    assert session_walks(sample_trial("normal")) is None
+    folder = _session(tmp_path, ["walk.c3d"])
+    trial = open_trial(folder)
+    assert trial.walk and trial.trial_path == folder / "walk.c3d" and trial.static_path is None
+    assert trial.out_root == folder / "gait_out" / "walk"
+
+
+def test_trials_and_static_globs(tmp_path):
+    from gaitcli.run.trial import session_walks
+
+    subject = {**BASE, "trials": ["Walking 0*.c3d", "Fast *.c3d"], "static": "Cal*.c3d"}
+    folder = _session(tmp_path, ["Walking 01.c3d", "Walking 02.c3d", "Walking 10.c3d", "Fast 1.c3d", "Cal 03.c3d"],
+                      subject)
+    assert [p.name for p in session_walks(folder)] == ["Walking 01.c3d", "Walking 02.c3d", "Fast 1.c3d"]
+    assert open_trial(folder / "Fast 1.c3d").static_path == folder / "Cal 03.c3d"
+    (folder / "subject.yaml").write_text(yaml.safe_dump({**subject, "trials": "Slow *.c3d"}))
+    with pytest.raises(InputError, match="subject.yaml: trials: 'Slow \\*.c3d' matches no file in"):
+        session_walks(folder)
+    (folder / "subject.yaml").write_text(yaml.safe_dump({**subject, "trials": "../*.c3d"}))
+    with pytest.raises(InputError, match="trials: got '../\\*.c3d' \\(expected a file name or glob inside"):
+        session_walks(folder)
+    _error(_with(trials=[3]), "s/subject.yaml")
+
+
+@pytest.mark.parametrize(("names", "static", "match"), [
+    (["Static 01.c3d", "Static 02.c3d", "Walking 01.c3d"], None, "static: 2 static trials: 'Static 01.c3d', "
+                                                                  "'Static 02.c3d' \\(expected one, or `static:`"),
+    (["Cal 1.c3d", "Cal 2.c3d", "Walking 01.c3d"], "Cal*.c3d", "static: 'Cal\\*.c3d' matches 2 files"),
+    (["Walking 01.c3d"], "Cal*.c3d", "static: 'Cal\\*.c3d' matches 0 files \\(expected one\\)"),
+])
+def test_a_static_must_be_one(tmp_path, names, static, match):
+    folder = _session(tmp_path, names, {**BASE, "static": static} if static else None)
+    with pytest.raises(InputError, match=match):
+        open_trial(folder / "Walking 01.c3d")
+
+
+def test_two_statics_one_named(tmp_path):
+    folder = _session(tmp_path, ["Static 01.c3d", "Static 02.c3d", "Walking 01.c3d"],
+                      {**BASE, "static": "Static 02.c3d"})
+    assert open_trial(folder / "Walking 01.c3d").static_path == folder / "Static 02.c3d"

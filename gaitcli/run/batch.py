@@ -1,19 +1,17 @@
 """Many trials at once (``gait batch``), on the workers of :func:`gaitcli.run.cluster.workers`.
 
 :func:`find_trials` finds every trial below a lab folder (a folder with ``subject.yaml``, or each walk of such a
-folder that is a session; ``gait_out`` and hidden folders are not searched). :func:`plan` decides, in this process and before any worker starts, what
-is current: a trial whose every stage's output was made from the same inputs and configuration is ``skipped``
-(its key figures read from the outputs' ``summary.json``), and a trial that failed on bad input (exit 2) in the
-previous batch with the same files and configuration (``batch_summary.csv``'s ``input_key``) keeps its failure
-without being run again. The rest become tasks (:func:`run_trial`), each calling the pipeline's stage
-functions (:func:`gaitcli.run.pipeline.run_stages`), never the command line; a trial's failure is its rows,
-never the batch's. A worker that dies mid-trial leaves only the hidden ``.part`` folder of the stage it was
-writing (outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); on a Dask cluster the scheduler runs
-that trial once more on another worker and marks it failed after a second death
-(``distributed.scheduler.allowed-failures: 1`` on a local cluster). Results stay on disk: this process holds
-one row per trial × stage and at most a few tasks per worker in flight, so its memory does not grow with the
-number of trials waiting.
-"""
+folder that is a session; ``gait_out`` and hidden folders are not searched). :func:`plan` decides, in this process
+and before any worker starts, what is current: a trial whose every stage's output was made from the same inputs and
+configuration is ``skipped`` (its key figures read from the outputs' ``summary.json``), and a trial that failed on
+bad input (exit 2) in the previous batch with the same files and configuration (``batch_summary.csv``'s
+``input_key``) keeps its failure without being run again. The rest become tasks (:func:`run_trial`), each calling
+the pipeline's stage functions (:func:`gaitcli.run.pipeline.run_stages`), never the command line; a trial's failure
+is its rows, never the batch's. A worker that dies mid-trial leaves only the hidden ``.part`` folder of the stage
+it was writing (outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); on a Dask cluster the scheduler runs
+that trial once more on another worker and marks it failed after a second death (``distributed.scheduler.allowed-
+failures: 1`` on a local cluster). Results stay on disk: this process holds one row per trial × stage and at most a
+few tasks per worker in flight, so its memory does not grow with the number of trials waiting. """
 
 from __future__ import annotations
 

@@ -1,0 +1,51 @@
+"""A session folder as Nexus leaves one (``gait synth --session``): ``gait run SESSION`` runs every walk into
+``gait_out/<walk>/`` and pools their strides into ``gait_out/session/``; a rerun runs nothing; a single-trial
+command on the session names the choice."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+
+from .conftest import gait
+
+WALKS = ("Walking 01", "Walking 02")
+
+
+def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
+    made = gait("synth", "S", "--session", "--walks", "2", "--strides", "2", "--seed", "4", cwd=tmp_path)
+    assert made.returncode == 0, made.describe()
+    session = tmp_path / "S"
+    assert sorted(p.name for p in session.glob("*.c3d")) == ["Static 01.c3d", "Walking 01.c3d", "Walking 02.c3d"]
+    run = gait("run", "S", "--no-plots", cwd=tmp_path)
+    assert run.returncode == 0, run.describe()
+    assert "2 ok, 0 failed, 0 skipped" in run.stdout and "session: wrote" in run.stderr
+    out = session / "gait_out"
+    for walk in WALKS:
+        assert (out / walk / "idyn" / "gait_cycle.csv").is_file() and (out / walk / "filter" / "events.csv").is_file()
+    strides = pd.read_csv(out / "session" / "strides.csv")
+    cycles = {w: pd.read_csv(out / w / "idyn" / "gait_cycle.csv") for w in WALKS}
+    complete = strides[strides.status != "rejected"]
+    assert len(complete) == sum(c.groupby(["side", "stride"]).ngroups for c in cycles.values())
+    # the session's mean: every right stride of both walks' gait_cycle.csv, averaged here directly
+    right = np.array([block.knee_r_flexion.to_numpy() for c in cycles.values()
+                      for _, block in c[c.side == "r"].groupby("stride")])
+    cycle = pd.read_csv(out / "session" / "cycle.csv")
+    np.testing.assert_allclose(cycle[cycle.side == "r"].knee_r_flexion_mean, right.mean(axis=0), rtol=1e-5,
+                               atol=1e-4)
+    np.testing.assert_allclose(cycle[cycle.side == "r"].knee_r_flexion_sd, right.std(axis=0, ddof=1), rtol=1e-4,
+                               atol=1e-4)
+    walks = pd.read_csv(out / "session" / "walks.csv").set_index("walk")
+    for walk in WALKS:
+        idyn = json.loads((out / walk / "idyn" / "summary.json").read_text())
+        assert walks.loc[walk, "speed_m_s"] == np.float64(f"{idyn['speed_m_s']:.6g}")
+    summary = json.loads((out / "session" / "summary.json").read_text())
+    assert summary["walks"] == 2 and abs(summary["table_3_1_mean"]["speed_m_s"] - walks.loc["mean", "speed_m_s"]) < 1e-5
+
+    again = gait("run", "S", "--no-plots", cwd=tmp_path)
+    assert again.returncode == 0 and "0 ok, 0 failed, 2 skipped" in again.stdout, again.describe()
+    one = gait("idyn", "S", cwd=tmp_path)
+    assert one.returncode == 2 and len(one.stderr_lines) == 1, one.describe()
+    assert "a session of 2 walks" in one.stderr and "gait run" in one.stderr and "Walking 01.c3d" in one.stderr
