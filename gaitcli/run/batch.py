@@ -11,7 +11,8 @@ is its rows, never the batch's. A worker that dies mid-trial leaves only the hid
 it was writing (outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); on a Dask cluster the scheduler runs
 that trial once more on another worker and marks it failed after a second death (``distributed.scheduler.allowed-
 failures: 1`` on a local cluster). Results stay on disk: this process holds one row per trial × stage and at most a
-few tasks per worker in flight, so its memory does not grow with the number of trials waiting. """
+few tasks per worker in flight, so its memory does not grow with the number of trials waiting.
+"""
 
 from __future__ import annotations
 
