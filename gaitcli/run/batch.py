@@ -9,9 +9,10 @@ bad input (exit 2) in the previous batch with the same files and configuration (
 the pipeline's stage functions (:func:`gaitcli.run.pipeline.run_stages`), never the command line; a trial's failure
 is its rows, never the batch's. A worker that dies mid-trial leaves only the hidden ``.part`` folder of the stage
 it was writing (outputs appear whole or not at all, :mod:`gaitcli.io.atomic`); on a Dask cluster the scheduler runs
-that trial once more on another worker and marks it failed after a second death (``distributed.scheduler.allowed-
-failures: 1`` on a local cluster). Results stay on disk: this process holds one row per trial × stage and at most a
-few tasks per worker in flight, so its memory does not grow with the number of trials waiting.
+that trial once more on another worker and marks it failed after a second death
+(``distributed.scheduler.allowed-failures: 1`` on a local cluster). Results stay on disk: this process holds one
+row per trial × stage and at most a few tasks per worker in flight, so its memory does not grow with the number of
+trials waiting.
 """
 
 from __future__ import annotations
