@@ -581,9 +581,21 @@ def report_command(console: Console, out_dir, reference, exports):
                 console.info(f"report: exported {path}")
 
 
+#: the options of the gait group itself, taken anywhere on the command line (``gait idyn TRIAL --json``)
+GLOBAL_FLAGS = ("--quiet", "-q", "--json", "--debug")
+
+
+def global_options_first(argv: list[str]) -> list[str]:
+    """``argv`` with the group's flags (:data:`GLOBAL_FLAGS`) given after the subcommand moved before it, so that
+    they work in either place; nothing after ``--`` is moved."""
+    end = argv.index("--") if "--" in argv else len(argv)
+    flags = [a for a in argv[:end] if a in GLOBAL_FLAGS]
+    return flags + [a for a in argv[:end] if a not in GLOBAL_FLAGS] + argv[end:]
+
+
 def main(argv: list[str] | None = None) -> int:
     """Console-script entry point; maps errors to exit codes."""
-    argv = list(sys.argv[1:] if argv is None else argv)
+    argv = global_options_first(list(sys.argv[1:] if argv is None else argv))
     debug = "--debug" in argv
     previous = warnings.showwarning
     warnings.showwarning = _show_warning

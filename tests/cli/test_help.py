@@ -36,3 +36,17 @@ def test_json_prints_one_document_even_when_earlier_stages_run(tmp_path, monkeyp
     summary = json.loads(capsys.readouterr().out)
     assert summary["dof"] == 27 and "rms_residual_force_N" in summary
     assert (tmp_path / "gait_out" / "filter" / "summary.json").is_file()
+
+
+def test_global_options_are_taken_after_the_subcommand_too():
+    from gaitcli.cli import global_options_first
+
+    assert global_options_first(["idyn", "T", "--json", "-q"]) == ["--json", "-q", "idyn", "T"]
+    assert global_options_first(["--debug", "run", "T", "--no-plots"]) == ["--debug", "run", "T", "--no-plots"]
+    assert global_options_first(["filter", "--", "-q"]) == ["filter", "--", "-q"]  # a trial named -q
+
+
+def test_debug_after_the_subcommand_shows_the_traceback(tmp_path, capsys):
+    assert main(["filter", str(tmp_path / "none"), "--debug"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" in err and err.strip().splitlines()[-1].startswith("gait: error: ")
