@@ -293,3 +293,18 @@ def test_a_number_beyond_a_double_is_an_input_error_not_infinity(tmp_path, cell,
         (c / "normal" / "gait_out" / "idyn" / "summary.json").write_text(f'{{"objective": {summary}}}')
         with pytest.raises(InputError, match="is beyond the range of a double"):
             compare_trees(write_tree(tmp_path / "d"), c)
+
+
+def test_a_batch_summarys_run_state_is_not_compared(tmp_path):
+    """Two labs of the same results: one ran its trials, the other found them current (status skipped), and a
+    failure's reason names each lab's own path; their exit codes and figures still count."""
+    header = "trial,stage,status,exit_code,reason,wall_time_s,input_key,speed_m_s\n"
+    a, b = write_tree(tmp_path / "a"), write_tree(tmp_path / "b")
+    (a / "batch_summary.csv").write_text(header + "normal,idyn,ok,0,,1.2,k1,1.31\n"
+                                                  f"bad,filter,failed,2,{a}/bad/trial.c3d: not a C3D,0.1,k2,\n")
+    (b / "batch_summary.csv").write_text(header + "normal,idyn,skipped,0,,0,k1,1.31\n"
+                                                  f"bad,filter,failed,2,{b}/bad/trial.c3d: not a C3D,0,k2,\n")
+    assert not compare_trees(a, b).findings
+    (b / "batch_summary.csv").write_text(header + "normal,idyn,unconverged,3,,0,k1,1.29\n"
+                                                  f"bad,filter,failed,2,{b}/bad/trial.c3d: not a C3D,0,k2,\n")
+    assert {f.column for f in compare_trees(a, b).findings} == {"exit_code", "speed_m_s"}

@@ -153,6 +153,11 @@ _STATISTIC = re.compile(r"_(mean|sd)$")
 VOLATILE_KEYS = ("elapsed_s", "solve_time_s", "wall_time_s", "reused", "case_key", "version", "gaitcli_version",
                  "created", "created_at", "date", "hostname", "cwd")
 
+#: per table file name, columns that record how a run went rather than what it found: a batch's ``status`` (a
+#: rerun skips a current trial: "skipped" against "ok") and ``reason`` (a failure's message names the lab's own
+#: absolute paths); its ``exit_code`` and figures are compared
+RUN_STATE_COLUMNS = {"batch_summary.csv": ("status", "reason")}
+
 #: the columns that say where in a table a difference is (those present, in this order)
 WHERE_COLUMNS = ("time_s", "cycle_pct", "side", "stride", "case")
 
@@ -464,7 +469,9 @@ def _where(table: pd.DataFrame, row: int) -> str:
 
 def _compare_csv(path_a: Path, path_b: Path, rel: str, tol: Tolerances) -> list[Finding]:
     """Two tables compared chunk by chunk (:func:`_csv_chunks`); each column's findings over the chunks merged
-    (:func:`_merged`). A column is compared as text in the chunks where a cell of it is not a number."""
+    (:func:`_merged`). A column is compared as text in the chunks where a cell of it is not a number;
+    :data:`RUN_STATE_COLUMNS` are not compared."""
+    tol = replace(tol, ignore=tol.ignore + RUN_STATE_COLUMNS.get(Path(rel).name, ()))
     with closing(_csv_chunks(path_a)) as chunks_a, closing(_csv_chunks(path_b)) as chunks_b:
         return _compare_chunks(chunks_a, chunks_b, rel, tol, path_a, path_b)
 
