@@ -158,3 +158,16 @@ def test_an_optional_stage_is_asked_for_only_with_a_trial(probe, tmp_path, monke
 
     run, other = TrialRun(trial, None, cfg), TrialRun(trial, None, changed)
     assert run.fresh("probe") is not None and other.fresh("probe") is None  # its optional stage's configuration
+
+
+def test_each_muscle_variant_has_its_own_folder():
+    from gaitcli.core.registry import stage
+    from gaitcli.muscles.stage import METHODS, MusclesConfig
+
+    folders = {stage("muscles").output_folder(MusclesConfig(method=m, side=s, phase=p, objective=o))
+               for m in METHODS for s in ("r", "l") for p in ("cycle", "swing")
+               for o in ("metabolic", "crowninshield_brand")}
+    assert len(folders) == len(METHODS) * 8
+    assert stage("muscles").output_folder(MusclesConfig()) == "muscles/eid"
+    assert stage("muscles").output_folder(MusclesConfig(method="so", side="l", phase="swing",
+                                                        objective="crowninshield_brand")) == "muscles/so_l_swing_cb"

@@ -50,6 +50,14 @@ class MusclesConfig:
     phase: str = parameter("cycle", choices=PHASES, help="A stride recorded on the plates (periodic) or a swing "
                                                          "phase (default: cycle).")
 
+    @property
+    def variant(self) -> str:
+        """The output folder's name below ``muscles/``: the method, then ``_l`` for the left leg, ``_swing`` for a
+        swing phase and ``_cb`` for the Crowninshield–Brand objective, so that no variant replaces another's
+        results (the default, right leg over a stride with the metabolic objective, is the method alone)."""
+        return (self.method + ("_l" if self.side == "l" else "") + ("_swing" if self.phase == "swing" else "")
+                + ("_cb" if self.objective == "crowninshield_brand" else ""))
+
 
 @dataclass(frozen=True)
 class MuscleOptions:

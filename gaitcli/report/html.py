@@ -195,7 +195,8 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
         figures = muscle_figures(h5, work / "muscles" / method, title=name)
         cost = summary.get("metabolic_cost_J")
         state = "" if summary.get("converged", True) else ' <span class="bad">(did not converge)</span>'
-        parts.append(f"<h2>Muscles: {html.escape(method.upper())}{state}</h2>"
+        variant = method.upper().replace("_L", ", left leg").replace("_SWING", ", swing").replace("_CB", ", Σ(F/Fmax)³")
+        parts.append(f"<h2>Muscles: {html.escape(variant)}{state}</h2>"
                      f"<p>metabolic cost of one leg over the interval: {_number(cost, 1)} J; cost of transport "
                      f"{_number(summary.get('cost_of_transport_J_per_m'), 1)} J/m</p>")
         names = {"forces.png": "forces (N)", "activations.png": "activations (0–1)",

@@ -89,7 +89,7 @@ MUSCLES = register(Stage(
     name="muscles", config=MusclesConfig, depends=("idyn",), run=_muscles,
     write=_writer("gaitcli.muscles.outputs", "write_muscle_outputs"),
     result=MuscleResult, h5_name="muscles.h5",
-    plots=_figures("muscle_figures"), folder=lambda cfg: f"muscles/{cfg.method}",
+    plots=_figures("muscle_figures"), folder=lambda cfg: f"muscles/{cfg.variant}",
     converged=lambda result: result.converged, unconverged=_unconverged_muscles))
 
 

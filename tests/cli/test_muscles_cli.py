@@ -269,7 +269,7 @@ def test_eid_and_mso_converge_with_bounded_excitations(runs, method, side):
     name = method if side == "r" else f"{method}_l"
     run = result(runs, name)
     assert run.returncode == 0, run.describe()
-    folder = runs[1] / name / "gait_out" / "muscles" / method
+    folder = runs[1] / name / "gait_out" / "muscles" / name  # each variant its own folder: muscles/eid_l
     assert_all_files(folder)
     info = summary_of(folder)
     assert set(MUSCLE_SUMMARY_KEYS) <= set(info)
@@ -309,7 +309,7 @@ def test_eid_objectives(runs):
     satisfies the same constraints (4.26–4.28); both are reported under their own objective."""
     run = result(runs, "cb")
     assert run.returncode == 0, run.describe()
-    cb = summary_of(runs[1] / "cb" / "gait_out" / "muscles" / "eid")
+    cb = summary_of(runs[1] / "cb" / "gait_out" / "muscles" / "eid_cb")
     metabolic = summary_of(runs[1] / "eid" / "gait_out" / "muscles" / "eid")
     assert cb["objective"] == "crowninshield_brand" and metabolic["objective"] == "metabolic"
     assert cb["converged"] is True and cb["interval_s"] == pytest.approx(metabolic["interval_s"], abs=1e-9)
@@ -320,7 +320,7 @@ def test_validate_reproduces_swing_angles_and_cost(runs):
     """Forward integration driven by the EID excitations (4.5.4): < 3° RMS, cost within 10 %."""
     run = result(runs, "validate")
     assert run.returncode == 0, run.describe()
-    info = summary_of(runs[1] / "validate" / "gait_out" / "muscles" / "eid")
+    info = summary_of(runs[1] / "validate" / "gait_out" / "muscles" / "eid_swing")
     assert info["phase"] == "swing" and info["converged"] is True
     assert info["validation_restarted_at_nodes"] is False  # one integration over the swing, as 4.5.4
     assert 0 <= info["validation_rms_deg"] < 3.0
@@ -387,7 +387,7 @@ def test_swing_phase_interval(runs):
     run = result(runs, "swing")
     assert run.returncode == 0, run.describe()
     trial = runs[1] / "swing"
-    folder = trial / "gait_out" / "muscles" / "so"
+    folder = trial / "gait_out" / "muscles" / "so_swing"
     assert_all_files(folder)
     info = summary_of(folder)
     start, end = info["interval_s"]
@@ -408,7 +408,7 @@ def test_left_side(runs):
     run = result(runs, "left")
     assert run.returncode == 0, run.describe()
     trial = runs[1] / "left"
-    folder = trial / "gait_out" / "muscles" / "so"
+    folder = trial / "gait_out" / "muscles" / "so_l"
     assert_all_files(folder)
     info = summary_of(folder)
     assert info["side"] == "l" and info["converged"] is True and info["periodic"] is True
