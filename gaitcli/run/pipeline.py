@@ -155,6 +155,27 @@ class TrialRun:
             return None
         return path if key == self.stage_key(name) else None
 
+    def why_stale(self, name: str) -> str | None:
+        """Why the stage's existing output will not do (None: there is none, or it is fresh): the settings it was
+        made with that differ from this run's, or changed input files."""
+        path = self.output_folder(name) / stage(name).h5_name
+        if not path.is_file():
+            return None
+        try:
+            made = json.loads(file_attrs(path).get("stage_key") or "{}")
+        except (InputError, ValueError):
+            return f"the output in {path.parent} cannot be read"
+        now = json.loads(self.stage_key(name))
+        if made == now:
+            return None
+        changed = [f"{section}.{key} {made_value} in the existing output, {value} asked"
+                   for section, settings in now["config"].items()
+                   for key, value in settings.items()
+                   if (made_value := made.get("config", {}).get(section, {}).get(key, "(none)")) != value]
+        if made.get("inputs") != now["inputs"]:
+            changed.append("the trial's files changed since")
+        return "; ".join(changed) or "it was made by another version of gaitcli"
+
     def record(self, name: str, path: Path) -> None:
         """``path`` read by stage ``name``: its SHA-256 goes into that stage's provenance."""
         self.read.setdefault(name, {})[str(path)] = sha256(path)
@@ -308,6 +329,10 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
                     continue
                 except (InputError, KeyError, OSError, ValueError, TypeError):  # older or damaged: make it anew
                     pass
+            else:
+                reason = run.why_stale(name)
+                if reason:  # a result of other settings is about to be replaced: say so
+                    warnings.warn(f"{name}: {reason}: running {name} again", GaitWarning, stacklevel=2)
         started = time.perf_counter()
         ctx = run.context(name, inputs={d: handoffs[d] for d in st.depends},
                           input_paths={d: sources[d] for d in st.depends}, static_recording=static_recording,

@@ -26,7 +26,7 @@ import yaml
 from gaitcli import __version__
 from gaitcli.resources import sample_trial
 
-from .conftest import FILTER_FILES, Result, build_once, copy_sample, gait_many, snapshot
+from .conftest import FILTER_FILES, Result, build_once, copy_sample, gait, gait_many, snapshot
 from .truth import (
     COP_M,
     FREE_MOMENT_NM,
@@ -316,3 +316,16 @@ def test_per_foot_grf_matches_truth(runs, which):
         assert e["free_moment_Nm"] <= FREE_MOMENT_NM, e
         # the filter's own effect (the unfiltered truth, 3 % of peak at the loading edge) is far larger
         assert e["unfiltered_rel"] > 3 * e["force_rel"][2], e
+
+
+def test_a_stage_run_again_for_other_settings_says_why(tmp_path):
+    """``gait filter --cutoff 8`` then ``gait idyn`` (which asks for the default 6 Hz): the filter runs again, and a
+    warning names the settings that differ; the next idyn reuses the 6 Hz filter without a word."""
+    trial = copy_sample("normal", tmp_path / "t")
+    assert gait("filter", trial, "--cutoff", "8", "--no-plots", cwd=tmp_path).returncode == 0
+    idyn = gait("idyn", trial, "--no-plots", cwd=tmp_path)
+    assert idyn.returncode == 0, idyn.describe()
+    assert ("gait: warning: filter: filter.cutoff_hz 8.0 in the existing output, 6.0 asked; "
+            "filter.force_cutoff_hz 8.0 in the existing output, 6.0 asked: running filter again") in idyn.stderr_lines
+    again = gait("idyn", trial, "--no-plots", cwd=tmp_path)
+    assert again.returncode == 0 and "running filter again" not in again.stderr, again.describe()
