@@ -212,7 +212,13 @@ def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, momen
     residuals."""
     cfg = configure(pipeline, idyn={"angles": angles, "moments": moments, "frames": frames, "pose": pose},
                     filter={"events": events})
-    if exports:  # the export names checked before any stage runs: a name too long stops it with nothing written
+    _run_exporting(console, trial, ["idyn"], cfg, out=out, plots=not no_plots, exports=exports, show="idyn")
+
+
+def _run_exporting(console: Console, trial, names, cfg, *, out, plots: bool, exports, show: str | None) -> None:
+    """:meth:`Console.run`, then the exports of idyn's results (``--export``), whose file names are checked before
+    any stage runs: a name too long stops it with nothing written."""
+    if exports:
         from gaitcli.io.atomic import check_output_file
         from gaitcli.io.exports import export_targets
         from gaitcli.run.pipeline import TrialRun
@@ -220,7 +226,7 @@ def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, momen
         run = TrialRun(trial, out, cfg)
         for path in export_targets(run.out_root, set(exports), trial_name=run.trial.name):
             check_output_file(path)
-    console.run(trial, ["idyn"], cfg, out=out, plots=not no_plots, show="idyn")
+    console.run(trial, names, cfg, out=out, plots=plots, show=show)
     if exports:
         from gaitcli.io.exports import export_trial
 
@@ -396,19 +402,28 @@ def reference_command(console: Console, trials, out, pipeline, band):
 
 @gait.command("run")
 @_trial_options
+@_config_option(FilterConfig, "cutoff_hz", "--cutoff")
+@_config_option(IdynConfig, "frames", "--frames")
+@_config_option(IdynConfig, "pose", "--pose")
+@click.option("--export", "exports", type=Choice(("opensim", "c3d")), multiple=True,
+              help="Also export idyn's results (as gait idyn --export; one trial, not a session).")
 @click.pass_obj
-def run_command(console: Console, trial, out, pipeline, no_plots):
+def run_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, frames, pose, exports):
     """Run every stage of the pipeline on a trial, in order; on a session folder, on every walk (in parallel)
-    and then the session's strides pooled into gait_out/session/."""
+    and then the session's strides pooled into gait_out/session/. The options override the pipeline's."""
     from gaitcli.run.session import session_folder
 
-    cfg = configure(pipeline)
+    cfg = configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz},
+                    idyn={"frames": frames, "pose": pose})
     if trial is not None and session_folder(trial) is not None:
-        if out is not None:
-            raise click.UsageError("-o/--out is for one trial: a session's outputs go to SESSION/gait_out/")
+        for flag, given in (("-o/--out", out), ("--export", exports)):
+            if given:
+                raise click.UsageError(f"{flag} is for one trial: a session's outputs go to SESSION/gait_out/")
         _run_session(console, trial, cfg, plots=not no_plots)
         return
-    console.run(trial, cfg.stages, cfg, out=out, plots=not no_plots)
+    if exports and "idyn" not in cfg.stages:
+        raise click.UsageError("--export exports idyn's results: the pipeline has no idyn stage")
+    _run_exporting(console, trial, cfg.stages, cfg, out=out, plots=not no_plots, exports=exports, show=None)
 
 
 def _run_session(console: Console, folder: Path, cfg, *, plots: bool) -> None:

@@ -329,3 +329,17 @@ def test_a_stage_run_again_for_other_settings_says_why(tmp_path):
             "filter.force_cutoff_hz 8.0 in the existing output, 6.0 asked: running filter again") in idyn.stderr_lines
     again = gait("idyn", trial, "--no-plots", cwd=tmp_path)
     assert again.returncode == 0 and "running filter again" not in again.stderr, again.describe()
+
+
+def test_gait_run_takes_the_common_overrides(tmp_path):
+    trial = copy_sample("normal", tmp_path / "t")
+    run = gait("run", trial, "--cutoff", "8", "--frames", "anatomical", "--export", "opensim", "--no-plots",
+               cwd=tmp_path)
+    assert run.returncode == 0, run.describe()
+    out = trial / "gait_out"
+    assert json.loads((out / "filter" / "summary.json").read_text())["cutoff_hz"] == 8.0
+    assert yaml.safe_load(h5py.File(out / "idyn" / "idyn.h5", "r").attrs["config_yaml"])["idyn"]["frames"] == \
+        "anatomical"
+    assert (out / "export" / "opensim" / "external_loads.xml").is_file()
+    bad = gait("run", trial, "--pipeline", "muscles_eid", "--cutoff", "-1", cwd=tmp_path)
+    assert bad.returncode == 2 and "--cutoff" in bad.stderr, bad.describe()
