@@ -20,6 +20,7 @@ import click
 
 from gaitcli import __version__
 from gaitcli.core.interrupts import terminate_as_interrupt
+from gaitcli.core.registry import stage
 from gaitcli.core.validate import check_parameter, expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import GaitError, GaitWarning, InputError, NotConvergedError
@@ -51,7 +52,8 @@ class Console:
                 continue
             self.summaries[outcome.stage] = outcome.summary
             if not self.quiet and not self.as_json:
-                click.echo(f"{outcome.stage}: wrote {outcome.folder}", err=True)
+                line = stage(outcome.stage).describe(outcome.summary or {})
+                click.echo(f"{outcome.stage}: {line + '; ' if line else ''}wrote {outcome.folder}", err=True)
 
     def progress(self):
         """The rich progress display (silent with --quiet)."""

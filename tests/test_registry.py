@@ -171,3 +171,21 @@ def test_each_muscle_variant_has_its_own_folder():
     assert stage("muscles").output_folder(MusclesConfig()) == "muscles/eid"
     assert stage("muscles").output_folder(MusclesConfig(method="so", side="l", phase="swing",
                                                         objective="crowninshield_brand")) == "muscles/so_l_swing_cb"
+
+
+def test_each_stage_says_its_result_in_one_line():
+    from gaitcli.run.stages import describe_idyn, describe_muscles, describe_prediction
+
+    assert describe_idyn({"strides": 6, "speed_m_s": 1.3094, "stance_right_pct": 60.6, "stance_left_pct": 61.5}) == \
+        "6 strides, 1.31 m/s, stance 61/62 %"
+    assert describe_idyn({"strides": 0, "speed_m_s": None}) == "0 strides, ? m/s, stance ?/? %"
+    assert describe_muscles({"method": "eid", "side": "r", "converged": True, "metabolic_cost_J": 215.3,
+                             "min_excitation": -1e-8, "max_excitation": 1.0}) == "eid right: converged, 215 J"
+    assert describe_muscles({"method": "so", "side": "l", "phase": "swing", "converged": True,
+                             "metabolic_cost_J": None, "min_excitation": -0.4, "max_excitation": 0.37,
+                             "validation_rms_deg": 0.1}) == \
+        "so left swing: converged, excitations -0.40…0.37 outside [0, 1], forward validation 0.10° RMS"
+    checks = {"stance_pct": {"ok": True}, "ankle_moment_peak_pct": {"ok": False}}
+    assert describe_prediction({"converged": True, "iterations": 232, "cost_of_transport_J_per_m": 350.4,
+                                "objective": 11.38015, "gait_checks": checks}) == \
+        "converged in 232 it., Et 350 J/m, J 11.38, 1 gait check failed (ankle_moment_peak_pct)"

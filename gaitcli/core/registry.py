@@ -134,6 +134,8 @@ class Stage:
     converged: Callable[[Any], bool] = _converged
     #: the one-line reason an unconverged result gives (exit 3)
     unconverged: Callable[[Any], str] = field(default=lambda result: "did not converge")
+    #: the result in a few words, from the stage's summary.json (the command line's line for it)
+    describe: Callable[[dict], str] = field(default=lambda summary: "")
 
     def output_folder(self, cfg) -> str:
         return self.name if self.folder is None else self.folder(cfg)

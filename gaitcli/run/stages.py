@@ -74,23 +74,64 @@ def _figures(name: str):
     return draw
 
 
+def _number(value, spec: str) -> str:
+    """``value`` formatted by ``spec``, or "?" where the summary has none (a null: no strides, a failed fit)."""
+    return "?" if value is None or value != value else format(value, spec)
+
+
+def describe_filter(s: dict) -> str:
+    """``filter: 428 frames, 2 plates, 6 Hz, 3 gaps filled``."""
+    return (f"{s.get('frames')} frames, {s.get('plates')} plates, {_number(s.get('cutoff_hz'), 'g')} Hz, "
+            f"{s.get('gaps_filled', 0)} gaps filled")
+
+
+def describe_idyn(s: dict) -> str:
+    """``idyn: 6 strides, 1.30 m/s, stance 58/58 %``."""
+    return (f"{s.get('strides')} strides, {_number(s.get('speed_m_s'), '.2f')} m/s, stance "
+            f"{_number(s.get('stance_right_pct'), '.0f')}/{_number(s.get('stance_left_pct'), '.0f')} %")
+
+
+def describe_muscles(s: dict) -> str:
+    """``muscles: eid right: converged, 215 J`` (and excitations outside [0, 1], the validation's RMS)."""
+    side = {"r": "right", "l": "left"}.get(s.get("side"), s.get("side"))
+    text = (f"{s.get('method')} {side}{' swing' if s.get('phase') == 'swing' else ''}: "
+            f"{'converged' if s.get('converged') else 'did not converge'}")
+    if s.get("metabolic_cost_J") is not None:  # SO has none
+        text += f", {_number(s['metabolic_cost_J'], '.0f')} J"
+    low, high = s.get("min_excitation"), s.get("max_excitation")
+    if low is not None and high is not None and (low < -1e-3 or high > 1 + 1e-3):
+        text += f", excitations {low:.2f}…{high:.2f} outside [0, 1]"
+    if s.get("validation_rms_deg") is not None:
+        text += f", forward validation {s['validation_rms_deg']:.2f}° RMS"
+    return text
+
+
+def describe_prediction(s: dict) -> str:
+    """``predict: converged in 232 it., Et 350 J/m, 1 gait check failed``."""
+    failed = [name for name, check in (s.get("gait_checks") or {}).items() if not check.get("ok", True)]
+    return (f"{'converged' if s.get('converged') else 'did not converge'} in {s.get('iterations')} it., "
+            f"Et {_number(s.get('cost_of_transport_J_per_m'), '.0f')} J/m, J {_number(s.get('objective'), '.4g')}, "
+            f"{len(failed)} gait check{'' if len(failed) == 1 else 's'} failed"
+            + (f" ({', '.join(failed)})" if failed else ""))
+
+
 FILTER = register(Stage(
     name="filter", config=FilterConfig, run=_filter, write=_writer("gaitcli.signal.outputs", "write_filter_outputs"),
     read=lambda path: read_result(path, Trial, "trial"), handoff=lambda result: result.trial,
-    h5_name="filter.h5", plots=_figures("filter_figures")))
+    h5_name="filter.h5", plots=_figures("filter_figures"), describe=describe_filter))
 
 IDYN = register(Stage(
     name="idyn", config=IdynConfig, depends=("filter",), run=_idyn,
     write=_writer("gaitcli.dynamics.outputs", "write_idyn_outputs"),
     read=lambda path: read_result(path, SagittalExport, "sagittal"), handoff=lambda result: result.sagittal,
-    h5_name="idyn.h5", plots=_figures("idyn_figures")))
+    h5_name="idyn.h5", plots=_figures("idyn_figures"), describe=describe_idyn))
 
 MUSCLES = register(Stage(
     name="muscles", config=MusclesConfig, depends=("idyn",), run=_muscles,
     write=_writer("gaitcli.muscles.outputs", "write_muscle_outputs"),
     result=MuscleResult, h5_name="muscles.h5",
     plots=_figures("muscle_figures"), folder=lambda cfg: f"muscles/{cfg.variant}",
-    converged=lambda result: result.converged, unconverged=_unconverged_muscles))
+    converged=lambda result: result.converged, unconverged=_unconverged_muscles, describe=describe_muscles))
 
 
 # ------------------------------------------------------------------------------------------------------- predict
@@ -275,4 +316,5 @@ PREDICT = register(Stage(
     name="predict", config=PredictConfig, optional=("idyn",), trial=False, run=_predict, write=_write_prediction,
     read=lambda path: read_result(path, PredictResult), handoff=lambda prediction: prediction.result,
     h5_name="predict.h5", plots=_prediction_figures,
-    converged=lambda prediction: prediction.result.converged, unconverged=_unconverged_prediction))
+    converged=lambda prediction: prediction.result.converged, unconverged=_unconverged_prediction,
+    describe=describe_prediction))

@@ -257,8 +257,8 @@ def exact(runs):
 def test_run_does_filter_then_idyn(exact):
     run, trial = exact
     lines = run.stderr_lines
-    filter_line = next(i for i, line in enumerate(lines) if line.startswith("filter: wrote"))
-    idyn_line = next(i for i, line in enumerate(lines) if line.startswith("idyn: wrote"))
+    filter_line = next(i for i, line in enumerate(lines) if line.startswith("filter: ") and "wrote" in line)
+    idyn_line = next(i for i, line in enumerate(lines) if line.startswith("idyn: ") and "wrote" in line)
     assert filter_line < idyn_line
     assert json.loads((trial / "gait_out" / "filter" / "summary.json").read_text())["cutoff_hz"] == 0
     with h5py.File(trial / "gait_out" / "filter" / "filter.h5", "r") as f, \

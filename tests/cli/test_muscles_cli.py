@@ -245,8 +245,12 @@ def test_filter_and_idyn_run_first_then_reused(runs):
     out = root / "normal" / "gait_out"
     assert (out / "filter" / "filter.h5").is_file() and (out / "idyn" / "idyn.h5").is_file()
     first, second = result(runs, "first"), result(runs, "second")
-    assert any(line.startswith("filter: wrote") for line in first.stderr_lines), first.describe()
-    assert any(line.startswith("idyn: wrote") for line in first.stderr_lines), first.describe()
+    assert any(line.startswith("filter: 428 frames, 2 plates, 6 Hz") and line.endswith("filter")
+               for line in first.stderr_lines), first.describe()
+    assert any(line.startswith("idyn: 6 strides, 1.30 m/s, stance 58/58 %; wrote") for line in first.stderr_lines), \
+        first.describe()
+    assert any(line.startswith("muscles: so right: converged, excitations") and "outside [0, 1]" in line
+               for line in first.stderr_lines), first.describe()
     assert second.returncode == 0, second.describe()
     assert not any(line.startswith(("filter:", "idyn:")) for line in second.stderr_lines), second.describe()
     assert record["upstream_mtimes"]["filter"] and record["upstream_mtimes"]["idyn"]
@@ -341,8 +345,9 @@ def test_validate_over_a_cycle_restarts_at_the_nodes(runs):
 def test_eid_not_converged_exit_3(runs):
     run = result(runs, "heavy")
     assert run.returncode == 3, run.describe()
-    errors = [line for line in run.stderr_lines if "did not converge" in line]
+    errors = [line for line in run.stderr_lines if line.startswith("gait: error:")]
     assert len(errors) == 1 and errors[0].startswith("gait: error: EID did not converge"), run.describe()
+    assert any(line.startswith("muscles: eid right: did not converge") for line in run.stderr_lines)
     assert "Traceback" not in run.stderr
     folder = runs[1] / "heavy" / "gait_out" / "muscles" / "eid"
     assert_all_files(folder)
