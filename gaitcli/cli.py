@@ -376,8 +376,12 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
 @click.option("--band", "band", type=click.Path(path_type=Path, dir_okay=False),
               help="Also write a normal band for figures (mean, SD over the cycle of every angle and moment of "
                    "hip, knee and ankle, both legs pooled): gait report --reference takes it.")
+@click.option("--sd-floor", "sd_floor", is_flag=True,
+              help="Raise every SD to a floor (3°, 0.1 N·m/kg, 0.2 W/kg, 0.3 N/kg): for one subject's strides, "
+                   "which vary far less than between subjects. Off: the SDs as measured (a prediction's Jdev "
+                   "applies the floors itself).")
 @click.pass_obj
-def reference_command(console: Console, trials, out, pipeline, band):
+def reference_command(console: Console, trials, out, pipeline, band, sd_floor):
     """A reference gait (mean and SD over the cycle) from the idyn outputs of one or more trials."""
     from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.io.outputs import write_table
@@ -387,13 +391,15 @@ def reference_command(console: Console, trials, out, pipeline, band):
     cfg = configure(pipeline)
     outputs = [fresh_output(trial, "idyn", cfg, plots=False) for trial in trials]
     names = [Path(t).resolve().name for t in trials]
-    reference, right, left = reference_from_idyn([read_idyn_output(p) for p in outputs], sources=names)
+    reference, right, left = reference_from_idyn([read_idyn_output(p) for p in outputs], sources=names,
+                                                 sd_floor=sd_floor)
     write_table(out, reference.columns())
     forces = [reference.strides[v] for v in FORCES]
     if band is not None:
         from gaitcli.signal.bands import band_from_gait_cycles
 
-        normal = band_from_gait_cycles([p.parent / "gait_cycle.csv" for p in outputs], source=", ".join(names))
+        normal = band_from_gait_cycles([p.parent / "gait_cycle.csv" for p in outputs], source=", ".join(names),
+                                       sd_floor=sd_floor)
         write_table(band, normal.columns())
         console.info(f"reference: wrote {band} (band of {len(normal.mean)} variables, "
                      f"{min(normal.strides.values())}–{max(normal.strides.values())} strides each)")

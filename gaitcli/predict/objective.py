@@ -22,7 +22,7 @@ import numpy as np
 from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.cost import cost_of_transport, deviation
 from gaitcli.predict.dynamics import ContactPoint, LegInversion
-from gaitcli.predict.reference import VARIABLES
+from gaitcli.predict.reference import VARIABLES, jdev_sd
 from gaitcli.predict.variables import Variables
 from gaitcli.signal.bands import Band
 from gaitcli.signal.cycles import CYCLE_PCT
@@ -65,7 +65,7 @@ def reference_deviation(v: Variables, reference: Band, points: list[ContactPoint
     pct = 100 * v.fractions
     mean, sd = reference.arrays(VARIABLES)
     means = ca.horzcat(*[f(pct) for f in _interpolants(mean)])
-    sds = ca.horzcat(*[f(pct) for f in _interpolants(sd)])
+    sds = ca.horzcat(*[f(pct) for f in _interpolants(jdev_sd(sd))])
     return deviation(ca.vertcat(*rows), means, sds, v.times, v.period)
 
 

@@ -6,11 +6,11 @@ flexion and ankle dorsiflexion of both legs in degrees, and each foot's
 fore-aft and vertical ground reaction in N per kg of body mass. A reference is
 made from the idyn outputs of one or more trials (``gait reference``): every
 right stride contributes its angles, and its ground reactions where that foot's
-load was known throughout the stride. The dissertation's σ are inter-subject SDs
-(Winter); the strides of one subject vary far less, which would make Jdev
-explode and change what the weights mean, so every SD is raised to a floor
-(:data:`gaitcli.signal.bands.SD_FLOOR`, our choice: about the smallest of Winter's inter-subject SDs
-over the cycle, 3° for the angles and 0.3 N/kg for the forces).
+load was known throughout the stride. A reference holds the SDs as measured (``sd_floor``: raised to the
+floors). The dissertation's σ are inter-subject SDs (Winter); the strides of one subject vary far less, which
+would make Jdev explode and change what the weights mean, so Jdev divides by each SD raised to a floor
+(:func:`jdev_sd`; :data:`gaitcli.signal.bands.SD_FLOOR`, our choice: about the smallest of Winter's
+inter-subject SDs over the cycle, 3° for the angles and 0.3 N/kg for the forces).
 """
 
 from __future__ import annotations
@@ -70,12 +70,18 @@ def _shift(curve: np.ndarray, offset_pct: float) -> np.ndarray:
                             for k in range(curve.shape[1])])
 
 
+def jdev_sd(sd: np.ndarray) -> np.ndarray:
+    """The σ Jdev (5.28) divides by: each SD of :data:`VARIABLES` (columns of ``sd``) raised to its floor
+    (:data:`gaitcli.signal.bands.SD_FLOOR`; module docstring)."""
+    return np.maximum(sd, np.array([floor_of(v) for v in VARIABLES]))
+
+
 def build_reference(right: list[np.ndarray], left: list[np.ndarray], *, left_offset_pct: float = 50.0,
-                    sources=()) -> Band:
+                    sources=(), sd_floor: bool = False) -> Band:
     """The reference from each leg's strides over its own cycle ((101, 5) arrays in :data:`LEG_VARIABLES`
     order, NaN where a stride does not give a variable); the left leg's curves are moved to the right-heel-
-    strike cycle by ``left_offset_pct`` (where the left heel strikes in it). Each SD is raised to its floor
-    (:data:`gaitcli.signal.bands.SD_FLOOR`)."""
+    strike cycle by ``left_offset_pct`` (where the left heel strikes in it). With ``sd_floor`` each SD is
+    raised to its floor (:func:`jdev_sd`)."""
     mean_r, sd_r, n_r = _side_statistics(right, "r")
     mean_l, sd_l, n_l = _side_statistics(left, "l")
     mean_l, sd_l = _shift(mean_l, left_offset_pct), _shift(sd_l, left_offset_pct)
@@ -84,8 +90,7 @@ def build_reference(right: list[np.ndarray], left: list[np.ndarray], *, left_off
     mean[:, order] = np.column_stack([mean_r, mean_l])
     sd[:, order] = np.column_stack([sd_r, sd_l])
     counts[order] = np.concatenate([n_r, n_l])
-    floors = np.array([floor_of(v) for v in VARIABLES])
-    return as_reference(mean, np.maximum(sd, floors), counts, ", ".join(map(str, sources)))
+    return as_reference(mean, jdev_sd(sd) if sd_floor else sd, counts, ", ".join(map(str, sources)))
 
 
 def leg_cycles(time_s, values, load_known, strides) -> list[np.ndarray]:
@@ -131,7 +136,7 @@ def idyn_reference_strides(idyn: IdynOutput) -> tuple[list[np.ndarray], list[np.
 
 def read_reference(path: str | Path) -> Band:
     """Read ``ref.csv`` (columns ``cycle_pct``, ``<variable>_mean``, ``<variable>_sd`` for every one of
-    :data:`VARIABLES`, finite, SD > 0); one-line errors."""
+    :data:`VARIABLES`, finite, SD ≥ 0); one-line errors."""
     path = Path(path)
     if not path.is_file():
         raise InputError(path, None, "reference file not found")
@@ -149,18 +154,18 @@ def read_reference(path: str | Path) -> Band:
     mean, sd = band.arrays(VARIABLES)
     if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(sd))):
         raise InputError(path, None, "expected finite numbers in every column")
-    if np.any(sd <= 0):
-        raise InputError(path, "_sd columns", "expected standard deviations > 0")
     return as_reference(mean, sd, np.zeros(len(VARIABLES), int), str(path))
 
 
-def reference_from_idyn(outputs: Sequence[IdynOutput], sources=()) -> tuple[Band, int, int]:
+def reference_from_idyn(outputs: Sequence[IdynOutput], sources=(), *, sd_floor: bool = False
+                        ) -> tuple[Band, int, int]:
     """The reference of every stride in the trials' idyn ``outputs``, and how many right and left strides it
-    has; the left leg moved by the mean offset of its heel strikes (50 % where none was seen)."""
+    has; the left leg moved by the mean offset of its heel strikes (50 % where none was seen); ``sd_floor`` as
+    :func:`build_reference`."""
     right, left, offsets = [], [], []
     for idyn in outputs:
         r, left_strides, o = idyn_reference_strides(idyn)
         right, left, offsets = right + r, left + left_strides, offsets + o
     reference = build_reference(right, left, left_offset_pct=float(np.mean(offsets)) if offsets else 50.0,
-                                sources=list(sources))
+                                sources=list(sources), sd_floor=sd_floor)
     return reference, len(right), len(left)

@@ -36,7 +36,7 @@ from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.nlp import build_nlp, instant_segments
 from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.prosthesis import CHOICES, COEFFICIENTS, curve_for
-from gaitcli.predict.reference import VARIABLES
+from gaitcli.predict.reference import VARIABLES, jdev_sd
 from gaitcli.predict.settings import PredictSettings
 from gaitcli.predict.solve import NlpCache, PredictSolution, solve_windowed
 from gaitcli.signal.bands import Band
@@ -471,7 +471,7 @@ def _costs(tr: Transcriber, t, period: float, stride: float, reference: Band,
     grf = _ground_forces(tr, t) if grf is None else grf
     values = np.column_stack([walker_to_clinical(t.y[opening]), grf[opening] / tr.model.total_mass_kg])
     means = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[v]) for v in VARIABLES])
-    sds = np.column_stack([np.interp(pct, CYCLE_PCT, reference.sd[v]) for v in VARIABLES])
+    sds = np.column_stack([np.interp(pct, CYCLE_PCT, sd) for sd in jdev_sd(reference.arrays(VARIABLES)[1]).T])
     return (float(cost_of_transport(t.metabolic_rate_W, times, period, stride)),
             float(deviation(values, means, sds, times, period)))
 

@@ -9,9 +9,9 @@ reaction ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``
 ``<variable>_sd``; ``gait reference ... --band FILE`` writes one from idyn outputs) or from a ``gait reference``
 table, whose right-leg columns give the sagittal angles and forces. The package's band
 (``signal/data/normal_band.csv``) comes from ``gait synth``'s normative trial (Winter's curves; the command is in
-sample_trials/README.md); one subject's strides vary far less than between subjects, so each SD is raised to a
-floor (3°, 0.1 N·m/kg, 0.2 W/kg, 0.3 N/kg, our choice as for the prediction's reference,
-:data:`gaitcli.predict.reference.SD_FLOOR`).
+sample_trials/README.md); one subject's strides vary far less than between subjects, so each SD was raised to a
+floor (3°, 0.1 N·m/kg, 0.2 W/kg, 0.3 N/kg, our choice as for the prediction's Jdev, :data:`SD_FLOOR`;
+``gait reference --sd-floor``).
 """
 
 from __future__ import annotations
@@ -83,10 +83,10 @@ def floor_of(variable: str) -> float:
     return next((v for suffix, v in SD_FLOOR.items() if variable.endswith(suffix)), 0.0)
 
 
-def band_from_gait_cycles(paths, *, source: str = "") -> Band:
+def band_from_gait_cycles(paths, *, source: str = "", sd_floor: bool = False) -> Band:
     """The band of every stride in idyn's ``gait_cycle.csv`` files (both legs pooled, each over its own cycle;
     at each percentage the strides that give the variable there: a moment where its foot's load is known, NaN
-    where none does); each SD raised to its floor."""
+    where none does); with ``sd_floor`` each SD raised to its floor (:data:`SD_FLOOR`)."""
     import pandas as pd
 
     stacks: dict[str, list[np.ndarray]] = {}
@@ -111,7 +111,8 @@ def band_from_gait_cycles(paths, *, source: str = "") -> Band:
         with np.errstate(invalid="ignore", divide="ignore"):
             mean[name] = np.where(count > 0, np.nansum(stack, axis=0) / np.maximum(count, 1), np.nan)
             spread = np.sqrt(np.nansum((stack - mean[name]) ** 2, axis=0) / np.maximum(count - 1, 1))
-        sd[name] = np.where(count > 0, np.maximum(np.where(count > 1, spread, 0.0), floor_of(name)), np.nan)
+        floor = floor_of(name) if sd_floor else 0.0
+        sd[name] = np.where(count > 0, np.maximum(np.where(count > 1, spread, 0.0), floor), np.nan)
         strides[name] = int(count.max())
     if not mean:
         raise InputError(None, "band", "no complete stride in the trials' gait_cycle.csv (expected idyn outputs)")

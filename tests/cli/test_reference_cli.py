@@ -19,8 +19,10 @@ NORMATIVE_TRIAL = ("--gait", "normative", "--seed", "1", "--mass-kg", "55", "--s
 def test_the_bundled_reference_is_what_the_command_makes(tmp_path):
     made = gait("synth", tmp_path / "normal", *NORMATIVE_TRIAL, cwd=tmp_path)
     assert made.returncode == 0, made.describe()
-    runs = gait_many({"made": (("reference", "normal", "-o", "ref.csv", "--band", "band.csv"), tmp_path),
+    runs = gait_many({"made": (("reference", "normal", "-o", "ref.csv", "--band", "band.csv", "--sd-floor"), tmp_path),
                       "missing": (("reference", "no_such_trial", "-o", "bad.csv"), tmp_path)})
+    raw = gait("reference", "normal", "-o", "raw.csv", cwd=tmp_path)  # the SDs as measured
+    assert raw.returncode == 0, raw.describe()
     made = runs["made"]
     assert made.returncode == 0, made.describe()
     got, bundled = pd.read_csv(tmp_path / "ref.csv"), pd.read_csv(bundled_reference())
@@ -34,6 +36,11 @@ def test_the_bundled_reference_is_what_the_command_makes(tmp_path):
     assert 5 < got.ankle_r_dorsiflexion_deg_mean[10:60].max() < 15
     # plausible walking: vertical GRF above body weight in the loading response, none in the right swing
     assert got.grf_z_r_N_per_kg_mean[10:20].max() > 9.81 and got.grf_z_r_N_per_kg_mean[75:95].max() < 0.5
+    raw = pd.read_csv(tmp_path / "raw.csv")
+    sds = [c for c in got.columns if c.endswith("_sd")]
+    np.testing.assert_allclose(got[sds].to_numpy(), np.maximum(raw[sds].to_numpy(), got[sds].to_numpy().min(axis=0)),
+                               rtol=1e-5)
+    assert (raw.knee_r_flexion_deg_sd < 3.0).mean() > 0.5  # one subject's strides: mostly below the 3° floor
     missing = runs["missing"]
     assert missing.returncode == 2 and len(missing.stderr_lines) == 1, missing.describe()
     assert "no_such_trial" in missing.stderr and "trial folder not found" in missing.stderr

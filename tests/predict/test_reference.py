@@ -8,7 +8,7 @@ import pytest
 
 from gaitcli.errors import InputError
 from gaitcli.io.outputs import write_table
-from gaitcli.predict.reference import build_reference, leg_cycles, read_reference
+from gaitcli.predict.reference import VARIABLES, build_reference, jdev_sd, leg_cycles, read_reference
 from gaitcli.signal.bands import SD_FLOOR
 from gaitcli.signal.cycles import CYCLE_PCT
 
@@ -31,8 +31,14 @@ def test_mean_sd_and_the_floor_by_hand():
     # the left leg is moved as a periodic curve: its 100 % is its 0 % (this ramp is not periodic)
     np.testing.assert_allclose(ref.mean[hip_l][:100], 100 + CYCLE_PCT[:100] / 10)
     one = build_reference(strides(0.0, count=1), strides(0.0, count=1), left_offset_pct=0.0)
-    np.testing.assert_allclose(one.sd[hip_r], SD_FLOOR["_deg"])  # one stride: SD 0, raised to the floor
-    np.testing.assert_allclose(one.sd[grf_z_r], SD_FLOOR["_N_per_kg"])
+    np.testing.assert_allclose(one.sd[hip_r], 0.0)  # one stride: SD 0, as measured
+    floored = build_reference(strides(0.0, count=1), strides(0.0, count=1), left_offset_pct=0.0, sd_floor=True)
+    np.testing.assert_allclose(floored.sd[hip_r], SD_FLOOR["_deg"])  # raised to the floor
+    np.testing.assert_allclose(floored.sd[grf_z_r], SD_FLOOR["_N_per_kg"])
+    # Jdev divides by the floored SDs whatever the reference holds
+    np.testing.assert_array_equal(jdev_sd(one.arrays(VARIABLES)[1]), floored.arrays(VARIABLES)[1])
+    np.testing.assert_array_equal(jdev_sd(ref.arrays(VARIABLES)[1]), np.maximum(ref.arrays(VARIABLES)[1],
+                                                                                 floored.arrays(VARIABLES)[1]))
     assert list(ref.strides.values()) == [2] * 10
 
 
@@ -75,9 +81,9 @@ def test_csv_round_trip_and_errors(tmp_path):
     with pytest.raises(InputError, match=r"short.csv: knee_l_flexion_deg_sd: missing column"):
         read_reference(tmp_path / "short.csv")
     columns = ref.columns()
-    columns["grf_z_l_N_per_kg_sd"] = np.zeros(101)
-    write_table(tmp_path / "zero.csv", columns)
-    with pytest.raises(InputError, match="expected standard deviations > 0"):
-        read_reference(tmp_path / "zero.csv")
+    columns["grf_z_l_N_per_kg_sd"] = -np.ones(101)
+    write_table(tmp_path / "negative.csv", columns)
+    with pytest.raises(InputError, match="grf_z_l_N_per_kg_sd: expected means and standard deviations ≥ 0"):
+        read_reference(tmp_path / "negative.csv")
     with pytest.raises(InputError, match="reference file not found"):
         read_reference(tmp_path / "none.csv")
