@@ -20,6 +20,8 @@ from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.run.batch import BATCH_SUMMARY, BatchResult, run_batch, stages_of
 from gaitcli.run.config import PipelineConfig
 from gaitcli.run.trial import SESSION_OUTPUT, output_root, session_walks
+from gaitcli.signal.bands import BAND_FILE, read_band
+from gaitcli.signal.profile import gait_profile
 from gaitcli.signal.session import SessionStrides, Walk, pool
 
 
@@ -59,6 +61,18 @@ def read_walk(ref: Path, cfg: PipelineConfig) -> Walk | None:
                 cycles=pd.read_csv(idyn / "gait_cycle.csv"), features=json.loads((idyn / "summary.json").read_text()))
 
 
+def session_profile(pooled: SessionStrides) -> dict:
+    """The Gait Profile Score of the session's mean curves against the package's normal band
+    (:mod:`gaitcli.signal.profile`)."""
+    means = {side: {c[:-len("_mean")]: block[c].to_numpy() for c in block.columns if c.endswith("_mean")}
+             for side, block in pooled.cycle.groupby("side")}
+    try:
+        profile = gait_profile(means, read_band(BAND_FILE))
+    except ValueError:  # no kinematic variable in common (a pipeline without angles)
+        return {}
+    return {**profile.as_dict(), "band": str(BAND_FILE.name)}
+
+
 def write_session(folder: Path, pooled: SessionStrides) -> Path:
     """``gait_out/session/`` whole (replacing the previous one)."""
     target = folder / "gait_out" / SESSION_OUTPUT
@@ -66,7 +80,7 @@ def write_session(folder: Path, pooled: SessionStrides) -> Path:
     with stage_folder(target) as tmp:
         for name, table in (("strides.csv", pooled.strides), ("cycle.csv", pooled.cycle), ("walks.csv", pooled.walks)):
             write_table(tmp / name, {c: table[c].to_numpy() for c in table.columns})
-        write_json(tmp / "summary.json", pooled.summary())
+        write_json(tmp / "summary.json", {**pooled.summary(), "gait_profile": session_profile(pooled)})
     return target
 
 

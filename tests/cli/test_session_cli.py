@@ -43,6 +43,8 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
         assert walks.loc[walk, "speed_m_s"] == np.float64(f"{idyn['speed_m_s']:.6g}")
     summary = json.loads((out / "session" / "summary.json").read_text())
     assert summary["walks"] == 2 and abs(summary["table_3_1_mean"]["speed_m_s"] - walks.loc["mean", "speed_m_s"]) < 1e-5
+    profile = summary["gait_profile"]  # against the package's band (tests/signal/test_profile.py: known answers)
+    assert 0 < profile["gps_right_deg"] < 20 and set(profile["gvs_deg"]["right"]) >= {"knee_r_flexion"}
 
     again = gait("run", "S", "--no-plots", cwd=tmp_path)
     assert again.returncode == 0 and "0 ok, 0 failed, 2 skipped" in again.stdout, again.describe()
