@@ -15,6 +15,7 @@ import dataclasses
 import json
 import time
 import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -241,6 +242,24 @@ def needed_stages(names) -> tuple[str, ...]:
     return tuple(n for n in stage_names() if n in wanted)
 
 
+@contextmanager
+def recorded_warnings():
+    """Yield a list that receives the message of every :class:`GaitWarning` given in the block (a stage's
+    summary.json keeps them, for the report); each warning then goes on to the caller's filters and display as
+    if not recorded."""
+    said: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", GaitWarning)  # recorded even where the caller ignores them (a batch)
+        try:
+            yield said
+        finally:
+            pending = list(caught)
+    for w in pending:
+        if issubclass(w.category, GaitWarning) and str(w.message) not in said:
+            said.append(str(w.message))
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+
+
 def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | None = None,
                progress: ProgressCallback = no_progress, plots: bool = True, files: dict[str, Path] | None = None,
                workers: int | None = None, scheduler: str | None = None) -> list[StageOutcome]:
@@ -289,7 +308,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     def write(name: str) -> StageOutcome:
         """Write a computed stage's folder whole; its outcome."""
         st = stage(name)
-        result, elapsed = computed.pop(name)
+        result, elapsed, said = computed.pop(name)
         target = run.output_folder(name)
         started = time.perf_counter()
         with stage_folder(target) as tmp:
@@ -298,6 +317,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
                 progress(Progress(name, "figures", 0, 1))
                 st.plots(tmp / st.h5_name, tmp / "plots", run.title)
                 progress(Progress(name, "figures", 1, 1))
+            summary["warnings"] = said
             summary["elapsed_s"] = round(elapsed + time.perf_counter() - started, 3)
             write_json(tmp / "summary.json", summary)
         converged = st.converged(result)
@@ -337,9 +357,10 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
         ctx = run.context(name, inputs={d: handoffs[d] for d in st.depends},
                           input_paths={d: sources[d] for d in st.depends}, static_recording=static_recording,
                           progress=progress, plots=plots, workers=workers, scheduler=scheduler, written=write_early)
-        result = st.run(ctx, cfg.section(name))
+        with recorded_warnings() as said:
+            result = st.run(ctx, cfg.section(name))
         handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path if run.trial else None
-        computed[name] = (result, time.perf_counter() - started)
+        computed[name] = (result, time.perf_counter() - started, said)
 
     for name in computed:  # before the first write: a user's file in any folder to replace stops them all
         check_replaceable(run.output_folder(name))

@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -120,6 +121,9 @@ def test_no_plates_still_writes_outputs(runs, shared_c3d_dir):
     result = runs["results"]["duplicate_labels"]
     assert result.returncode == 0, result.describe()
     _outputs_written(runs["root"] / "duplicate_labels")
+    # the stage's summary.json keeps what it warned, as said on the console (for the report)
+    summary = json.loads((runs["root"] / "duplicate_labels" / "gait_out" / "filter" / "summary.json").read_text())
+    assert [f"gait: warning: {w}" for w in summary["warnings"]] == _warnings(result)
     markers = read_table(runs["root"] / "duplicate_labels" / "gait_out" / "filter" / "markers_filtered.csv")
     assert markers.columns[0] == "time_s" and "T8_2_x_m" in markers.columns
 
