@@ -7,9 +7,10 @@ cycle figures over the grey normal band (:mod:`gaitcli.signal.bands`); a study's
 Right is red and left blue throughout, every axis has its unit, every figure a caption, and titles name the
 trial folder, never a path outside it.
 
-What a folder is (:func:`find_report`): a batch (``batch_summary.csv``: an index page and a page per trial), a
-trial output root (stage folders with ``summary.json``; or a trial folder holding ``gait_out/``), or a
-predict study (``study/study.csv`` or ``study.csv``).
+What a folder is (:func:`find_report`): a session (``gait_out/session/``: the session's page and a page per
+walk), a batch (``batch_summary.csv``: an index page and a page per trial), a trial output root (stage folders
+with ``summary.json``; or a trial folder holding ``gait_out/``), or a predict study (``study/study.csv`` or
+``study.csv``). Every page opens with the warnings its stages gave (their ``summary.json``'s ``warnings``).
 """
 
 from __future__ import annotations
@@ -46,6 +47,9 @@ text-align: right; } th { background: #f4f4f4; } td:first-child, th:first-child 
 figure { margin: 1em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
 figcaption { font-size: 0.9em; color: #444; max-width: 1100px; } .meta { color: #666; font-size: 0.9em; }
 .right { color: #d62728; } .left { color: #1f77b4; } .bad { color: #b00; font-weight: bold; }
+.warnings { background: #fff4e5; border-left: 4px solid #e69500; padding: 0.4em 1em; }
+@media print { body { margin: 0; max-width: none; font-size: 10pt; } h2 { break-before: auto; }
+figure, table { break-inside: avoid; } @page { size: A4; margin: 12mm; } }
 """
 #: nothing but inline styles and data-URI images may load
 CSP = "default-src 'none'; img-src data:; style-src 'unsafe-inline'"
@@ -159,7 +163,8 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
         subject = f"body mass {float(idyn['mass_kg']):.1f} kg"
     parts = [f"<h1>{html.escape(name)}</h1>",
              f'<p class="meta">{html.escape(subject)}{"; " if subject else ""}outputs in {html.escape(root.name)}/; '
-             f'<span class="right">right in red</span>, <span class="left">left in blue</span></p>']
+             f'<span class="right">right in red</span>, <span class="left">left in blue</span></p>',
+             warnings_block(stage_warnings(root))]
     if idyn:
         rows = [(label, _number(idyn.get(key), digits), _number(NORMAL_FEATURES.get(key), digits), unit)
                 for key, label, unit, digits in FEATURES]
@@ -257,12 +262,102 @@ def study_body(folder: Path) -> str:
     return "".join(parts)
 
 
+def stage_warnings(root: Path) -> list[tuple[str, str]]:
+    """(stage folder, message) of every warning the stages below the output root ``root`` recorded."""
+    found = []
+    for path in sorted(root.glob("*/summary.json")) + sorted(root.glob("muscles/*/summary.json")):
+        said = _summary(path.parent, ()).get("warnings") or []
+        found += [(path.parent.relative_to(root).as_posix(), str(w)) for w in said if isinstance(w, str)]
+    return found
+
+
+def warnings_block(found: list[tuple[str, str]]) -> str:
+    """The warnings at the top of a page, one line each (or that there were none)."""
+    if not found:
+        return '<p class="meta">No stage gave a warning.</p>'
+    lines = "".join(f"<li>{html.escape(where)}: {html.escape(message)}</li>" for where, message in found)
+    return f'<div class="warnings"><strong>{len(found)} warning{"s" * (len(found) != 1)}</strong><ul>{lines}</ul></div>'
+
+
+def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str, Path]) -> str:
+    """The session's page (``root``: its ``gait_out``): subject and session, every walk's warnings, Table 3.1
+    per walk beside normal walking, the strides used and rejected, the Gait Profile Score, the mean ± SD
+    figures of every stride."""
+    import pandas as pd
+
+    from gaitcli.report.session_plots import session_figures
+
+    session = root / "session"
+    folder = root.parent
+    summary = _summary(session, ())
+    walks = pd.read_csv(session / "walks.csv")
+    strides = pd.read_csv(session / "strides.csv", keep_default_na=False, na_values=["NaN"])
+    names = [w for w in walks.walk if w not in ("mean", "sd")]
+    first = _summary(root / names[0] / "idyn", ()) if names else {}
+    filtered = _summary(root / names[0] / "filter", ()) if names else {}
+    subject = _subject(folder)
+    facts = [("subject", subject or f"body mass {first.get('mass_kg', '—')} kg"),
+             ("walks", f"{len(names)}: " + ", ".join(names)),
+             ("marker set", first.get("marker_set", "—")), ("hip joint centres", first.get("hip_joint_centre", "—")),
+             ("static", first.get("static") or "none (standing frames of the walk)"),
+             ("filter cut-off", f"{filtered.get('cutoff_hz', '—')} Hz markers, {filtered.get('force_cutoff_hz', '—')} "
+                                "Hz forces"),
+             ("angles", f"{first.get('angles', '—')} ({first.get('angle_frames', '—')}); moments "
+                        f"{first.get('moment_convention', '—')}")]
+    parts = [f"<h1>Session {html.escape(folder.name)}</h1>",
+             _table(("", ""), facts),
+             "<h2>Warnings</h2>",
+             warnings_block([(f"{walk} / {where}", message) for walk in names
+                             for where, message in stage_warnings(root / walk)])]
+    rows = []
+    for key, label, unit, digits in FEATURES:
+        values = dict(zip(walks.walk, walks[key]))
+        rows.append([f"{label} ({unit})", *[_number(values.get(w), digits) for w in names],
+                     f"{_number(values.get('mean'), digits)} ± {_number(values.get('sd'), digits)}",
+                     _number(NORMAL_FEATURES.get(key), digits)])
+    parts += ["<h2>Temporal-spatial parameters (Table 3.1)</h2>",
+              _table(("", *names, "session mean ± SD", "normal (3.3.3)"), rows)]
+    counts = summary.get("strides", {})
+    used = [[side, *[counts.get(side, {}).get(k, 0) for k in ("used", "kinematics only", "rejected")]]
+            for side in ("r", "l")]
+    rejected = strides[strides.status != "used"]
+    parts += ["<h2>Strides</h2>", _table(("side", "used", "kinematics only", "rejected"), used),
+              _table(("walk", "side", "start (s)", "status", "reason"),
+                     [[r.walk, r.side, f"{r.start_s:.2f}", r.status, r.reason] for r in rejected.itertuples()])]
+    profile = summary.get("gait_profile") or {}
+    if profile:
+        gvs = profile.get("gvs_deg", {})
+        variables = sorted({c.replace("_r_", "_").replace("_l_", "_") for side in gvs.values() for c in side})
+        rows = [[v, *[_number(gvs.get(side, {}).get(v.replace("_", f"_{s}_", 1) if not v.startswith("pelvis") else v),
+                              1) for side, s in (("right", "r"), ("left", "l"))]] for v in variables]
+        parts += ["<h2>Gait Profile Score</h2>",
+                  f"<p>GPS {_number(profile.get('gps_deg'), 1)}° (right {_number(profile.get('gps_right_deg'), 1)}°,"
+                  f" left {_number(profile.get('gps_left_deg'), 1)}°) against the band "
+                  f"{html.escape(str(profile.get('band', '')))}: the RMS difference from the normal mean over the "
+                  "cycle, per variable (GVS) and over the variables (Baker et al. 2009).</p>",
+                  _table(("variable (GVS, deg)", "right", "left"), rows)]
+    figures = session_figures(session, work / "session", title=folder.name, band=band)
+    captions = {"kinematics.png": "Kinematics (deg) in three planes, each side's mean ± SD over every stride of "
+                                  "every walk (right red, left blue; n strides), over the grey normal band; foot off "
+                                  "of each side dashed.",
+                "kinetics.png": "Joint moments (N·m/kg, Plug-in Gait's signs) in three planes and total joint powers "
+                                "(W/kg, generated positive) of the strides whose foot was on the force plates."}
+    parts += ["<h2>Kinematics and kinetics</h2>", *[_figure(p, captions[p.name]) for p in figures]]
+    links = "".join(f'<li><a href="{html.escape(path.relative_to(root).as_posix())}">{html.escape(walk)}</a></li>'
+                    for walk, path in walk_pages.items())
+    parts += ["<h2>Walks</h2>", f"<ul>{links}</ul>"]
+    return "".join(parts)
+
+
 def find_report(out_dir: Path) -> tuple[str, Path]:
-    """(kind, root) of a folder: ``batch``, ``study`` or ``trial`` (see the module docstring)."""
+    """(kind, root) of a folder: ``session``, ``batch``, ``study`` or ``trial`` (see the module docstring)."""
     out_dir = Path(out_dir)
     if not out_dir.is_dir():
         raise InputError(out_dir, None, "not found (expected an output folder: a trial's gait_out, a batch's lab "
                                         "folder or a predict study)")
+    for root in (out_dir, out_dir / "gait_out"):
+        if (root / "session" / "summary.json").is_file():
+            return "session", root
     if (out_dir / "batch_summary.csv").is_file():
         return "batch", out_dir
     for study in (out_dir / "study", out_dir):
@@ -306,6 +401,22 @@ def write_report(out_dir: Path, band: Band | None) -> list[Page]:
         if kind == "trial":
             name = _trial_name(root)
             return [Page(write_page(root / "report.html", name, trial_body(root, name, band, work)), name)]
+        if kind == "session":
+            walks = [w for w in _rows(root / "session" / "walks.csv", ("walk",)) if w["walk"] not in ("mean", "sd")]
+            pages = {}
+            for row in walks:
+                walk = row["walk"]
+                output = (root / walk).resolve()
+                if not output.is_relative_to(root) or not output.is_dir():
+                    raise InputError(root / "session" / "walks.csv", "walk", f"got {shown(walk)} (expected a walk's "
+                                                                            f"output folder in {root})")
+                title = f"{root.parent.name} / {walk}"
+                pages[walk] = write_page(output / "report.html", title,
+                                         trial_body(output, title, band, work / f"walk{len(pages)}"))
+            page = write_page(root / "report.html", f"session {root.parent.name}",
+                              session_body(root, band, work, pages))
+            return [Page(page, f"session {root.parent.name}", "session"),
+                    *[Page(path, walk, "walk") for walk, path in pages.items()]]
         rows = [{**r, "trial": plain_text(r["trial"]), "reason": plain_text(r["reason"])}
                 for r in _rows(root / "batch_summary.csv", ("trial", "status", "reason"))]
         for r in rows:  # every page stays in the lab folder

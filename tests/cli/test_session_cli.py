@@ -4,10 +4,14 @@ command on the session names the choice."""
 
 from __future__ import annotations
 
+import base64
+import io
 import json
+import re
 
 import numpy as np
 import pandas as pd
+from PIL import Image
 
 from .conftest import gait
 
@@ -45,6 +49,21 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
     assert summary["walks"] == 2 and abs(summary["table_3_1_mean"]["speed_m_s"] - walks.loc["mean", "speed_m_s"]) < 1e-5
     profile = summary["gait_profile"]  # against the package's band (tests/signal/test_profile.py: known answers)
     assert 0 < profile["gps_right_deg"] < 20 and set(profile["gvs_deg"]["right"]) >= {"knee_r_flexion"}
+
+    report = gait("report", "S", cwd=tmp_path)
+    assert report.returncode == 0, report.describe()
+    page = (out / "report.html").read_text(encoding="utf-8")
+    for heading in ("Warnings", "Temporal-spatial parameters (Table 3.1)", "Strides", "Gait Profile Score",
+                    "Kinematics and kinetics", "Walks"):
+        assert f"<h2>{heading}</h2>" in page, heading
+    assert "No stage gave a warning." in page and 'href="Walking 02/report.html"' in page
+    images = re.findall(r'<img src="data:image/png;base64,([^"]*)"', page)
+    assert len(images) == 2
+    for data in images:
+        with Image.open(io.BytesIO(base64.b64decode(data))) as image:
+            image.load()
+            assert image.size[0] > 800
+    assert all((out / walk / "report.html").is_file() for walk in WALKS)
 
     again = gait("run", "S", "--no-plots", cwd=tmp_path)
     assert again.returncode == 0 and "0 ok, 0 failed, 2 skipped" in again.stdout, again.describe()

@@ -177,3 +177,23 @@ def test_a_study_figure_linking_outside_its_folder_is_refused(tmp_path):
     (study / "study.png").symlink_to(tmp_path / "secret.png")
     with pytest.raises(InputError, match="links outside the study folder"):
         report_html.write_report(tmp_path, band=None)
+
+
+def test_the_warnings_of_every_stage_open_the_page_escaped(tmp_path, no_figures):
+    root = tmp_path / "gait_out"
+    write_json(root / "filter" / "summary.json", {"frames": 3, "warnings": ["trial.c3d: no usable force plates",
+                                                                            HOSTILE]})
+    write_json(root / "muscles" / "eid_l" / "summary.json", {"converged": True, "warnings": ["excitation clipped"]})
+    (root / "muscles" / "eid_l" / "muscles.h5").write_bytes(b"")
+    (page,) = report_html.write_report(root, band=None)
+    text = page.path.read_text(encoding="utf-8")
+    block = re.search(r'<div class="warnings">(.*?)</div>', text)[1]
+    assert "<strong>3 warnings</strong>" in block and "<script>" not in text
+    assert re.findall(r"<li>(.*?)</li>", block) == [
+        "filter: trial.c3d: no usable force plates", f"filter: {html.escape(HOSTILE)}",
+        "muscles/eid_l: excitation clipped"]
+    assert text.index('class="warnings"') < text.index("<h2>Muscles: EID, left leg</h2>")
+    write_json(root / "filter" / "summary.json", {"frames": 3, "warnings": []})
+    write_json(root / "muscles" / "eid_l" / "summary.json", {"converged": True})
+    (page,) = report_html.write_report(root, band=None)
+    assert "No stage gave a warning." in page.path.read_text(encoding="utf-8")

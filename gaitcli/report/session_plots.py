@@ -1,0 +1,115 @@
+"""A session's figures from ``gait_out/session/`` (``cycle.csv``, ``strides.csv``): each side's mean ± SD over
+the strides of every walk against the grey normal band, right red, left blue, with each side's foot off (the
+mean stance % of its strides, dashed): the kinematics of pelvis, hip, knee, ankle and foot in three planes, and
+the moments of hip, knee and ankle in three planes with their total powers."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from gaitcli.core.events import SIDE_NAMES
+from gaitcli.report.plots import SIDE_COLOUR, draw_band, plt, save
+from gaitcli.signal.bands import Band
+from gaitcli.signal.cycles import CYCLE_PCT
+
+PLANES = ("sagittal", "frontal", "transverse")
+#: kinematics: (segment or joint, its cycle.csv columns per plane with {s} for the side; None: not drawn)
+KINEMATICS = (("pelvis", ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation")),
+              ("hip", ("hip_{s}_flexion", "hip_{s}_adduction", "hip_{s}_rotation")),
+              ("knee", ("knee_{s}_flexion", "knee_{s}_adduction", "knee_{s}_rotation")),
+              ("ankle", ("ankle_{s}_flexion", "ankle_{s}_inversion", "ankle_{s}_rotation")),
+              ("foot", (None, None, "foot_{s}_progression")))
+JOINTS = ("hip", "knee", "ankle")
+
+
+def _band_name(column: str, suffix: str) -> str:
+    """The band's side-free variable of a cycle.csv column: ``hip_r_flexion`` → ``hip_flexion_deg``."""
+    parts = column.split("_")
+    if len(parts) > 2 and parts[1] in ("r", "l"):
+        parts = [parts[0], *parts[2:]]
+    return "_".join(parts) + suffix
+
+
+def _draw(ax, cycle: pd.DataFrame, pattern: str, band: Band | None, suffix: str, foot_off: dict) -> bool:
+    """One variable: the band, each side's mean ± SD and foot off; True when a side had it."""
+    drawn = False
+    draw_band(ax, band, _band_name(pattern.format(s="r"), suffix), label=False)
+    for side in ("r", "l"):
+        column = pattern.format(s=side)
+        block = cycle[cycle.side == side]
+        if f"{column}_mean" not in block or not np.isfinite(block[f"{column}_mean"]).any():
+            continue
+        mean, sd = block[f"{column}_mean"].to_numpy(), block[f"{column}_sd"].to_numpy()
+        n = int(np.nanmax(block[f"{column}_n"]))
+        ax.plot(CYCLE_PCT, mean, color=SIDE_COLOUR[side], lw=1.2, label=f"{SIDE_NAMES[side]} (n={n})")
+        ax.fill_between(CYCLE_PCT, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
+        if side in foot_off:
+            ax.axvline(foot_off[side], color=SIDE_COLOUR[side], ls="--", lw=0.8)
+        drawn = True
+    ax.axhline(0, color="0.7", lw=0.6)
+    return drawn
+
+
+def session_figures(session: Path, folder: Path, *, title: str = "", band: Band | None = None) -> list[Path]:
+    """``kinematics.png`` (deg) and ``kinetics.png`` (N·m/kg, W/kg) of the session folder ``session``
+    (``gait_out/session``) into ``folder``."""
+    cycle = pd.read_csv(session / "cycle.csv")
+    strides = pd.read_csv(session / "strides.csv")
+    complete = strides[strides.status != "rejected"]
+    foot_off = {side: float(g.stance_pct.mean()) for side, g in complete.groupby("side")}
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+
+    fig, axes = plt.subplots(len(KINEMATICS), 3, figsize=(12, 2.3 * len(KINEMATICS)), sharex=True)
+    for row, (part, columns) in enumerate(KINEMATICS):
+        for col, pattern in enumerate(columns):
+            ax = axes[row, col]
+            if pattern is None or not _draw(ax, cycle, pattern, band, "_deg", foot_off):
+                ax.axis("off")
+                continue
+            ax.set_title(f"{part} {pattern.split('_')[-1]}", fontsize=9)
+            ax.set_ylabel("deg")
+    for col, plane in enumerate(PLANES):
+        bottom = max(row for row, (_, columns) in enumerate(KINEMATICS) if columns[col] is not None)
+        axes[bottom, col].set_xlabel("gait cycle (%)")
+        axes[bottom, col].tick_params(labelbottom=True)
+        axes[0, col].annotate(plane, (0.5, 1.25), xycoords="axes fraction", ha="center", fontsize=11)
+    _legend(fig, axes)
+    fig.suptitle(f"{title}: kinematics, mean ± SD of every stride; foot off dashed".strip(": "), fontsize=11)
+    written.append(save(fig, folder / "kinematics.png"))
+
+    fig, axes = plt.subplots(len(JOINTS) + 1, 3, figsize=(12, 2.3 * (len(JOINTS) + 1)), sharex=True)
+    for row, joint in enumerate(JOINTS):
+        moments = [c[:-len("_mean")] for c in cycle.columns
+                   if c.startswith(f"{joint}_r_") and c.endswith("_moment_per_kg_mean")]
+        for col, column in enumerate(moments[:3]):
+            ax = axes[row, col]
+            pattern = column.replace(f"{joint}_r_", f"{joint}_{{s}}_", 1)
+            if not _draw(ax, cycle, pattern, band, "", foot_off):
+                ax.axis("off")
+                continue
+            ax.set_title(column.replace(f"{joint}_r_", f"{joint} ").replace("_moment_per_kg", " moment")
+                         .replace("_", " "), fontsize=9)
+            ax.set_ylabel("N·m/kg")
+        power = axes[len(JOINTS), row]
+        if _draw(power, cycle, f"{joint}_{{s}}_power_W_per_kg", band, "", foot_off):
+            power.set_title(f"{joint} power (+ generated)", fontsize=9)
+            power.set_ylabel("W/kg")
+        else:
+            power.axis("off")
+        power.set_xlabel("gait cycle (%)")
+    _legend(fig, axes)
+    fig.suptitle(f"{title}: moments and powers, strides with the foot on the plates".strip(": "), fontsize=11)
+    written.append(save(fig, folder / "kinetics.png"))
+    return written
+
+
+def _legend(fig, axes) -> None:
+    handles, labels = next(((h, lab) for ax in axes.flat for h, lab in [ax.get_legend_handles_labels()] if h),
+                           ([], []))
+    if handles:
+        fig.legend(handles, labels, loc="upper right", fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
