@@ -103,6 +103,11 @@ def _found_file(folder: Path, path: Path | None) -> Path | None:
     return path
 
 
+def _names(paths: list[Path], shown_at_most: int = 4) -> str:
+    """The first few file names, quoted, for a message."""
+    return ", ".join(shown(p.name) for p in paths[:shown_at_most]) + (", …" if len(paths) > shown_at_most else "")
+
+
 def _vsk_files(folder: Path) -> list[Path]:
     """The Vicon subject files (``*.vsk``, any case; hidden files not) directly in ``folder``, sorted."""
     return sorted(p for p in folder.iterdir() if p.suffix.lower() == ".vsk" and not p.name.startswith(".")
@@ -113,9 +118,9 @@ def _only_vsk(folder: Path, has_yaml: bool) -> Path | None:
     """The folder's one .vsk (None without); more than one is an error naming them."""
     found = _vsk_files(folder)
     if len(found) > 1:
-        names = ", ".join(shown(p.name) for p in found[:4]) + (", …" if len(found) > 4 else "")
         how = "`vsk:` in subject.yaml naming one" if has_yaml else "a subject.yaml naming one under `vsk:`"
-        raise InputError(folder, "vsk", f"{len(found)} Vicon subject files: {names} (expected one, or {how})")
+        raise InputError(folder, "vsk", f"{len(found)} Vicon subject files: {_names(found)} (expected one, or "
+                                        f"{how})")
     return _found_file(folder, found[0]) if found else None
 
 
@@ -168,9 +173,9 @@ def session_static(folder: Path, subject: Subject) -> Path | None:
     if name and GLOB_CHARS & set(name):
         found = _matches(folder, name, "static")
         if len(found) != 1:
-            names = ", ".join(shown(p.name) for p in found[:4]) + (", …" if len(found) > 4 else "")
-            raise InputError(folder / "subject.yaml", "static", f"{shown(name)} matches {len(found)} files"
-                                                                f"{': ' + names if found else ''} (expected one)")
+            listed = f": {_names(found)}" if found else ""
+            raise InputError(folder / "subject.yaml", "static", f"{shown(name)} matches {len(found)} files{listed} "
+                                                                "(expected one)")
         return found[0]
     named = _named_file(folder, name, "static")
     if named is not None:
@@ -179,9 +184,8 @@ def session_static(folder: Path, subject: Subject) -> Path | None:
         return _found_file(folder, folder / "static.c3d")
     statics = [p for p in _c3d_files(folder) if _says_static(p)]
     if len(statics) > 1:
-        names = ", ".join(shown(p.name) for p in statics[:4]) + (", …" if len(statics) > 4 else "")
-        raise InputError(folder, "static", f"{len(statics)} static trials: {names} (expected one, or `static:` in "
-                                           "subject.yaml naming one)")
+        raise InputError(folder, "static", f"{len(statics)} static trials: {_names(statics)} (expected one, or "
+                                           "`static:` in subject.yaml naming one)")
     return _found_file(folder, statics[0]) if statics else None
 
 
