@@ -97,7 +97,9 @@ def run_session(folder: str | Path, cfg: PipelineConfig, **batch) -> SessionRun:
     result = run_batch(folder, cfg, summary_path=summary_path, **batch)
     pooled = None
     if "idyn" in stages_of(cfg):
-        read = [read_walk(w, cfg) for w in walks]
+        # the walks whose idyn this batch made or found current (a failed walk's older outputs are not its own)
+        done = {r.trial for r in result.rows if r.stage == "idyn" and r.status != "failed"}
+        read = [read_walk(w, cfg) for w in walks if w.relative_to(folder).as_posix() in done]
         read = [w for w in read if w is not None]
         if read:
             pooled = pool(read)

@@ -67,6 +67,12 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
 
     again = gait("run", "S", "--no-plots", cwd=tmp_path)
     assert again.returncode == 0 and "0 ok, 0 failed, 2 skipped" in again.stdout, again.describe()
+    (session / "Walking 03.c3d").write_text("not a C3D\n")  # a damaged walk: the others still pooled
+    damaged = gait("run", "S", "--no-plots", cwd=tmp_path)
+    assert damaged.returncode == 2 and damaged.stderr_lines[-1].startswith("gait: error: "), damaged.describe()
+    assert "Walking 03.c3d" in damaged.stderr_lines[-1] and "1 of 3 walks failed" in damaged.stderr_lines[-1]
+    assert json.loads((out / "session" / "summary.json").read_text())["walks"] == 2
+    (session / "Walking 03.c3d").unlink()
     one = gait("idyn", "S", cwd=tmp_path)
     assert one.returncode == 2 and len(one.stderr_lines) == 1, one.describe()
     assert "a session of 2 walks" in one.stderr and "gait run" in one.stderr and "Walking 01.c3d" in one.stderr
