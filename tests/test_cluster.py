@@ -38,6 +38,16 @@ def test_tasks_run_after_what_they_need_with_its_results_as_their_last_arguments
     assert done == [("a", 1), ("d", 10), ("b", 111), ("c", 1111)]
 
 
+@pytest.mark.parametrize("dask", BACKENDS)
+def test_other_processes_run_tasks_after_what_they_need(dask):
+    """The same chain on two worker processes (a study's prosthesis case waits for its normal case's future)."""
+    tasks = {"a": Task(_add, (1,)), "d": Task(_add, (10,)), "b": Task(_add, (100,), ("a", "d")),
+             "c": Task(_add, (1000,), ("b",))}
+    with workers(2, dask=dask) as pool:
+        done = dict((key, future.result()) for key, future in completed(pool, tasks))
+    assert done == {"a": 1, "d": 10, "b": 111, "c": 1111}
+
+
 def test_a_failed_task_fails_the_tasks_that_need_it_without_running_them():
     calls = []
 

@@ -110,18 +110,19 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
 
 def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_path, dask_cluster):
     # two cases stopped after one IPOPT iteration (6 nodes): both in study.csv, marked, exit 3; the rerun reads
-    # both back (the same inputs and configuration). (--starts: tests/predict/test_study.py.) The same study on a
-    # Dask cluster (every case a task, the sach case depending on the normal one's future) gives the same case
-    # keys, which chain the start keys, and objectives. --starts goes to the cluster by the same
-    # run.cluster.workers: given a scheduler nobody serves, it says so before building anything (a start solved
-    # there would build two more problems, 10 s each).
+    # both back (the same inputs and configuration). (--starts: tests/predict/test_study.py.) The normal case on a
+    # Dask cluster (a task on another process) gives the same case key and objective; a prosthesis case waiting
+    # for its normal case's future is the same task graph as tests/test_cluster.py's chains on Dask. --starts goes
+    # to the cluster by the same run.cluster.workers: given a scheduler nobody serves, it says so before building
+    # anything. (Every case here builds its problem: 10 s of derivatives each.)
     address, _ = dask_cluster
     # at the default speed: the normal case is the problem the session's stopped prediction built (conftest), which
     # a runner that made it holds (its NlpCache; the local study runs in the runner, --workers 1)
-    (tmp_path / "tiny.yaml").write_text("name: tiny\nspeeds_m_s: [1.1275]\nweights: [b]\nconditions: [normal, sach]\n"
-                                        "nodes: 6\nmax_iterations: 1\n")
+    grid = "speeds_m_s: [1.1275]\nweights: [b]\nnodes: 6\nmax_iterations: 1\n"
+    (tmp_path / "tiny.yaml").write_text(f"name: tiny\nconditions: [normal, sach]\n{grid}")
+    (tmp_path / "normal.yaml").write_text(f"name: normal\nconditions: [normal]\n{grid}")
     jobs = {"study": (("predict", "--study", "tiny.yaml", "-o", "out", "--workers", "1"), tmp_path)}
-    runs = gait_many({**jobs, "dask": (("predict", "--study", "tiny.yaml", "-o", "dask", "--scheduler", address),
+    runs = gait_many({**jobs, "dask": (("predict", "--study", "normal.yaml", "-o", "dask", "--scheduler", address),
                                        tmp_path),
                       "starts": (("predict", "--nodes", "6", "--starts", "2", "-o", "starts",
                                   "--scheduler", "tcp://127.0.0.1:1"), tmp_path)}, workers=3)
@@ -131,10 +132,9 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     assert "--scheduler: cannot reach the Dask scheduler at tcp://127.0.0.1:1" in starts.stderr
     assert not (tmp_path / "starts").exists()
     on_cluster = pd.read_csv(tmp_path / "dask" / "study" / "study.csv")
-    for case in ("v1.13_b_normal", "v1.13_b_sach"):
-        keys = [json.loads((tmp_path / name / "study" / case / "summary.json").read_text())["case_key"]
-                for name in ("out", "dask")]
-        assert keys[0] == keys[1], case
+    keys = [json.loads((tmp_path / name / "study" / "v1.13_b_normal" / "summary.json").read_text())["case_key"]
+            for name in ("out", "dask")]
+    assert keys[0] == keys[1]
     run = runs["study"]
     assert run.returncode == 3 and "2 of 2 study cases did not converge" in run.stderr, run.describe()
     study = tmp_path / "out" / "study"
@@ -142,7 +142,7 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     assert list(table["condition"]) == ["normal", "sach"] and not table["converged"].any()
     assert not table["reused"].any() and (table["iterations"] == 1).all()
     first = table["objective"].to_numpy()
-    np.testing.assert_allclose(on_cluster["objective"], first, rtol=1e-9)
+    np.testing.assert_allclose(on_cluster["objective"], first[:1], rtol=1e-9)
     assert (study / "study.png").stat().st_size > 1000
     sach = json.loads((study / "v1.13_b_sach" / "summary.json").read_text())
     assert sach["prosthesis"]["name"] == "SACH" and sach["strength_scale"] == 1.5
