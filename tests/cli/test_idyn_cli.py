@@ -53,6 +53,9 @@ EXACT_PIPELINE = "filter: {cutoff_hz: 0, force_cutoff_hz: 0, force_threshold_N: 
 SKI_BOOT_KG = 2.431  # Table A.3
 #: the sample subjects (sample_trials/README.md): gait synth's default subject walks normally
 SAMPLE_MASS_KG = {"normal": 75.0, "ski_boot": 55.0}
+#: the sample trials whose figures are drawn here: normal walking and each locked joint (the added masses' figures
+#: are the normal trial's code path)
+FIGURED = ("normal", "knee_orthosis", "ski_boot")
 GAP = (50, 69)  # file frames (first frame 1) where GTr and MRFr are missing: longer than the 10 filled
 EDGE = 2
 
@@ -78,7 +81,8 @@ def _drop_static_marker(trial: Path, name: str) -> None:
 
 def _build(root: Path) -> dict:
     """Make every trial folder, run every invocation (several at a time); return the results as JSON."""
-    jobs = {name: [("idyn", copy_sample(name, root / name))] for name in SAMPLES}
+    jobs = {name: [("idyn", copy_sample(name, root / name), *(() if name in FIGURED else ("--no-plots",)))]
+            for name in SAMPLES}
     (root / "exact.yaml").write_text(EXACT_PIPELINE)
     jobs["exact"] = [("synth", root / "exact", "--seed", "0", "--noise-mm", "0", "--artefact-mm", "0",
                       "--plate-noise-n", "0"),
@@ -158,8 +162,9 @@ def test_idyn_on_every_sample_trial_writes_the_design_files(runs, name):
     folder = out_dir(root, name)
     for file in IDYN_FILES:
         assert (folder / file).is_file(), f"{file} missing\n{result.describe()}"
-    plots = list((folder / "plots").iterdir())
-    assert plots and all(p.suffix == ".png" and p.stat().st_size > 1000 for p in plots)
+    if name in FIGURED:
+        plots = list((folder / "plots").iterdir())
+        assert plots and all(p.suffix == ".png" and p.stat().st_size > 1000 for p in plots)
     assert list(pd.read_csv(folder / "kinematics.csv").columns) == ["time_s", *ANATOMICAL_ANGLES]
     kin = pd.read_csv(folder / "coordinates.csv")
     assert list(kin.columns) == ["time_s", *COORDINATES]
