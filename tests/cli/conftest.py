@@ -302,12 +302,22 @@ def dask_cluster(request):
     finally:
         client.close()
         for proc in (worker, scheduler):
-            os.killpg(proc.pid, signal.SIGTERM)
+            _signal_group(proc, signal.SIGTERM)
         for proc in (worker, scheduler):
             try:
                 proc.wait(20)
             except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
+                _signal_group(proc, signal.SIGKILL)
+                proc.wait()
+
+
+def _signal_group(proc: subprocess.Popen, signum: int) -> None:
+    """``signum`` to the process group ``proc`` leads; nothing when the group has ended already (a test killed
+    a worker and its nanny followed)."""
+    try:
+        os.killpg(proc.pid, signum)
+    except ProcessLookupError:
+        pass
 
 
 #: ``gait idyn`` with both exports, as the stair-session tests run it
