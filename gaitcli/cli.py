@@ -217,7 +217,8 @@ def idyn_command(console: Console, trial, out, pipeline, no_plots, angles, momen
     _run_exporting(console, trial, ["idyn"], cfg, out=out, plots=not no_plots, exports=exports, show="idyn")
 
 
-def _run_exporting(console: Console, trial, names, cfg, *, out, plots: bool, exports, show: str | None) -> None:
+def _run_exporting(console: Console, trial, names, cfg, *, out, plots: bool, exports, show: str | None,
+                   **options) -> None:
     """:meth:`Console.run`, then the exports of idyn's results (``--export``), whose file names are checked before
     any stage runs: a name too long stops it with nothing written."""
     if exports:
@@ -228,7 +229,7 @@ def _run_exporting(console: Console, trial, names, cfg, *, out, plots: bool, exp
         run = TrialRun(trial, out, cfg)
         for path in export_targets(run.out_root, set(exports), trial_name=run.trial.name):
             check_output_file(path)
-    console.run(trial, names, cfg, out=out, plots=plots, show=show)
+    console.run(trial, names, cfg, out=out, plots=plots, show=show, **options)
     if exports:
         from gaitcli.io.exports import export_trial
 
@@ -415,26 +416,35 @@ def reference_command(console: Console, trials, out, pipeline, band, sd_floor):
 @_config_option(IdynConfig, "pose", "--pose")
 @click.option("--export", "exports", type=Choice(("opensim", "c3d")), multiple=True,
               help="Also export idyn's results (as gait idyn --export; one trial, not a session).")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="A session's walks (or a prediction's starts) at once on this many local worker processes "
+                   "(default: the number of CPUs; 1: one after the other in this process).")
+@click.option("--scheduler", help="Address of an existing Dask scheduler (tcp://host:port) instead of local workers.")
 @click.pass_obj
-def run_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, frames, pose, exports):
+def run_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, frames, pose, exports, workers,
+                scheduler):
     """Run every stage of the pipeline on a trial, in order; on a session folder, on every walk (in parallel)
     and then the session's strides pooled into gait_out/session/. The options override the pipeline's."""
     from gaitcli.run.session import session_folder
 
+    if workers is not None and scheduler is not None:
+        raise click.UsageError("--workers and --scheduler exclude each other (a scheduler has its own workers)")
     cfg = configure(pipeline, filter={"cutoff_hz": cutoff_hz, "force_cutoff_hz": cutoff_hz},
                     idyn={"frames": frames, "pose": pose})
     if trial is not None and session_folder(trial) is not None:
         for flag, given in (("-o/--out", out), ("--export", exports)):
             if given:
                 raise click.UsageError(f"{flag} is for one trial: a session's outputs go to SESSION/gait_out/")
-        _run_session(console, trial, cfg, plots=not no_plots)
+        _run_session(console, trial, cfg, plots=not no_plots, workers=workers, scheduler=scheduler)
         return
     if exports and "idyn" not in cfg.stages:
         raise click.UsageError("--export exports idyn's results: the pipeline has no idyn stage")
-    _run_exporting(console, trial, cfg.stages, cfg, out=out, plots=not no_plots, exports=exports, show=None)
+    _run_exporting(console, trial, cfg.stages, cfg, out=out, plots=not no_plots, exports=exports, show=None,
+                   workers=workers, scheduler=scheduler)
 
 
-def _run_session(console: Console, folder: Path, cfg, *, plots: bool) -> None:
+def _run_session(console: Console, folder: Path, cfg, *, plots: bool, workers: int | None,
+                 scheduler: str | None) -> None:
     """``gait run SESSION``: the walks as a batch with its progress display, then one line per failed walk and
     the session's; a failed or unconverged walk → its exit code (the highest)."""
     import os
@@ -449,8 +459,8 @@ def _run_session(console: Console, folder: Path, cfg, *, plots: bool) -> None:
             if to_run:
                 console.info(f"session: {to_run} of {total} walks to run")
 
-        done = run_session(folder, cfg, workers=os.cpu_count() or 1, plots=plots, on_rows=progress,
-                           on_start=started)
+        done = run_session(folder, cfg, workers=workers or os.cpu_count() or 1, scheduler=scheduler, plots=plots,
+                           on_rows=progress, on_start=started)
     failed = {r.trial: r for r in done.batch.rows if r.status in ("failed", "unconverged")}
     for walk, row in failed.items():
         console.info(f"session: {walk}: {row.status}: {row.reason}")

@@ -23,7 +23,8 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
     assert made.returncode == 0, made.describe()
     session = tmp_path / "S"
     assert sorted(p.name for p in session.glob("*.c3d")) == ["Static 01.c3d", "Walking 01.c3d", "Walking 02.c3d"]
-    run = gait("run", "S", "--no-plots", cwd=tmp_path)
+    # one walk after the other in the runner (in parallel the walks are gait batch's tasks: test_batch_cli.py)
+    run = gait("run", "S", "--no-plots", "--workers", "1", cwd=tmp_path)
     assert run.returncode == 0, run.describe()
     assert "2 ok, 0 failed, 0 skipped" in run.stdout and "session: wrote" in run.stderr
     out = session / "gait_out"
@@ -65,10 +66,10 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
             assert image.size[0] > 800
     assert all((out / walk / "report.html").is_file() for walk in WALKS)
 
-    again = gait("run", "S", "--no-plots", cwd=tmp_path)
+    again = gait("run", "S", "--no-plots", "--workers", "1", cwd=tmp_path)
     assert again.returncode == 0 and "0 ok, 0 failed, 2 skipped" in again.stdout, again.describe()
     (session / "Walking 03.c3d").write_text("not a C3D\n")  # a damaged walk: the others still pooled
-    damaged = gait("run", "S", "--no-plots", cwd=tmp_path)
+    damaged = gait("run", "S", "--no-plots", "--workers", "1", cwd=tmp_path)
     assert damaged.returncode == 2 and damaged.stderr_lines[-1].startswith("gait: error: "), damaged.describe()
     assert "Walking 03.c3d" in damaged.stderr_lines[-1] and "1 of 3 walks failed" in damaged.stderr_lines[-1]
     assert json.loads((out / "session" / "summary.json").read_text())["walks"] == 2
