@@ -6,7 +6,8 @@ All invocations run once per session (:func:`build_once`), several processes at 
   on a second copy whose ``idyn.h5`` then gets NaN knee angles inside the analysed stride;
 * then, at once, on copies of the first trial folder (filter and idyn outputs included): a second
   ``--method so`` run on the same folder (must reuse filter and idyn), ``--method eid`` with each
-  objective, ``--method mso``, ``--method eid --validate`` over the swing phase and over the stride,
+  objective (the metabolic one validated over the stride), ``--method mso``, ``--method eid --validate``
+  over the swing phase,
   ``--phase swing``, ``--side l``, and the muscles run on the corrupted copy (exit 2, nothing written);
   the runs whose figures no test looks at (the corrupted copy's, Crowninshield–Brand's, the validations',
   EID's and MSO's of the left leg: SO's is drawn) draw none (``--no-plots``: a stage's figures take as long
@@ -97,7 +98,7 @@ def _build(root: Path) -> dict:
     shutil.copytree(out / "muscles" / "so", root / "so_first")  # the first run's outputs, before the second run
     upstream = {stage: _mtimes(out / stage) for stage in ("filter", "idyn")}
     upstream_sha = {stage: snapshot(out / stage) for stage in ("filter", "idyn")}
-    for name in ("eid", "eid_l", "cb", "mso", "mso_l", "validate", "validate_cycle", "swing", "left"):
+    for name in ("eid", "eid_l", "cb", "mso", "mso_l", "validate", "swing", "left"):
         _copy_with_outputs(normal, root / name)
     heavy = gait("synth", root / "heavy", "--seed", "1", "--gait", "normative", cwd=root)
     if heavy.returncode != 0:
@@ -107,11 +108,10 @@ def _build(root: Path) -> dict:
     nan_idyn = snapshot(nan / "gait_out")
     results = gait_many({  # the longest first
         "heavy": (("muscles", root / "heavy", "--method", "eid"), root),
-        "eid": (("muscles", root / "eid", "--method", "eid"), root),
+        "eid": (("muscles", root / "eid", "--method", "eid", "--validate"), root),  # validated over the stride
         "eid_l": (("muscles", root / "eid_l", "--method", "eid", "--side", "l", "--no-plots"), root),
         "validate": (("muscles", root / "validate", "--method", "eid", "--phase", "swing", "--validate", "--no-plots"),
                      root),
-        "validate_cycle": (("muscles", root / "validate_cycle", "--method", "eid", "--validate", "--no-plots"), root),
         "mso": (("muscles", root / "mso", "--method", "mso"), root),
         "mso_l": (("muscles", root / "mso_l", "--method", "mso", "--side", "l", "--no-plots"), root),
         "cb": (("muscles", root / "cb", "--method", "eid", "--objective", "crowninshield_brand", "--no-plots"), root),
@@ -335,9 +335,9 @@ def test_validate_reproduces_swing_angles_and_cost(runs):
 
 def test_validate_over_a_cycle_restarts_at_the_nodes(runs):
     """Over a stride (stance included) the forward model restarts from the EID state at every node."""
-    run = result(runs, "validate_cycle")
+    run = result(runs, "eid")
     assert run.returncode == 0, run.describe()
-    info = summary_of(runs[1] / "validate_cycle" / "gait_out" / "muscles" / "eid")
+    info = summary_of(runs[1] / "eid" / "gait_out" / "muscles" / "eid")
     assert info["phase"] == "cycle" and info["validation_restarted_at_nodes"] is True
     assert 0 <= info["validation_rms_deg"] < 3.0
     assert info["validation_metabolic_cost_J"] == pytest.approx(info["metabolic_cost_J"], rel=0.10)
