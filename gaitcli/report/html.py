@@ -279,6 +279,42 @@ def warnings_block(found: list[tuple[str, str]]) -> str:
     return f'<div class="warnings"><strong>{len(found)} warning{"s" * (len(found) != 1)}</strong><ul>{lines}</ul></div>'
 
 
+def side_rows(strides) -> list[list[str]]:
+    """A session's temporal-spatial parameters per side from its strides.csv (complete strides): speed, cadence
+    (two steps a stride: 120 / period, steps/min), stride length and period, stance and swing (% of the
+    cycle), single support (the other foot's swing) and double support (stance − single support), beside the
+    values 3.3.3's normal walking implies."""
+    import numpy as np
+
+    complete = strides[strides.status != "rejected"]
+    by_side = {side: complete[complete.side == side] for side in ("r", "l")}
+    stance = {side: by_side[side].stance_pct.to_numpy(float) for side in by_side}
+    normal_stance = NORMAL_FEATURES["stance_right_pct"]
+    normal_period = NORMAL_FEATURES["stride_length_m"] / NORMAL_FEATURES["speed_m_s"]
+
+    def cell(values, digits):
+        values = np.asarray(values, float)
+        values = values[np.isfinite(values)]
+        if not values.size:
+            return "—"
+        sd = f" ± {values.std(ddof=1):.{digits}f}" if values.size > 1 else ""
+        return f"{values.mean():.{digits}f}{sd}"
+
+    other = {"r": "l", "l": "r"}
+    rows = [("walking speed (m/s)", lambda s: by_side[s].speed_m_s, NORMAL_FEATURES["speed_m_s"], 2),
+            ("cadence (steps/min)", lambda s: 120.0 / by_side[s].period_s, 120.0 / normal_period, 1),
+            ("stride length (m)", lambda s: by_side[s].stride_length_m, NORMAL_FEATURES["stride_length_m"], 2),
+            ("stride period (s)", lambda s: by_side[s].period_s, normal_period, 2),
+            ("stance = foot off (% of cycle)", lambda s: stance[s], normal_stance, 1),
+            ("swing (% of cycle)", lambda s: 100.0 - stance[s], 100.0 - normal_stance, 1),
+            ("single support (% of cycle)", lambda s: 100.0 - stance[other[s]], 100.0 - normal_stance, 1),
+            ("double support (% of cycle)",
+             lambda s: stance[s] - (100.0 - np.nanmean(stance[other[s]]) if stance[other[s]].size else np.nan),
+             2 * normal_stance - 100.0, 1)]
+    return [[label, cell(values("r"), digits), cell(values("l"), digits), f"{normal:.{digits}f}"]
+            for label, values, normal, digits in rows]
+
+
 def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str, Path]) -> str:
     """The session's page (``root``: its ``gait_out``): subject and session, every walk's warnings, Table 3.1
     per walk beside normal walking, the strides used and rejected, the Gait Profile Score, the mean ± SD
@@ -316,7 +352,10 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
                      f"{_number(values.get('mean'), digits)} ± {_number(values.get('sd'), digits)}",
                      _number(NORMAL_FEATURES.get(key), digits)])
     parts += ["<h2>Temporal-spatial parameters (Table 3.1)</h2>",
-              _table(("", *names, "session mean ± SD", "normal (3.3.3)"), rows)]
+              _table(("", *names, "session mean ± SD", "normal (3.3.3)"), rows),
+              "<p>Per side, over every complete stride of every walk (mean ± SD; normal: from 3.3.3's speed, "
+              "stride and stance, walking having no flight phase):</p>",
+              _table(("", "right", "left", "normal"), side_rows(strides))]
     counts = summary.get("strides", {})
     used = [[side, *[counts.get(side, {}).get(k, 0) for k in ("used", "kinematics only", "rejected")]]
             for side in ("r", "l")]

@@ -65,6 +65,9 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
             image.load()
             assert image.size[0] > 800
     assert all((out / walk / "report.html").is_file() for walk in WALKS)
+    cadence = next(row for row in re.findall(r"<tr>(.*?)</tr>", page) if "cadence (steps/min)" in row)
+    right = complete[complete.side == "r"]
+    assert f"<td>{np.mean(120 / right.period_s):.1f} ± {np.std(120 / right.period_s, ddof=1):.1f}</td>" in cadence
 
     again = gait("run", "S", "--no-plots", "--workers", "1", cwd=tmp_path)
     assert again.returncode == 0 and "0 ok, 0 failed, 2 skipped" in again.stdout, again.describe()
