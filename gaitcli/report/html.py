@@ -235,8 +235,21 @@ def predict_section(folder: Path, name: str, work: Path) -> str:
         "prosthesis.png": "The prosthetic ankle's spring moment (N·m) against its angle (rad), beside Table A.7's "
                           "feet."}
     body = "".join(_figure(p, captions.get(p.name, p.stem)) for p in figures)
-    return (f"<h2>Predicted gait{state}</h2>"
+    return (f"<h2>Predicted gait{state}</h2>" + prediction_status(summary)
             + _table(("", "value", "unit"), rows) + body)
+
+
+def prediction_status(summary: dict) -> str:
+    """A prediction's outcome first: converged or not (IPOPT's status), in how many iterations, and which of
+    the gait checks (stance, double support, knee swing, vertical GRF, ankle moment peak) failed."""
+    checks = summary.get("gait_checks") if isinstance(summary.get("gait_checks"), dict) else {}
+    failed = [name for name, check in checks.items() if isinstance(check, dict) and not check.get("ok", True)]
+    converged = summary.get("converged", True)
+    text = (f"{'converged' if converged else 'did not converge'} ({html.escape(str(summary.get('status', '')))}) in "
+            f"{html.escape(str(summary.get('iterations', '—')))} iterations; "
+            + (f"gait checks failed: {html.escape(', '.join(failed))}" if failed else
+               f"all {len(checks)} gait checks passed" if checks else "no gait checks"))
+    return f'<p class="{"" if converged and not failed else "bad"}">{text}</p>'.replace(' class=""', "")
 
 
 def study_body(folder: Path) -> str:

@@ -104,10 +104,15 @@ def test_the_prediction_rows(tmp_path, monkeypatch):
 
     monkeypatch.setattr(predict_plots, "predict_figures", lambda *a, **k: [])
     root = tmp_path / "gait_out"
+    checks = {"stance_pct": {"value": 62.0, "ok": True}, "ankle_moment_peak_pct": {"value": 32.0, "ok": False}}
     write_json(root / "predict" / "summary.json", {"speed_m_s": 1.1275, "cost_of_transport_J_per_m": 250.04,
-                                                    "deviation": 3.14159, "objective": 0.98765, "converged": False})
+                                                    "deviation": 3.14159, "objective": 0.98765, "converged": False,
+                                                    "status": "Maximum_Iterations_Exceeded", "iterations": 2,
+                                                    "gait_checks": checks})
     (root / "predict" / "predict.h5").write_bytes(b"")
     text = report_html.write_report(root, band=None)[0].path.read_text(encoding="utf-8")
+    assert ('<p class="bad">did not converge (Maximum_Iterations_Exceeded) in 2 iterations; gait checks failed: '
+            "ankle_moment_peak_pct</p>") in text
     assert cells(text) == [["", "value", "unit"], ["speed", "1.13", "m/s"],
                            ["metabolic cost of transport Et", "250.0", "J/m"],
                            ["deviation from the reference Jdev", "3.14", ""], ["objective J", "0.988", ""]]
