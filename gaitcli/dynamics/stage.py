@@ -81,7 +81,7 @@ HEEL = {"r": "CAr", "l": "CAl"}
 
 @dataclass(frozen=True)
 class ReferencePosture:
-    """How the model was calibrated: ``static`` ("static.c3d", "subject.yaml" or "auto: …"), the file frames
+    """How the model was calibrated: ``static`` (the static's file name, "subject.yaml" or "auto: …"), the file frames
     used (None: all of static.c3d), the marker set, the hip-centre method, the plates' stride estimate of the
     body mass (kg, None without one), and SCORE's residual per side."""
 
@@ -337,9 +337,9 @@ def body_mass(trial: Trial, subject: Subject, cfg: IdynConfig, *, static: Record
 def reference_frames(trial: Trial, static: Recording | None, subject: Subject, *,
                      subject_path: Path | None) -> tuple[Markers, np.ndarray | None, str]:
     """The markers of the reference posture (3.1.3), the frames of them to average (None: all), and how they
-    were chosen: static.c3d, the frames subject.yaml names, or ``static_frames: auto``."""
-    if static is not None:
-        return static.markers, None, "static.c3d"
+    were chosen: the static trial's file name, the frames subject.yaml names, or ``static_frames: auto``."""
+    if static is not None:  # the static's file name (a session's "Static 01.c3d")
+        return static.markers, None, static.source.name if static.source is not None else "static.c3d"
     m = trial.markers
     if subject.static_frames in (None, "auto"):
         frames, how = least_flexed_frames(m, source=subject_path)
