@@ -354,7 +354,7 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
              ("angles", f"{first.get('angles', '—')} ({first.get('angle_frames', '—')}); moments "
                         f"{first.get('moment_convention', '—')}")]
     parts = [f"<h1>Session {html.escape(folder.name)}</h1>",
-             _table(("", ""), facts),
+             _table(("session", ""), facts),
              "<h2>Warnings</h2>",
              warnings_block([(f"{walk} / {where}", message) for walk in names
                              for where, message in stage_warnings(root / walk)])]
