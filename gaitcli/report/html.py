@@ -483,7 +483,9 @@ def write_report(out_dir: Path, band: Band | None) -> list[Page]:
         reasons = {r["trial"]: r["reason"] for r in rows if r["reason"]}
         pages, links = [], []
         for trial, state in sorted(status.items()):
-            output = root / trial / "gait_out"
+            walk = Path(trial)  # a session's walk is its C3D; its outputs are in the session's gait_out/<walk>/
+            output = (root / walk.parent / "gait_out" / walk.stem if walk.suffix.lower() == ".c3d"
+                      else root / trial / "gait_out")
             if state != "failed" and output.is_dir():
                 page = write_page(output / "report.html", trial,
                                   trial_body(output, trial, band, work / trial.replace("/", "_")))
