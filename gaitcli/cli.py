@@ -52,7 +52,10 @@ class Console:
                 continue
             self.summaries[outcome.stage] = outcome.summary
             if not self.quiet and not self.as_json:
-                line = stage(outcome.stage).describe(outcome.summary or {})
+                summary = outcome.summary or {}
+                line = stage(outcome.stage).describe(summary)
+                said = len(summary.get("warnings") or ())
+                line += f"{', ' if line else ''}{said} warning{'s' * (said != 1)}" if said else ""
                 click.echo(f"{outcome.stage}: {line + '; ' if line else ''}wrote {outcome.folder}", err=True)
 
     def progress(self):

@@ -124,6 +124,9 @@ def test_no_plates_still_writes_outputs(runs, shared_c3d_dir):
     # the stage's summary.json keeps what it warned, as said on the console (for the report)
     summary = json.loads((runs["root"] / "duplicate_labels" / "gait_out" / "filter" / "summary.json").read_text())
     assert [f"gait: warning: {w}" for w in summary["warnings"]] == _warnings(result)
+    said = len(summary["warnings"])
+    assert said >= 2 and any(line.startswith("filter: ") and f", {said} warnings; wrote" in line
+                             for line in result.stderr_lines), result.describe()
     markers = read_table(runs["root"] / "duplicate_labels" / "gait_out" / "filter" / "markers_filtered.csv")
     assert markers.columns[0] == "time_s" and "T8_2_x_m" in markers.columns
 
