@@ -391,7 +391,7 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
     figures = session_figures(session, work / "session", title=folder.name, band=band)
     captions = {"kinematics.png": "Kinematics (deg) in three planes, each side's mean ± SD over every stride of "
                                   "every walk (right red, left blue; n strides), over the grey normal band; foot off "
-                                  "of each side dashed.",
+                                  "of each side dashed, normal walking's (61 %, 3.3.3) dash-dotted.",
                 "kinetics.png": "Joint moments (N·m/kg, Plug-in Gait's signs) in three planes and total joint powers "
                                 "(W/kg, generated positive) of the strides whose foot was on the force plates."}
     parts += ["<h2>Kinematics and kinetics</h2>", *[_figure(p, captions[p.name]) for p in figures]]

@@ -51,6 +51,25 @@ def mark_events(ax, events, *, sides=("r", "l")) -> None:
                           linewidths=0.8, alpha=0.6, linestyles=style)
 
 
+#: foot off in normal walking, % of the cycle (the dissertation's 3.3.3: stance 61 %)
+NORMAL_FOOT_OFF_PCT = 61.0
+
+
+def mark_foot_off(ax, strides=None, *, foot_off_pct: dict[str, float] | None = None) -> None:
+    """Each side's mean foot off (% of its cycle; from its strides' toe offs, or given) dashed in its colour, and
+    normal walking's (:data:`NORMAL_FOOT_OFF_PCT`) dash-dotted grey."""
+    if foot_off_pct is None:
+        foot_off_pct = {}
+        for side in ("r", "l"):
+            offs = [100 * (s.toe_off_s - s.start_s) / s.period_s for s in strides or () if s.side == side]
+            offs = [o for o in offs if np.isfinite(o)]
+            if offs:
+                foot_off_pct[side] = float(np.mean(offs))
+    ax.axvline(NORMAL_FOOT_OFF_PCT, color="0.55", ls="-.", lw=0.9, zorder=0.4)
+    for side, pct in foot_off_pct.items():
+        ax.axvline(pct, color=SIDE_COLOUR[side], ls="--", lw=0.8)
+
+
 def draw_band(ax, band: Band | None, variable: str, *, label: bool = True) -> bool:
     """Grey mean ± 1 SD of ``variable`` behind whatever ``ax`` shows over 0–100 % (True when drawn)."""
     got = None if band is None else band.get(variable)
@@ -199,6 +218,8 @@ def _cycle_figure(tables: IdynTables, strides, plane: str, *, title: str, band):
         axes[rows - 1, col].set_xlabel("gait cycle (%)")
         for row in range(rows):
             axes[row, col].axhline(0, color="0.7", lw=0.6)
+    for ax in axes.flat:
+        mark_foot_off(ax, strides)
     for row in range(rows):
         for ax in axes[row]:
             ax.legend(fontsize=7, loc="best")
@@ -206,11 +227,12 @@ def _cycle_figure(tables: IdynTables, strides, plane: str, *, title: str, band):
     if convention.startswith("Plug-in Gait"):
         sign += ("; moments + = extensor / plantarflexor (Plug-in Gait)" if plane == "sagittal"
                  else "; moments + = abductor / everter (Plug-in Gait)")
-    normal = "; grey: normal ± 1 SD" if banded else ""
+    normal = "grey: normal ± 1 SD; " if banded else ""
     shown = "angles, moments and powers" if power is not None else "angles and moments"
     fig.suptitle(f"{plane.capitalize()} {shown} over the gait cycle — {title}\nmean ± SD of each side's strides; "
-                 f"moments blank where the foot's load is unknown; + = {sign}{normal}", fontsize=9)
-    fig.subplots_adjust(left=0.07, right=0.98, top=0.88, bottom=0.09, hspace=0.12, wspace=0.3)
+                 f"moments blank where the foot's load is unknown; + = {sign}\n{normal}dashed: each side's foot "
+                 f"off; dash-dot: 3.3.3's walkers' ({NORMAL_FOOT_OFF_PCT:g} %)", fontsize=9)
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.86, bottom=0.09, hspace=0.12, wspace=0.3)
     return fig
 
 

@@ -1,6 +1,6 @@
 """A session's figures from ``gait_out/session/`` (``cycle.csv``, ``strides.csv``): each side's mean ± SD over
 the strides of every walk against the grey normal band, right red, left blue, with each side's foot off (the
-mean stance % of its strides, dashed): the kinematics of pelvis, hip, knee, ankle and foot in three planes, and
+mean stance % of its strides, dashed; normal walking's dash-dotted grey): the kinematics of pelvis, hip, knee, ankle and foot in three planes, and
 the moments of hip, knee and ankle in three planes with their total powers."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from gaitcli.core.events import SIDE_NAMES
-from gaitcli.report.plots import SIDE_COLOUR, draw_band, plt, save
+from gaitcli.report.plots import SIDE_COLOUR, draw_band, mark_foot_off, plt, save
 from gaitcli.signal.bands import Band
 from gaitcli.signal.cycles import CYCLE_PCT
 
@@ -46,9 +46,9 @@ def _draw(ax, cycle: pd.DataFrame, pattern: str, band: Band | None, suffix: str,
         n = int(np.nanmax(block[f"{column}_n"]))
         ax.plot(CYCLE_PCT, mean, color=SIDE_COLOUR[side], lw=1.2, label=f"{SIDE_NAMES[side]} (n={n})")
         ax.fill_between(CYCLE_PCT, mean - sd, mean + sd, color=SIDE_COLOUR[side], alpha=0.15, lw=0)
-        if side in foot_off:
-            ax.axvline(foot_off[side], color=SIDE_COLOUR[side], ls="--", lw=0.8)
         drawn = True
+    if drawn:
+        mark_foot_off(ax, foot_off_pct={side: pct for side, pct in foot_off.items()})
     ax.axhline(0, color="0.7", lw=0.6)
     return drawn
 
@@ -78,7 +78,8 @@ def session_figures(session: Path, folder: Path, *, title: str = "", band: Band 
         axes[bottom, col].tick_params(labelbottom=True)
         axes[0, col].annotate(plane, (0.5, 1.25), xycoords="axes fraction", ha="center", fontsize=11)
     _legend(fig, axes)
-    fig.suptitle(f"{title}: kinematics, mean ± SD of every stride; foot off dashed".strip(": "), fontsize=11)
+    fig.suptitle(f"{title}: kinematics, mean ± SD of every stride; foot off dashed, normal's dash-dot".strip(": "),
+                 fontsize=11)
     written.append(save(fig, folder / "kinematics.png"))
 
     fig, axes = plt.subplots(len(JOINTS) + 1, 3, figsize=(12, 2.3 * (len(JOINTS) + 1)), sharex=True)

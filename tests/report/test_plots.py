@@ -231,3 +231,17 @@ def test_muscle_figures_say_where_the_energetics_do_not_apply(tmp_path, drawn):
     assert not energy.patches and "not given" in energy.get_title()
     assert all(len(ax.patches) == 2 for ax in drawn["forces.png"].axes)  # one red span per infeasible frame
     assert "red: infeasible frames" in drawn["forces.png"]._suptitle.get_text()
+
+
+def test_foot_off_is_each_sides_mean_toe_off_and_normal_walkings():
+    from gaitcli.signal.cycles import Stride
+
+    strides = [Stride("r", 0.0, 1.0, 0.6), Stride("r", 1.0, 2.2, 1.72), Stride("l", 0.5, 1.5, np.nan),
+               Stride("l", 1.5, 2.5, 2.1)]  # right 60 % and 60 %; left: one toe off unseen, one at 60 %
+    fig, ax = plt.subplots()
+    plots.mark_foot_off(ax, strides)
+    vertical = sorted((round(float(line.get_xdata()[0]), 9), line.get_color(), line.get_linestyle())
+                      for line in ax.get_lines())
+    plt.close(fig)
+    assert vertical == sorted([(60.0, plots.SIDE_COLOUR["r"], "--"), (60.0, plots.SIDE_COLOUR["l"], "--"),
+                               (plots.NORMAL_FOOT_OFF_PCT, "0.55", "-.")])
