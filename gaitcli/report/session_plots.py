@@ -1,7 +1,7 @@
 """A session's figures from ``gait_out/session/`` (``cycle.csv``, ``strides.csv``): each side's mean ± SD over
 the strides of every walk against the grey normal band, right red, left blue, with each side's foot off (the
-mean stance % of its strides, dashed; normal walking's dash-dotted grey): the kinematics of pelvis, hip, knee, ankle and foot in three planes, and
-the moments of hip, knee and ankle in three planes with their total powers."""
+mean stance % of its strides, dashed; normal walking's dash-dotted grey): the kinematics of pelvis, hip, knee,
+ankle and foot in three planes, and the moments of hip, knee and ankle in three planes with their powers."""
 
 from __future__ import annotations
 
