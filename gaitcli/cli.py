@@ -470,14 +470,14 @@ def _run_session(console: Console, folder: Path, cfg, *, plots: bool, workers: i
     if done.pooled is not None:
         info = done.pooled.summary()
         used = {side: info["strides"][side]["used"] + info["strides"][side]["kinematics only"] for side in "rl"}
-        console.info(f"session: wrote {done.output} ({info['walks']} walks; {used['r']} right and {used['l']} left "
-                     f"strides, {info['per_stride']['speed_m_s_mean']:.2f} m/s)")
+        console.info(f"session: wrote {done.output} ({info['walks']} walk{'s' * (info['walks'] != 1)}; {used['r']} "
+                     f"right and {used['l']} left strides, {info['per_stride']['speed_m_s_mean']:.2f} m/s)")
     click.echo(f"{done.batch.line()} ({done.batch.elapsed_s:.1f} s)")
     if failed:  # the first failure as the command's error: bad input 2, unconverged 3, an internal error 1
         walk, row = min(failed.items(), key=lambda item: {2: 0, 1: 1, 3: 2}.get(item[1].exit_code, 1))
         message = f"{len(failed)} of {len(done.walks)} walks {'did not converge' if row.exit_code == 3 else 'failed'}"
-        if row.exit_code == 2:
-            raise InputError(folder / walk, None, f"{message}; this one: {row.reason}")
+        if row.exit_code == 2:  # the reason names the walk's file
+            raise InputError(folder, None, f"{message}: {row.reason}")
         error = NotConvergedError if row.exit_code == 3 else GaitError
         raise error(f"{message} (listed above; {folder / 'gait_out' / 'batch_summary.csv'})")
 
