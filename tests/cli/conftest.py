@@ -353,3 +353,28 @@ def stair_sessions(shared_pig_dir, tmp_path_factory):
                                                                                                    root))
     return root, {k: Result.from_json(v) for k, v in record.items()}
 
+
+
+# ------------------------------------------------------------------ a page opened in headless Chromium
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+#: injected into a copy of a page (whose own Content-Security-Policy forbids scripts): on load, each image's
+#: natural size and every fetch the page made (data: URIs make none), into an attribute --dump-dom prints
+CHECK = ("<script>addEventListener('load', () => { document.body.setAttribute('data-check', JSON.stringify({"
+         "images: [...document.images].map(i => [i.naturalWidth, i.naturalHeight]), "
+         "requests: performance.getEntriesByType('resource').map(e => e.name)})); });</script>")
+
+
+def in_chromium(page: Path, tmp_path: Path) -> dict:
+    """``page`` loaded in headless Chromium: {"images": [[width, height], ...], "requests": [url, ...]}."""
+    import html as htmlmod
+    import re
+
+    text = re.sub(r'<meta http-equiv="Content-Security-Policy"[^>]*>', "", page.read_text(encoding="utf-8"))
+    probe = tmp_path / f"probe_{page.parent.name}.html"
+    probe.write_text(text.replace("</body>", CHECK + "</body>"), encoding="utf-8")
+    done = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=10000",
+                           "--dump-dom", probe.as_uri()], capture_output=True, text=True, timeout=120)
+    found = re.search(r'data-check="([^"]*)"', done.stdout)
+    assert found, done.stderr[-2000:]
+    return json.loads(htmlmod.unescape(found[1]))

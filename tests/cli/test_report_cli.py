@@ -9,23 +9,15 @@ made; data: URIs make none) into an attribute, which ``--dump-dom`` prints.
 
 from __future__ import annotations
 
-import html as htmlmod
-import json
 import re
 import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
 
 from gaitcli.resources import sample_trials_dir
 
-from .conftest import Result, build_once, gait_many
-
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-CHECK = ("<script>addEventListener('load', () => { document.body.setAttribute('data-check', JSON.stringify({"
-         "images: [...document.images].map(i => [i.naturalWidth, i.naturalHeight]), "
-         "requests: performance.getEntriesByType('resource').map(e => e.name)})); });</script>")
+from .conftest import CHROMIUM, Result, build_once, gait_many, in_chromium
 
 
 def _build(root: Path, prediction: Path) -> dict:
@@ -61,17 +53,6 @@ def reports(tmp_path_factory, stopped_prediction):
             "report.html"}
 
 
-def _in_chromium(page: Path, tmp_path: Path) -> dict:
-    text = re.sub(r'<meta http-equiv="Content-Security-Policy"[^>]*>', "", page.read_text(encoding="utf-8"))
-    probe = tmp_path / f"probe_{page.parent.name}.html"
-    probe.write_text(text.replace("</body>", CHECK + "</body>"), encoding="utf-8")
-    done = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=10000",
-                           "--dump-dom", probe.as_uri()], capture_output=True, text=True, timeout=120)
-    found = re.search(r'data-check="([^"]*)"', done.stdout)
-    assert found, done.stderr[-2000:]
-    return json.loads(htmlmod.unescape(found[1]))
-
-
 @pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (.ci/run installs it)")
 @pytest.mark.parametrize("name", ["trial", "predict", "batch_trial"])
 def test_a_page_loads_offline_with_every_image_decoded(reports, name, tmp_path):
@@ -80,7 +61,7 @@ def test_a_page_loads_offline_with_every_image_decoded(reports, name, tmp_path):
     source = page.read_text(encoding="utf-8")
     expected = source.count("<img ")
     assert expected == {"trial": 9, "predict": 6, "batch_trial": 5}[name], expected  # the figures of each page
-    check = _in_chromium(page, tmp_path)
+    check = in_chromium(page, tmp_path)
     assert check["requests"] == []
     assert len(check["images"]) == expected and all(w > 0 and h > 0 for w, h in check["images"]), check["images"]
 

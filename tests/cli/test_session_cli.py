@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 from PIL import Image
 
-from .conftest import gait
+from .conftest import CHROMIUM, gait, in_chromium
 
 WALKS = ("Walking 01", "Walking 02")
 
@@ -65,6 +65,10 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
             image.load()
             assert image.size[0] > 800
     assert all((out / walk / "report.html").is_file() for walk in WALKS)
+    if CHROMIUM is not None:  # .ci/run installs it
+        check = in_chromium(out / "report.html", tmp_path)
+        assert check["requests"] == [] and len(check["images"]) == 2
+        assert all(w > 800 and h > 400 for w, h in check["images"]), check["images"]
     cadence = next(row for row in re.findall(r"<tr>(.*?)</tr>", page) if "cadence (steps/min)" in row)
     right = complete[complete.side == "r"]
     assert f"<td>{np.mean(120 / right.period_s):.1f} ± {np.std(120 / right.period_s, ddof=1):.1f}</td>" in cadence
