@@ -52,3 +52,11 @@ def gait_checks(cycle_pct, knee_flexion_deg, grf_z_N_per_kg, grf_pct, ankle_mome
                          "ok": bool(first > 1.0 and second > 1.0 and valley < 1.0)},
         "ankle_moment_peak_pct": {"value": peak_pct, "ok": bool(peak_pct >= 0.6 * stance_pct)},
     }
+
+
+def failed_checks(checks) -> list[str]:
+    """The names of the checks :func:`gait_checks` gave (as summary.json holds them) that failed; a value that
+    is not such a mapping (a damaged summary) gives none."""
+    if not isinstance(checks, dict):
+        return []
+    return [name for name, check in checks.items() if isinstance(check, dict) and not check.get("ok", True)]

@@ -29,7 +29,9 @@ from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.h5 import file_attrs
 from gaitcli.io.outputs import plain_text
+from gaitcli.predict.checks import failed_checks
 from gaitcli.signal.bands import Band
+from gaitcli.signal.profile import GPS_VARIABLES
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
 #: Wolf and Rettig), the literature values the dissertation compares Table 3.1 with
@@ -243,7 +245,7 @@ def prediction_status(summary: dict) -> str:
     """A prediction's outcome first: converged or not (IPOPT's status), in how many iterations, and which of
     the gait checks (stance, double support, knee swing, vertical GRF, ankle moment peak) failed."""
     checks = summary.get("gait_checks") if isinstance(summary.get("gait_checks"), dict) else {}
-    failed = [name for name, check in checks.items() if isinstance(check, dict) and not check.get("ok", True)]
+    failed = failed_checks(checks)
     converged = summary.get("converged", True)
     text = (f"{'converged' if converged else 'did not converge'} ({html.escape(str(summary.get('status', '')))}) in "
             f"{html.escape(str(summary.get('iterations', '—')))} iterations; "
@@ -379,9 +381,11 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
     profile = summary.get("gait_profile") or {}
     if profile:
         gvs = profile.get("gvs_deg", {})
-        variables = sorted({c.replace("_r_", "_").replace("_l_", "_") for side in gvs.values() for c in side})
-        rows = [[v, *[_number(gvs.get(side, {}).get(v.replace("_", f"_{s}_", 1) if not v.startswith("pelvis") else v),
-                              1) for side, s in (("right", "r"), ("left", "l"))]] for v in variables]
+        columns = {variable.removesuffix("_deg"): pattern for pattern, variable in GPS_VARIABLES}
+        rows = [[label, *[_number(gvs.get(side, {}).get(columns[label].format(s=s)), 1)
+                          for side, s in (("right", "r"), ("left", "l"))]]
+                for label in sorted(columns) if any(columns[label].format(s=s) in gvs.get(side, {})
+                                                    for side, s in (("right", "r"), ("left", "l")))]
         parts += ["<h2>Gait Profile Score</h2>",
                   f"<p>GPS {_number(profile.get('gps_deg'), 1)}° (right {_number(profile.get('gps_right_deg'), 1)}°,"
                   f" left {_number(profile.get('gps_left_deg'), 1)}°) against the band "

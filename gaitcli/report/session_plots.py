@@ -12,7 +12,7 @@ import pandas as pd
 
 from gaitcli.core.events import SIDE_NAMES
 from gaitcli.report.plots import SIDE_COLOUR, draw_band, mark_foot_off, plt, save
-from gaitcli.signal.bands import Band
+from gaitcli.signal.bands import Band, leg_variable
 from gaitcli.signal.cycles import CYCLE_PCT
 
 PLANES = ("sagittal", "frontal", "transverse")
@@ -25,18 +25,11 @@ KINEMATICS = (("pelvis", ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation"))
 JOINTS = ("hip", "knee", "ankle")
 
 
-def _band_name(column: str, suffix: str) -> str:
-    """The band's side-free variable of a cycle.csv column: ``hip_r_flexion`` → ``hip_flexion_deg``."""
-    parts = column.split("_")
-    if len(parts) > 2 and parts[1] in ("r", "l"):
-        parts = [parts[0], *parts[2:]]
-    return "_".join(parts) + suffix
-
-
-def _draw(ax, cycle: pd.DataFrame, pattern: str, band: Band | None, suffix: str, foot_off: dict) -> bool:
+def _draw(ax, cycle: pd.DataFrame, pattern: str, band: Band | None, foot_off: dict) -> bool:
     """One variable: the band, each side's mean ± SD and foot off; True when a side had it."""
     drawn = False
-    draw_band(ax, band, _band_name(pattern.format(s="r"), suffix), label=False)
+    leg = leg_variable(pattern.format(s="r"))
+    draw_band(ax, band, leg[1] if leg else f"{pattern}_deg", label=False)  # the pelvis's angles have no side
     for side in ("r", "l"):
         column = pattern.format(s=side)
         block = cycle[cycle.side == side]
@@ -67,7 +60,7 @@ def session_figures(session: Path, folder: Path, *, title: str = "", band: Band 
     for row, (part, columns) in enumerate(KINEMATICS):
         for col, pattern in enumerate(columns):
             ax = axes[row, col]
-            if pattern is None or not _draw(ax, cycle, pattern, band, "_deg", foot_off):
+            if pattern is None or not _draw(ax, cycle, pattern, band, foot_off):
                 ax.axis("off")
                 continue
             ax.set_title(f"{part} {pattern.split('_')[-1]}", fontsize=9)
@@ -89,14 +82,14 @@ def session_figures(session: Path, folder: Path, *, title: str = "", band: Band 
         for col, column in enumerate(moments[:3]):
             ax = axes[row, col]
             pattern = column.replace(f"{joint}_r_", f"{joint}_{{s}}_", 1)
-            if not _draw(ax, cycle, pattern, band, "", foot_off):
+            if not _draw(ax, cycle, pattern, band, foot_off):
                 ax.axis("off")
                 continue
             ax.set_title(column.replace(f"{joint}_r_", f"{joint} ").replace("_moment_per_kg", " moment")
                          .replace("_", " "), fontsize=9)
             ax.set_ylabel("N·m/kg")
         power = axes[len(JOINTS), row]
-        if _draw(power, cycle, f"{joint}_{{s}}_power_W_per_kg", band, "", foot_off):
+        if _draw(power, cycle, f"{joint}_{{s}}_power_W_per_kg", band, foot_off):
             power.set_title(f"{joint} power (+ generated)", fontsize=9)
             power.set_ylabel("W/kg")
         else:

@@ -145,35 +145,42 @@ class TrialRun:
     def output_folder(self, name: str) -> Path:
         return self.out_root / stage(name).output_folder(self.cfg.section(name))
 
-    def fresh(self, name: str) -> Path | None:
-        """The stage's HDF5 output if it exists and was made from the same inputs and configuration."""
+    def _made(self, name: str) -> tuple[Path, str | None] | None:
+        """The stage's HDF5 output and the key it was made with ("" without one; None: a damaged file, made
+        anew); None without an output."""
         path = self.output_folder(name) / stage(name).h5_name
         if not path.is_file():
             return None
         try:
-            key = file_attrs(path).get("stage_key")
-        except InputError:  # damaged: made anew
-            return None
-        return path if key == self.stage_key(name) else None
+            return path, file_attrs(path).get("stage_key", "")
+        except InputError:
+            return path, None
+
+    def fresh(self, name: str) -> Path | None:
+        """The stage's HDF5 output if it exists and was made from the same inputs and configuration."""
+        made = self._made(name)
+        return made[0] if made is not None and made[1] == self.stage_key(name) else None
 
     def why_stale(self, name: str) -> str | None:
         """Why the stage's existing output will not do (None: there is none, or it is fresh): the settings it was
         made with that differ from this run's, or changed input files."""
-        path = self.output_folder(name) / stage(name).h5_name
-        if not path.is_file():
+        made, key_now = self._made(name), self.stage_key(name)
+        if made is None or made[1] == key_now:
             return None
+        path, key = made
+        unreadable = f"the output in {path.parent} cannot be read"
+        if key is None:
+            return unreadable
         try:
-            made = json.loads(file_attrs(path).get("stage_key") or "{}")
-        except (InputError, ValueError):
-            return f"the output in {path.parent} cannot be read"
-        now = json.loads(self.stage_key(name))
-        if made == now:
-            return None
-        changed = [f"{section}.{key} {made_value} in the existing output, {value} asked"
+            before = json.loads(key) if key else {}
+        except ValueError:
+            return unreadable
+        now = json.loads(key_now)
+        changed = [f"{section}.{setting} {was} in the existing output, {value} asked"
                    for section, settings in now["config"].items()
-                   for key, value in settings.items()
-                   if (made_value := made.get("config", {}).get(section, {}).get(key, "(none)")) != value]
-        if made.get("inputs") != now["inputs"]:
+                   for setting, value in settings.items()
+                   if (was := before.get("config", {}).get(section, {}).get(setting, "(none)")) != value]
+        if before.get("inputs") != now["inputs"]:
             changed.append("the trial's files changed since")
         return "; ".join(changed) or "it was made by another version of gaitcli"
 

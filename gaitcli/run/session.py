@@ -20,7 +20,7 @@ from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.run.batch import BATCH_SUMMARY, BatchResult, run_batch, stages_of
 from gaitcli.run.config import PipelineConfig
 from gaitcli.run.trial import SESSION_OUTPUT, output_root, session_walks
-from gaitcli.signal.bands import BAND_FILE, read_band
+from gaitcli.signal.bands import BAND_FILE, default_band
 from gaitcli.signal.profile import gait_profile
 from gaitcli.signal.session import SessionStrides, Walk, pool
 
@@ -67,7 +67,7 @@ def session_profile(pooled: SessionStrides) -> dict:
     means = {side: {c[:-len("_mean")]: block[c].to_numpy() for c in block.columns if c.endswith("_mean")}
              for side, block in pooled.cycle.groupby("side")}
     try:
-        profile = gait_profile(means, read_band(BAND_FILE))
+        profile = gait_profile(means, default_band())
     except ValueError:  # no kinematic variable in common (a pipeline without angles)
         return {}
     return {**profile.as_dict(), "band": str(BAND_FILE.name)}

@@ -29,6 +29,7 @@ from gaitcli.dynamics.stage import IdynConfig, run_idyn
 from gaitcli.errors import InputError
 from gaitcli.io.h5 import read_result
 from gaitcli.muscles.stage import MuscleResult, MusclesConfig, run_muscles_stage
+from gaitcli.predict.checks import failed_checks
 from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult
 from gaitcli.signal.stage import FilterConfig, filter_trial
@@ -108,7 +109,7 @@ def describe_muscles(s: dict) -> str:
 
 def describe_prediction(s: dict) -> str:
     """``predict: converged in 232 it., Et 350 J/m, 1 gait check failed``."""
-    failed = [name for name, check in (s.get("gait_checks") or {}).items() if not check.get("ok", True)]
+    failed = failed_checks(s.get("gait_checks"))
     return (f"{'converged' if s.get('converged') else 'did not converge'} in {s.get('iterations')} it., "
             f"Et {_number(s.get('cost_of_transport_J_per_m'), '.0f')} J/m, J {_number(s.get('objective'), '.4g')}, "
             f"{len(failed)} gait check{'' if len(failed) == 1 else 's'} failed"

@@ -83,6 +83,24 @@ def floor_of(variable: str) -> float:
     return next((v for suffix, v in SD_FLOOR.items() if variable.endswith(suffix)), 0.0)
 
 
+def leg_variable(column: str) -> tuple[str, str] | None:
+    """(side, band variable) of a gait_cycle.csv leg column (:data:`LEG_COLUMN`): ``knee_r_flexion`` →
+    ("r", "knee_flexion_deg"), ``hip_l_power_W_per_kg`` → ("l", "hip_power_W_per_kg"); None for another."""
+    leg = LEG_COLUMN.match(column)
+    return (leg[2], f"{leg[1]}_{leg[3]}{leg[4] or '_deg'}") if leg else None
+
+
+def stride_statistics(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean, SD (ddof 1) and count at each point over the strides (rows) of ``stack`` that give it there
+    (finite; NaN: a stride that does not, e.g. a moment where its foot's load is unknown): the mean NaN where no
+    stride does, the SD where fewer than two do."""
+    count = np.isfinite(stack).sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(count > 0, np.nansum(stack, axis=0) / np.maximum(count, 1), np.nan)
+        spread = np.sqrt(np.nansum((stack - mean) ** 2, axis=0) / np.maximum(count - 1, 1))
+    return mean, np.where(count > 1, spread, np.nan), count
+
+
 def band_from_gait_cycles(paths, *, source: str = "", sd_floor: bool = False) -> Band:
     """The band of every stride in idyn's ``gait_cycle.csv`` files (both legs pooled, each over its own cycle;
     at each percentage the strides that give the variable there: a moment where its foot's load is known, NaN
@@ -96,21 +114,17 @@ def band_from_gait_cycles(paths, *, source: str = "", sd_floor: bool = False) ->
             if len(block) != CYCLE_PCT.size:
                 continue
             for column in block.columns:
-                leg = LEG_COLUMN.match(column)
-                if leg and leg[2] == side:
-                    name = f"{leg[1]}_{leg[3]}{leg[4] or '_deg'}"
-                    stacks.setdefault(name, []).append(block[column].to_numpy(float))
+                leg = leg_variable(column)
+                if leg and leg[0] == side:
+                    stacks.setdefault(leg[1], []).append(block[column].to_numpy(float))
     mean, sd, strides = {}, {}, {}
     for name, curves in stacks.items():
         if not curves:
             continue
-        stack = np.stack(curves)  # NaN where a stride's moment is unknown (its foot off the plates)
-        count = np.isfinite(stack).sum(axis=0)
+        average, spread, count = stride_statistics(np.stack(curves))
         if not count.any():
             continue
-        with np.errstate(invalid="ignore", divide="ignore"):
-            mean[name] = np.where(count > 0, np.nansum(stack, axis=0) / np.maximum(count, 1), np.nan)
-            spread = np.sqrt(np.nansum((stack - mean[name]) ** 2, axis=0) / np.maximum(count - 1, 1))
+        mean[name] = average
         floor = floor_of(name) if sd_floor else 0.0
         sd[name] = np.where(count > 0, np.maximum(np.where(count > 1, spread, 0.0), floor), np.nan)
         strides[name] = int(count.max())

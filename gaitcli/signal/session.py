@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from gaitcli.core.events import Events
+from gaitcli.signal.bands import stride_statistics
 from gaitcli.signal.cycles import CYCLE_PCT, strides
 
 #: the fraction of a stride's samples with its leg's moments known for its kinetics to be used (one sample short:
@@ -130,12 +131,7 @@ def pool(walks: list[Walk]) -> SessionStrides:
         for name in variables:
             kinetic = name.endswith("_per_kg")
             stack = np.array([b[name].to_numpy() for b in (used if kinetic else blocks)]).reshape(-1, CYCLE_PCT.size)
-            finite = np.isfinite(stack)
-            n = finite.sum(axis=0)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                mean = np.where(n > 0, np.nansum(np.where(finite, stack, 0.0), axis=0) / np.maximum(n, 1), np.nan)
-                dev = np.where(finite, stack - mean, 0.0)
-                sd = np.where(n > 1, np.sqrt((dev ** 2).sum(axis=0) / np.maximum(n - 1, 1)), np.nan)
+            mean, sd, n = stride_statistics(stack)
             block.update({f"{name}_mean": mean, f"{name}_sd": sd, f"{name}_n": n})
         cycle_blocks.append(pd.DataFrame(block))
     per_walk = pd.DataFrame([{"walk": w.name, **{k: w.features.get(k, np.nan) for k in TABLE_3_1}} for w in walks])
