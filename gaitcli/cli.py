@@ -589,7 +589,7 @@ def _print_findings(result) -> None:
 @click.argument("out_dir", type=click.Path(path_type=Path))
 @click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
               help="Normal band for the cycle figures: a band CSV (gait reference --band) or a gait reference "
-                   "table (default: the package's band, from Winter's adult curves).")
+                   "table (default: the package's band, Schwartz et al. 2008's free speed).")
 @click.option("--export", "exports", type=Choice(("opensim", "c3d")), multiple=True,
               help="Also export each trial's idyn results for OpenSim or as a C3D copy (as gait idyn --export).")
 @click.pass_obj

@@ -13,7 +13,7 @@ from gaitcli.dynamics.stage import IdynResult
 from gaitcli.io.h5 import Dataset, read_result, record_datasets, write_h5
 from gaitcli.io.outputs import write_table
 from gaitcli.io.stage_files import IdynTables, read_idyn_tables
-from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
+from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES, MIRRORED_ON_LEFT
 from gaitcli.kinematics.conventions import (
     ANATOMICAL_CONVENTION,
     CONVENTION,
@@ -108,17 +108,19 @@ def residual_columns(result: IdynResult) -> dict:
 
 def cycle_columns(result: IdynResult) -> dict:
     """Every complete stride of each side normalised to 0–100 % (long format: one block per stride): the angles,
-    moments (N·m/kg) and total joint powers (W/kg) of the tables."""
+    moments (N·m/kg) and total joint powers (W/kg) of the tables; a left stride's pelvis obliquity and rotation
+    negated (:data:`MIRRORED_ON_LEFT`, as Plug-in Gait reports the left side)."""
     kin, angle_names, _ = displayed_angles(result)
     mom = known_shown_moments_Nm(result) / result.mass_kg
     powers = {name: values for name, values in power_columns(result).items()
               if name.endswith("_power_W_per_kg") and "sagittal" not in name}
     values = np.column_stack([kin, mom, *powers.values()])
     names = list(angle_names) + [f"{m}_per_kg" for m in displayed_moments(result)[1]] + list(powers)
+    left_sign = np.array([-1.0 if name in MIRRORED_ON_LEFT else 1.0 for name in names])
     blocks = {"cycle_pct": [], "side": [], "stride": [], "start_s": []}
     rows = []
     for k, stride in enumerate(result.strides):
-        rows.append(normalise(values, result.time_s, stride))
+        rows.append(normalise(values, result.time_s, stride) * (left_sign if stride.side == "l" else 1.0))
         blocks["cycle_pct"].append(CYCLE_PCT)
         blocks["side"].append(np.full(CYCLE_POINTS, stride.side))
         blocks["stride"].append(np.full(CYCLE_POINTS, k + 1))

@@ -35,6 +35,9 @@ ANKLE_CONVENTIONS = ("plug_in_gait", "isb")
 PIG_FOOT_AXES = np.array([[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
 
 PELVIS_ANGLES = ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation")
+#: the pelvis angles a left stride reports negated (Plug-in Gait's LPelvisAngles: the left side up or forward
+#: positive), so that each side's cycle reads like the other's and like a normal band
+MIRRORED_ON_LEFT = ("pelvis_obliquity", "pelvis_rotation")
 SIDE_ANGLES = ("hip_{s}_flexion", "hip_{s}_adduction", "hip_{s}_rotation",
                "knee_{s}_flexion", "knee_{s}_adduction", "knee_{s}_rotation",
                "ankle_{s}_flexion", "ankle_{s}_inversion", "ankle_{s}_rotation", "foot_{s}_progression")

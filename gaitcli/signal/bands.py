@@ -1,17 +1,17 @@
 """Normal bands: mean ± 1 SD over the gait cycle of a reference group, which figures draw grey behind a trial's
-curves (:func:`gaitcli.report.plots.draw_band`).
+curves (:func:`gaitcli.report.plots.draw_band`) and the Gait Profile Score measures against.
 
 A band holds side-free variables over 0–100 % of a stride (both legs alike, in the names and signs of the
-tables it was made from, the side dropped): angles ``<joint>_<sense>_deg`` (``hip_flexion_deg``,
-``ankle_inversion_deg``, ``foot_progression_deg``, ...), moments ``<joint>_<sense>_moment_per_kg`` (N·m/kg:
-``knee_extensor_moment_per_kg`` ...), total joint powers ``<joint>_power_W_per_kg`` (W/kg) and the ground
-reaction ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read from a band file (``cycle_pct`` then ``<variable>_mean`` and
-``<variable>_sd``; ``gait reference ... --band FILE`` writes one from idyn outputs) or from a ``gait reference``
-table, whose right-leg columns give the sagittal angles and forces. The package's band
-(``signal/data/normal_band.csv``) comes from ``gait synth``'s normative trial (Winter's curves; the command is in
-sample_trials/README.md); one subject's strides vary far less than between subjects, so each SD was raised to a
-floor (3°, 0.1 N·m/kg, 0.2 W/kg, 0.3 N/kg, our choice as for the prediction's Jdev, :data:`SD_FLOOR`;
-``gait reference --sd-floor``).
+tables it was made from, the side dropped): angles ``<joint>_<sense>_deg`` (``pelvis_tilt_deg``,
+``hip_flexion_deg``, ``foot_progression_deg``, ...; the pelvis as each side's cycle reports it), moments
+``<joint>_<sense>_moment_per_kg`` (N·m/kg: ``knee_extensor_moment_per_kg`` ...), total joint powers
+``<joint>_power_W_per_kg`` (W/kg) and the ground reaction ``grf_x_N_per_kg``, ``grf_z_N_per_kg``. It is read
+from a band file (``cycle_pct`` then ``<variable>_mean`` and ``<variable>_sd``; ``gait reference ... --band FILE``
+writes one from idyn outputs) or from a ``gait reference`` table, whose right-leg columns give the sagittal
+angles and forces. The package's band (``signal/data/normal_band.csv``) is Schwartz et al. (2008)'s
+free-speed group of 83 typically developing children and adolescents in Plug-in Gait's components
+(``signal/data/README.md``: source, subjects, speed, licence, conversion). ``gait reference --sd-floor`` raises
+each SD to a floor (3°, 0.1 N·m/kg, 0.2 W/kg, 0.3 N/kg, :data:`SD_FLOOR`), for a band of one subject's strides.
 """
 
 from __future__ import annotations
@@ -26,9 +26,10 @@ from gaitcli.errors import InputError
 from gaitcli.signal.cycles import CYCLE_PCT
 
 #: a gait_cycle.csv column a band pools over both legs: ``<joint>_<side>_<sense>`` (deg),
-#: ``<joint>_<side>_<sense>_moment_per_kg`` or ``<joint>_<side>_power_W_per_kg`` (the pelvis and lumbar columns
-#: have no side)
+#: ``<joint>_<side>_<sense>_moment_per_kg`` or ``<joint>_<side>_power_W_per_kg`` (the pelvis columns have no side:
+#: each stride's holds the pelvis as its side reports it, :data:`PELVIS_COLUMNS`)
 LEG_COLUMN = re.compile(r"^(hip|knee|ankle|foot)_([rl])_(\w+?)(_moment_per_kg|_W_per_kg)?$")
+PELVIS_COLUMNS = ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation")
 #: SD floors by the variable's unit suffix
 SD_FLOOR = {"_deg": 3.0, "_moment_per_kg": 0.1, "_W_per_kg": 0.2, "_N_per_kg": 0.3}
 BAND_FILE = Path(__file__).resolve().parent / "data" / "normal_band.csv"
@@ -115,6 +116,8 @@ def band_from_gait_cycles(paths, *, source: str = "", sd_floor: bool = False) ->
                 continue
             for column in block.columns:
                 leg = leg_variable(column)
+                if column in PELVIS_COLUMNS:
+                    leg = (side, f"{column}_deg")
                 if leg and leg[0] == side:
                     stacks.setdefault(leg[1], []).append(block[column].to_numpy(float))
     mean, sd, strides = {}, {}, {}
@@ -171,7 +174,11 @@ def read_band(path: str | Path, *, side_free: bool = True) -> Band:
     return Band(mean, sd, path.name)
 
 
+#: the package band's caption
+BAND_SOURCE = "Schwartz et al. 2008, 83 typically developing children, free speed"
+
+
 def default_band() -> Band:
-    """The package's band (the strides of ``gait synth``'s normative trial: Winter's curves)."""
+    """The package's band (:data:`BAND_FILE`; module docstring)."""
     band = read_band(BAND_FILE)
-    return Band(band.mean, band.sd, "gaitcli's band: Winter's adult curves (gait synth --gait normative)")
+    return Band(band.mean, band.sd, BAND_SOURCE)

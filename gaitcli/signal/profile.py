@@ -5,8 +5,9 @@ A Gait Variable Score is the root mean square, over the points of the cycle (0â€
 the difference between one kinematic variable's mean curve and the band's mean of it. The Gait Profile Score
 is the root mean square of the GVS: per side over that side's variables, and overall over every variable of
 both sides. Baker's nine variables per side are the pelvis's tilt, obliquity and rotation, the hip's flexion,
-abduction and rotation, knee flexion, ankle dorsiflexion and foot progression; a band without pelvis curves
-(the package's) gives a GPS over the six others, and the result says which it used.
+abduction and rotation, knee flexion, ankle dorsiflexion and foot progression, the pelvis as each side's cycle
+reports it (gait_cycle.csv mirrors the left's obliquity and rotation); a band without some of them gives a GPS
+over the others, and the result says which it used.
 """
 
 from __future__ import annotations
