@@ -586,19 +586,34 @@ def _print_findings(result) -> None:
 
 
 @gait.command("report")
-@click.argument("out_dir", type=click.Path(path_type=Path))
+@click.argument("out_dirs", metavar="OUT_DIR...", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
               help="Normal band for the cycle figures: a band CSV (gait reference --band) or a gait reference "
                    "table (default: the package's band, Schwartz et al. 2008's free speed).")
 @click.option("--export", "exports", type=Choice(("opensim", "c3d")), multiple=True,
               help="Also export each trial's idyn results for OpenSim or as a C3D copy (as gait idyn --export).")
+@click.option("--compare", is_flag=True,
+              help="Compare the conditions OUT_DIR... (trials, walks, sessions or bundled sample trials' names) "
+                   "with the first: Table 3.1 each, mean ± SD overlaid, SPM where they differ (runs filter and "
+                   "idyn where needed).")
+@click.option("-o", "--out", "out", type=click.Path(path_type=Path, file_okay=False),
+              help="With --compare: where the comparison goes (default ./gait_compare; OUT/compare/report.html).")
 @click.pass_obj
-def report_command(console: Console, out_dir, reference, exports):
-    """A self-contained HTML page per trial, prediction or study in OUT_DIR (and an index for a batch)."""
+def report_command(console: Console, out_dirs, reference, exports, compare, out):
+    """A self-contained HTML page per trial, session, prediction or study in OUT_DIR (and an index for a batch);
+    with --compare, one page comparing the conditions."""
     from gaitcli.report.html import find_report, write_report
     from gaitcli.signal.bands import default_band, read_band
 
     band = default_band() if reference is None else read_band(reference)
+    if compare:
+        if len(out_dirs) < 2 or exports:
+            raise click.UsageError("--compare takes two or more conditions and no --export")
+        _compare(console, out_dirs, band, Path("gait_compare") if out is None else out)
+        return
+    if len(out_dirs) != 1 or out is not None:
+        raise click.UsageError("one OUT_DIR (several with --compare; -o/--out is for --compare)")
+    out_dir = out_dirs[0]
     pages = write_report(out_dir, band)
     for page in pages:
         console.info(f"report: wrote {page.path}")
@@ -615,6 +630,27 @@ def report_command(console: Console, out_dir, reference, exports):
             formats = set(exports) if trial_file is not None else set(exports) - {"c3d"}
             for path in export_trial(output, formats, trial_c3d=trial_file):
                 console.info(f"report: exported {path}")
+
+
+def _compare(console: Console, refs, band, out: Path) -> None:
+    """``gait report A B … --compare``: every condition read (its filter and idyn run where needed), compared
+    with the first, written to OUT/compare/ with its page."""
+    import os
+
+    from gaitcli.report.html import write_compare_report
+    from gaitcli.run.conditions import compare_conditions, condition_sources, read_condition, write_comparison
+
+    cfg = configure(None)
+    sources = condition_sources(refs, out.resolve())
+    conditions = []
+    for source in sources:
+        console.info(f"compare: reading {source.name}")
+        conditions.append(read_condition(source, cfg, workers=os.cpu_count() or 1))
+    comparison = compare_conditions(conditions)
+    folder = write_comparison(out.resolve(), comparison)
+    page = write_compare_report(folder, band)
+    console.info(f"compare: {len(conditions)} conditions, {len(comparison.spans)} spans where one differs from "
+                 f"{sources[0].name}; wrote {page.path}")
 
 
 #: the options of the gait group itself, taken anywhere on the command line (``gait idyn TRIAL --json``)

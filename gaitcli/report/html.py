@@ -405,6 +405,60 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
     return "".join(parts)
 
 
+def compare_body(compare: Path, band: Band | None, work: Path) -> str:
+    """The page of a comparison of conditions (``compare``: its ``OUT/compare`` folder): the conditions' warnings,
+    Table 3.1 per condition, where each differs from the first (SPM) and the overlaid mean ± SD figures."""
+    import pandas as pd
+
+    from gaitcli.report.compare_plots import compare_figures
+
+    summary = _summary(compare, ())
+    names = [str(n) for n in summary.get("conditions", [])]
+    conditions = pd.read_csv(compare / "conditions.csv").assign(condition=lambda t: t.condition.astype(str))
+    spans = pd.read_csv(compare / "spm.csv").assign(condition=lambda t: t.condition.astype(str))
+    said = summary.get("warnings", {})
+    parts = [f"<h1>Conditions compared: {html.escape(', '.join(names))}</h1>", "<h2>Warnings</h2>",
+             warnings_block([(name, message) for name in names for message in said.get(name, [])])]
+    by_name = conditions.set_index("condition")
+    rows = [[f"{label} ({unit})", *[_number(by_name.loc[n, key], digits) for n in names],
+             _number(NORMAL_FEATURES.get(key), digits)] for key, label, unit, digits in FEATURES]
+    rows.append(["strides (right / left)",
+                 *[f"{by_name.loc[n, 'strides_right']} / {by_name.loc[n, 'strides_left']}" for n in names], ""])
+    parts += ["<h2>Temporal-spatial parameters (Table 3.1)</h2>", _table(("", *names, "normal (3.3.3)"), rows)]
+    tested = summary.get("variables_tested", {})
+    units = {"_moment_per_kg": "N·m/kg", "_W_per_kg": "W/kg"}
+    found = [[s.condition, {"r": "right", "l": "left"}.get(s.side, s.side), s.variable,
+              f"{s.start_pct:.0f}–{s.end_pct:.0f} %",
+              f"{s.largest_difference:+.2f} {next((u for k, u in units.items() if s.variable.endswith(k)), 'deg')}",
+              "< 0.001" if s.p < 0.001 else f"{s.p:.3f}"] for s in spans.itertuples()]
+    parts += [f"<h2>Where each condition differs from {html.escape(names[0] if names else '')}</h2>",
+              f"<p>Statistical parametric mapping: a two-sample t-test over the strides at every point of the cycle "
+              f"(spm1d; two-tailed, unequal variances), family-wise α = {summary.get('alpha', '—')} over each "
+              "side's variables (Šidák: "
+              + ", ".join(f"{html.escape(k)} {v} variables" for k, v in tested.items())
+              + "). A span is where |t| exceeds the critical t; its largest difference is the condition's mean minus "
+                "the first's.</p>",
+              _table(("condition", "side", "variable", "span", "largest difference", "p"), found)
+              if found else "<p>No condition differs from the first anywhere along the cycle.</p>"]
+    captions = {"kinematics": "Kinematics (deg) in three planes", "kinetics": "Joint moments (N·m/kg, Plug-in "
+                "Gait's signs) in three planes and total joint powers (W/kg, generated positive)"}
+    figures = compare_figures(compare, work / "compare", band=band)
+    parts += ["<h2>Kinematics and kinetics</h2>"]
+    for path in figures:
+        kind, side = path.stem.split("_")
+        parts.append(_figure(path, f"{captions[kind]}, {'right' if side == 'r' else 'left'} side: each condition's "
+                                   f"mean ± SD over its strides (n strides) over the grey normal band; a bar under "
+                                   f"the curves in a condition's colour where it differs from {names[0]}."))
+    return "".join(parts)
+
+
+def write_compare_report(compare: Path, band: Band | None) -> Page:
+    """``compare/report.html`` of a written comparison (:func:`gaitcli.run.conditions.write_comparison`)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        title = "conditions compared"
+        return Page(write_page(compare / "report.html", title, compare_body(compare, band, Path(tmp))), title)
+
+
 def find_report(out_dir: Path) -> tuple[str, Path]:
     """(kind, root) of a folder: ``session``, ``batch``, ``study`` or ``trial`` (see the module docstring)."""
     out_dir = Path(out_dir)

@@ -25,11 +25,19 @@ KINEMATICS = (("pelvis", ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation"))
 JOINTS = ("hip", "knee", "ankle")
 
 
+def band_variable(pattern: str | None) -> str | None:
+    """The band's variable of a cycle.csv column pattern (``{s}`` for the side): ``knee_{s}_flexion`` →
+    ``knee_flexion_deg``; the pelvis's angles have no side (``pelvis_tilt`` → ``pelvis_tilt_deg``)."""
+    if pattern is None:
+        return None
+    leg = leg_variable(pattern.format(s="r"))
+    return leg[1] if leg else f"{pattern}_deg"
+
+
 def _draw(ax, cycle: pd.DataFrame, pattern: str, band: Band | None, foot_off: dict) -> bool:
     """One variable: the band, each side's mean ± SD and foot off; True when a side had it."""
     drawn = False
-    leg = leg_variable(pattern.format(s="r"))
-    draw_band(ax, band, leg[1] if leg else f"{pattern}_deg", label=False)  # the pelvis's angles have no side
+    draw_band(ax, band, band_variable(pattern), label=False)
     for side in ("r", "l"):
         column = pattern.format(s=side)
         block = cycle[cycle.side == side]

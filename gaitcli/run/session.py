@@ -46,9 +46,10 @@ def session_folder(folder: str | Path) -> list[Path] | None:
     return walks or None
 
 
-def read_walk(ref: Path, cfg: PipelineConfig) -> Walk | None:
-    """A walk's filter and idyn outputs as :class:`~gaitcli.signal.session.Walk` (None where idyn wrote none)."""
-    root = output_root(ref)
+def read_walk(ref: Path, cfg: PipelineConfig, root: Path | None = None) -> Walk | None:
+    """A walk's filter and idyn outputs (in ``root``, default its own output root) as
+    :class:`~gaitcli.signal.session.Walk` (None where idyn wrote none)."""
+    root = output_root(ref) if root is None else root
     idyn = root / stage("idyn").output_folder(cfg.section("idyn"))
     filtered = root / stage("filter").output_folder(cfg.section("filter"))
     if not (idyn / "gait_cycle.csv").is_file() or not (filtered / "events.csv").is_file():

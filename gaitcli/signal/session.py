@@ -111,13 +111,17 @@ def stride_rows(walk: Walk) -> list[dict]:
     return sorted(rows, key=lambda r: (r["start_s"], r["side"]))
 
 
-def pool(walks: list[Walk]) -> SessionStrides:
-    """The session's strides, mean ± SD cycles and Table 3.1 (module docstring)."""
-    rows = [row for walk in walks for row in stride_rows(walk)]
+def stride_table(walks: list[Walk]) -> pd.DataFrame:
+    """Every stride of every walk (:func:`stride_rows`), one row each."""
     columns = ["walk", "side", "stride", "start_s", "end_s", "toe_off_s", "period_s", "stance_pct",
                "stride_length_m", "speed_m_s", "status", "reason"]
-    table = pd.DataFrame(rows, columns=columns)
-    cycle_blocks = []
+    return pd.DataFrame([row for walk in walks for row in stride_rows(walk)], columns=columns)
+
+
+def side_stacks(walks: list[Walk], table: pd.DataFrame) -> dict[str, dict[str, np.ndarray]]:
+    """{side: {cycle variable: (strides, 101)}} over the strides ``table`` (:func:`stride_table`) uses: the
+    kinematics of every complete stride, the kinetics (``*_per_kg``) of those whose moments are known."""
+    out = {}
     for side in ("r", "l"):
         used, kinematic = [], []
         for walk in walks:
@@ -125,18 +129,30 @@ def pool(walks: list[Walk]) -> SessionStrides:
             for status, target in ((STATUS_USED, used), (STATUS_KINEMATICS, kinematic)):
                 for stride in chosen[chosen.status == status].stride:
                     target.append(walk.cycles[walk.cycles.stride == stride])
-        blocks = used + kinematic
         variables = _side_variables(walks[0].cycles.columns, side) if walks else []
+        out[side] = {name: np.array([b[name].to_numpy() for b in (used if name.endswith("_per_kg")
+                                                                   else used + kinematic)]).reshape(-1, CYCLE_PCT.size)
+                     for name in variables}
+    return out
+
+
+def pool(walks: list[Walk]) -> SessionStrides:
+    """The session's strides, mean ± SD cycles and Table 3.1 (module docstring)."""
+    table = stride_table(walks)
+    cycle_blocks = []
+    for side, stacks in side_stacks(walks, table).items():
         block = {"side": np.full(CYCLE_PCT.size, side), "cycle_pct": CYCLE_PCT}
-        for name in variables:
-            kinetic = name.endswith("_per_kg")
-            stack = np.array([b[name].to_numpy() for b in (used if kinetic else blocks)]).reshape(-1, CYCLE_PCT.size)
+        for name, stack in stacks.items():
             mean, sd, n = stride_statistics(stack)
             block.update({f"{name}_mean": mean, f"{name}_sd": sd, f"{name}_n": n})
         cycle_blocks.append(pd.DataFrame(block))
+    return SessionStrides(strides=table, cycle=pd.concat(cycle_blocks, ignore_index=True), walks=walk_table(walks))
+
+
+def walk_table(walks: list[Walk]) -> pd.DataFrame:
+    """Table 3.1 per walk, then their mean and SD (rows ``mean``, ``sd``)."""
     per_walk = pd.DataFrame([{"walk": w.name, **{k: w.features.get(k, np.nan) for k in TABLE_3_1}} for w in walks])
     values = per_walk[list(TABLE_3_1)].astype(float)
     summary_rows = pd.DataFrame([{"walk": "mean", **values.mean().to_dict()},
                                  {"walk": "sd", **values.std(ddof=1).to_dict()}])
-    return SessionStrides(strides=table, cycle=pd.concat(cycle_blocks, ignore_index=True),
-                          walks=pd.concat([per_walk, summary_rows], ignore_index=True))
+    return pd.concat([per_walk, summary_rows], ignore_index=True)
