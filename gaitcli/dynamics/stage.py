@@ -531,8 +531,8 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
         for i, body in enumerate(BODIES):
             if body in frames:
                 omega[:, i] = frame_angular_velocity(frames[body], markers.rate_hz)
-    heel_x = {s: markers.get(HEEL[s])[:, 0] for s in SIDES if HEEL[s] in markers}
-    features = gait_features(trial.events, heel_x, markers.time_s)
+    heels = {s: markers.get(HEEL[s])[:, :2] for s in SIDES if HEEL[s] in markers}
+    features = gait_features(trial.events, heels, markers.time_s)
     trial = trial.with_step(f"idyn: calibrated on the standing posture, body mass {mass_kg:.2f} kg "
                             f"({mass_source}); {POSE_STEPS[cfg.pose]}, 27 coordinates, inverse dynamics (3.21, 3.22), "
                             f"moments in {cfg.frames} frames")

@@ -35,11 +35,14 @@ from gaitcli.signal.profile import GPS_VARIABLES
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
 #: Wolf and Rettig), the literature values the dissertation compares Table 3.1 with
-NORMAL_FEATURES = {"speed_m_s": 1.38, "stride_length_m": 1.41, "stance_right_pct": 61.0, "stance_left_pct": 61.0}
+NORMAL_FEATURES = {"speed_m_s": 1.38, "stride_length_m": 1.41, "stance_right_pct": 61.0, "stance_left_pct": 61.0,
+                   "step_length_right_m": 1.41 / 2, "step_length_left_m": 1.41 / 2}
 FEATURES = (("speed_m_s", "walking speed", "m/s", 2), ("stride_length_m", "stride length", "m", 2),
             ("period_s", "stride period", "s", 2), ("stance_right_pct", "stance, right", "% of cycle", 1),
             ("stance_left_pct", "stance, left", "% of cycle", 1),
-            ("double_stance_pct", "double stance", "% of cycle", 1))
+            ("double_stance_pct", "double stance", "% of cycle", 1),
+            ("step_length_right_m", "step length, right", "m", 2), ("step_length_left_m", "step length, left", "m", 2),
+            ("step_width_m", "step width", "m", 2))
 STYLE = """
 body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1250px; color: #222; }
 h1 { font-size: 1.5em; margin-bottom: 0.2em; } \
@@ -191,10 +194,13 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
         parts.append("<h2>Pelvis residuals</h2>" + "".join(_figure(p, captions[p.name]) for p in figures
                                                            if p.name == "residuals.png"))
     if (root / "filter" / "filter.h5").is_file():
-        figures = filter_figures(root / "filter" / "filter.h5", work / "filter", title=name)
+        mass = idyn.get("mass_kg")
+        figures = filter_figures(root / "filter" / "filter.h5", work / "filter", title=name, body_mass_kg=mass)
+        unit = f"% of body weight ({mass:.1f} kg)" if mass else "N"
         captions = {"markers.png": "Marker trajectories (m), raw and after the zero-lag low-pass filter.",
-                    "grf.png": "Ground reaction per foot (N) and its centre of pressure, with the gait events "
-                               "(heel strike solid, toe off dashed)."}
+                    "grf.png": f"Ground reaction per foot ({unit}): vertical, fore-aft and mediolateral (positive to "
+                               "the left), and its centre of pressure, with the gait events (heel strike solid, toe "
+                               "off dashed)."}
         parts.append("<h2>Signals</h2>" + "".join(_figure(p, captions.get(p.name, p.stem)) for p in figures))
     for h5 in sorted((root / "muscles").glob("*/muscles.h5")) if (root / "muscles").is_dir() else ():
         method = h5.parent.name
@@ -296,9 +302,9 @@ def warnings_block(found: list[tuple[str, str]]) -> str:
 
 def side_rows(strides) -> list[list[str]]:
     """A session's temporal-spatial parameters per side from its strides.csv (complete strides): speed, cadence
-    (two steps a stride: 120 / period, steps/min), stride length and period, stance and swing (% of the
-    cycle), single support (the other foot's swing) and double support (stance − single support), beside the
-    values 3.3.3's normal walking implies."""
+    (two steps a stride: 120 / period, steps/min), stride length and period, step length and width (the step
+    each stride opens with), stance and swing (% of the cycle), single support (the other foot's swing) and double
+    support (stance − single support), beside the values 3.3.3's normal walking implies (none for step width)."""
     import numpy as np
 
     complete = strides[strides.status != "rejected"]
@@ -320,13 +326,16 @@ def side_rows(strides) -> list[list[str]]:
             ("cadence (steps/min)", lambda s: 120.0 / by_side[s].period_s, 120.0 / normal_period, 1),
             ("stride length (m)", lambda s: by_side[s].stride_length_m, NORMAL_FEATURES["stride_length_m"], 2),
             ("stride period (s)", lambda s: by_side[s].period_s, normal_period, 2),
+            ("step length (m)", lambda s: by_side[s].get("step_length_m", ()), NORMAL_FEATURES["step_length_right_m"],
+             2),
+            ("step width (m)", lambda s: by_side[s].get("step_width_m", ()), None, 2),
             ("stance = foot off (% of cycle)", lambda s: stance[s], normal_stance, 1),
             ("swing (% of cycle)", lambda s: 100.0 - stance[s], 100.0 - normal_stance, 1),
             ("single support (% of cycle)", lambda s: 100.0 - stance[other[s]], 100.0 - normal_stance, 1),
             ("double support (% of cycle)",
              lambda s: stance[s] - (100.0 - np.nanmean(stance[other[s]]) if stance[other[s]].size else np.nan),
              2 * normal_stance - 100.0, 1)]
-    return [[label, cell(values("r"), digits), cell(values("l"), digits), f"{normal:.{digits}f}"]
+    return [[label, cell(values("r"), digits), cell(values("l"), digits), _number(normal, digits)]
             for label, values, normal, digits in rows]
 
 

@@ -18,6 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from gaitcli.core.events import SIDE_NAMES  # noqa: E402
+from gaitcli.core.physics import GRAVITY_M_S2  # noqa: E402
 from gaitcli.io.atomic import atomic_path  # noqa: E402
 from gaitcli.io.h5 import read_result  # noqa: E402
 from gaitcli.io.stage_files import IdynTables, read_filter_signals, read_idyn_tables  # noqa: E402
@@ -82,8 +83,10 @@ def draw_band(ax, band: Band | None, variable: str, *, label: bool = True) -> bo
     return True
 
 
-def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
-    """``markers.png`` (raw vs filtered, a few foot and pelvis landmarks) and ``grf.png`` (per foot, events)."""
+def filter_figures(h5_path: Path, folder: Path, *, title: str = "", body_mass_kg: float | None = None) -> list[Path]:
+    """``markers.png`` (raw vs filtered, a few foot and pelvis landmarks) and ``grf.png`` (per foot, events: the
+    vertical, fore-aft and mediolateral force, in % of body weight given ``body_mass_kg``, else N, and the
+    centre of pressure)."""
     signals = read_filter_signals(h5_path)
     trial, raw, cutoff_hz = signals.trial, signals.raw_markers_m, signals.cutoff_hz
     folder = Path(folder)
@@ -115,27 +118,29 @@ def filter_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
     loads = {side: (load.force_N, load.cop_m) for side, load in trial.feet.items() if load.on_plates} \
         or {name: (plate.force_N, plate.cop_m) for name, plate in signals.plates.items()}
     if loads:
-        fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True)
+        scale, unit = (100.0 / (body_mass_kg * GRAVITY_M_S2), "% body weight") if body_mass_kg else (1.0, "N")
+        fig, axes = plt.subplots(4, 1, figsize=(10, 8.5), sharex=True)
         t = trial.time_s
         for name, (force, cop) in loads.items():
             colour = SIDE_COLOUR.get(name, None)
             label = SIDE_NAMES.get(name, name)
-            axes[0].plot(t, force[:, 2], color=colour, label=label)
-            axes[1].plot(t, force[:, 0], color=colour, label=label)
-            axes[2].plot(t, cop[:, 0], color=colour, label=label)
+            for row, component in enumerate((2, 0, 1)):
+                axes[row].plot(t, scale * force[:, component], color=colour, label=label)
+            axes[3].plot(t, cop[:, 0], color=colour, label=label)
         for plate in signals.plates.values():
             raw_fz = plate.raw_vertical_force_N
             if raw_fz.size:
-                axes[0].plot(np.arange(raw_fz.size) / plate.analog_rate_hz, raw_fz, color="0.7", lw=0.6, zorder=0)
+                axes[0].plot(np.arange(raw_fz.size) / plate.analog_rate_hz, scale * raw_fz, color="0.7", lw=0.6,
+                             zorder=0)
         for ax in axes:
             mark_events(ax, events)
-        axes[0].set_ylabel("vertical GRF (N)")
-        axes[1].set_ylabel("fore-aft GRF (N)")
-        axes[2].set_ylabel("COP forward x (m)")
-        axes[2].set_xlabel("time (s)  —  solid: heel strike, dashed: toe off; grey: unfiltered plates")
+        for row, direction in enumerate(("vertical", "fore-aft", "mediolateral, + left")):
+            axes[row].set_ylabel(f"{direction} GRF\n({unit})", fontsize=9)
+        axes[3].set_ylabel("COP forward x (m)", fontsize=9)
+        axes[3].set_xlabel("time (s)  —  solid: heel strike, dashed: toe off; grey: unfiltered plates")
         axes[0].legend(loc="upper right", fontsize=8)
         fig.suptitle(f"Ground reactions per foot — {title}", fontsize=10)
-        fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.08, hspace=0.12)
+        fig.subplots_adjust(left=0.09, right=0.98, top=0.95, bottom=0.07, hspace=0.12)
         written.append(save(fig, folder / "grf.png"))
     return written
 

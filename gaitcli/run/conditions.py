@@ -27,7 +27,7 @@ from gaitcli.run.session import read_walk, run_session, session_folder
 from gaitcli.run.trial import output_root
 from gaitcli.signal.bands import stride_statistics
 from gaitcli.signal.cycles import CYCLE_PCT
-from gaitcli.signal.session import TABLE_3_1, side_stacks, stride_table, walk_table
+from gaitcli.signal.session import WALK_FEATURES, side_stacks, stride_table, walk_table
 from gaitcli.signal.spm import ALPHA, comparable, family_alpha, two_sample
 
 #: the variables a comparison tests: angles, moments and powers (not the lumbar joint's nor the residuals')
@@ -95,7 +95,7 @@ def read_condition(source: ConditionSource, cfg: PipelineConfig, **batch) -> Con
     table = stride_table(walks)
     means = walk_table(walks).set_index("walk").loc["mean"]
     said = tuple(f"{w.name}: {message}" for w in walks for message in w.features.get("warnings", ()))
-    return Condition(source.name, table, side_stacks(walks, table), {k: float(means[k]) for k in TABLE_3_1}, said)
+    return Condition(source.name, table, side_stacks(walks, table), {k: float(means[k]) for k in WALK_FEATURES}, said)
 
 
 @dataclass(frozen=True)

@@ -21,8 +21,10 @@ from gaitcli.run.batch import BATCH_SUMMARY, BatchResult, run_batch, stages_of
 from gaitcli.run.config import PipelineConfig
 from gaitcli.run.trial import SESSION_OUTPUT, output_root, session_walks
 from gaitcli.signal.bands import BAND_FILE, default_band
+from gaitcli.signal.cycles import Step, steps
 from gaitcli.signal.profile import gait_profile
 from gaitcli.signal.session import SessionStrides, Walk, pool
+from gaitcli.signal.stage import HEEL
 
 
 @dataclass(frozen=True)
@@ -55,11 +57,27 @@ def read_walk(ref: Path, cfg: PipelineConfig, root: Path | None = None) -> Walk 
     if not (idyn / "gait_cycle.csv").is_file() or not (filtered / "events.csv").is_file():
         return None
     events = pd.read_csv(filtered / "events.csv")
+    events = Events(frame=events.frame, time_s=events.time_s, side=events.side, kind=events.event,
+                    source=events.source)
     coordinates = pd.read_csv(idyn / "coordinates.csv", usecols=["time_s", "pelvis_x"])
-    return Walk(name=ref.stem, events=Events(frame=events.frame, time_s=events.time_s, side=events.side,
-                                             kind=events.event, source=events.source),
-                time_s=coordinates.time_s.to_numpy(), pelvis_x_m=coordinates.pelvis_x.to_numpy(),
-                cycles=pd.read_csv(idyn / "gait_cycle.csv"), features=json.loads((idyn / "summary.json").read_text()))
+    return Walk(name=ref.stem, events=events, time_s=coordinates.time_s.to_numpy(),
+                pelvis_x_m=coordinates.pelvis_x.to_numpy(), cycles=pd.read_csv(idyn / "gait_cycle.csv"),
+                features=json.loads((idyn / "summary.json").read_text()),
+                steps=tuple(_steps(filtered / "markers_filtered.csv", events)))
+
+
+def _steps(markers_csv: Path, events: Events) -> list[Step]:
+    """The walk's steps from the heels in the filter's markers (none where its table has no heel)."""
+    if not markers_csv.is_file():
+        return []
+    header = pd.read_csv(markers_csv, nrows=0).columns
+    heels = {side: next((name for name in HEEL[side] if f"{name}_x_m" in header), None) for side in ("r", "l")}
+    if None in heels.values():
+        return []
+    columns = ["time_s"] + [f"{heels[s]}_{a}_m" for s in ("r", "l") for a in ("x", "y")]
+    table = pd.read_csv(markers_csv, usecols=columns)
+    positions = {s: table[[f"{heels[s]}_x_m", f"{heels[s]}_y_m"]].to_numpy(float) for s in ("r", "l")}
+    return steps(events, positions, table.time_s.to_numpy(float))
 
 
 def session_profile(pooled: SessionStrides) -> dict:

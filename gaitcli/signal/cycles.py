@@ -49,7 +49,8 @@ def normalise(values: np.ndarray, time_s: np.ndarray, stride: Stride) -> np.ndar
 
 @dataclass(frozen=True)
 class GaitFeatures:
-    """Table 3.1: stride length (m), period (s), speed (m/s), stance % per side, double stance %.
+    """Table 3.1: stride length (m), period (s), speed (m/s), stance % per side, double stance %; and each side's
+    step length and the step width (m, :func:`steps`).
 
     Means over the complete strides of both sides; NaN where the events do not allow it.
     """
@@ -61,26 +62,63 @@ class GaitFeatures:
     stance_left_pct: float
     double_stance_pct: float
     strides: int
+    step_length_right_m: float = float("nan")
+    step_length_left_m: float = float("nan")
+    step_width_m: float = float("nan")
 
     def as_dict(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
-def _footprint(heel_x: np.ndarray, time_s: np.ndarray, strike_s: float, period_s: float) -> float:
-    """Forward position of a planted heel: where it moves least in the first 35 % of the cycle after a strike.
+def footprint(heel: np.ndarray, time_s: np.ndarray, strike_s: float, period_s: float) -> np.ndarray:
+    """Position of a planted heel (``heel``: (frames,) forward or (frames, k) positions, m): where its forward
+    position moves least in the first 35 % of the cycle after a strike.
 
     Robust to heel strikes timed a few frames early or late (kinematic events),
     unlike the heel position at the strike itself, when the heel still moves.
     """
-    window = (time_s >= strike_s) & (time_s <= strike_s + 0.35 * period_s) & np.isfinite(heel_x)
+    heel = np.asarray(heel, float).reshape(len(time_s), -1)
+    window = (time_s >= strike_s) & (time_s <= strike_s + 0.35 * period_s) & np.all(np.isfinite(heel), axis=1)
     if window.sum() < 3:
-        return float(np.interp(strike_s, time_s, heel_x))
-    speed = np.abs(np.gradient(heel_x[window], time_s[window]))
-    return float(heel_x[window][np.argmin(speed)])
+        return np.array([np.interp(strike_s, time_s, heel[:, k]) for k in range(heel.shape[1])])
+    speed = np.abs(np.gradient(heel[window, 0], time_s[window]))
+    return heel[window][np.argmin(speed)]
 
 
-def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.ndarray) -> GaitFeatures:
-    """Table 3.1 from events and each heel's forward position (m) over time.
+@dataclass(frozen=True)
+class Step:
+    """One step: the foot ``side`` planted at ``strike_s`` (s) ahead of the other foot's last footprint; length
+    along the walk (x) and width across it (y), m."""
+
+    side: str
+    strike_s: float
+    length_m: float
+    width_m: float
+
+
+def steps(events: Events, heel_m: dict[str, np.ndarray], time_s: np.ndarray) -> list[Step]:
+    """Every step whose two footprints (:func:`footprint`) are seen: ``heel_m[side]`` (frames, 2) the heel's
+    forward and lateral position (m, model axes: x along the walk, y left); in time order."""
+    strikes = {side: events.times(side, "heel_strike") for side in ("r", "l")}
+    periods = [st.period_s for st in strides(events)]
+    period = float(np.mean(periods)) if periods else 1.0
+    out = []
+    for side, other in (("r", "l"), ("l", "r")):
+        if side not in heel_m or other not in heel_m:
+            continue
+        for strike in strikes[side]:
+            before = strikes[other][strikes[other] < strike]
+            if not before.size:
+                continue
+            here = footprint(heel_m[side], time_s, float(strike), period)
+            there = footprint(heel_m[other], time_s, float(before[-1]), period)
+            out.append(Step(side, float(strike), float(abs(here[0] - there[0])), float(abs(here[1] - there[1]))))
+    return sorted(out, key=lambda step: step.strike_s)
+
+
+def gait_features(events: Events, heel_m: dict[str, np.ndarray], time_s: np.ndarray) -> GaitFeatures:
+    """Table 3.1 from events and each heel's position (m) over time: (frames,) forward, or (frames, 2) forward
+    and lateral (then the steps too, :func:`steps`).
 
     Stride length is the forward distance between two successive footprints of
     the same heel (mean over strides), the period the time between the strikes. Stance % is
@@ -97,9 +135,10 @@ def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.nd
     period = mean([st.period_s for st in all_strides])
     lengths = []
     for st in all_strides:
-        x = heel_x_m.get(st.side)
-        if x is not None:
-            lengths.append(abs(_footprint(x, time_s, st.end_s, period) - _footprint(x, time_s, st.start_s, period)))
+        heel = heel_m.get(st.side)
+        if heel is not None:
+            lengths.append(abs(footprint(heel, time_s, st.end_s, period)[0]
+                               - footprint(heel, time_s, st.start_s, period)[0]))
     stance = {}
     for side in ("r", "l"):
         contacts = events.stances(side, "plate") or events.stances(side)
@@ -107,7 +146,12 @@ def gait_features(events: Events, heel_x_m: dict[str, np.ndarray], time_s: np.nd
     # walking has no flight phase: each foot's stance overlaps the other's twice per stride
     double = stance["r"] + stance["l"] - 100.0
     length = mean(lengths)
+    lateral = {s: h for s, h in heel_m.items() if np.ndim(h) == 2 and np.shape(h)[1] >= 2}
+    found = steps(events, lateral, time_s) if len(lateral) == 2 else []
     return GaitFeatures(stride_length_m=length, period_s=period,
                         speed_m_s=length / period if np.isfinite(length) and period > 0 else float("nan"),
                         stance_right_pct=stance["r"], stance_left_pct=stance["l"],
-                        double_stance_pct=double, strides=len(all_strides))
+                        double_stance_pct=double, strides=len(all_strides),
+                        step_length_right_m=mean([st.length_m for st in found if st.side == "r"]),
+                        step_length_left_m=mean([st.length_m for st in found if st.side == "l"]),
+                        step_width_m=mean([st.width_m for st in found]))

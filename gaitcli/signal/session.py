@@ -4,10 +4,11 @@ mean ± SD of each cycle variable over the used strides, and Table 3.1 per walk 
 A stride runs from a heel strike to the next of the same foot (:func:`gaitcli.signal.cycles.strides`). Its
 period is the time between the strikes, its stance % the time to the foot's toe off over the period, its
 length the forward travel of the pelvis over the stride (steady walking: one stride length) and its speed the
-length over the period. A stride is used for kinematics when it is complete (a toe off inside it) and for
-kinetics too when the moments of its own leg are known over at least :data:`KINETICS_KNOWN` of it (the foot on
-the force plates whenever it is on the ground); a heel strike without a next one (the walk ends) is listed as
-rejected with that reason.
+length over the period; its step (:func:`gaitcli.signal.cycles.steps`) is the one its opening heel strike
+ends: the distance along and across the walk from the other foot's last footprint. A stride is used for
+kinematics when it is complete (a toe off inside it) and for kinetics too when the moments of its own leg are
+known over at least :data:`KINETICS_KNOWN` of it (the foot on the force plates whenever it is on the ground); a
+heel strike without a next one (the walk ends) is listed as rejected with that reason.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import pandas as pd
 
 from gaitcli.core.events import Events
 from gaitcli.signal.bands import stride_statistics
-from gaitcli.signal.cycles import CYCLE_PCT, strides
+from gaitcli.signal.cycles import CYCLE_PCT, Step, strides
 
 #: the fraction of a stride's samples with its leg's moments known for its kinetics to be used (one sample short:
 #: the closing heel strike off the plates)
@@ -30,6 +31,8 @@ SAME_TIME_S = 0.005
 CYCLE_KEYS = ("cycle_pct", "side", "stride", "start_s")
 #: Table 3.1 as the idyn stage's summary gives it
 TABLE_3_1 = ("stride_length_m", "period_s", "speed_m_s", "stance_right_pct", "stance_left_pct", "double_stance_pct")
+#: a walk's features: Table 3.1 and its steps (NaN from an idyn output made before steps were)
+WALK_FEATURES = TABLE_3_1 + ("step_length_right_m", "step_length_left_m", "step_width_m")
 STATUS_USED, STATUS_KINEMATICS, STATUS_REJECTED = "used", "kinematics only", "rejected"
 
 
@@ -44,6 +47,7 @@ class Walk:
     pelvis_x_m: np.ndarray
     cycles: pd.DataFrame
     features: dict
+    steps: tuple[Step, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -86,10 +90,13 @@ def stride_rows(walk: Walk) -> list[dict]:
     for st in strides(walk.events):
         x = np.interp([st.start_s, st.end_s], walk.time_s, walk.pelvis_x_m)
         length = float(abs(x[1] - x[0]))
+        step = next((s for s in walk.steps if s.side == st.side and abs(s.strike_s - st.start_s) < SAME_TIME_S),
+                    None)
         row = {"walk": walk.name, "side": st.side, "start_s": st.start_s, "end_s": st.end_s,
                "toe_off_s": st.toe_off_s, "period_s": st.period_s,
                "stance_pct": 100.0 * (st.toe_off_s - st.start_s) / st.period_s, "stride_length_m": length,
-               "speed_m_s": length / st.period_s}
+               "speed_m_s": length / st.period_s, "step_length_m": step.length_m if step else np.nan,
+               "step_width_m": step.width_m if step else np.nan}
         cycle = next((group for start, group in blocks[st.side] if abs(start - st.start_s) < SAME_TIME_S), None)
         if not np.isfinite(st.toe_off_s):
             row.update(status=STATUS_REJECTED, reason="no toe off between its heel strikes")
@@ -114,7 +121,7 @@ def stride_rows(walk: Walk) -> list[dict]:
 def stride_table(walks: list[Walk]) -> pd.DataFrame:
     """Every stride of every walk (:func:`stride_rows`), one row each."""
     columns = ["walk", "side", "stride", "start_s", "end_s", "toe_off_s", "period_s", "stance_pct",
-               "stride_length_m", "speed_m_s", "status", "reason"]
+               "stride_length_m", "speed_m_s", "step_length_m", "step_width_m", "status", "reason"]
     return pd.DataFrame([row for walk in walks for row in stride_rows(walk)], columns=columns)
 
 
@@ -150,9 +157,10 @@ def pool(walks: list[Walk]) -> SessionStrides:
 
 
 def walk_table(walks: list[Walk]) -> pd.DataFrame:
-    """Table 3.1 per walk, then their mean and SD (rows ``mean``, ``sd``)."""
-    per_walk = pd.DataFrame([{"walk": w.name, **{k: w.features.get(k, np.nan) for k in TABLE_3_1}} for w in walks])
-    values = per_walk[list(TABLE_3_1)].astype(float)
+    """Table 3.1 and the steps per walk (:data:`WALK_FEATURES`), then their mean and SD (rows ``mean``, ``sd``)."""
+    per_walk = pd.DataFrame([{"walk": w.name, **{k: w.features.get(k, np.nan) for k in WALK_FEATURES}}
+                             for w in walks])
+    values = per_walk[list(WALK_FEATURES)].astype(float)
     summary_rows = pd.DataFrame([{"walk": "mean", **values.mean().to_dict()},
                                  {"walk": "sd", **values.std(ddof=1).to_dict()}])
     return pd.concat([per_walk, summary_rows], ignore_index=True)

@@ -72,6 +72,12 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
     cadence = next(row for row in re.findall(r"<tr>(.*?)</tr>", page) if "cadence (steps/min)" in row)
     right = complete[complete.side == "r"]
     assert f"<td>{np.mean(120 / right.period_s):.1f} ± {np.std(120 / right.period_s, ddof=1):.1f}</td>" in cadence
+    # steady walking: every step half a stride (tests/signal/test_cycles.py: footprints with known steps)
+    steps = complete.step_length_m.dropna()
+    assert len(steps) >= len(complete) - 2 and np.allclose(steps, complete.stride_length_m.mean() / 2, rtol=0.02)
+    step = next(row for row in re.findall(r"<tr>(.*?)</tr>", page) if "step length (m)" in row)
+    right_steps = right.step_length_m.dropna()
+    assert f"<td>{right_steps.mean():.2f} ± {right_steps.std(ddof=1):.2f}</td>" in step
 
     again = gait("run", "S", "--no-plots", "--workers", "1", cwd=tmp_path)
     assert again.returncode == 0 and "0 ok, 0 failed, 2 skipped" in again.stdout, again.describe()

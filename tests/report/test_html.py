@@ -79,7 +79,8 @@ def test_the_trial_page_has_the_rows_of_each_stage(tmp_path, no_figures):
     root = tmp_path / "gait_out"
     write_json(root / "idyn" / "summary.json", {"mass_kg": 71.25, "speed_m_s": 1.2345, "stride_length_m": 1.3,
                                                  "period_s": 1.05, "stance_right_pct": 60.04, "stance_left_pct": 61.96,
-                                                 "double_stance_pct": None})
+                                                 "double_stance_pct": None, "step_length_left_m": 0.649,
+                                                 "step_width_m": 0.123})
     write_json(root / "muscles" / "eid" / "summary.json", {"metabolic_cost_J": 123.456,
                                                            "cost_of_transport_J_per_m": 98.76, "converged": True})
     write_json(root / "muscles" / "so" / "summary.json", {"metabolic_cost_J": None, "converged": False})
@@ -91,7 +92,9 @@ def test_the_trial_page_has_the_rows_of_each_stage(tmp_path, no_figures):
     assert rows[0] == ["feature", "this trial", "normal walking (3.3.3: 26 subjects, Heidelberg)", "unit"]
     assert rows[1:] == [["walking speed", "1.23", "1.38", "m/s"], ["stride length", "1.30", "1.41", "m"],
                         ["stride period", "1.05", "—", "s"], ["stance, right", "60.0", "61.0", "% of cycle"],
-                        ["stance, left", "62.0", "61.0", "% of cycle"], ["double stance", "—", "—", "% of cycle"]]
+                        ["stance, left", "62.0", "61.0", "% of cycle"], ["double stance", "—", "—", "% of cycle"],
+                        ["step length, right", "—", "0.70", "m"], ["step length, left", "0.65", "0.70", "m"],
+                        ["step width", "0.12", "—", "m"]]
     assert "body mass 71.2 kg" in text  # no subject.yaml beside the outputs
     assert "<h2>Muscles: EID</h2><p>metabolic cost of one leg over the interval: 123.5 J; cost of transport " \
            "98.8 J/m</p>" in text

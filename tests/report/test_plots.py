@@ -153,9 +153,9 @@ def test_filter_figures_show_raw_and_filtered_markers_in_mm(tmp_path, drawn):
 
 def test_grf_figure_shows_each_foot_on_the_plates_and_the_unfiltered_plates(tmp_path, drawn):
     plots.filter_figures(synthetic.write_filter(tmp_path / "filter.h5"), tmp_path / "plots")
-    vertical, fore_aft, cop = drawn["grf.png"].axes
-    assert [ax.get_ylabel() for ax in (vertical, fore_aft, cop)] == ["vertical GRF (N)", "fore-aft GRF (N)",
-                                                                    "COP forward x (m)"]
+    vertical, fore_aft, lateral, cop = drawn["grf.png"].axes
+    assert [ax.get_ylabel() for ax in (vertical, fore_aft, lateral, cop)] == [
+        "vertical GRF\n(N)", "fore-aft GRF\n(N)", "mediolateral, + left GRF\n(N)", "COP forward x (m)"]
     curves = vertical.get_lines()
     assert [line.get_label() for line in curves[:1]] == ["right"]  # the left foot was never on a plate
     assert np.nanmax(curves[0].get_ydata()) == 700.0
@@ -164,6 +164,13 @@ def test_grf_figure_shows_each_foot_on_the_plates_and_the_unfiltered_plates(tmp_
     assert unfiltered.get_xdata()[-1] == pytest.approx(2199 / synthetic.ANALOG_RATE_HZ)
     # events as in the idyn figure: 3 + 2 right, 2 + 1 left
     assert sorted(len(c.get_segments()) for c in vertical.collections) == [1, 2, 2, 3]
+
+
+def test_given_the_body_mass_the_grf_is_in_percent_of_body_weight(tmp_path, drawn):
+    plots.filter_figures(synthetic.write_filter(tmp_path / "filter.h5"), tmp_path / "plots", body_mass_kg=70.0)
+    vertical = drawn["grf.png"].axes[0]
+    assert vertical.get_ylabel() == "vertical GRF\n(% body weight)"
+    assert np.nanmax(vertical.get_lines()[0].get_ydata()) == pytest.approx(700.0 / (70.0 * 9.81) * 100)
 
 
 def test_without_a_foot_on_the_plates_the_grf_figure_shows_the_plates(tmp_path, drawn):
