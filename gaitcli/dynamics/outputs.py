@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.dynamics.sagittal import SagittalExport, sagittal_columns
 from gaitcli.dynamics.stage import IdynResult
 from gaitcli.io.h5 import Dataset, read_result, record_datasets, write_h5
@@ -106,16 +107,34 @@ def residual_columns(result: IdynResult) -> dict:
     return columns
 
 
+def grf_columns(result: IdynResult) -> dict[str, np.ndarray]:
+    """Each foot's ground reaction in % of body weight: ``grf_<side>_vertical``, ``_anterior`` (along the walk) and
+    ``_medial`` (towards the other foot: +y for the right, −y for the left) ``_pct_body_weight``; NaN where the
+    foot's load is not known (on the ground off the plates)."""
+    weight_N = result.mass_kg * GRAVITY_M_S2
+    out = {}
+    for side in ("r", "l"):
+        load = result.trial.feet.get(side)
+        force = np.full((result.trial.n_frames, 3), np.nan) if load is None or not load.on_plates else \
+            np.where(result.foot_measured[side][:, None], load.force_N, np.nan)
+        medial = 1.0 if side == "r" else -1.0
+        for name, component in (("vertical", force[:, 2]), ("anterior", force[:, 0]), ("medial", medial * force[:, 1])):
+            out[f"grf_{side}_{name}_pct_body_weight"] = 100.0 * component / weight_N
+    return out
+
+
 def cycle_columns(result: IdynResult) -> dict:
     """Every complete stride of each side normalised to 0–100 % (long format: one block per stride): the angles,
-    moments (N·m/kg) and total joint powers (W/kg) of the tables; a left stride's pelvis obliquity and rotation
-    negated (:data:`MIRRORED_ON_LEFT`, as Plug-in Gait reports the left side)."""
+    moments (N·m/kg) and total joint powers (W/kg) of the tables and each foot's ground reaction in % of body
+    weight (:func:`grf_columns`); a left stride's pelvis obliquity and rotation negated (:data:`MIRRORED_ON_LEFT`,
+    as Plug-in Gait reports the left side)."""
     kin, angle_names, _ = displayed_angles(result)
     mom = known_shown_moments_Nm(result) / result.mass_kg
     powers = {name: values for name, values in power_columns(result).items()
               if name.endswith("_power_W_per_kg") and "sagittal" not in name}
-    values = np.column_stack([kin, mom, *powers.values()])
-    names = list(angle_names) + [f"{m}_per_kg" for m in displayed_moments(result)[1]] + list(powers)
+    grf = grf_columns(result)
+    values = np.column_stack([kin, mom, *powers.values(), *grf.values()])
+    names = list(angle_names) + [f"{m}_per_kg" for m in displayed_moments(result)[1]] + list(powers) + list(grf)
     left_sign = np.array([-1.0 if name in MIRRORED_ON_LEFT else 1.0 for name in names])
     blocks = {"cycle_pct": [], "side": [], "stride": [], "start_s": []}
     rows = []

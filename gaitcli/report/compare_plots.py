@@ -2,7 +2,7 @@
 each condition's mean ± SD over its strides against the grey normal band (the first condition black, the others
 in colour), and under the curves a bar in a condition's colour wherever SPM finds it differs from the first
 (:mod:`gaitcli.run.conditions`); the kinematics of pelvis, hip, knee, ankle and foot in three planes, the moments
-in three planes and the powers."""
+in three planes, the powers and the ground reactions."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pandas as pd
 
 from gaitcli.core.events import SIDE_NAMES
 from gaitcli.report.plots import draw_band, plt, save
-from gaitcli.report.session_plots import JOINTS, KINEMATICS, PLANES, band_variable
+from gaitcli.report.session_plots import GRF, JOINTS, KINEMATICS, PLANES, band_variable
 from gaitcli.signal.bands import Band
 from gaitcli.signal.cycles import CYCLE_PCT
 
@@ -83,7 +83,15 @@ def compare_figures(compare: Path, folder: Path, *, band: Band | None = None) ->
                            f"{names[0]}")
         written.append(save(fig, folder / f"kinematics_{side}.png"))
 
-        fig, axes = plt.subplots(len(JOINTS) + 1, 3, figsize=(12, 2.3 * (len(JOINTS) + 1)), sharex=True)
+        fig, axes = plt.subplots(len(JOINTS) + 2, 3, figsize=(12, 2.3 * (len(JOINTS) + 2)), sharex=True)
+        for col, (pattern, name) in enumerate(GRF):
+            ax = axes[len(JOINTS) + 1, col]
+            if _draw(ax, rows, on_side, pattern.format(s=side), None, band, names):
+                ax.set_title(name, fontsize=9)
+                ax.set_ylabel("% body weight")
+            else:
+                ax.axis("off")
+            ax.set_xlabel("gait cycle (%)")
         for row, joint in enumerate(JOINTS):
             moments = [c[:-len("_mean")] for c in rows.columns
                        if c.startswith(f"{joint}_{side}_") and c.endswith("_moment_per_kg_mean")]
@@ -104,8 +112,8 @@ def compare_figures(compare: Path, folder: Path, *, band: Band | None = None) ->
                 power.set_ylabel("W/kg")
             else:
                 power.axis("off")
-            power.set_xlabel("gait cycle (%)")
-        _finish(fig, axes, f"{SIDE_NAMES[side]} side: moments and powers; bars: differs from {names[0]}")
+        _finish(fig, axes, f"{SIDE_NAMES[side]} side: moments, powers, ground reactions; bars: differs from "
+                           f"{names[0]}")
         written.append(save(fig, folder / f"kinetics_{side}.png"))
     return written
 

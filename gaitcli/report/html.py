@@ -405,8 +405,9 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
     captions = {"kinematics.png": "Kinematics (deg) in three planes, each side's mean ± SD over every stride of "
                                   "every walk (right red, left blue; n strides), over the grey normal band; foot off "
                                   "of each side dashed, normal walking's (61 %, 3.3.3) dash-dotted.",
-                "kinetics.png": "Joint moments (N·m/kg, Plug-in Gait's signs) in three planes and total joint powers "
-                                "(W/kg, generated positive) of the strides whose foot was on the force plates."}
+                "kinetics.png": "Joint moments (N·m/kg, Plug-in Gait's signs) in three planes, total joint powers "
+                                "(W/kg, generated positive) and the foot's ground reaction (% body weight: vertical, "
+                                "anterior, medial) of the strides whose foot was on the force plates."}
     parts += ["<h2>Kinematics and kinetics</h2>", *[_figure(p, captions[p.name]) for p in figures]]
     links = "".join(f'<li><a href="{html.escape(path.relative_to(root).as_posix())}">{html.escape(walk)}</a></li>'
                     for walk, path in walk_pages.items())
@@ -450,7 +451,8 @@ def compare_body(compare: Path, band: Band | None, work: Path) -> str:
               _table(("condition", "side", "variable", "span", "largest difference", "p"), found)
               if found else "<p>No condition differs from the first anywhere along the cycle.</p>"]
     captions = {"kinematics": "Kinematics (deg) in three planes", "kinetics": "Joint moments (N·m/kg, Plug-in "
-                "Gait's signs) in three planes and total joint powers (W/kg, generated positive)"}
+                "Gait's signs) in three planes, total joint powers (W/kg, generated positive) and the foot's ground "
+                "reaction (% body weight: vertical, anterior, medial)"}
     figures = compare_figures(compare, work / "compare", band=band)
     parts += ["<h2>Kinematics and kinetics</h2>"]
     for path in figures:

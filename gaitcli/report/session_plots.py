@@ -1,7 +1,8 @@
 """A session's figures from ``gait_out/session/`` (``cycle.csv``, ``strides.csv``): each side's mean ± SD over
 the strides of every walk against the grey normal band, right red, left blue, with each side's foot off (the
 mean stance % of its strides, dashed; normal walking's dash-dotted grey): the kinematics of pelvis, hip, knee,
-ankle and foot in three planes, and the moments of hip, knee and ankle in three planes with their powers."""
+ankle and foot in three planes, and the moments of hip, knee and ankle in three planes with their powers and each
+foot's ground reaction (% body weight)."""
 
 from __future__ import annotations
 
@@ -23,6 +24,9 @@ KINEMATICS = (("pelvis", ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation"))
               ("ankle", ("ankle_{s}_flexion", "ankle_{s}_inversion", "ankle_{s}_rotation")),
               ("foot", (None, None, "foot_{s}_progression")))
 JOINTS = ("hip", "knee", "ankle")
+#: the ground reaction's row: (cycle.csv column pattern, title)
+GRF = (("grf_{s}_vertical_pct_body_weight", "vertical GRF"), ("grf_{s}_anterior_pct_body_weight", "anterior GRF"),
+       ("grf_{s}_medial_pct_body_weight", "medial GRF"))
 
 
 def band_variable(pattern: str | None) -> str | None:
@@ -83,7 +87,15 @@ def session_figures(session: Path, folder: Path, *, title: str = "", band: Band 
                  fontsize=11)
     written.append(save(fig, folder / "kinematics.png"))
 
-    fig, axes = plt.subplots(len(JOINTS) + 1, 3, figsize=(12, 2.3 * (len(JOINTS) + 1)), sharex=True)
+    fig, axes = plt.subplots(len(JOINTS) + 2, 3, figsize=(12, 2.3 * (len(JOINTS) + 2)), sharex=True)
+    for col, (pattern, name) in enumerate(GRF):
+        ax = axes[len(JOINTS) + 1, col]
+        if _draw(ax, cycle, pattern, band, foot_off):
+            ax.set_title(name, fontsize=9)
+            ax.set_ylabel("% body weight")
+        else:
+            ax.axis("off")
+        ax.set_xlabel("gait cycle (%)")
     for row, joint in enumerate(JOINTS):
         moments = [c[:-len("_mean")] for c in cycle.columns
                    if c.startswith(f"{joint}_r_") and c.endswith("_moment_per_kg_mean")]
@@ -102,9 +114,9 @@ def session_figures(session: Path, folder: Path, *, title: str = "", band: Band 
             power.set_ylabel("W/kg")
         else:
             power.axis("off")
-        power.set_xlabel("gait cycle (%)")
     _legend(fig, axes)
-    fig.suptitle(f"{title}: moments and powers, strides with the foot on the plates".strip(": "), fontsize=11)
+    fig.suptitle(f"{title}: moments, powers and ground reactions, strides with the foot on the plates".strip(": "),
+                 fontsize=11)
     written.append(save(fig, folder / "kinetics.png"))
     return written
 

@@ -30,8 +30,8 @@ from gaitcli.signal.cycles import CYCLE_PCT
 from gaitcli.signal.session import WALK_FEATURES, side_stacks, stride_table, walk_table
 from gaitcli.signal.spm import ALPHA, comparable, family_alpha, two_sample
 
-#: the variables a comparison tests: angles, moments and powers (not the lumbar joint's nor the residuals')
-COMPARED = ("pelvis_", "hip_", "knee_", "ankle_", "foot_")
+#: the variables a comparison tests: angles, moments, powers, ground reactions (not the lumbar joint's)
+COMPARED = ("pelvis_", "hip_", "knee_", "ankle_", "foot_", "grf_")
 
 
 @dataclass(frozen=True)

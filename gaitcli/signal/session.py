@@ -27,6 +27,8 @@ from gaitcli.signal.cycles import CYCLE_PCT, Step, strides
 KINETICS_KNOWN = 0.95
 #: two times closer than this are one event (s; the tables' 6 significant digits, a frame at 200 Hz)
 SAME_TIME_S = 0.005
+#: the cycle variables of the loads (moments, powers, ground reactions): from the strides whose loads are known
+KINETIC_SUFFIXES = ("_per_kg", "_pct_body_weight")
 #: the columns of gait_cycle.csv that are not cycle variables
 CYCLE_KEYS = ("cycle_pct", "side", "stride", "start_s")
 #: Table 3.1 as the idyn stage's summary gives it
@@ -127,7 +129,8 @@ def stride_table(walks: list[Walk]) -> pd.DataFrame:
 
 def side_stacks(walks: list[Walk], table: pd.DataFrame) -> dict[str, dict[str, np.ndarray]]:
     """{side: {cycle variable: (strides, 101)}} over the strides ``table`` (:func:`stride_table`) uses: the
-    kinematics of every complete stride, the kinetics (``*_per_kg``) of those whose moments are known."""
+    kinematics of every complete stride, the kinetics (:data:`KINETIC_SUFFIXES`) of those whose moments are
+    known."""
     out = {}
     for side in ("r", "l"):
         used, kinematic = [], []
@@ -137,7 +140,7 @@ def side_stacks(walks: list[Walk], table: pd.DataFrame) -> dict[str, dict[str, n
                 for stride in chosen[chosen.status == status].stride:
                     target.append(walk.cycles[walk.cycles.stride == stride])
         variables = _side_variables(walks[0].cycles.columns, side) if walks else []
-        out[side] = {name: np.array([b[name].to_numpy() for b in (used if name.endswith("_per_kg")
+        out[side] = {name: np.array([b[name].to_numpy() for b in (used if name.endswith(KINETIC_SUFFIXES)
                                                                    else used + kinematic)]).reshape(-1, CYCLE_PCT.size)
                      for name in variables}
     return out

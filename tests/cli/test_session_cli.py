@@ -42,6 +42,9 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
                                atol=1e-4)
     np.testing.assert_allclose(cycle[cycle.side == "r"].knee_r_flexion_sd, right.std(axis=0, ddof=1), rtol=1e-4,
                                atol=1e-4)
+    # the ground reaction in % body weight: above body weight in the loading response, nothing in swing
+    vertical = cycle[cycle.side == "r"].grf_r_vertical_pct_body_weight_mean.to_numpy()
+    assert 100 < vertical[:30].max() < 140 and np.nanmax(np.abs(vertical[70:95])) < 1.0
     walks = pd.read_csv(out / "session" / "walks.csv").set_index("walk")
     for walk in WALKS:
         idyn = json.loads((out / walk / "idyn" / "summary.json").read_text())
