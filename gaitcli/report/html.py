@@ -157,6 +157,11 @@ def _subject(trial_folder: Path | None) -> str:
     return f"{s.sex}, {mass}, {s.stature_m:g} m" + (f", marker set {s.marker_set}" if s.marker_set else "")
 
 
+def _muscle_variant(folder: str) -> str:
+    """A muscle output folder's name for people: ``eid_l_swing`` → "EID, left leg, swing"."""
+    return folder.upper().replace("_L", ", left leg").replace("_SWING", ", swing").replace("_CB", ", Σ(F/Fmax)³")
+
+
 def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
     """The sections of a trial output root's page (``root``: the folder holding filter/, idyn/, ...)."""
     from gaitcli.report.plots import filter_figures, idyn_figures, muscle_figures
@@ -208,7 +213,7 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
         figures = muscle_figures(h5, work / "muscles" / method, title=name)
         cost = summary.get("metabolic_cost_J")
         state = "" if summary.get("converged", True) else ' <span class="bad">(did not converge)</span>'
-        variant = method.upper().replace("_L", ", left leg").replace("_SWING", ", swing").replace("_CB", ", Σ(F/Fmax)³")
+        variant = _muscle_variant(method)
         parts.append(f"<h2>Muscles: {html.escape(variant)}{state}</h2>"
                      f"<p>metabolic cost of one leg over the interval: {_number(cost, 1)} J; cost of transport "
                      f"{_number(summary.get('cost_of_transport_J_per_m'), 1)} J/m</p>")
@@ -371,7 +376,7 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
                              for where, message in stage_warnings(root / walk)])]
     rows = []
     for key, label, unit, digits in FEATURES:
-        values = dict(zip(walks.walk, walks[key]))
+        values = dict(zip(walks.walk, walks[key])) if key in walks else {}
         rows.append([f"{label} ({unit})", *[_number(values.get(w), digits) for w in names],
                      f"{_number(values.get('mean'), digits)} ± {_number(values.get('sd'), digits)}",
                      _number(NORMAL_FEATURES.get(key), digits)])
@@ -401,6 +406,14 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
                   f"{html.escape(str(profile.get('band', '')))}: the RMS difference from the normal mean over the "
                   "cycle, per variable (GVS) and over the variables (Baker et al. 2009).</p>",
                   _table(("variable (GVS, deg)", "right", "left"), rows)]
+    muscles = [[walk, _muscle_variant(path.parent.name), "yes" if summary.get("converged") else "no",
+                _number(summary.get("metabolic_cost_J"), 1), _number(summary.get("cost_of_transport_J_per_m"), 1)]
+               for walk in names for path in sorted((root / walk / "muscles").glob("*/summary.json"))
+               for summary in [_summary(path.parent, ("metabolic_cost_J", "cost_of_transport_J_per_m"))]]
+    if muscles:
+        parts += ["<h2>Muscles</h2>", "<p>Each walk's muscle stage (one leg over its interval; the walk's page has "
+                                      "the forces, activations and excitations):</p>",
+                  _table(("walk", "method", "converged", "metabolic cost (J)", "cost of transport (J/m)"), muscles)]
     figures = session_figures(session, work / "session", title=folder.name, band=band)
     captions = {"kinematics.png": "Kinematics (deg) in three planes, each side's mean ± SD over every stride of "
                                   "every walk (right red, left blue; n strides), over the grey normal band; foot off "

@@ -205,3 +205,19 @@ def test_the_warnings_of_every_stage_open_the_page_escaped(tmp_path, no_figures)
     write_json(root / "muscles" / "eid_l" / "summary.json", {"converged": True})
     (page,) = report_html.write_report(root, band=None)
     assert "No stage gave a warning." in page.path.read_text(encoding="utf-8")
+
+
+def test_a_session_page_lists_each_walks_muscles(tmp_path, monkeypatch):
+    from gaitcli.report import session_plots
+
+    monkeypatch.setattr(session_plots, "session_figures", lambda *a, **k: [])
+    root = tmp_path / "S" / "gait_out"
+    (root / "session").mkdir(parents=True)
+    (root / "session" / "walks.csv").write_text("walk,speed_m_s\nWalking 01,1.2\nmean,1.2\nsd,\n")
+    (root / "session" / "strides.csv").write_text("walk,side,start_s,period_s,stance_pct,speed_m_s,stride_length_m,"
+                                                  "status,reason\nWalking 01,r,0.5,1.1,60,1.2,1.3,used,\n")
+    write_json(root / "session" / "summary.json", {"walks": 1})
+    write_json(root / "Walking 01" / "muscles" / "eid_l_swing" / "summary.json",
+               {"converged": False, "metabolic_cost_J": 41.96, "cost_of_transport_J_per_m": None})
+    body = report_html.session_body(root, None, tmp_path / "work", {})
+    assert ["Walking 01", "EID, left leg, swing", "no", "42.0", "—"] in cells(body)
