@@ -4,7 +4,8 @@ and again with other options.
 The first solver of an NLP derives ∇J, the constraint Jacobian and the Hessian of the Lagrangian from the CasADi
 expressions; a second one (a warm start's options, another iteration or time limit: every windowed solve's later
 rounds on an unmoved window, every chained study case) takes the first one's. Prints, per node count and model,
-the NLP's build, the first solver's construction, the second's, and their ratio.
+the NLP's build, the first solver's construction, the second's, their ratio, and the size of the Hessian of the
+Lagrangian (non-zeros, and instructions: what each IPOPT iteration evaluates).
 Run from the repository root: ``python benchmarks/bench_solver_reuse.py [--nodes 6 18] [--model symmetric full]``.
 One core (BENCH_CORE: which, benchmarks/timing.py). Asserts nothing.
 """
@@ -45,14 +46,16 @@ def main() -> None:
             built = time.perf_counter() - began
             cache = NlpCache()
             began = time.perf_counter()
-            cache.solver(nlp, ipopt_options(settings, warm=False))
+            solver, _ = cache.solver(nlp, ipopt_options(settings, warm=False))
             first = time.perf_counter() - began
+            hessian = solver.get_function("nlp_hess_l")
             began = time.perf_counter()
             cache.solver(nlp, ipopt_options(settings, warm=True))
             second = time.perf_counter() - began
             print(f"nn {nodes:2d} {model:9s}: w {nlp.w.numel():5d}, g {nlp.constraints.numel():5d}; NLP built "
                   f"{built:5.1f} s; first solver {first:5.1f} s, a warm start's {second:4.1f} s "
-                  f"({first / second:.0f}× faster)", flush=True)
+                  f"({first / second:.0f}× faster); Hessian {hessian.sparsity_out(0).nnz()} non-zeros, "
+                  f"{hessian.n_instructions()} instructions", flush=True)
 
 
 if __name__ == "__main__":
