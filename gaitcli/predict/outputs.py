@@ -21,7 +21,7 @@ def write_predict_outputs(folder: Path, result: PredictResult, attrs: dict) -> d
     folder = Path(folder)
     motion = {"time_s": result.time_s, "cycle_pct": result.cycle_pct,
               "hip_x_m": result.coordinates[:, 0], "hip_z_m": result.coordinates[:, 1],
-              "trunk_lean_deg": np.degrees(-result.coordinates[:, 2])}  # forward lean positive
+              "trunk_lean_deg": np.degrees(result.coordinates[:, 2])}  # y3 > 0: the HAT's CoM ahead of the hip
     motion.update({name: result.clinical_angles_deg[:, k] for k, name in enumerate(ANGLE_COLUMNS)})
     write_table(folder / "motion.csv", motion)
     pct = 100 * result.point_time_s / result.period_s

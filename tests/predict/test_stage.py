@@ -138,6 +138,15 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
         assert np.asarray(h5["result/design"][()]).size == 435
     for name in ("motion.csv", "muscles.csv"):
         assert len((tmp_path / name).read_text().splitlines()) == 81  # header + 80 instants
+    # trunk lean: forward positive, as the HAT's centre of mass ahead of the hip says
+    import pandas as pd
+
+    from gaitcli.predict.model import WalkingModel
+
+    lean = pd.read_csv(tmp_path / "motion.csv").trunk_lean_deg.to_numpy()
+    model = WalkingModel()
+    ahead = np.array([model.point("hat_com", y)[0] - model.point("hip", y)[0] for y in result.coordinates])
+    assert np.all(np.sign(lean) == np.sign(ahead)) and np.abs(lean).max() > 1.0
     assert json.loads(json.dumps(summary, default=float))["fine_grid"]["refinement"] == 4
 
 
