@@ -21,23 +21,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from gaitcli.predict.calls import called, mapped
 from gaitcli.predict.grid import periodic_derivative
 from gaitcli.predict.variables import Variables
-
-
-def called(function: ca.Function, *args):
-    """``function(*args)`` as one call node of the NLP's expression graph, not inlined: CasADi differentiates the
-    function once for all its calls instead of each instant's copy of its expression (fewer and faster derivative
-    instructions; ``benchmarks/bench_solver_reuse.py`` measures both)."""
-    out = function.call([ca.SX(a) for a in args], False, True)
-    return out[0] if len(out) == 1 else tuple(out)
-
-
-def mapped(function: ca.Function, n: int) -> ca.Function:
-    """``function`` evaluated on each of ``n`` columns, as one function whose call stays one node (an SX call of a
-    map would be inlined)."""
-    args = [ca.MX.sym(function.name_in(k), function.size1_in(k), n) for k in range(function.n_in())]
-    return ca.Function(f"{function.name()}_map", args, function.map(n)(*args))
 
 
 def muscle_forces(v: Variables, max_isometric_force_N) -> list:
