@@ -254,6 +254,20 @@ def moved_windows(nlp: NLP, lam_g: np.ndarray, threshold: float = 1e-8) -> dict 
 
 
 @dataclass(frozen=True)
+class WarmStart:
+    """An earlier solve's last point: the NLP's variables ``w`` and IPOPT's multipliers of g and of w's bounds.
+    It continues a problem of the same sizes (the same nodes and model), whatever its speed or weights."""
+
+    w: np.ndarray
+    lam_g: np.ndarray
+    lam_x: np.ndarray
+
+    def fits(self, nlp: NLP) -> bool:
+        """Whether it has the sizes of ``nlp``'s w and g."""
+        return self.w.size == self.lam_x.size == nlp.w.numel() and self.lam_g.size == nlp.constraints.numel()
+
+
+@dataclass(frozen=True)
 class PredictSolution:
     """A windowed solve: ``outcome`` the last solve's (iterations and time summed over the rounds; ``x`` is w,
     ``outside`` what the first start had outside the bounds), ``x`` χ of the solution, ``device`` its device
@@ -272,7 +286,7 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
                    settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
                    options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
                    optimal_device: bool = False, deadline: float | None = None,
-                   cache: NlpCache | None = None) -> PredictSolution:
+                   cache: NlpCache | None = None, warm: WarmStart | None = None) -> PredictSolution:
     """:func:`solve` with the spline windows placed where the start puts the instants, moved while a solution
     presses on one.
 
@@ -295,6 +309,9 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
         As :func:`solve` (``w0`` the first round's).
     cache : NlpCache, optional
         The runner's built problems and compiled solvers (default: one for this call).
+    warm : WarmStart, optional
+        An earlier solve's variables and multipliers: the first round starts from them (IPOPT's warm start)
+        where they fit its problem (:meth:`WarmStart.fits`; else from ``x0`` alone).
 
     Returns
     -------
@@ -309,6 +326,8 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
     w, multipliers, iterations, seconds = w0, None, 0, 0.0
     for k in range(1, rounds + 1):
         nlp = cache.nlp(transcriber, reference, settings, symmetric=symmetric, segments=segments)
+        if k == 1 and warm is not None and warm.fits(nlp):
+            w, multipliers = warm.w, (warm.lam_g, warm.lam_x)
         out = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report, device=device,
                     optimal_device=optimal_device, deadline=deadline, cache=cache, transcriber=transcriber)
         if k == 1:

@@ -38,7 +38,7 @@ from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.prosthesis import CHOICES, COEFFICIENTS, curve_for
 from gaitcli.predict.reference import VARIABLES, jdev_sd
 from gaitcli.predict.settings import PredictSettings
-from gaitcli.predict.solve import NlpCache, PredictSolution, solve_windowed
+from gaitcli.predict.solve import NlpCache, PredictSolution, WarmStart, solve_windowed
 from gaitcli.signal.bands import Band
 from gaitcli.signal.cycles import CYCLE_PCT
 
@@ -225,6 +225,11 @@ class PredictResult:
     violations: dict = field(default_factory=dict)
     fine_grid: dict = field(default_factory=dict)
     design: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    #: the last NLP's variables w (χ and the lifted values) and IPOPT's multipliers of g and of w's bounds: what
+    #: a warm start from this result (``--init``) continues from
+    nlp_variables: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    constraint_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bound_multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0))
     converged: bool = False
     status: str = ""
     iterations: int = 0
@@ -304,7 +309,8 @@ def walker_muscles(cfg: PredictConfig, device: ProsthesisLaw | None) -> WalkerMu
 
 
 def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Band,
-                init: np.ndarray | None = None, report=None, device: ProsthesisLaw | None = None,
+                init: np.ndarray | None = None, warm: WarmStart | None = None, report=None,
+                device: ProsthesisLaw | None = None,
                 cache: NlpCache | None = None) -> PredictResult:
     """Predict one gait cycle (module docstring).
 
@@ -318,6 +324,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         What Jdev (5.28) tracks.
     init : array, optional
         A design vector χ of the same layout to start from (default: the default initial guess).
+    warm : WarmStart, optional
+        With ``init``: the variables and multipliers it was solved with, continued where they fit the problem.
     report : callable, optional
         ``report(iteration, objective, violation)`` after every IPOPT iteration, counted over all solves.
     device : ProsthesisLaw, optional
@@ -375,7 +383,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         if optimal and first.outcome.converged:
             solve_options["device"] = device.with_values("optimal", first.device)
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report,
-                            **solve_options)
+                            warm=warm if init is not None else None, **solve_options)
     solve_time = time.perf_counter() - start
     final = (device.with_values("optimal", solved.device) if optimal else device) if cfg.prosthetic else None
     muscles = walker_muscles(cfg, final)
@@ -383,7 +391,9 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     converged = solved.outcome.converged and solved.windows_hold and not violated_groups(violations)
     history += _solve_notes(solved, f"{'symmetric' if cfg.symmetric else 'full'} model, {label}")
     result["fine_grid"] = fine_grid(cfg, solved.x, reference, model, muscles)
-    return PredictResult(**result, design=np.asarray(solved.x, float), converged=bool(converged),
+    return PredictResult(**result, design=np.asarray(solved.x, float), nlp_variables=solved.outcome.x,
+                         constraint_multipliers=solved.outcome.lam_g, bound_multipliers=solved.outcome.lam_x,
+                         converged=bool(converged),
                          status=solved.outcome.status, iterations=iterations + solved.outcome.iterations,
                          rounds=rounds + solved.rounds, solve_time_s=solve_time, history=tuple(history),
                          prosthesis=final, foot_mass_kg=cfg.foot_mass_kg, strength_scale=cfg.strength())

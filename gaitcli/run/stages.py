@@ -146,6 +146,7 @@ class PredictionInputs:
     reference: object
     device: object = None
     init: np.ndarray | None = None
+    warm: object = None  # the init file's variables and multipliers (predict.solve.WarmStart), where it has them
 
 
 @dataclass(frozen=True)
@@ -161,6 +162,20 @@ class Prediction:
     @property
     def history(self) -> tuple[str, ...]:
         return self.result.history
+
+
+def read_warm(path: Path):
+    """The last NLP variables and multipliers of an earlier ``predict.h5`` (a ``WarmStart``), or None where the
+    file has none (written before they were stored, or by an unconverged run that never solved)."""
+    from gaitcli.io.h5 import read_field
+    from gaitcli.predict.solve import WarmStart
+
+    try:
+        arrays = [np.asarray(read_field(path, PredictResult, name, what="gait predict"), float)
+                  for name in ("nlp_variables", "constraint_multipliers", "bound_multipliers")]
+    except (InputError, KeyError, ValueError, TypeError):
+        return None
+    return WarmStart(*arrays) if all(a.size for a in arrays) else None
 
 
 def read_init(path: Path):
@@ -219,6 +234,7 @@ def prediction_inputs(ctx: StageContext, cfg: PredictConfig) -> PredictionInputs
 
     device = prosthesis_curve(ctx, cfg)
     init = read_init(ctx.files["init"]) if "init" in ctx.files else None
+    warm = read_warm(ctx.files["init"]) if init is not None else None
     given = ctx.files.get("reference")
     reference = read_reference(given) if given is not None else None
     for name in ("init", "reference"):
@@ -241,7 +257,7 @@ def prediction_inputs(ctx: StageContext, cfg: PredictConfig) -> PredictionInputs
                                             thigh_length_m=subject.thigh_length_m,
                                             shank_length_m=subject.shank_length_m)
               if subject is not None else WalkerParameters.subject_1())
-    return PredictionInputs(params, reference, device, init)
+    return PredictionInputs(params, reference, device, init, warm)
 
 
 @functools.lru_cache(maxsize=1)
@@ -277,7 +293,7 @@ def _predict(ctx: StageContext, cfg: PredictConfig) -> Prediction:
                                  report=iteration, cache=prediction_cache())
     else:
         result = run_predict(cfg, params=start.params, reference=start.reference, init=start.init,
-                             report=iteration, device=start.device, cache=prediction_cache())
+                             warm=start.warm, report=iteration, device=start.device, cache=prediction_cache())
     return Prediction(result, cfg)
 
 

@@ -14,6 +14,8 @@ import numpy as np
 import pandas as pd
 from PIL import Image
 
+from gaitcli.run.stages import read_warm
+
 from .conftest import Runner, copy_sample, gait_many, snapshot
 
 #: one worker for the study on a cluster: its tasks run in one process, as a study's tasks on a busy cluster
@@ -80,6 +82,11 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
             assert h5.attrs["converged"] == 0 and "result/design" in h5
             design = np.asarray(h5["result/design"][()])
         assert design.size == 11 * 5 + 3 * 3 + 5  # the full model's layout: tests/predict/test_stage.py
+        warm = read_warm(folder / "predict.h5")  # what --init of this file continues from
+        assert warm is not None and warm.w.size == warm.lam_x.size > design.size and warm.lam_g.size > 0
+    with h5py.File(tmp_path / "older.h5", "w") as h5:  # a predict.h5 of a version that stored χ only
+        h5["result/design"] = design
+    assert read_warm(tmp_path / "older.h5") is None
     figures = ("angles.png", "grf.png", "moments.png", "muscles.png", "stick.png", "walk.gif")
     assert all((tmp_path / "out" / "predict" / "plots" / f).stat().st_size > 1000 for f in figures)
     with Image.open(tmp_path / "out" / "predict" / "plots" / "walk.gif") as gif:  # one frame per motion row

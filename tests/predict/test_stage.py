@@ -158,3 +158,27 @@ def test_a_solve_past_its_time_limit_stops_unconverged_and_says_why(cache):
     result = run_predict(PredictConfig(nodes=6, max_iterations=50, time_limit_s=1e-6),
                          reference=read_reference(bundled_reference()), cache=cache)
     assert result.status == TIME_LIMIT_STATUS and result.iterations == 0 and not result.converged
+
+
+def test_a_warm_start_continues_from_the_stored_variables_where_they_fit(stopped, cache):
+    """A result keeps the last NLP's variables and multipliers; a start from them (``--init`` of its
+    predict.h5) begins at exactly those variables, while a start from χ alone recomputes the lifted values. A
+    warm start of other sizes (another node count) is not used."""
+    from gaitcli.predict.problem import Transcriber
+    from gaitcli.predict.solve import WarmStart, solve_windowed
+    from gaitcli.predict.stage import settings_of
+
+    result, _ = stopped
+    warm = WarmStart(result.nlp_variables, result.constraint_multipliers, result.bound_multipliers)
+    assert warm.w.size == warm.lam_x.size > result.design.size and warm.lam_g.size > 0
+    cfg = PredictConfig(nodes=6, max_iterations=0)  # IPOPT evaluates the start and stops there
+    reference, transcriber = read_reference(bundled_reference()), Transcriber(6)
+
+    def first_point(start):
+        return solve_windowed(transcriber, reference, result.design, settings_of(cfg), symmetric=True, warm=start,
+                              cache=cache).outcome.x
+
+    assert np.array_equal(first_point(warm), warm.w)
+    assert not np.allclose(first_point(None), warm.w, rtol=0, atol=1e-9)
+    other = WarmStart(warm.w[:-1], warm.lam_g, warm.lam_x[:-1])
+    assert np.array_equal(first_point(other), first_point(None))
