@@ -143,7 +143,8 @@ def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objec
     m, n = problem.models.muscle.m, problem.n
     so_force, so_out = warm_start if warm_start is not None else solve_so(problem, settings)
     x, cost, g = _eid_nlp(problem, objective, smoothing, None)
-    solver = build_solver("eid", x, cost, g, settings=settings)
+    # a trial's moments the muscles cannot make (a locked joint's, carried by an orthosis) make it infeasible
+    solver = build_solver("eid", x, cost, g, settings=settings, may_be_infeasible=True)
     x0, lbx, ubx, s_max = _bounds_and_start(problem, so_force, 0)
     out = solve(solver, x0, lbx, ubx, 0.0, 0.0, blocks=_blocks(m, n, 0))
     blocks = out.x.reshape(3, n, m)

@@ -24,10 +24,16 @@ class SolverSettings:
     print_level: int = 0
 
 
-def build_solver(name: str, x, f, g, p=None, settings: SolverSettings | None = None) -> ca.Function:
-    """An IPOPT ``nlpsol`` for min f(x, p) s.t. lbg ≤ g(x, p) ≤ ubg, lbx ≤ x ≤ ubx (exact Hessian)."""
+def build_solver(name: str, x, f, g, p=None, settings: SolverSettings | None = None, *,
+                 may_be_infeasible: bool = False) -> ca.Function:
+    """An IPOPT ``nlpsol`` for min f(x, p) s.t. lbg ≤ g(x, p) ≤ ubg, lbx ≤ x ≤ ubx (exact Hessian).
+
+    ``may_be_infeasible``: IPOPT's heuristics that detect an infeasible problem sooner (its restoration phase
+    entered earlier); on a feasible one they change nothing (benchmarks/README.md, "EID").
+    """
     s = settings or SolverSettings()
     problem = {"x": x, "f": f, "g": g, **({"p": p} if p is not None else {})}
     opts = ipopt.options(tol=s.tol, max_iter=s.max_iter, print_level=s.print_level,
-                         **{"ipopt.constr_viol_tol": s.constr_viol_tol, "ipopt.hessian_approximation": "exact"})
+                         **{"ipopt.constr_viol_tol": s.constr_viol_tol, "ipopt.hessian_approximation": "exact",
+                            **({"ipopt.expect_infeasible_problem": "yes"} if may_be_infeasible else {})})
     return ipopt.build_solver(name, problem, opts)
