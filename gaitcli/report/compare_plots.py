@@ -12,8 +12,8 @@ import numpy as np
 import pandas as pd
 
 from gaitcli.core.events import SIDE_NAMES
-from gaitcli.report.plots import draw_band, plt, save
-from gaitcli.report.session_plots import GRF, JOINTS, KINEMATICS, PLANES, band_variable
+from gaitcli.report.plots import draw_band, save
+from gaitcli.report.session_plots import band_variable, kinematics_grid, kinetics_grid
 from gaitcli.signal.bands import Band
 from gaitcli.signal.cycles import CYCLE_PCT
 
@@ -64,54 +64,15 @@ def compare_figures(compare: Path, folder: Path, *, band: Band | None = None) ->
     for side in ("r", "l"):
         rows = cycle[cycle.side == side]
         on_side = spans[spans.side == side]
-        fig, axes = plt.subplots(len(KINEMATICS), 3, figsize=(12, 2.3 * len(KINEMATICS)), sharex=True)
-        for row, (part, columns) in enumerate(KINEMATICS):
-            for col, pattern in enumerate(columns):
-                ax = axes[row, col]
-                column = pattern.format(s=side) if pattern else None
-                if column is None or not _draw(ax, rows, on_side, column, band_variable(pattern), band, names):
-                    ax.axis("off")
-                    continue
-                ax.set_title(f"{part} {pattern.split('_')[-1]}", fontsize=9)
-                ax.set_ylabel("deg")
-        for col, plane in enumerate(PLANES):
-            bottom = max(row for row, (_, columns) in enumerate(KINEMATICS) if columns[col] is not None)
-            axes[bottom, col].set_xlabel("gait cycle (%)")
-            axes[bottom, col].tick_params(labelbottom=True)
-            axes[0, col].annotate(plane, (0.5, 1.25), xycoords="axes fraction", ha="center", fontsize=11)
+
+        def draw(ax, pattern, rows=rows, on_side=on_side, side=side):
+            return _draw(ax, rows, on_side, pattern.format(s=side), band_variable(pattern), band, names)
+
+        fig, axes = kinematics_grid(draw)
         _finish(fig, axes, f"{SIDE_NAMES[side]} side: kinematics, mean ± SD per condition; bars: differs from "
                            f"{names[0]}")
         written.append(save(fig, folder / f"kinematics_{side}.png"))
-
-        fig, axes = plt.subplots(len(JOINTS) + 2, 3, figsize=(12, 2.3 * (len(JOINTS) + 2)), sharex=True)
-        for col, (pattern, name) in enumerate(GRF):
-            ax = axes[len(JOINTS) + 1, col]
-            if _draw(ax, rows, on_side, pattern.format(s=side), None, band, names):
-                ax.set_title(name, fontsize=9)
-                ax.set_ylabel("% body weight")
-            else:
-                ax.axis("off")
-            ax.set_xlabel("gait cycle (%)")
-        for row, joint in enumerate(JOINTS):
-            moments = [c[:-len("_mean")] for c in rows.columns
-                       if c.startswith(f"{joint}_{side}_") and c.endswith("_moment_per_kg_mean")]
-            for col in range(3):
-                ax = axes[row, col]
-                column = moments[col] if col < len(moments) else None
-                pattern = column.replace(f"{joint}_{side}_", f"{joint}_{{s}}_", 1) if column else None
-                if column is None or not _draw(ax, rows, on_side, column, band_variable(pattern), band, names):
-                    ax.axis("off")
-                    continue
-                ax.set_title(column.replace(f"{joint}_{side}_", f"{joint} ").replace("_moment_per_kg", " moment")
-                             .replace("_", " "), fontsize=9)
-                ax.set_ylabel("N·m/kg")
-            power = axes[len(JOINTS), row]
-            pattern = f"{joint}_{{s}}_power_W_per_kg"
-            if _draw(power, rows, on_side, pattern.format(s=side), band_variable(pattern), band, names):
-                power.set_title(f"{joint} power (+ generated)", fontsize=9)
-                power.set_ylabel("W/kg")
-            else:
-                power.axis("off")
+        fig, axes = kinetics_grid(draw, rows.columns)
         _finish(fig, axes, f"{SIDE_NAMES[side]} side: moments, powers, ground reactions; bars: differs from "
                            f"{names[0]}")
         written.append(save(fig, folder / f"kinetics_{side}.png"))

@@ -6,6 +6,7 @@ foot's ground reaction (% body weight)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -58,21 +59,25 @@ def _draw(ax, cycle: pd.DataFrame, pattern: str, band: Band | None, foot_off: di
     return drawn
 
 
-def session_figures(session: Path, folder: Path, *, title: str = "", band: Band | None = None) -> list[Path]:
-    """``kinematics.png`` (deg) and ``kinetics.png`` (N·m/kg, W/kg) of the session folder ``session``
-    (``gait_out/session``) into ``folder``."""
-    cycle = pd.read_csv(session / "cycle.csv")
-    strides = pd.read_csv(session / "strides.csv")
-    complete = strides[strides.status != "rejected"]
-    foot_off = {side: float(g.stance_pct.mean()) for side, g in complete.groupby("side")}
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
+def moment_patterns(columns, joint: str) -> list[str]:
+    """The moment columns of ``joint`` in a cycle table (``<joint>_<side>_<sense>_moment_per_kg_mean``) as
+    patterns with ``{s}`` for the side, in the table's order, each sense once."""
+    found = []
+    for column in columns:
+        match = re.match(rf"^{joint}_[rl]_(\w+)_moment_per_kg_mean$", column)
+        if match and f"{joint}_{{s}}_{match[1]}_moment_per_kg" not in found:
+            found.append(f"{joint}_{{s}}_{match[1]}_moment_per_kg")
+    return found
 
+
+def kinematics_grid(draw) -> tuple:
+    """The kinematics figure's grid (:data:`KINEMATICS` × the three planes): ``draw(ax, pattern)`` draws one
+    variable (``pattern`` with ``{s}`` for the side) and says whether it had any; (figure, axes)."""
     fig, axes = plt.subplots(len(KINEMATICS), 3, figsize=(12, 2.3 * len(KINEMATICS)), sharex=True)
     for row, (part, columns) in enumerate(KINEMATICS):
         for col, pattern in enumerate(columns):
             ax = axes[row, col]
-            if pattern is None or not _draw(ax, cycle, pattern, band, foot_off):
+            if pattern is None or not draw(ax, pattern):
                 ax.axis("off")
                 continue
             ax.set_title(f"{part} {pattern.split('_')[-1]}", fontsize=9)
@@ -82,38 +87,63 @@ def session_figures(session: Path, folder: Path, *, title: str = "", band: Band 
         axes[bottom, col].set_xlabel("gait cycle (%)")
         axes[bottom, col].tick_params(labelbottom=True)
         axes[0, col].annotate(plane, (0.5, 1.25), xycoords="axes fraction", ha="center", fontsize=11)
-    _legend(fig, axes)
-    fig.suptitle(f"{title}: kinematics, mean ± SD of every stride; foot off dashed, normal's dash-dot".strip(": "),
-                 fontsize=11)
-    written.append(save(fig, folder / "kinematics.png"))
+    return fig, axes
 
+
+def kinetics_grid(draw, columns) -> tuple:
+    """The kinetics figure's grid: each joint's moments in three planes (those of the table ``columns``,
+    :func:`moment_patterns`), the joints' powers, the ground reaction (:data:`GRF`); ``draw`` as
+    :func:`kinematics_grid`'s; (figure, axes)."""
     fig, axes = plt.subplots(len(JOINTS) + 2, 3, figsize=(12, 2.3 * (len(JOINTS) + 2)), sharex=True)
-    for col, (pattern, name) in enumerate(GRF):
-        ax = axes[len(JOINTS) + 1, col]
-        if _draw(ax, cycle, pattern, band, foot_off):
-            ax.set_title(name, fontsize=9)
-            ax.set_ylabel("% body weight")
-        else:
-            ax.axis("off")
-        ax.set_xlabel("gait cycle (%)")
     for row, joint in enumerate(JOINTS):
-        moments = [c[:-len("_mean")] for c in cycle.columns
-                   if c.startswith(f"{joint}_r_") and c.endswith("_moment_per_kg_mean")]
-        for col, column in enumerate(moments[:3]):
+        patterns = moment_patterns(columns, joint)
+        for col in range(3):
             ax = axes[row, col]
-            pattern = column.replace(f"{joint}_r_", f"{joint}_{{s}}_", 1)
-            if not _draw(ax, cycle, pattern, band, foot_off):
+            if col >= len(patterns) or not draw(ax, patterns[col]):
                 ax.axis("off")
                 continue
-            ax.set_title(column.replace(f"{joint}_r_", f"{joint} ").replace("_moment_per_kg", " moment")
+            ax.set_title(patterns[col].replace(f"{joint}_{{s}}_", f"{joint} ").replace("_moment_per_kg", " moment")
                          .replace("_", " "), fontsize=9)
             ax.set_ylabel("N·m/kg")
         power = axes[len(JOINTS), row]
-        if _draw(power, cycle, f"{joint}_{{s}}_power_W_per_kg", band, foot_off):
+        if draw(power, f"{joint}_{{s}}_power_W_per_kg"):
             power.set_title(f"{joint} power (+ generated)", fontsize=9)
             power.set_ylabel("W/kg")
         else:
             power.axis("off")
+    grf = [draw(axes[len(JOINTS) + 1, col], pattern) for col, (pattern, _) in enumerate(GRF)]
+    for col, (_, name) in enumerate(GRF):
+        ax = axes[len(JOINTS) + 1, col]
+        if grf[col]:
+            ax.set_title(name, fontsize=9)
+            ax.set_ylabel("% body weight")
+        else:
+            ax.axis("off")
+        # the cycle axis under the lowest drawn row (tables made before the ground reactions were: the powers)
+        bottom = ax if any(grf) else axes[len(JOINTS), col]
+        bottom.set_xlabel("gait cycle (%)")
+        bottom.tick_params(labelbottom=True)
+    return fig, axes
+
+
+def session_figures(session: Path, folder: Path, *, title: str = "", band: Band | None = None) -> list[Path]:
+    """``kinematics.png`` (deg) and ``kinetics.png`` (N·m/kg, W/kg, % body weight) of the session folder
+    ``session`` (``gait_out/session``) into ``folder``."""
+    cycle = pd.read_csv(session / "cycle.csv")
+    strides = pd.read_csv(session / "strides.csv")
+    complete = strides[strides.status != "rejected"]
+    foot_off = {side: float(g.stance_pct.mean()) for side, g in complete.groupby("side")}
+    folder.mkdir(parents=True, exist_ok=True)
+
+    def draw(ax, pattern):
+        return _draw(ax, cycle, pattern, band, foot_off)
+
+    fig, axes = kinematics_grid(draw)
+    _legend(fig, axes)
+    fig.suptitle(f"{title}: kinematics, mean ± SD of every stride; foot off dashed, normal's dash-dot".strip(": "),
+                 fontsize=11)
+    written = [save(fig, folder / "kinematics.png")]
+    fig, axes = kinetics_grid(draw, cycle.columns)
     _legend(fig, axes)
     fig.suptitle(f"{title}: moments, powers and ground reactions, strides with the foot on the plates".strip(": "),
                  fontsize=11)
