@@ -37,12 +37,12 @@ COMPARED = ("pelvis_", "hip_", "knee_", "ankle_", "foot_", "grf_")
 @dataclass(frozen=True)
 class Condition:
     """One condition: its name, its walks' strides and their curves per side ({side: {variable: (n, 101)}}) and
-    its Table 3.1 (the mean over its walks)."""
+    its Table 3.1 and steps (the mean over its walks)."""
 
     name: str
     strides: pd.DataFrame
     stacks: dict[str, dict[str, np.ndarray]]
-    table_3_1: dict[str, float]
+    features: dict[str, float]
     warnings: tuple[str, ...] = ()
 
 
@@ -147,7 +147,7 @@ def write_comparison(out: Path, comparison: ConditionComparison) -> Path:
     """``OUT/compare/`` whole (module docstring); replaces an earlier comparison there."""
     target = out / "compare"
     check_replaceable(target)
-    conditions = pd.DataFrame([{"condition": c.name, **c.table_3_1,
+    conditions = pd.DataFrame([{"condition": c.name, **c.features,
                                 "strides_right": int((c.strides.side == "r").sum()),
                                 "strides_left": int((c.strides.side == "l").sum())} for c in comparison.conditions])
     with stage_folder(target) as tmp:
