@@ -5,7 +5,7 @@ The first solver of an NLP derives ∇J, the constraint Jacobian and the Hessian
 expressions; a second one (a warm start's options, another iteration or time limit: every windowed solve's later
 rounds on an unmoved window, every chained study case) takes the first one's. Prints, per node count and model,
 the NLP's build, the first solver's construction, the second's, their ratio, and the size of the Hessian of the
-Lagrangian (non-zeros, and instructions: what each IPOPT iteration evaluates).
+Lagrangian (non-zeros, instructions, and the time one evaluation takes: what each IPOPT iteration pays).
 Run from the repository root: ``python benchmarks/bench_solver_reuse.py [--nodes 6 18] [--model symmetric full]``.
 One core (BENCH_CORE: which, benchmarks/timing.py). Asserts nothing.
 """
@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import time
 
+import numpy as np
 from timing import one_core
 
 from gaitcli.predict.guess import initial_guess
@@ -49,13 +50,19 @@ def main() -> None:
             solver, _ = cache.solver(nlp, ipopt_options(settings, warm=False))
             first = time.perf_counter() - began
             hessian = solver.get_function("nlp_hess_l")
+            point = [np.full(nlp.w.numel(), 0.5), settings.parameter_values(), 1.0,
+                     np.ones(nlp.constraints.numel())]
+            began = time.perf_counter()
+            for _ in range(10):
+                hessian(*point)
+            evaluation_ms = (time.perf_counter() - began) * 100
             began = time.perf_counter()
             cache.solver(nlp, ipopt_options(settings, warm=True))
             second = time.perf_counter() - began
             print(f"nn {nodes:2d} {model:9s}: w {nlp.w.numel():5d}, g {nlp.constraints.numel():5d}; NLP built "
                   f"{built:5.1f} s; first solver {first:5.1f} s, a warm start's {second:4.1f} s "
                   f"({first / second:.0f}× faster); Hessian {hessian.sparsity_out(0).nnz()} non-zeros, "
-                  f"{hessian.n_instructions()} instructions", flush=True)
+                  f"{hessian.n_instructions()} instructions, {evaluation_ms:.0f} ms an evaluation", flush=True)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from gaitcli.predict.calls import called, mapped
 from gaitcli.predict.grid import periodic_derivative
 from gaitcli.predict.variables import Variables
 
@@ -33,17 +32,13 @@ def muscle_forces(v: Variables, max_isometric_force_N) -> list:
 
 
 def dynamics_residuals(v: Variables, model, muscles, forces: list) -> list:
-    """rhs − Φ (5.1) at every stated instant: rhs the lifted generalized forces, Φ from the model (one function
-    of (y, ẏ, ÿ, F, D) called per instant)."""
-    y, yd, ydd, force = ca.SX.sym("y", 9), ca.SX.sym("yd", 9), ca.SX.sym("ydd", 9), ca.SX.sym("F", 16)
-    c = ca.SX.sym("c", v.coefficients.numel())
-    physics = ca.Function("physics", [y, yd, ydd, force, c], [
-        model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.tissue(y, yd)
-        - muscles.device(y, yd, c) - muscles.moment_arms(y) @ force], ["y", "yd", "ydd", "F", "D"], ["Phi"])
+    """rhs − Φ (5.1) at every stated instant: rhs the lifted generalized forces, Φ from the model."""
     out = []
     for i in v.dynamics_instants:
-        args = [v.values["y"][i], v.values["yd"][i], v.values["ydd"][i], forces[i], v.coefficients]
-        out.append(v.generalized_forces[i] - called(physics, *args))
+        y, yd, ydd = v.values["y"][i], v.values["yd"][i], v.values["ydd"][i]
+        physics = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.tissue(y, yd)
+                   - muscles.device(y, yd, v.coefficients) - muscles.moment_arms(y) @ forces[i])
+        out.append(v.generalized_forces[i] - physics)
     return out
 
 
@@ -91,34 +86,22 @@ def invert_muscles(v: Variables, transcriber, forces: list) -> list[LegInversion
     legs = []
     for k in range(v.muscle_columns.stop // 8):
         c = slice(8 * k, 8 * k + 8)
+        l_ce, v_ce = muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, matrix("l_m")[:, c].T, matrix("v_m")[:, c].T)
+        # the root of 4.3.3 is real only above a slowest ȧ, below the feasible ȧ ≥ −t2·a (u ≥ 0, the first
+        # excitation bound); a start beyond it (a neighbouring case's unconverged solution) would make Et NaN
+        # and stop IPOPT at iteration 0, so ȧ is raised to that floor (MuscleModel.slowest_activation_rate):
+        # u exact and smooth on the feasible set and near it, finite everywhere
+        a_rows = a_m[:, c].T
+        u = muscle.excitation(a_rows, ca.fmax(adot[:, c].T, muscle.slowest_activation_rate(a_rows)))
         f_ce = force_m[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, v.n_i)
-        inversion = mapped(_inversion(transcriber, f_max_n[c]), v.n_i)
-        balance, rate = called(inversion, a_m[:, c].T, adot[:, c].T, l_se[:, c].T, v_se[:, c].T,
-                               matrix("l_m")[:, c].T, matrix("v_m")[:, c].T, f_ce)
-        rate = rate.T
+        # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
+        # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small
+        f_max = ca.repmat(ca.DM(f_max_n[c]), 1, v.n_i)
+        balance = (muscle.fibre_force(a_m[:, c].T, l_ce, v_ce) - f_ce) / f_max
+        rate = transcriber.metabolic(u, a_m[:, c].T, l_ce, v_ce, f_ce).T
         legs.append(LegInversion(balance=balance, rate=rate, a=a_m[:, c], adot=adot[:, c],
                                  t1=ca.repmat(ca.DM(t1[c]).T, v.n_i, 1), t2=ca.repmat(ca.DM(t2[c]).T, v.n_i, 1)))
     return legs
-
-
-def _inversion(transcriber, f_max_n) -> ca.Function:
-    """One leg's 8 muscles at one instant: (a, ȧ, l_se, v_se, l_m, v_m, f_ce) → (the fibre's force balance per
-    F_max, the heat rate Ė in W) (module docstring)."""
-    muscle = transcriber.muscles.muscle
-    a, adot, l_se, v_se, l_m, v_m, f_ce = (ca.SX.sym(n, 8) for n in ("a", "adot", "l_se", "v_se", "l_m", "v_m",
-                                                                     "f_ce"))
-    l_ce, v_ce = muscle.fibre_kinematics(l_se, v_se, l_m, v_m)
-    # the root of 4.3.3 is real only above a slowest ȧ, below the feasible ȧ ≥ −t2·a (u ≥ 0, the first
-    # excitation bound); a start beyond it (a neighbouring case's unconverged solution) would make Et NaN
-    # and stop IPOPT at iteration 0, so ȧ is raised to that floor (MuscleModel.slowest_activation_rate):
-    # u exact and smooth on the feasible set and near it, finite everywhere
-    u = muscle.excitation(a, ca.fmax(adot, muscle.slowest_activation_rate(a)))
-    # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
-    # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small
-    balance = (muscle.fibre_force(a, l_ce, v_ce) - f_ce) / ca.DM(f_max_n)
-    rate = transcriber.metabolic(u, a, l_ce, v_ce, f_ce)
-    return ca.Function("inversion", [a, adot, l_se, v_se, l_m, v_m, f_ce], [balance, rate],
-                       ["a", "adot", "l_se", "v_se", "l_m", "v_m", "f_ce"], ["balance", "rate"])
 
 
 @dataclass
