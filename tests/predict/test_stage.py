@@ -178,7 +178,8 @@ def test_a_warm_start_continues_from_the_stored_variables_where_they_fit(stopped
         return solve_windowed(transcriber, reference, result.design, settings_of(cfg), symmetric=True, warm=start,
                               cache=cache).outcome.x
 
+    from_design = first_point(None)
     assert np.array_equal(first_point(warm), warm.w)
-    assert not np.allclose(first_point(None), warm.w, rtol=0, atol=1e-9)
+    assert not np.allclose(from_design, warm.w, rtol=0, atol=1e-9)
     other = WarmStart(warm.w[:-1], warm.lam_g, warm.lam_x[:-1])
-    assert np.array_equal(first_point(other), first_point(None))
+    assert np.array_equal(first_point(other), from_design)
