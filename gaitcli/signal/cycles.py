@@ -96,24 +96,34 @@ class Step:
     width_m: float
 
 
+def footprints(events: Events, heel_m: dict[str, np.ndarray], time_s: np.ndarray,
+               period_s: float) -> dict[str, dict[float, np.ndarray]]:
+    """Each heel's footprint (:func:`footprint`) at each of its foot's heel strikes: side → {strike (s): position}."""
+    return {side: {float(t): footprint(heel, time_s, float(t), period_s) for t in events.times(side, "heel_strike")}
+            for side, heel in heel_m.items()}
+
+
+def _steps(prints: dict[str, dict[float, np.ndarray]]) -> list[Step]:
+    """The steps between the footprints of both feet (:func:`steps`), in time order."""
+    out = []
+    for side, other in (("r", "l"), ("l", "r")):
+        if side not in prints or other not in prints:
+            continue
+        others = np.array(sorted(prints[other]))
+        for strike, here in prints[side].items():
+            before = others[others < strike]
+            if not before.size:
+                continue
+            there = prints[other][float(before[-1])]
+            out.append(Step(side, strike, float(abs(here[0] - there[0])), float(abs(here[1] - there[1]))))
+    return sorted(out, key=lambda step: step.strike_s)
+
+
 def steps(events: Events, heel_m: dict[str, np.ndarray], time_s: np.ndarray) -> list[Step]:
     """Every step whose two footprints (:func:`footprint`) are seen: ``heel_m[side]`` (frames, 2) the heel's
     forward and lateral position (m, model axes: x along the walk, y left); in time order."""
-    strikes = {side: events.times(side, "heel_strike") for side in ("r", "l")}
     periods = [st.period_s for st in strides(events)]
-    period = float(np.mean(periods)) if periods else 1.0
-    out = []
-    for side, other in (("r", "l"), ("l", "r")):
-        if side not in heel_m or other not in heel_m:
-            continue
-        for strike in strikes[side]:
-            before = strikes[other][strikes[other] < strike]
-            if not before.size:
-                continue
-            here = footprint(heel_m[side], time_s, float(strike), period)
-            there = footprint(heel_m[other], time_s, float(before[-1]), period)
-            out.append(Step(side, float(strike), float(abs(here[0] - there[0])), float(abs(here[1] - there[1]))))
-    return sorted(out, key=lambda step: step.strike_s)
+    return _steps(footprints(events, heel_m, time_s, float(np.mean(periods)) if periods else 1.0))
 
 
 def gait_features(events: Events, heel_m: dict[str, np.ndarray], time_s: np.ndarray) -> GaitFeatures:
@@ -128,17 +138,14 @@ def gait_features(events: Events, heel_m: dict[str, np.ndarray], time_s: np.ndar
     being exact; kinematic events (Zeni) time heel strike a few frames early and
     are the fallback.
     """
-    all_strides = strides(events)
     def mean(v):
         return float(np.mean(v)) if len(v) else float("nan")
 
+    all_strides = strides(events)
     period = mean([st.period_s for st in all_strides])
-    lengths = []
-    for st in all_strides:
-        heel = heel_m.get(st.side)
-        if heel is not None:
-            lengths.append(abs(footprint(heel, time_s, st.end_s, period)[0]
-                               - footprint(heel, time_s, st.start_s, period)[0]))
+    prints = footprints(events, heel_m, time_s, period)  # each once: the strides and the steps share them
+    lengths = [abs(prints[st.side][st.end_s][0] - prints[st.side][st.start_s][0]) for st in all_strides
+               if st.side in prints]
     stance = {}
     for side in ("r", "l"):
         contacts = events.stances(side, "plate") or events.stances(side)
@@ -146,8 +153,8 @@ def gait_features(events: Events, heel_m: dict[str, np.ndarray], time_s: np.ndar
     # walking has no flight phase: each foot's stance overlaps the other's twice per stride
     double = stance["r"] + stance["l"] - 100.0
     length = mean(lengths)
-    lateral = {s: h for s, h in heel_m.items() if np.ndim(h) == 2 and np.shape(h)[1] >= 2}
-    found = steps(events, lateral, time_s) if len(lateral) == 2 else []
+    lateral = {s: p for s, p in prints.items() if np.ndim(heel_m[s]) == 2 and np.shape(heel_m[s])[1] >= 2}
+    found = _steps(lateral) if len(lateral) == 2 else []
     return GaitFeatures(stride_length_m=length, period_s=period,
                         speed_m_s=length / period if np.isfinite(length) and period > 0 else float("nan"),
                         stance_right_pct=stance["r"], stance_left_pct=stance["l"],
