@@ -1,10 +1,11 @@
 """The constraint groups of the predictive-gait NLP (Diss. 5.2.8–5.2.9), each built by its own function.
 
 Every group function returns :class:`Rows` (expressions with their lower and upper bounds, in order);
-:func:`gaitcli.predict.nlp.build_nlp` stacks them in the order of :data:`GROUPS`. The first six define the
-lifted variables (``variables.py``) from the spline coefficients; the rest are the dissertation's:
+:func:`gaitcli.predict.nlp.build_nlp` stacks them in the order of :data:`GROUPS`. After ``nodes``, the first five define the
+lifted variables (``variables.py``) from the splines' B-spline coefficients (periodic C3 / C2 splines by
+construction, 5.14–5.23, so no continuity rows); the rest are the dissertation's:
 
-    continuity  the segment coefficients make periodic C3 / C2 splines    (5.14–5.23)
+    nodes       the nodal values p_{k,0} inside their box                 (5.13; ``layout.box_bounds``)
     splines     Q's y, ẏ, ÿ, ŝ = the splines at the instants              (5.10–5.12)
     dynamics    rhs = M ÿ + k − g − Q_p − R f_m                           (5.1)
     paths       l_m, v_m = the muscle paths at (y, ẏ)                     (A.9)
@@ -53,7 +54,8 @@ import numpy as np
 from gaitcli.core.validate import number
 from gaitcli.predict.contact import PHASE_TABLE, PHASES
 from gaitcli.predict.dynamics import ContactPoint, LegInversion
-from gaitcli.predict.splines import continuity_matrix, is_casadi
+from gaitcli.predict.layout import box_bounds
+from gaitcli.predict.splines import is_casadi
 from gaitcli.predict.variables import (
     LIFTED_SCALE,
     REACTION_SCALE_N,
@@ -106,7 +108,7 @@ def smooth_max(values, sharpness: float = SHAPE_SHARPNESS_PER_RAD):
 
 # ------------------------------------------------------------------------------------------ the NLP's groups
 #: the constraint groups in the order g stacks them (module docstring)
-GROUPS = ("continuity", "splines", "dynamics", "paths", "activation", "reactions", "moment", "contact", "unilateral",
+GROUPS = ("nodes", "splines", "dynamics", "paths", "activation", "reactions", "moment", "contact", "unilateral",
           "mtp", "friction", "clearance", "excitation", "speed", "shape", "hip_bound", "windows", "monotone")
 
 
@@ -144,12 +146,16 @@ def windows_rows(v: Variables, segments: dict, reach: int) -> Rows:
     return rows
 
 
-def continuity_rows(v: Variables) -> Rows:
-    """The segment coefficients form periodic splines (5.14–5.23); a removed muscle's (fixed at 0) has none."""
+def nodal_rows(v: Variables) -> Rows:
+    """The splines' nodal values p_{k,0} (5.13) inside :func:`~gaitcli.predict.layout.box_bounds`' box: linear in
+    the B-spline coefficients (d of them per node); a removed muscle's (fixed at 0) has none."""
     rows = Rows()
+    blocks_low, blocks_high = (v.layout.unpack(bound) for bound in box_bounds(v.layout))
     for b in v.splines:
-        columns = v.columns if b.name == "stretch" else list(range(b.coefficients.shape[1]))
-        rows.add(ca.DM(continuity_matrix(b.spline)) @ b.coefficients[:, columns], 0.0, 0.0)
+        columns = v.columns if b.name == "stretch" else list(range(b.variables.shape[1]))
+        nodal = ca.mtimes(ca.DM(b.spline.nodal_from_bspline), b.variables[:, columns])
+        rows.add(nodal, blocks_low[b.design_block][:, columns].ravel(order="F"),
+                 blocks_high[b.design_block][:, columns].ravel(order="F"))
     return rows
 
 

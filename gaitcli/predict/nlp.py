@@ -125,13 +125,13 @@ class NLP:
     @property
     def spline_size(self) -> int:
         """Length of w's first part: the segment coefficients, durations and step lengths."""
-        return sum(b.coefficients.numel() for b in self.splines) + self.layout.blocks["durations"][1] + \
+        return sum(b.variables.numel() for b in self.splines) + self.layout.blocks["durations"][1] + \
             self.layout.blocks["steps"][1]
 
     def coefficients_of(self, x: np.ndarray) -> np.ndarray:
-        """w's spline part for χ ``x``: the segment coefficients of its splines, durations, steps."""
+        """w's spline part for χ ``x``: the B-spline coefficients of its splines, durations, steps."""
         blocks = self.layout.unpack(np.asarray(x, float))
-        parts = [(b.spline.matrix @ blocks[b.design_block]).ravel(order="F") for b in self.splines]
+        parts = [b.spline.bspline_of(blocks[b.design_block]).ravel(order="F") for b in self.splines]
         return np.concatenate(parts + [blocks["durations"].ravel() / DURATION_SCALE_S, blocks["steps"].ravel()])
 
     def gait(self, w) -> tuple:
@@ -187,9 +187,9 @@ class NLP:
         w = np.asarray(w, float).ravel()
         blocks, start = {}, 0
         for b in self.splines:
-            rows, cols = b.coefficients.shape
+            rows, cols = b.variables.shape
             c = w[start:start + rows * cols].reshape(rows, cols, order="F")
-            blocks[b.design_block] = c[0::b.spline.degree + 1]
+            blocks[b.design_block] = b.spline.nodal_from_bspline @ c
             start += rows * cols
         n_d = self.layout.blocks["durations"][1]
         blocks["durations"] = w[start:start + n_d] * DURATION_SCALE_S
@@ -260,7 +260,7 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     forces = muscle_forces(v, muscles.muscle.params.max_isometric_force_N)
     legs = invert_muscles(v, transcriber, forces)
     points = contact_points(v, transcriber.contact)
-    rows = {"continuity": groups.continuity_rows(v), "splines": groups.splines_rows(v, at_instants),
+    rows = {"nodes": groups.nodal_rows(v), "splines": groups.splines_rows(v, at_instants),
             "dynamics": groups.dynamics_rows(dynamics_residuals(v, model, muscles, forces)),
             "paths": groups.paths_rows(path_residuals(v, muscles)), "activation": groups.activation_rows(v, legs),
             "reactions": groups.reactions_rows(points),

@@ -94,6 +94,23 @@ class PeriodicSpline:
         """The matrix as (N, degree + 1, N): blocks[k, p] maps the nodal values to p_{k,p}."""
         return self.matrix.reshape(self.intervals, self.degree + 1, self.intervals)
 
+    @property
+    def basis(self) -> np.ndarray:
+        """((degree + 1)·N, N): the segment coefficients p_{k,p} (rows as :attr:`matrix`'s) of the spline whose
+        periodic uniform B-spline coefficients are c (:func:`bspline_matrix`); banded: segment k reads
+        c_{k−d+s} … c_{k+s} (indices modulo N, s = ⌊(d + 1)/2⌋)."""
+        return bspline_matrix(self.degree, self.intervals)
+
+    @property
+    def nodal_from_bspline(self) -> np.ndarray:
+        """(N, N): the nodal values y_k = p_{k,0} (5.13) of B-spline coefficients c (circulant)."""
+        return self.basis[0::self.degree + 1]
+
+    def bspline_of(self, values) -> np.ndarray:
+        """The B-spline coefficients c (N,) or (N, n) of the spline with nodal values ``values``: the inverse
+        of :attr:`nodal_from_bspline` (regular wherever :attr:`matrix` exists)."""
+        return np.linalg.solve(self.nodal_from_bspline, np.asarray(values, float))
+
 
 def _rate(p: int, r: int) -> float:
     """d^r/dτ^r τ^p = rate · τ^(p − r): p!/(p − r)! (0 for p < r)."""
@@ -118,6 +135,31 @@ def _periodic_matrix(degree: int, intervals: int) -> np.ndarray:
     matrix = np.linalg.solve(a, b)
     matrix.setflags(write=False)
     return matrix
+
+
+@cache
+def bspline_matrix(degree: int, intervals: int) -> np.ndarray:
+    """((d + 1)·N, N): segment coefficients p_{k,p} (τ-powers, rows as :attr:`PeriodicSpline.matrix`'s) of
+    Σ_j c_j·B(x − j + s), x = N·t/T, B the cardinal B-spline of degree d (support [0, d + 1], knots at the
+    integers), s = ⌊(d + 1)/2⌋ so that c_j's basis function peaks at or just after node j.
+
+    The periodic B-splines of degree d on the N uniform intervals span exactly the periodic C^{d−1}
+    piecewise polynomials of (5.14)–(5.23): the same splines, with coefficients that act locally (segment k
+    reads d + 1 of them) where a nodal value acts on every segment. Each piece of B is read off exactly by
+    interpolating d + 1 of its values (scipy's B-spline evaluation) with a polynomial in τ."""
+    from scipy.interpolate import BSpline
+
+    width, shift = degree + 1, (degree + 1) // 2
+    cardinal = BSpline.basis_element(np.arange(degree + 2, dtype=float), extrapolate=False)
+    tau = np.linspace(0.0, 1.0, width)
+    vandermonde = tau[:, None] ** np.arange(width)
+    pieces = [np.linalg.solve(vandermonde, np.nan_to_num(cardinal(i + tau))) for i in range(width)]
+    out = np.zeros((width * intervals, intervals))
+    for k in range(intervals):
+        for i, piece in enumerate(pieces):  # B(k + τ − j + s) on piece i: j = k + s − i
+            out[width * k:width * (k + 1), (k + shift - i) % intervals] += piece
+    out.setflags(write=False)
+    return out
 
 
 def quartic(nodes: int) -> PeriodicSpline:

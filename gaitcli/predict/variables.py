@@ -8,12 +8,13 @@ control instants (80 by default), I/2 the first half cycle's; in brackets the si
 grid (:meth:`Variables.blocks` gives each block's place in w):
 
     block  full model       symmetric model   content                                          unit / scale
-    C_t    —                5N_h × 3 (135)    the trunk's (hip x periodic part, hip z, HAT)      m, rad / 1
-                                              T/2-periodic quartic segment coefficients p_{k,0…4}
-    C_y    5N × 9 (765)     5N × 3 (255)      the quartic coordinate splines' coefficients       m, rad / 1
-                                              (y1 periodic part … y9; symmetric: the right leg's
-                                              y4 … y6)
-    C_s    4N × 16 (1088)   4N × 8 (544)      the cubic tendon-stretch splines' coefficients ŝ   1 / 1
+    C_t    —                N_h × 3 (27)      the trunk's (hip x periodic part, hip z, HAT)      m, rad / 1
+                                              T/2-periodic quartic B-spline coefficients
+    C_y    N × 9 (153)      N × 3 (51)        the quartic coordinate splines' B-spline           m, rad / 1
+                                              coefficients (y1 periodic part … y9; symmetric:
+                                              the right leg's y4 … y6)
+    C_s    N × 16 (272)     N × 8 (136)       the cubic tendon-stretch splines' B-spline         1 / 1
+                                              coefficients ŝ
     T      8                4                 the phase durations T_1 … (symmetric: T_5…8 =      s / 0.1
                                               T_1…4)
     L      2                1                 the step lengths L_r, L_l (symmetric: L_l = L_r)   m / 1
@@ -26,9 +27,12 @@ grid (:meth:`Variables.blocks` gives each block's place in w):
                                               point in grid order (the phase's reaction names)
     D      6 (prosthetic models only)         the device's coefficients in its law's order:       the law's SCALE
                                               (a_p, b_p, c0, a_n, b_n, d_prosth) of (5.58)–(5.59)
-    w      10 187 (10 193 with D)  5 101 (5 107 with D)
+    w      8 759 (8 765 with D)  4 381 (4 387 with D)
 
-The nodal values of χ (5.13) are the coefficients p_{k,0} (rows 0, 5, 10, … of a C block). Units of Q:
+A C block holds the coefficients c_j of periodic uniform B-splines (``splines.bspline_matrix``): the same
+splines as (5.10)–(5.23), each segment's polynomial p_{k,0…d} a fixed linear function of d + 1 neighbouring
+coefficients, so that the constraints touch few of them and no continuity rows are needed. χ's nodal values
+(5.13) are p_{k,0} = ``spline.nodal_from_bspline`` · c. Units of Q:
 y in m (y1, y2) or rad, ẏ per s, ÿ per s², ŝ dimensionless, rhs in N or N·m (5.1), l_m m, v_m m/s, a
 dimensionless. Muscles removed with a prosthetic ankle (``WalkerMuscles.present``) keep their places, fixed
 at zero by their bounds.
@@ -40,7 +44,7 @@ either way, so that no later part of the problem distinguishes the two models.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -66,14 +70,20 @@ COORDINATE_QUANTITIES = ("y", "yd", "ydd")
 
 @dataclass
 class SplineBlock:
-    """One spline family of w: its coefficients (``rows`` × ``columns`` SX), spline, the χ block it stands for;
-    ``windows``: which segment list of the NLP places its windows ("cycle", or "half" for the trunk's)."""
+    """One spline family of w: its B-spline coefficients ``variables`` (N × columns SX, the design variables),
+    spline, the χ block it stands for; ``windows``: which segment list of the NLP places its windows ("cycle",
+    or "half" for the trunk's). ``coefficients`` are the segment coefficients p_{k,p} they make (5.10–5.12;
+    ((d + 1)·N × columns), linear in ``variables``)."""
 
     name: str
     spline: PeriodicSpline
-    coefficients: ca.SX
+    variables: ca.SX
     design_block: str
     windows: str = "cycle"
+    coefficients: ca.SX = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.coefficients = ca.mtimes(ca.DM(self.spline.basis), self.variables)
 
 
 def half_spline(layout: DesignLayout) -> PeriodicSpline:
@@ -133,9 +143,9 @@ class Variables:
         if self.symmetric:
             half = half_spline(self.layout)
             self.intervals = {"cycle": quartic_spline.intervals, "half": half.intervals}
-            self.splines = [SplineBlock("trunk", half, sym("Ct", 5 * half.intervals, 3), "trunk", "half"),
-                            SplineBlock("leg", quartic_spline, sym("Cy", 5 * n, 3), "right_leg"),
-                            SplineBlock("stretch", cubic_spline, sym("Cs", 4 * n, 8), "right_stretch")]
+            self.splines = [SplineBlock("trunk", half, sym("Ct", half.intervals, 3), "trunk", "half"),
+                            SplineBlock("leg", quartic_spline, sym("Cy", n, 3), "right_leg"),
+                            SplineBlock("stretch", cubic_spline, sym("Cs", n, 8), "right_stretch")]
             self.durations_z, self.steps = sym("T", 4), sym("L", 1)
             self.durations = ca.vertcat(self.durations_z, self.durations_z) * DURATION_SCALE_S
             self.steps_r = self.steps_l = self.steps[0]
@@ -143,8 +153,8 @@ class Variables:
             self.dynamics_instants, self.muscle_columns, self.energy_factor = range(self.half), slice(0, 8), 2.0
         else:
             self.intervals = {"cycle": quartic_spline.intervals}
-            self.splines = [SplineBlock("coordinates", quartic_spline, sym("Cy", 5 * n, 9), "coordinates"),
-                            SplineBlock("stretch", cubic_spline, sym("Cs", 4 * n, 16), "tendon_stretch")]
+            self.splines = [SplineBlock("coordinates", quartic_spline, sym("Cy", n, 9), "coordinates"),
+                            SplineBlock("stretch", cubic_spline, sym("Cs", n, 16), "tendon_stretch")]
             self.durations_z, self.steps = sym("T", 8), sym("L", 2)
             self.durations = self.durations_z * DURATION_SCALE_S
             self.steps_r, self.steps_l = self.steps[0], self.steps[1]
@@ -199,7 +209,7 @@ class Variables:
     @property
     def head(self) -> ca.SX:
         """w's spline part: C…, T, L."""
-        return ca.vertcat(*[ca.vec(b.coefficients) for b in self.splines], self.durations_z, self.steps)
+        return ca.vertcat(*[ca.vec(b.variables) for b in self.splines], self.durations_z, self.steps)
 
     @property
     def w(self) -> ca.SX:
@@ -210,7 +220,7 @@ class Variables:
     def blocks(self) -> dict[str, slice]:
         """Each block of w (module docstring) as a slice of w."""
         names = {"trunk": "C_t", "leg": "C_y", "coordinates": "C_y", "stretch": "C_s"}
-        sizes = [(names[b.name], b.coefficients.numel()) for b in self.splines]
+        sizes = [(names[b.name], b.variables.numel()) for b in self.splines]
         sizes += [("T", self.durations_z.numel()), ("L", self.steps.numel())]
         sizes += [(block, q.numel()) for (block, _, _), q in zip(self.lifted_blocks, self.lifted_symbols)]
         sizes += [("Λ", self.lam.numel())] + ([("D", self.device.numel())] if self.device is not None else [])
@@ -220,18 +230,17 @@ class Variables:
         return out
 
     def bounds(self, present: np.ndarray, step_m: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """lbw, ubw without D: the nodal values p_{k,0}, durations and steps as :func:`box_bounds` (the steps
-        fixed at ``step_m`` when > 0); ŝ ≥ 0 (a taut or just slack tendon) and 0 ≤ a ≤ 1; the ``present``
-        (16,) muscles' values free, the others' fixed at 0."""
+        """lbw, ubw without D: the durations and steps as :func:`box_bounds` (the steps fixed at ``step_m``
+        when > 0), the B-spline coefficients free (``constraints.nodal_rows`` bounds their nodal values); ŝ ≥ 0
+        (a taut or just slack tendon) and 0 ≤ a ≤ 1; the ``present`` (16,) muscles' values free, the others'
+        fixed at 0."""
         low, high = box_bounds(self.layout, present)
         blocks_low, blocks_high = self.layout.unpack(low), self.layout.unpack(high)
         if step_m > 0:
             blocks_low["steps"] = blocks_high["steps"] = np.full_like(blocks_low["steps"], step_m)
         lbw, ubw = [], []
-        for b in self.splines:
-            width = b.spline.degree + 1
-            lo, hi = np.full(b.coefficients.shape, -np.inf), np.full(b.coefficients.shape, np.inf)
-            lo[0::width], hi[0::width] = blocks_low[b.design_block], blocks_high[b.design_block]
+        for b in self.splines:  # the B-splines' coefficients free: their nodal values are bounded (``nodes`` rows)
+            lo, hi = np.full(b.variables.shape, -np.inf), np.full(b.variables.shape, np.inf)
             if b.name == "stretch":  # a removed muscle's spline is 0
                 lo[:, ~self.present], hi[:, ~self.present] = 0.0, 0.0
             lbw.append(lo.ravel(order="F"))

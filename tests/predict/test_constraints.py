@@ -88,7 +88,7 @@ def _group_sizes(transcriber, symmetric, settings):
                                                               else {})}
     forces = muscle_forces(v, muscles.muscle.params.max_isometric_force_N)
     legs, points = invert_muscles(v, transcriber, forces), contact_points(v, transcriber.contact)
-    rows = {"continuity": c.continuity_rows(v), "splines": c.splines_rows(v, instant_splines(v, segments, 1)),
+    rows = {"nodes": c.nodal_rows(v), "splines": c.splines_rows(v, instant_splines(v, segments, 1)),
             "dynamics": c.dynamics_rows(dynamics_residuals(v, model, muscles, forces)),
             "paths": c.paths_rows(path_residuals(v, muscles)), "activation": c.activation_rows(v, legs),
             "excitation": c.excitation_rows(v, legs), "reactions": c.reactions_rows(points),
@@ -112,7 +112,7 @@ def test_each_constraint_group_has_its_rows_on_a_tiny_grid(tiny):
     from gaitcli.predict.settings import PredictSettings
 
     bounded = PredictSettings(hip_moment_Nm_per_kg=0.9, swing_hip_moment_Nm_per_kg=0.3)
-    symmetric = {"continuity": 4 * 3 * 3 + 4 * 5 * 3 + 3 * 5 * 8,  # quartic C3: 4 per interval and column; cubic C2: 3
+    symmetric = {"nodes": 3 * 3 + 5 * 3 + 5 * 8,  # a nodal value per interval and column (trunk N_h = 3)
                  "splines": 8 * (3 + 3 + 3 + 8) + 4 * (3 + 3 + 3),  # Q's y, ẏ, ÿ, ŝ at 8 instants; P's at 4
                  "dynamics": 9 * 4, "paths": 2 * 8 * 8, "activation": 8 * 8, "excitation": 2 * 8 * 8,
                  "reactions": 2 * (5 + 5 + 3 + 3), "moment": 6 * 8, "contact": 2 * (4 + 5 + 3 + 2),
@@ -120,7 +120,7 @@ def test_each_constraint_group_has_its_rows_on_a_tiny_grid(tiny):
                  "clearance": 2 * (2 + 1 + 2 + 3), "speed": 1, "shape": 4, "hip_bound": 8, "windows": 8 + 4,
                  "monotone": 0}
     assert _group_sizes(tiny, True, bounded) == symmetric
-    full = {"continuity": 4 * 5 * 9 + 3 * 5 * 16, "splines": 8 * (9 + 9 + 9 + 16), "dynamics": 9 * 8,
+    full = {"nodes": 5 * 9 + 5 * 16, "splines": 8 * (9 + 9 + 9 + 16), "dynamics": 9 * 8,
             "paths": 2 * 16 * 8, "activation": 16 * 8, "excitation": 2 * 16 * 8, "reactions": 2 * 2 * (5 + 5 + 3 + 3),
             "moment": 6 * 16, "contact": 2 * 2 * (4 + 5 + 3 + 2), "unilateral": 2 * 2 * (2 + 3 + 2 + 1),
             "mtp": 2 * 2 * 2, "friction": 2 * 2 * 2 * (2 + 2 + 1 + 1), "clearance": 2 * 2 * (2 + 1 + 2 + 3),
@@ -139,6 +139,6 @@ def test_a_prosthetic_models_groups_leave_out_the_removed_muscles_and_add_the_mo
 
     sach = Transcriber(6, grid=control_grid((2,) * 8), muscles=WalkerMuscles(prosthesis=COMMERCIAL_FEET["sach"]))
     sizes = _group_sizes(sach, True, PredictSettings())
-    assert sizes["continuity"] == 4 * 3 * 3 + 4 * 5 * 3 + 3 * 5 * 6 and sizes["splines"] == 8 * 15 + 4 * 9
+    assert sizes["nodes"] == 3 * 3 + 5 * 3 + 5 * 6 and sizes["splines"] == 8 * 15 + 4 * 9
     assert sizes["paths"] == 2 * 6 * 8 and sizes["activation"] == 6 * 8 and sizes["excitation"] == 2 * 6 * 8
     assert sizes["monotone"] == PredictSettings().monotone_samples == 71

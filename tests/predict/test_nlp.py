@@ -18,7 +18,7 @@ from gaitcli.predict.settings import PredictSettings
 from gaitcli.predict.solve import moved_windows
 from gaitcli.resources import bundled_reference
 
-DEFINING = ("continuity", "splines", "dynamics", "paths", "activation", "reactions")
+DEFINING = ("splines", "dynamics", "paths", "activation", "reactions")
 
 
 @pytest.fixture(scope="module")
@@ -63,11 +63,11 @@ def test_group_sizes(transcriber, built):
 def test_the_variables_are_laid_out_as_documented(built):
     # variables.py's table at nn = 18 on the default grid: each block's size, in order, filling w
     symmetric, nlp = built
-    expected = ({"C_t": 5 * 9 * 3, "C_y": 5 * 17 * 3, "C_s": 4 * 17 * 8, "T": 4, "L": 1, "Q": 80 * 41, "P": 40 * 18,
+    expected = ({"C_t": 9 * 3, "C_y": 17 * 3, "C_s": 17 * 8, "T": 4, "L": 1, "Q": 80 * 41, "P": 40 * 18,
                  "Λ": 162} if symmetric else
-                {"C_y": 5 * 17 * 9, "C_s": 4 * 17 * 16, "T": 8, "L": 2, "Q": 80 * 100, "Λ": 324})
+                {"C_y": 17 * 9, "C_s": 17 * 16, "T": 8, "L": 2, "Q": 80 * 100, "Λ": 324})
     assert [(k, s.stop - s.start) for k, s in nlp.blocks.items()] == list(expected.items())
-    assert nlp.w.size1() == nlp.lbw.size == sum(expected.values()) == (5101 if symmetric else 10187)
+    assert nlp.w.size1() == nlp.lbw.size == sum(expected.values()) == (4381 if symmetric else 8759)
 
 
 def test_lifted_start_solves_the_defining_equations(transcriber, reference, built):
@@ -150,7 +150,7 @@ def test_prosthetic_nlp_removes_two_muscles_and_its_start_solves_the_defining_eq
     # Sol and TA: every variable of theirs fixed at 0 (spline coefficients and lifted ŝ, l_m, v_m, a)
     fixed = (nlp.lbw == 0) & (nlp.ubw == 0)
     per_instant = 4 * 2 * grid.instants  # ŝ, l_m, v_m, a of 2 muscles at every instant
-    coefficients = 2 * 4 * (transcriber.layout.nodes - 1)  # their cubic segments
+    coefficients = 2 * (transcriber.layout.nodes - 1)  # their cubic B-splines' coefficients
     assert fixed.sum() == per_instant + coefficients
     # the moment error uses the prostheses' moment: the transcription (problem.py) with SACH's curve agrees
     t = transcriber.at(*nlp.gait(w0))
@@ -260,8 +260,7 @@ def test_the_cost_stays_finite_where_an_activation_falls_faster_than_any_excitat
 
     symmetric, nlp = built
     w0 = nlp.start(initial_guess(transcriber, reference, symmetric=symmetric))
-    head = sum(b.coefficients.numel() for b in nlp.splines) + nlp.layout.blocks["durations"][1] \
-        + nlp.layout.blocks["steps"][1]
+    head = nlp.spline_size
     columns = [name for name, cols in nlp.lifted[0][2] for _ in range(cols)]
     n_i = transcriber.grid.instants
     a = head + columns.index("a") * n_i  # the first muscle's activations, instant by instant (column-major)
@@ -272,3 +271,26 @@ def test_the_cost_stays_finite_where_an_activation_falls_faster_than_any_excitat
     value, gradient = (np.array(v).ravel() for v in cost(w, p))
     assert np.isfinite(value).all() and np.isfinite(gradient).all()
     assert nlp.constraint_values(w)[nlp.groups["excitation"]].min() < 0  # the point is outside the bounds
+
+
+def test_the_constraint_jacobian_is_banded_in_the_spline_coefficients(reference):
+    # with B-spline coefficients an instant's y, ẏ, ÿ, ŝ read the 2·reach + 1 segments of its window, each
+    # d + 1 coefficients wide: 2·reach + 1 + d per spline column, whatever the node count; no row of the
+    # Jacobian grows with nn
+    import casadi as ca
+
+    from gaitcli.predict.grid import control_grid
+
+    reach, widest = 1, {}
+    for nodes in (14, 22):
+        transcriber = Transcriber(nodes, grid=control_grid((2,) * 8))
+        nlp = build_nlp(transcriber, reference, symmetric=False, reach=reach)
+        jacobian = ca.jacobian(nlp.constraints, nlp.w).sparsity()
+        counts = np.diff(np.array(jacobian.get_crs()[0]))  # non-zeros per row
+        widest[nodes] = counts.max()
+        splines = nlp.groups["splines"]
+        coefficients = nlp.blocks["C_y"].stop  # the quartic coordinates' columns, 9 × N
+        rows = ca.jacobian(nlp.constraints[splines], nlp.w[:coefficients]).sparsity()
+        per_row = np.diff(np.array(rows.get_crs()[0]))
+        assert per_row.max() == 2 * reach + 1 + 4, nodes  # one coordinate's value: its own spline only
+    assert widest[14] == widest[22]

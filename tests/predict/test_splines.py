@@ -204,3 +204,47 @@ def test_windowed_evaluation_equals_the_spline_inside_its_window(make):
     # outside its window the nearest window segment's polynomial is extrapolated: a different, smooth value
     outside = np.array(evaluate_window(spline, coefficients, period, 0.5, (0, 1), 0)).ravel()
     assert not np.allclose(outside, evaluate_fractions(spline, y, period, [0.5]).ravel())
+
+
+@pytest.mark.parametrize("make", [quartic, cubic])
+def test_bspline_coefficients_give_the_nodal_value_splines_curve(make):
+    # the same curve from B-spline coefficients c (bspline_matrix) as from the nodal values y it interpolates
+    # (5.13–5.23), to 1e-12 at random fractions, value and every continuous derivative; y → c → y round-trips
+    spline = make(18)
+    rng = np.random.default_rng(7)
+    y = rng.normal(size=(17, 3))
+    c = spline.bspline_of(y)
+    np.testing.assert_allclose(spline.nodal_from_bspline @ c, y, atol=1e-12)
+    np.testing.assert_allclose(spline.bspline_of(spline.nodal_from_bspline @ c), c, atol=1e-12)
+    fractions = rng.uniform(0, 1, 200)
+    for r in range(spline.degree):
+        e = splines.evaluation_matrix(spline, fractions, r)
+        k, tau = splines._segments(spline, fractions)
+        from_c = sum(rate * tau[:, None] ** (p - r) * (spline.basis @ c).reshape(17, spline.degree + 1, 3)[
+            k.astype(int), p] for p, rate in splines._terms(spline, r))
+        np.testing.assert_allclose(from_c, e @ y, rtol=0, atol=1e-12 * np.abs(e @ y).max())
+
+
+@pytest.mark.parametrize("degree", [3, 4])
+@pytest.mark.parametrize("intervals", [5, 8, 17])
+def test_bspline_matrix_is_scipys_periodic_bspline_and_local(degree, intervals):
+    # against scipy's de Boor evaluation of the periodic B-spline on the integer knots (another code path than
+    # the cardinal pieces bspline_matrix reads off); C^(d−1) at every node incl. the wrap (K·basis = 0), even
+    # where nodal interpolation is singular (quartic, even N); segment k reads d + 1 coefficients
+    from scipy.interpolate import BSpline
+
+    basis = splines.bspline_matrix(degree, intervals)
+    c = np.random.default_rng(intervals).normal(size=intervals)
+    shift = (degree + 1) // 2
+    knots = np.arange(-degree, intervals + degree + 1, dtype=float) - shift
+    coefficients = c[(np.arange(intervals + degree) - degree) % intervals]  # scipy's basis i is our c_{i−d}
+    reference = BSpline(knots, coefficients, degree, extrapolate="periodic")
+    x = np.linspace(0, intervals, 301, endpoint=False)
+    k = np.floor(x).astype(int)
+    p = (basis @ c).reshape(intervals, degree + 1)[k]
+    ours = sum(p[:, j] * (x - k) ** j for j in range(degree + 1))
+    np.testing.assert_allclose(ours, reference(x), atol=1e-12)
+    spline = splines.PeriodicSpline(degree, intervals, np.zeros((1, 1)))
+    assert np.abs(continuity_matrix(spline) @ basis).max() < 1e-12
+    per_segment = np.abs(basis.reshape(intervals, degree + 1, intervals)).sum(axis=1) > 0
+    assert per_segment.sum(axis=1).max() == min(degree + 1, intervals)
