@@ -1,73 +1,128 @@
-"""Predictive-gait timings (``gaitcli.predict.nlp``, ``gaitcli.predict.solve``) beside the dissertation's Table 5.1
-and two peers.
+"""Predictive-gait timings (``gaitcli.predict``) beside the dissertation's Table 5.1, the previous formulation
+and two peers; the stride across speeds against Winter's cadences.
 
-Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--iterations N]
-[--model symmetric full]``. For each node count and model: ``run_predict`` on normal walking (subject 1,
-the bundled reference, weights 4/3, 2/3, 1.1275 m/s) from the default initial guess (the full model: from the
-symmetric model's solution, whose solve its figures include): the lifted NLP solved
-by IPOPT with exact derivatives, its windows moved and re-solved while they bind (``solve_windowed``).
-Prints the build time (the CasADi expressions and the sparsity counts), the whole call's wall time
-(IPOPT's derivative functions included) with its IPOPT iterations and solves, the exit status, J, Et and Jdev
-of the last iterate, the constraint Jacobian's and Lagrangian Hessian's non-zeros, and the ratio to the
-dissertation's hours.
-Threads limited to one, the process to one core. Asserts nothing.
+Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--full 18]
+[--start walk guess] [--speeds 1.0 1.1275 1.325]``. One core (``BENCH_CORE``: which, timing.py); asserts nothing.
 
-Peers: Moco's example2DWalking prediction, 15 mesh intervals, 1379 s / 412
-iterations measured on a 2-core machine of this project's kind; the dissertation 11.3 / 15.9 / 22.3 /
-28.9 h at nn = 14 / 16 / 18 / 20 (Table 5.1).
+Per node count, model and start (``PredictConfig.start``: the shipped walk, or 5.2.10's guess): normal walking
+(subject 1, the bundled reference, weights 4/3, 2/3, 1.1275 m/s) by ``run_predict``. The problem and its first
+IPOPT solver are built first into the run's cache (``construct s``: CasADi's expressions, then IPOPT's
+derivative functions), so that ``solve s`` is IPOPT's iterations (with the transcription of the result). The
+full model solves the symmetric model first and fits its splines to that solution (``run_predict``); its
+``solve s`` includes both solves and the full problem's construction, its ``construct s`` is the symmetric
+problem's. Printed: IPOPT iterations and solves, J, Et, Jdev, the non-zeros of the constraint Jacobian and
+of the Hessian of the Lagrangian (lower triangle, as IPOPT counts them), the ratio to Table 5.1's hours and
+to Falisse et al.'s 2-D predictions (44–55 s).
+
+``--speeds``: the stride at each speed beside Winter's slow, natural and fast cadences (87, 105, 123 steps
+per minute at 1.00, 1.33 (1.325) and 1.68 m/s; stride = 2·60·v/cadence, the data 5.3.3 tracks), linearly
+interpolated.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 
-import casadi as ca
+import numpy as np
 from timing import one_core
 
-from gaitcli.predict.nlp import build_nlp
+from gaitcli.predict.guess import initial_guess, shipped_walk
+from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.nlp import instant_segments
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
-from gaitcli.predict.stage import PredictConfig, run_predict
+from gaitcli.predict.solve import NlpCache, checked_design, ipopt_options
+from gaitcli.predict.stage import PredictConfig, run_predict, settings_of
 from gaitcli.resources import bundled_reference
 
 TABLE_5_1_HOURS = {14: 11.3, 16: 15.9, 18: 22.3, 20: 28.9}
-MOCO_PREDICTION_S = 1379.0
+FALISSE_S = (44.0, 55.0)
+#: the previous formulation (nodal values' segment coefficients, continuity rows; 5.2.10's guess), measured on
+#: this machine at commit f784669, one core: nn = 18 symmetric, default `gait predict`
+PREVIOUS = {("symmetric", 18): {"iterations": 938, "solve_s": 1830.0, "J": 11.380150, "jac": None, "hess": 38547}}
+#: Winter's cadences (steps/min) at the speeds (m/s) 5.3.3 tracks: slow, natural, fast
+WINTER_CADENCE = ((1.00, 87.0), (1.325, 105.0), (1.68, 123.0))
+
+
+def construct(cfg: PredictConfig, reference, cache: NlpCache) -> tuple[float, int, int]:
+    """Build ``cfg``'s symmetric-or-not problem at the default start's windows and its first IPOPT solver into
+    ``cache``: (seconds, Jacobian non-zeros, Hessian non-zeros)."""
+    settings = settings_of(cfg)
+    transcriber = Transcriber(cfg.nodes)
+    x0 = (shipped_walk(cfg.nodes, settings, symmetric=True) if cfg.start == "walk"
+          else initial_guess(transcriber, reference, settings, symmetric=True))
+    layout = DesignLayout.build(cfg.nodes, symmetric=True)
+    began = time.perf_counter()
+    nlp = cache.nlp(transcriber, reference, settings, symmetric=True,
+                    segments=instant_segments(transcriber, layout, checked_design(transcriber, layout, x0)[0]))
+    solver, _ = cache.solver(nlp, ipopt_options(settings, warm=False))
+    seconds = time.perf_counter() - began
+    jacobian = solver.get_function("nlp_jac_g").sparsity_out(1).nnz()
+    hessian = solver.get_function("nlp_hess_l").sparsity_out(0).nnz()
+    return seconds, jacobian, hessian
+
+
+def predict(cfg: PredictConfig, reference) -> dict:
+    """One prediction, its construction timed apart (module docstring)."""
+    cache = NlpCache()
+    built, jacobian, hessian = construct(cfg, reference, cache)
+    began = time.perf_counter()
+    result = run_predict(cfg, reference=reference, cache=cache)
+    if cfg.symmetric and len(cache) != 1:
+        print(f"    (the prediction built {len(cache) - 1} more problems: windows moved, or construct() missed)")
+    return {"result": result, "construct_s": built, "solve_s": time.perf_counter() - began, "jac": jacobian,
+            "hess": hessian}
+
+
+def winter_stride_m(speed: float) -> float:
+    """Winter's stride at ``speed`` (m/s): 2·60·v/cadence, the cadence interpolated between his three."""
+    speeds, cadences = np.array(WINTER_CADENCE).T
+    return 2 * 60 * speed / float(np.interp(speed, speeds, cadences))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--nodes", type=int, nargs="+", default=[14, 16, 18, 20])
-    parser.add_argument("--model", nargs="+", default=["symmetric", "full"], choices=["symmetric", "full"])
+    parser.add_argument("--nodes", type=int, nargs="*", default=[14, 16, 18, 20])
+    parser.add_argument("--full", type=int, nargs="*", default=[18], help="node counts of the full model")
+    parser.add_argument("--start", nargs="+", default=["walk"], choices=["walk", "guess"])
+    parser.add_argument("--speeds", type=float, nargs="*", default=[1.0, 1.1275, 1.325])
     parser.add_argument("--iterations", type=int, default=3000)
     args = parser.parse_args()
     one_core()
     reference = read_reference(bundled_reference())
-    print(f"{'nn':>3} {'model':<9} {'build s':>7} {'total s':>8} {'iter':>5} {'solves':>6} {'conv':>5} {'J':>7}"
-          f" {'Et J/m':>7} {'Jdev':>6} {'jac nnz':>8} {'hess nnz':>8} {'vs Table 5.1':>12} {'vs Moco':>8}")
-    for nodes in args.nodes:
-        for model in args.model:
-            symmetric = model == "symmetric"
-            t0 = time.perf_counter()
-            transcriber = Transcriber(nodes)
-            nlp = build_nlp(transcriber, reference, symmetric=symmetric)
-            lam = ca.SX.sym("l", nlp.constraints.size1())
-            jac = ca.jacobian(nlp.constraints, nlp.w).nnz()
-            hess = ca.hessian(nlp.cost + ca.dot(lam, nlp.constraints), nlp.w)[0].nnz()
-            build = time.perf_counter() - t0
-            cfg = PredictConfig(nodes=nodes, symmetric=symmetric, max_iterations=args.iterations)
-            t0 = time.perf_counter()
-            result = run_predict(cfg, reference=reference)
-            wall = time.perf_counter() - t0
+    print(f"{'nn':>3} {'model':<9} {'start':<5} {'construct s':>11} {'solve s':>8} {'iter':>5} {'solves':>6}"
+          f" {'conv':>5} {'J':>8} {'Et J/m':>7} {'Jdev':>6} {'jac nnz':>8} {'hess nnz':>8} {'vs Table 5.1':>12}"
+          f" {'vs Falisse':>11}", flush=True)
+    cases = [(n, True) for n in args.nodes] + [(n, False) for n in args.full]
+    for nodes, symmetric in cases:
+        for start in args.start:
+            cfg = PredictConfig(nodes=nodes, symmetric=symmetric, start=start, max_iterations=args.iterations)
+            run = predict(cfg, reference)
+            r, wall = run["result"], run["construct_s"] + run["solve_s"]
             hours = TABLE_5_1_HOURS.get(nodes)
-            ratio = f"{hours * 3600 / wall:,.0f}x" if hours else "-"
-            print(f"{nodes:>3} {model:<9} {build:7.1f} {wall:8.1f} {result.iterations:>5} {result.rounds:>6}"
-                  f" {str(result.converged):>5} {result.objective:7.3f} {result.cost_of_transport_J_per_m:7.1f}"
-                  f" {result.deviation:6.2f} {jac:>8} {hess:>8} {ratio:>12} {MOCO_PREDICTION_S / wall:7.2f}x",
-                  flush=True)
-            checks = result.gait_checks()
+            print(f"{nodes:>3} {'symmetric' if symmetric else 'full':<9} {start:<5} {run['construct_s']:11.1f}"
+                  f" {run['solve_s']:8.1f} {r.iterations:>5} {r.rounds:>6} {str(r.converged):>5} {r.objective:8.4f}"
+                  f" {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f} {run['jac']:>8} {run['hess']:>8}"
+                  f" {f'{hours * 3600 / wall:,.0f}x' if hours else '-':>12}"
+                  f" {FALISSE_S[0] / wall:5.1f}–{FALISSE_S[1] / wall:.1f}x", flush=True)
+            checks = r.gait_checks()
             print("    gait checks: " + ", ".join(f"{k} {v['value']} {'ok' if v['ok'] else 'FAILS'}"
                                                   for k, v in checks.items()), flush=True)
+    for (model, nodes), old in PREVIOUS.items():
+        print(f"{nodes:>3} {model:<9} {'guess':<5} {'-':>11} {old['solve_s']:8.1f} {old['iterations']:>5} {'':>6}"
+              f" {'True':>5} {old['J']:8.4f} {'':>7} {'':>6} {'-':>8} {old['hess']:>8}   (previous formulation)")
+    if args.speeds:
+        print(f"\n{'speed m/s':>9} {'stride m':>8} {'period s':>8} {'Winter m':>8} {'ratio':>6} {'conv':>5} {'J':>8}")
+    for speed in args.speeds:
+        cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=args.iterations)
+        r = predict(cfg, reference)["result"]
+        stride = float(np.sum(r.step_lengths_m))
+        period = float(np.sum(r.phase_durations_s))
+        winter = winter_stride_m(speed)
+        print(f"{speed:9.4f} {stride:8.3f} {period:8.3f} {winter:8.3f} {stride / winter:6.2f} {str(r.converged):>5}"
+              f" {r.objective:8.4f}", flush=True)
 
 
 if __name__ == "__main__":

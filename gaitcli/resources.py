@@ -50,12 +50,3 @@ def bundled_pipelines() -> tuple[str, ...]:
 def study_file(name: str) -> Path:
     """A bundled prediction study (``gait predict --study``): ``pipelines/study_NAME.yaml``."""
     return _shipped_folder("gaitcli.pipelines", "pipelines") / f"study_{name}.yaml"
-
-
-def stored_solution(nodes: int, *, symmetric: bool) -> Path | None:
-    """A converged normal gait shipped with the package (``gait predict`` with its defaults: subject 1, 1.1275 m/s,
-    weights 4/3, 2/3, F_max as Table A.1) as a design vector χ, one value per line; None for other layouts.
-    Studies start their first normal case from it (``gaitcli.run.studies``)."""
-    path = (Path(__file__).resolve().parent / "predict" / "data"
-            / f"normal_{'symmetric' if symmetric else 'full'}_nn{nodes}.csv")
-    return path if path.is_file() else None

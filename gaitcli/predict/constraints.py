@@ -1,9 +1,9 @@
 """The constraint groups of the predictive-gait NLP (Diss. 5.2.8–5.2.9), each built by its own function.
 
 Every group function returns :class:`Rows` (expressions with their lower and upper bounds, in order);
-:func:`gaitcli.predict.nlp.build_nlp` stacks them in the order of :data:`GROUPS`. After ``nodes``, the first five define the
-lifted variables (``variables.py``) from the splines' B-spline coefficients (periodic C3 / C2 splines by
-construction, 5.14–5.23, so no continuity rows); the rest are the dissertation's:
+:func:`gaitcli.predict.nlp.build_nlp` stacks them in the order of :data:`GROUPS`. After ``nodes``, the first
+five define the lifted variables (``variables.py``) from the splines' B-spline coefficients (periodic C3 / C2
+splines by construction, 5.14–5.23, so no continuity rows); the rest are the dissertation's:
 
     nodes       the nodal values p_{k,0} inside their box                 (5.13; ``layout.box_bounds``)
     splines     Q's y, ẏ, ÿ, ŝ = the splines at the instants              (5.10–5.12)

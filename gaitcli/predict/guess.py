@@ -1,14 +1,20 @@
-"""The default initial guess χ of a prediction (Diss. 5.2.10): a walk read off the reference, not yet clipped.
+"""The starts χ of a prediction: the shipped normal walk (the default) and the dissertation's initial guess.
 
-The guess may lie outside the box bounds (``layout.box_bounds``), e.g. a reference's knee hyperextended by
-2°: the solve checks it against them, reports what lies outside and clips it (``solve.solve_windowed``).
+:func:`shipped_walk` is ``gait predict``'s own solution with its defaults (``data/normal_symmetric_nn18.csv``)
+on the problem's nodes and model, retimed to its speed: a gait that already walks, from which IPOPT needs
+a few dozen iterations where it needs hundreds from 5.2.10's guess (``benchmarks/README.md``).
+:func:`initial_guess` is 5.2.10's: a walk read off the reference, not yet clipped; it may lie outside the box
+bounds (``layout.box_bounds``), e.g. a reference's knee hyperextended by 2°: the solve checks it against them,
+reports what lies outside and clips it (``solve.solve_windowed``).
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
-from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.layout import DesignLayout, box_bounds, full_from_symmetric, symmetric_on_nodes
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import VARIABLES
 from gaitcli.predict.settings import PredictSettings
@@ -23,11 +29,34 @@ GUESS_PHASE_FRACTIONS = (0.07, 0.13, 0.55, 0.25)
 GUESS_STRETCH = float(np.sqrt(0.1))
 #: the guess's hip height per leg length (thigh + shank + ankle to sole): the standing foot on the floor
 GUESS_HIP_HEIGHT = 0.97
+#: the shipped normal walk: χ of ``gait predict`` with its defaults (subject 1, 1.1275 m/s, weights 4/3, 2/3,
+#: the bundled reference), symmetric model, on this many nodes
+SHIPPED_WALK = Path(__file__).resolve().parent / "data" / "normal_symmetric_nn18.csv"
+SHIPPED_WALK_NODES = 18
+#: the starts ``PredictConfig.start`` names
+STARTS = ("walk", "guess")
+
+
+def shipped_walk(nodes: int, settings: PredictSettings | None = None, *, symmetric: bool = False) -> np.ndarray:
+    """The default start χ: the shipped normal walk (:data:`SHIPPED_WALK`) on ``nodes`` nodes (its splines
+    fitted, ``layout.symmetric_on_nodes``, and clipped into the box; the full model's as
+    ``layout.full_from_symmetric``), its step fixed at ``settings.step_m`` where that is set, its phase
+    durations scaled so that it walks at the settings' speed (5.43: ΣT = ΔS/v)."""
+    s = settings or PredictSettings()
+    x = symmetric_on_nodes(np.loadtxt(SHIPPED_WALK), SHIPPED_WALK_NODES, nodes)
+    layout = DesignLayout.build(nodes, symmetric=True)
+    blocks = layout.unpack(x)
+    if s.step_m > 0:
+        blocks["steps"] = np.full_like(blocks["steps"], s.step_m)
+    period = 2 * float(blocks["steps"].sum()) / s.speed_m_s
+    blocks["durations"] = blocks["durations"] * period / (2 * float(blocks["durations"].sum()))
+    x = np.clip(layout.pack(blocks), *box_bounds(layout))  # a fit on other nodes may overshoot a bound a little
+    return x if symmetric else full_from_symmetric(nodes, x)
 
 
 def initial_guess(transcriber: Transcriber, reference: Band, settings: PredictSettings | None = None, *,
                   symmetric: bool = False) -> np.ndarray:
-    """The default start χ: a walk read off the reference.
+    """5.2.10's initial guess χ: a walk read off the reference (``PredictConfig.start`` "guess").
 
     Parameters
     ----------

@@ -156,3 +156,18 @@ def full_from_symmetric(nodes: int, x) -> np.ndarray:
     return full.pack({"coordinates": np.column_stack([trunk, blocks["right_leg"], left_leg]),
                       "tendon_stretch": np.column_stack([blocks["right_stretch"], left_stretch]),
                       "durations": np.tile(durations, 2), "steps": [steps[0], steps[0]]})
+
+
+def symmetric_on_nodes(x, nodes_from: int, nodes: int) -> np.ndarray:
+    """A symmetric χ ``x`` of ``nodes_from`` nodes on ``nodes`` nodes: each spline fitted in least squares to the
+    old one's value and derivatives (as :func:`full_from_symmetric`); durations and step as they are."""
+    old, new = DesignLayout.build(nodes_from, symmetric=True), DesignLayout.build(nodes, symmetric=True)
+    blocks = old.unpack(np.asarray(x, float))
+    if nodes == nodes_from:
+        return new.pack(blocks)
+    s = np.linspace(0.0, 1.0, 20 * max(nodes, nodes_from), endpoint=False)
+    half = (quartic(half_cycle_intervals(nodes_from - 1) + 1), quartic(half_cycle_intervals(nodes - 1) + 1))
+    fitted = {"trunk": _fitted(half[1], half[0], blocks["trunk"], 0.0, 1.0, (0, 1, 2), s),
+              "right_leg": _fitted(quartic(nodes), quartic(nodes_from), blocks["right_leg"], 0.0, 1.0, (0, 1, 2), s),
+              "right_stretch": _fitted(cubic(nodes), cubic(nodes_from), blocks["right_stretch"], 0.0, 1.0, (0, 1), s)}
+    return new.pack({**fitted, "durations": blocks["durations"], "steps": blocks["steps"]})

@@ -29,7 +29,7 @@ from gaitcli.predict.ankle_law import ProsthesisLaw
 from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
 from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
-from gaitcli.predict.guess import initial_guess
+from gaitcli.predict.guess import STARTS, initial_guess, shipped_walk
 from gaitcli.predict.layout import DesignLayout, full_from_symmetric
 from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles
@@ -151,6 +151,9 @@ class PredictConfig:
         MONOTONE_RANGE_DEG, parse=angle_range_deg, metavar="LOW,HIGH",
         expected="LOW,HIGH in degrees, −60 ≤ LOW < HIGH ≤ 60",
         help="Ankle angles (deg, negative = dorsiflexion) over which a prosthesis's spring moment must decrease.")
+    start: str = parameter("walk", choices=STARTS,
+                           help="Where IPOPT starts without --init: walk (the shipped normal walk on these nodes, "
+                                "retimed to the speed) or guess (5.2.10's initial guess from the reference).")
     starts: int = parameter(1, low=1, high=100,
                             help="Solve from this many starts (the default guess and seeded perturbations of it) in "
                                  "parallel and keep the best; every start in starts.csv.")
@@ -367,17 +370,17 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         # (benchmarks/README.md); a window that binds is moved and the problem solved again (solve_windowed)
         x0, settings = init, dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
     elif cfg.symmetric:
-        x0 = initial_guess(transcriber, reference, settings, symmetric=True)
+        x0 = default_start(cfg, transcriber, reference, settings, symmetric=True)
     else:
-        # the full model starts from the symmetric model's solution (from its default guess): a gait that
-        # already walks, to which the full model's splines are fitted (layout.full_from_symmetric)
-        first = solve_windowed(transcriber, reference, initial_guess(transcriber, reference, settings,
+        # the full model starts from the symmetric model's solution (from the default start): a gait of this
+        # subject and speed, to which the full model's splines are fitted (layout.full_from_symmetric)
+        first = solve_windowed(transcriber, reference, default_start(cfg, transcriber, reference, settings,
                                                                      symmetric=True),
                                settings, symmetric=True, report=report, **solve_options)
         iterations, rounds = first.outcome.iterations, first.rounds
         history += _solve_notes(first, f"symmetric model (the full model's start), {label}")
         x0 = (full_from_symmetric(cfg.nodes, first.x) if first.outcome.converged
-              else initial_guess(transcriber, reference, settings, symmetric=False))
+              else default_start(cfg, transcriber, reference, settings, symmetric=False))
         if first.outcome.converged:  # near a solution: windows of ±1 segment, as for any start from a solution
             settings = dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
         if optimal and first.outcome.converged:
@@ -397,6 +400,14 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
                          status=solved.outcome.status, iterations=iterations + solved.outcome.iterations,
                          rounds=rounds + solved.rounds, solve_time_s=solve_time, history=tuple(history),
                          prosthesis=final, foot_mass_kg=cfg.foot_mass_kg, strength_scale=cfg.strength())
+
+
+def default_start(cfg: PredictConfig, transcriber: Transcriber, reference: Band, settings: PredictSettings, *,
+                  symmetric: bool) -> np.ndarray:
+    """χ to start from without ``--init``: ``cfg.start``'s (``guess.py``)."""
+    if cfg.start == "guess":
+        return initial_guess(transcriber, reference, settings, symmetric=symmetric)
+    return shipped_walk(cfg.nodes, settings, symmetric=symmetric)
 
 
 def _solve_notes(solved: PredictSolution, label: str) -> list[str]:

@@ -7,7 +7,6 @@ prediction's starts; running many of them at once is :mod:`gaitcli.run.studies`'
   the bounds and its τ_s decreases over the declared range).
 - :func:`perturbed_guess`, :func:`solve_start` — ``--starts N``: seeded perturbations of the initial guess; the
   best converged solution is kept and :func:`agreeing` counts the starts that found it.
-- :func:`retimed` — a solution at one speed as the start of a case at another (a study's chains).
 """
 
 from __future__ import annotations
@@ -128,16 +127,6 @@ def perturbed_guess(cfg: PredictConfig, params: WalkerParameters | None, referen
     blocks["steps"] = steps
     low, high = box_bounds(layout, present_muscles(cfg.prosthetic))
     return np.clip(layout.pack(blocks), low, high)
-
-
-def retimed(cfg: PredictConfig, x: np.ndarray) -> np.ndarray:
-    """χ ``x`` (a solution at another speed) with its phase durations scaled so that it walks at
-    ``cfg.speed_m_s`` (5.43, ΣT = ΔS/v): a start for a neighbouring case."""
-    layout = DesignLayout.build(cfg.nodes, symmetric=cfg.symmetric)
-    blocks = layout.unpack(np.array(x, float))
-    period = float(layout.phase_durations(x).sum())
-    blocks["durations"] = blocks["durations"] * (sum(layout.step_lengths(x)) / cfg.speed_m_s) / period
-    return layout.pack(blocks)
 
 
 def solve_start(cfg: PredictConfig, *, params: WalkerParameters | None, reference: Band, seed: int | None,

@@ -38,10 +38,10 @@ from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import check_output_folder, remove_stale
 from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
+from gaitcli.predict.guess import SHIPPED_WALK, shipped_walk
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
-from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
-from gaitcli.predict.starts import agreeing, predict_optimal, retimed, solve_start, start_seeds
-from gaitcli.resources import stored_solution
+from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of, weight_pair
+from gaitcli.predict.starts import agreeing, predict_optimal, solve_start, start_seeds
 from gaitcli.run.cluster import Task, Workers, completed, map_in_order, workers
 from gaitcli.run.config import PipelineConfig, to_yaml
 from gaitcli.run.stages import prediction_cache
@@ -222,17 +222,16 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
     return row
 
 
-def _shipped_start(case: StudyCase) -> np.ndarray | None:
-    """A chain's first start: the shipped normal solution (``resources.stored_solution``) retimed to the case's
-    speed where the layout has one, else None (the default guess)."""
-    path = stored_solution(case.cfg.nodes, symmetric=case.cfg.symmetric)
-    return None if path is None else retimed(case.cfg, np.loadtxt(path))
+def _shipped_start(case: StudyCase) -> np.ndarray:
+    """A chain's first start: the shipped normal walk on the case's nodes, retimed to its speed
+    (``guess.shipped_walk``), started as a solution (``run_predict``'s ``init``)."""
+    return shipped_walk(case.cfg.nodes, settings_of(case.cfg), symmetric=case.cfg.symmetric)
 
 
-def first_start_keys(nodes: int) -> tuple[str, ...]:
-    """The key of a chain's first start: the shipped normal solution's SHA-256 (study cases are symmetric)."""
-    shipped = stored_solution(nodes, symmetric=True)
-    return (f"shipped {hashlib.sha256(shipped.read_bytes()).hexdigest()}",) if shipped is not None else ()
+def first_start_keys() -> tuple[str, ...]:
+    """The key of a chain's first start: the shipped normal walk's SHA-256 (fitted to the case's nodes, which
+    its own key holds)."""
+    return (f"shipped {hashlib.sha256(SHIPPED_WALK.read_bytes()).hexdigest()}",)
 
 
 def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[PredictResult, int]:
@@ -321,7 +320,7 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
     cases = [case for chain in chains for case in chain]
     root = (run.out_root / "study").resolve()  # the workers may run elsewhere, in other folders
     root.mkdir(parents=True, exist_ok=True)
-    first = first_start_keys(spec.base.nodes)
+    first = first_start_keys()
     tasks = {case.name: Task(run_case, (case, str(root), start.params, start.reference, repr(start.params), cfg,
                                         inputs, force, first), case.starts_from) for case in cases}
     rows: dict[str, dict] = {}

@@ -7,11 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gaitcli.predict.guess import SHIPPED_WALK as STORED
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import FEASIBILITY_TOLERANCE, PredictConfig, evaluate_design
-from gaitcli.resources import bundled_reference, stored_solution
-
-STORED = stored_solution(18, symmetric=True)
+from gaitcli.resources import bundled_reference
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,7 @@ from gaitcli.predict.cost import objective
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, run_predict
-from gaitcli.resources import bundled_reference, stored_solution
+from gaitcli.resources import bundled_reference
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +58,7 @@ def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(cache):
     its own (a mismatch of CasADi's conventions for them — a triangle, the sign of λ — would show here). Both
     solves return the shared IPOPT outcome; the cache hands back the problem it built, unchanged."""
     from gaitcli.core.ipopt import Outcome
-    from gaitcli.predict.guess import initial_guess
+    from gaitcli.predict.guess import shipped_walk
     from gaitcli.predict.layout import DesignLayout
     from gaitcli.predict.model import WalkingModel
     from gaitcli.predict.nlp import instant_segments
@@ -69,7 +69,7 @@ def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(cache):
     cfg = PredictConfig(nodes=6, max_iterations=2)
     reference, settings = read_reference(bundled_reference()), settings_of(cfg)
     transcriber = Transcriber(6, model=WalkingModel(cfg.walker_parameters(None)), muscles=walker_muscles(cfg, None))
-    x0 = initial_guess(transcriber, reference, settings, symmetric=True)
+    x0 = shipped_walk(6, settings, symmetric=True)  # run_predict's default start: the same windows
     segments = instant_segments(transcriber, DesignLayout.build(6, symmetric=True), x0)
     problems = len(cache)
     nlp = cache.nlp(transcriber, reference, settings, symmetric=True, segments=segments)
@@ -125,12 +125,12 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
 
     import h5py
 
+    from gaitcli.predict.guess import SHIPPED_WALK
     from gaitcli.predict.layout import full_from_symmetric
     from gaitcli.predict.outputs import write_predict_outputs
     from gaitcli.predict.stage import evaluate_design
 
-    stored = stored_solution(18, symmetric=True)
-    x = full_from_symmetric(18, np.loadtxt(stored))
+    x = full_from_symmetric(18, np.loadtxt(SHIPPED_WALK))
     result = evaluate_design(PredictConfig(symmetric=False), x, reference=read_reference(bundled_reference()))
     summary = write_predict_outputs(tmp_path, result, {"converged": int(result.converged)})
     assert summary["symmetric"] is False and len(summary["phase_durations_s"]) == 8

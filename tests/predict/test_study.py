@@ -116,18 +116,6 @@ def test_the_optimal_prosthesis_never_ends_above_the_foot_it_started_from(monkey
         np.testing.assert_array_equal(result.prosthesis.coefficients(), COMMERCIAL_FEET["seattle"].coefficients())
 
 
-def test_a_retimed_solution_walks_at_the_new_speed():
-    from gaitcli.resources import stored_solution
-
-    x = np.loadtxt(stored_solution(18, symmetric=True))
-    layout = DesignLayout.build(18, symmetric=True)
-    fast = starts.retimed(PredictConfig(speed_m_s=1.33), x)
-    assert sum(layout.step_lengths(fast)) / layout.phase_durations(fast).sum() == pytest.approx(1.33, rel=1e-12)
-    shares = layout.phase_durations(fast) / layout.phase_durations(x)
-    np.testing.assert_allclose(shares, shares[0])  # every phase alike: the same stance and double support
-    np.testing.assert_array_equal(layout.unpack(fast)["right_leg"], layout.unpack(x)["right_leg"])
-
-
 def test_starts_run_the_guess_and_seeded_perturbations_and_count_the_agreeing(monkeypatch):
     # --starts 4 (one worker: this process): start 0 from the given χ, starts 1–3 from perturbed_guess(seed + k);
     # the best converged J is kept and the starts within 1 % of it are counted
