@@ -46,10 +46,9 @@ PREVIOUS = {("symmetric", 18): {"iterations": 938, "solve_s": 1830.0, "J": 11.38
 WINTER_CADENCE = ((1.00, 87.0), (1.325, 105.0), (1.68, 123.0))
 
 
-def construct(cfg: PredictConfig, reference, cache: NlpCache) -> tuple[float, int, int]:
-    """Build ``cfg``'s symmetric-or-not problem at the default start's windows and its first IPOPT solver into
+def construct(cfg: PredictConfig, settings, reference, cache: NlpCache) -> tuple[float, int, int]:
+    """Build ``cfg``'s symmetric problem at the default start's windows and its first IPOPT solver into
     ``cache``: (seconds, Jacobian non-zeros, Hessian non-zeros)."""
-    settings = settings_of(cfg)
     transcriber = Transcriber(cfg.nodes)
     x0 = (shipped_walk(cfg.nodes, settings, symmetric=True) if cfg.start == "walk"
           else initial_guess(transcriber, reference, settings, symmetric=True))
@@ -64,16 +63,36 @@ def construct(cfg: PredictConfig, reference, cache: NlpCache) -> tuple[float, in
     return seconds, jacobian, hessian
 
 
-def predict(cfg: PredictConfig, reference) -> dict:
-    """One prediction, its construction timed apart (module docstring)."""
-    cache = NlpCache()
-    built, jacobian, hessian = construct(cfg, reference, cache)
+def predict(cfg: PredictConfig, reference, cop_sd_m: float = 0.0) -> dict:
+    """One prediction, its construction timed apart (module docstring); ``cop_sd_m`` > 0: Jdev also tracks the
+    feet's centres of pressure (``PredictSettings.cop_sd_m``)."""
+    cache, settings = NlpCache(), dataclasses.replace(settings_of(cfg), cop_sd_m=cop_sd_m)
+    built, jacobian, hessian = construct(cfg, settings, reference, cache)
     began = time.perf_counter()
-    result = run_predict(cfg, reference=reference, cache=cache)
+    result = run_predict(cfg, reference=reference, cache=cache, settings=settings)
     if cfg.symmetric and len(cache) != 1:
         print(f"    (the prediction built {len(cache) - 1} more problems: windows moved, or construct() missed)")
     return {"result": result, "construct_s": built, "solve_s": time.perf_counter() - began, "jac": jacobian,
             "hess": hessian}
+
+
+def kinetics(r) -> str:
+    """What a normal walker's kinetics show, of result ``r``: the knee's largest extensor moment in 5–20 % of
+    the cycle, where the ankle's plantarflexor moment peaks in stance, the vasti's largest stance activation,
+    the share of the cycle each saturated muscle spends above 0.95, the excitations on the 4× grid."""
+    moments = r.joint_moments_Nm / r.body_mass_kg  # senses of the clinical angles: flexion, dorsiflexion > 0
+    pct = 100 * r.point_time_s / r.phase_durations_s.sum()
+    stance_pct = r.summary()["stance_pct"]
+    early, stance = (pct >= 5) & (pct <= 20), pct <= stance_pct
+    names = list(r.muscle_names)
+    right = [k for k, n in enumerate(names) if n.endswith("_r")]
+    above = (r.activations[:, right] > 0.95).mean(axis=0)
+    saturated = {names[k].removesuffix("_r"): round(100 * float(s), 1) for k, s in zip(right, above) if s > 0}
+    vasti = r.activations[r.cycle_pct <= stance_pct, names.index("vasti_r")].max()
+    fine = r.fine_grid
+    return (f"knee extensor {-moments[early, 1].min():.2f} N·m/kg in 5–20 %, ankle plantarflexor peak at "
+            f"{pct[stance][np.argmin(moments[stance, 2])]:.0f} %, vasti {vasti:.2f} in stance, saturated % "
+            f"{saturated or '-'}, excitations on the 4× grid {fine['min_excitation']:.2f}…{fine['max_excitation']:.2f}")
 
 
 def winter_stride_m(speed: float) -> float:
@@ -89,6 +108,7 @@ def main() -> None:
     parser.add_argument("--start", nargs="+", default=["walk"], choices=["walk", "guess"])
     parser.add_argument("--speeds", type=float, nargs="*", default=[1.0, 1.1275, 1.325])
     parser.add_argument("--iterations", type=int, default=3000)
+    parser.add_argument("--cop-sd-m", type=float, default=0.0, help="> 0: Jdev also tracks the centres of pressure")
     args = parser.parse_args()
     one_core()
     reference = read_reference(bundled_reference())
@@ -99,7 +119,7 @@ def main() -> None:
     for nodes, symmetric in cases:
         for start in args.start:
             cfg = PredictConfig(nodes=nodes, symmetric=symmetric, start=start, max_iterations=args.iterations)
-            run = predict(cfg, reference)
+            run = predict(cfg, reference, args.cop_sd_m)
             r, wall = run["result"], run["construct_s"] + run["solve_s"]
             hours = TABLE_5_1_HOURS.get(nodes)
             print(f"{nodes:>3} {'symmetric' if symmetric else 'full':<9} {start:<5} {run['construct_s']:11.1f}"
@@ -110,19 +130,22 @@ def main() -> None:
             checks = r.gait_checks()
             print("    gait checks: " + ", ".join(f"{k} {v['value']} {'ok' if v['ok'] else 'FAILS'}"
                                                   for k, v in checks.items()), flush=True)
+            print("    " + kinetics(r), flush=True)
     for (model, nodes), old in PREVIOUS.items():
         print(f"{nodes:>3} {model:<9} {'guess':<5} {'-':>11} {old['solve_s']:8.1f} {old['iterations']:>5} {'':>6}"
               f" {'True':>5} {old['J']:8.4f} {'':>7} {'':>6} {'-':>8} {old['hess']:>8}   (previous formulation)")
     if args.speeds:
-        print(f"\n{'speed m/s':>9} {'stride m':>8} {'period s':>8} {'Winter m':>8} {'ratio':>6} {'conv':>5} {'J':>8}")
+        print(f"\n{'speed m/s':>9} {'stride m':>8} {'period s':>8} {'Winter m':>8} {'ratio':>6} {'conv':>5} {'J':>8}"
+              f" {'Et J/m':>7}")
     for speed in args.speeds:
         cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=args.iterations)
-        r = predict(cfg, reference)["result"]
+        r = predict(cfg, reference, args.cop_sd_m)["result"]
         stride = float(np.sum(r.step_lengths_m))
         period = float(np.sum(r.phase_durations_s))
         winter = winter_stride_m(speed)
         print(f"{speed:9.4f} {stride:8.3f} {period:8.3f} {winter:8.3f} {stride / winter:6.2f} {str(r.converged):>5}"
-              f" {r.objective:8.4f}", flush=True)
+              f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f}", flush=True)
+        print("    " + kinetics(r), flush=True)
 
 
 if __name__ == "__main__":

@@ -314,7 +314,7 @@ def walker_muscles(cfg: PredictConfig, device: ProsthesisLaw | None) -> WalkerMu
 def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, reference: Band,
                 init: np.ndarray | None = None, warm: WarmStart | None = None, report=None,
                 device: ProsthesisLaw | None = None,
-                cache: NlpCache | None = None) -> PredictResult:
+                cache: NlpCache | None = None, settings: PredictSettings | None = None) -> PredictResult:
     """Predict one gait cycle (module docstring).
 
     Parameters
@@ -337,6 +337,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     cache : NlpCache, optional
         The runner's built problems and compiled solvers (default: one for this call; a runner that solves
         many cases keeps one per process and passes it to each).
+    settings : PredictSettings, optional
+        The problem's settings (default ``settings_of(cfg)``; e.g. with an opt-in tracking term).
 
     Returns
     -------
@@ -345,7 +347,7 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         or a constraint group is violated.
     """
     weights = cfg.weights
-    settings = settings_of(cfg)
+    settings = settings if settings is not None else settings_of(cfg)
     device = device if device is not None else curve_for(cfg.prosthesis)
     optimal = cfg.prosthesis == "optimal"
     model = WalkingModel(cfg.walker_parameters(params))

@@ -163,7 +163,7 @@ def test_a_solve_past_its_time_limit_stops_unconverged_and_says_why(cache):
 def test_a_warm_start_continues_from_the_stored_variables_where_they_fit(stopped, cache):
     """A result keeps the last NLP's variables and multipliers; a start from them (``--init`` of its
     predict.h5) begins at exactly those variables, while a start from χ alone recomputes the lifted values. A
-    warm start of other sizes (another node count) is not used."""
+    warm start of other sizes (another node count, an older formulation) is not used."""
     from gaitcli.predict.problem import Transcriber
     from gaitcli.predict.solve import WarmStart, solve_windowed
     from gaitcli.predict.stage import settings_of
@@ -183,3 +183,8 @@ def test_a_warm_start_continues_from_the_stored_variables_where_they_fit(stopped
     assert not np.allclose(from_design, warm.w, rtol=0, atol=1e-9)
     other = WarmStart(warm.w[:-1], warm.lam_g, warm.lam_x[:-1])
     assert np.array_equal(first_point(other), from_design)
+    # a predict.h5 of the nodal-value formulation (segment coefficients and continuity rows: at 6 nodes 216 more
+    # variables, 216 continuity rows for 64 nodal ones) starts from its χ, which both formulations share
+    extra, rows = 216, 216 - 64
+    old = WarmStart(np.zeros(warm.w.size + extra), np.zeros(warm.lam_g.size + rows), np.zeros(warm.lam_x.size + extra))
+    assert np.array_equal(first_point(old), from_design)
