@@ -5,7 +5,7 @@ A study file (``gait predict --study FILE.yaml``; ``pipelines/study_*.yaml``) na
 conditions and the settings every case shares; each value is checked as the predict stage's own
 (:func:`gaitcli.core.validate.check_parameter`), an error naming the file and its key. :func:`study_cases`
 orders the cases in chains, one per speed: per weight set the normal case first (from the previous weight
-set's normal solution; the chain's first from the shipped normal solution retimed to its speed), every other
+set's normal solution; the chain's first from ``gait predict``'s default start, the shipped walk), every other
 case warm started from it, except the second and third commercial feet: they start from the first foot's
 solution when it converged (else from the normal one), and the optimal prosthesis last from the feet and the
 normal solution. Why the feet from a foot: the normal gait's ankle angles put Seattle's τ_s (a_p = −34020
@@ -38,9 +38,9 @@ from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import check_output_folder, remove_stale
 from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
-from gaitcli.predict.guess import SHIPPED_WALK, shipped_walk
+from gaitcli.predict.guess import SHIPPED_WALK
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
-from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, settings_of, weight_pair
+from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
 from gaitcli.predict.starts import agreeing, predict_optimal, solve_start, start_seeds
 from gaitcli.run.cluster import Task, Workers, completed, map_in_order, workers
 from gaitcli.run.config import PipelineConfig, to_yaml
@@ -222,15 +222,9 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
     return row
 
 
-def _shipped_start(case: StudyCase) -> np.ndarray:
-    """A chain's first start: the shipped normal walk on the case's nodes, retimed to its speed
-    (``guess.shipped_walk``), started as a solution (``run_predict``'s ``init``)."""
-    return shipped_walk(case.cfg.nodes, settings_of(case.cfg), symmetric=case.cfg.symmetric)
-
-
 def first_start_keys() -> tuple[str, ...]:
-    """The key of a chain's first start: the shipped normal walk's SHA-256 (fitted to the case's nodes, which
-    its own key holds)."""
+    """The key of a chain's first start, ``gait predict``'s default start: the shipped normal walk's SHA-256
+    (``guess.shipped_walk``; fitted to the case's nodes and speed, which its own key holds)."""
     return (f"shipped {hashlib.sha256(SHIPPED_WALK.read_bytes()).hexdigest()}",)
 
 
@@ -244,7 +238,7 @@ def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[Predi
                                cache=cache), 1
     # the first start that converged (a foot after the first: that foot's solution, else the normal one)
     starts = [solved[name] for name in case.starts_from]
-    init = next((r for r in starts if r.converged), starts[0]).design if starts else _shipped_start(case)
+    init = next((r for r in starts if r.converged), starts[0]).design if starts else None  # None: the default
     if case.cfg.starts > 1:  # start 0 from the chain's solution, the others from perturbed guesses, one by one
         with workers(1) as here:
             agreed, best = agreeing(run_starts(case.cfg, here, params=params, reference=reference, init=init))
