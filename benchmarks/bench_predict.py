@@ -14,9 +14,9 @@ problem's. Printed: IPOPT iterations and solves, J, Et, Jdev, the non-zeros of t
 of the Hessian of the Lagrangian (lower triangle, as IPOPT counts them), the ratio to Table 5.1's hours and
 to Falisse et al.'s 2-D predictions (44–55 s).
 
-``--speeds``: the stride at each speed beside Winter's slow, natural and fast cadences (87, 105, 123 steps
-per minute at 1.00, 1.33 (1.325) and 1.68 m/s; stride = 2·60·v/cadence, the data 5.3.3 tracks), linearly
-interpolated.
+``--speeds``: the stride at each speed beside Winter's slow, natural and fast cadences, the data 5.3.3 tracks
+at 1.00, 1.33 and 1.68 m/s (87, 105, 123 steps per minute: Winter's means as recalled, not checked against
+his book here; 1.325 m/s for the natural one), stride = 2·60·v/cadence, the cadence interpolated linearly.
 """
 
 from __future__ import annotations

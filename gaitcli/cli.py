@@ -274,6 +274,7 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
                    "subject 1, 73.0 kg, 1.792 m).")
 @click.option("--init", "init", type=click.Path(path_type=Path, dir_okay=False),
               help="Start from the solution in an earlier predict.h5 (same --nodes and --symmetric).")
+@_config_option(PredictConfig, "start", "--start")
 @_config_option(PredictConfig, "foot_mass_kg", "--foot-mass")
 @_config_option(PredictConfig, "foot_mass_at", "--foot-mass-at")
 @_config_option(PredictConfig, "prosthesis", "--prosthesis")

@@ -1,8 +1,8 @@
 """The starts χ of a prediction: the shipped normal walk (the default) and the dissertation's initial guess.
 
 :func:`shipped_walk` is ``gait predict``'s own solution with its defaults (``data/normal_symmetric_nn18.csv``)
-on the problem's nodes and model, retimed to its speed: a gait that already walks, from which IPOPT needs
-a few dozen iterations where it needs hundreds from 5.2.10's guess (``benchmarks/README.md``).
+on the problem's nodes, retimed to its speed: a gait that already walks, from which IPOPT needs tens of
+iterations where it needs hundreds from 5.2.10's guess (``benchmarks/README.md``).
 :func:`initial_guess` is 5.2.10's: a walk read off the reference, not yet clipped; it may lie outside the box
 bounds (``layout.box_bounds``), e.g. a reference's knee hyperextended by 2°: the solve checks it against them,
 reports what lies outside and clips it (``solve.solve_windowed``).

@@ -124,7 +124,7 @@ class NLP:
 
     @property
     def spline_size(self) -> int:
-        """Length of w's first part: the segment coefficients, durations and step lengths."""
+        """Length of w's first part: the B-spline coefficients, durations and step lengths."""
         return sum(b.variables.numel() for b in self.splines) + self.layout.blocks["durations"][1] + \
             self.layout.blocks["steps"][1]
 

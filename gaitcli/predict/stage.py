@@ -155,8 +155,8 @@ class PredictConfig:
                            help="Where IPOPT starts without --init: walk (the shipped normal walk on these nodes, "
                                 "retimed to the speed) or guess (5.2.10's initial guess from the reference).")
     starts: int = parameter(1, low=1, high=100,
-                            help="Solve from this many starts (the default guess and seeded perturbations of it) in "
-                                 "parallel and keep the best; every start in starts.csv.")
+                            help="Solve from this many starts (the default start and seeded perturbations of "
+                                 "5.2.10's guess) in parallel and keep the best; every start in starts.csv.")
     seed: int = parameter(0, low=0, help="Seed of the perturbed starts.")
 
     @property

@@ -48,7 +48,8 @@ def test_bad_options_and_files_exit_2_naming_them(tmp_path):
              "weights": (("--weights", "1,2"), "--weights: got '1,2'"),
              "speed": (("--speed", "0"), "--speed"),
              "reference": (("--reference", "ref.csv"), "ref.csv: hip_r_flexion_deg_sd: missing column"),
-             "init": (("--init", "none.h5"), "none.h5: --init: file not found")}
+             "init": (("--init", "none.h5"), "none.h5: --init: file not found"),
+             "start": (("--start", "best"), "--start': got 'best' (expected one of walk, guess)")}
     runs = gait_many({name: (("predict", *args, "-o", "out"), tmp_path) for name, (args, _) in cases.items()})
     for name, (_, expected) in cases.items():
         run = runs[name]
