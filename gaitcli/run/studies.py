@@ -6,11 +6,13 @@ conditions and the settings every case shares; each value is checked as the pred
 (:func:`gaitcli.core.validate.check_parameter`), an error naming the file and its key. :func:`study_cases`
 orders the cases in chains, one per speed: per weight set the normal case first (from the previous weight
 set's normal solution; the chain's first from ``gait predict``'s default start, the shipped walk), every other
-case warm started from it, except the second and third commercial feet: they start from the first foot's
-solution when it converged (else from the normal one), and the optimal prosthesis last from the feet and the
-normal solution. Why the feet from a foot: the normal gait's ankle angles put Seattle's τ_s (a_p = −34020
-N·m/rad³) hundreds of N·m off, where IPOPT spends its iterations in inertia corrections; from the SACH
-solution it converges many times faster (``benchmarks/README.md``, "Prediction").
+case warm started from it, except the commercial feet: the first foot from the previous weight set's first
+foot when that converged (the chain's first from the normal solution), the second and third from the first
+foot's solution when it converged (else from the normal one), and the optimal prosthesis last from the feet
+and the normal solution. Why the feet from a foot: the normal gait's ankle angles put Seattle's τ_s (a_p =
+−34020 N·m/rad³) hundreds of N·m off, where IPOPT spends its iterations in inertia corrections; from the SACH
+solution it converges many times faster, and SACH at 1.00 m/s, c), from the SACH solution of b) in 139
+iterations where from the normal solution it stalled at J 119 (``benchmarks/README.md``, "Prediction").
 
 Every case is a task on the workers (:func:`gaitcli.run.cluster.workers`), started once the cases it starts
 from are done, and written whole into ``OUT/study/<case>/`` (the files of ``gait predict``) with a
@@ -139,7 +141,7 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
     """The study's cases in chains, one per speed, in the order of the module docstring."""
     chains = []
     for speed in spec.speeds_m_s:
-        chain, previous = [], None
+        chain, previous, previous_foot = [], None, None
         for label, weights in spec.weights:
             base = dataclasses.replace(spec.base, speed_m_s=speed, weights=weights)
             prefix = f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
@@ -154,11 +156,15 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
                 elif condition == "optimal":
                     cfg = dataclasses.replace(base, prosthesis="optimal")
                     starts = tuple(f"{prefix}_{f}" for f in COMMERCIAL_FEET) + (normal,)
-                else:  # the first foot from the normal solution, the others from the first foot's (module doc)
+                else:  # the first foot from the last weight set's, the others from the first foot's (module doc)
                     feet = [c for c in order if c in COMMERCIAL_FEET]
                     first_foot = f"{prefix}_{feet[0]}"
                     cfg = dataclasses.replace(base, prosthesis=condition)
-                    starts = (normal,) if condition == feet[0] else (first_foot, normal)
+                    if condition == feet[0]:
+                        starts = (normal,) if previous_foot is None else (previous_foot, normal)
+                        previous_foot = first_foot
+                    else:
+                        starts = (first_foot, normal)
                 chain.append(StudyCase(f"{prefix}_{condition}", speed, label, condition, cfg, starts))
             previous = normal
         chains.append(chain)

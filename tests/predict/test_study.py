@@ -28,8 +28,8 @@ def spec_of(name: str) -> studies.StudySpec:
 def test_the_prosthesis_study_is_table_5_3s_grid():
     chains = studies.study_cases(spec_of("prostheses"))
     assert len(chains) == 2  # one per speed, 1.00 and 1.33 m/s
-    previous = None
     for chain in chains:
+        previous = previous_sach = None
         assert len({c.speed_m_s for c in chain}) == 1 and len(chain) == 4 * 5
         for k in range(0, 20, 5):  # per weight set a)–d)
             group = chain[k:k + 5]
@@ -40,9 +40,10 @@ def test_the_prosthesis_study_is_table_5_3s_grid():
             assert all(c.cfg.time_limit_s == 150 for c in group)
             assert normal.starts_from == (() if k == 0 else (previous,))
             sach = group[1].name
-            assert [c.starts_from for c in group[1:4]] == [(normal.name,), (sach, normal.name), (sach, normal.name)]
+            first_foot = (normal.name,) if k == 0 else (previous_sach, normal.name)  # a foot from the last foot
+            assert [c.starts_from for c in group[1:4]] == [first_foot, (sach, normal.name), (sach, normal.name)]
             assert optimal.starts_from == tuple(c.name for c in group[1:4]) + (normal.name,)
-            previous = normal.name
+            previous, previous_sach = normal.name, sach
     assert {c.weight_set for chain in chains for c in chain} == {"a", "b", "c", "d"}
     assert len({c.name for chain in chains for c in chain}) == 40  # one folder per case
 
