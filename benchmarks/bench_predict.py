@@ -28,13 +28,12 @@ import time
 import numpy as np
 from timing import one_core
 
-from gaitcli.predict.guess import initial_guess, shipped_walk
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.nlp import instant_segments
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.solve import NlpCache, checked_design, ipopt_options
-from gaitcli.predict.stage import PredictConfig, run_predict, settings_of
+from gaitcli.predict.stage import PredictConfig, default_start, run_predict, settings_of
 from gaitcli.resources import bundled_reference
 
 TABLE_5_1_HOURS = {14: 11.3, 16: 15.9, 18: 22.3, 20: 28.9}
@@ -50,8 +49,7 @@ def construct(cfg: PredictConfig, settings, reference, cache: NlpCache) -> tuple
     """Build ``cfg``'s symmetric problem at the default start's windows and its first IPOPT solver into
     ``cache``: (seconds, Jacobian non-zeros, Hessian non-zeros)."""
     transcriber = Transcriber(cfg.nodes)
-    x0 = (shipped_walk(cfg.nodes, settings, symmetric=True) if cfg.start == "walk"
-          else initial_guess(transcriber, reference, settings, symmetric=True))
+    x0 = default_start(cfg, transcriber, reference, settings, symmetric=True)
     layout = DesignLayout.build(cfg.nodes, symmetric=True)
     began = time.perf_counter()
     nlp = cache.nlp(transcriber, reference, settings, symmetric=True,

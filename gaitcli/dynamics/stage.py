@@ -38,6 +38,7 @@ from gaitcli.kinematics.joint_centres import JointWidths, functional_joint_centr
 from gaitcli.kinematics.markerset import VIRTUAL_JOINT_CENTRES, with_fixed_points
 from gaitcli.kinematics.model import BODIES, JOINT_CHILD, JOINTS, BodyParameters
 from gaitcli.signal.cycles import GaitFeatures, Stride, gait_features, strides
+from gaitcli.signal.stage import HEEL
 
 if TYPE_CHECKING:
     from gaitcli.kinematics.subject import Subject
@@ -76,7 +77,6 @@ class IdynConfig:
 
 
 FOOT_BODY = {"r": BODIES.index("foot_r"), "l": BODIES.index("foot_l")}
-HEEL = {"r": "CAr", "l": "CAl"}
 
 
 @dataclass(frozen=True)
@@ -531,7 +531,8 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
         for i, body in enumerate(BODIES):
             if body in frames:
                 omega[:, i] = frame_angular_velocity(frames[body], markers.rate_hz)
-    heels = {s: markers.get(HEEL[s])[:, :2] for s in SIDES if HEEL[s] in markers}
+    heel_names = {s: next((name for name in HEEL[s] if name in markers), None) for s in SIDES}
+    heels = {s: markers.get(name)[:, :2] for s, name in heel_names.items() if name is not None}
     features = gait_features(trial.events, heels, markers.time_s)
     trial = trial.with_step(f"idyn: calibrated on the standing posture, body mass {mass_kg:.2f} kg "
                             f"({mass_source}); {POSE_STEPS[cfg.pose]}, 27 coordinates, inverse dynamics (3.21, 3.22), "
