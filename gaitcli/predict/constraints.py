@@ -53,11 +53,11 @@ import numpy as np
 
 from gaitcli.core.validate import number
 from gaitcli.predict.contact import PHASE_TABLE, PHASES
-from gaitcli.predict.dynamics import ContactPoint, LegInversion
+from gaitcli.predict.dynamics import ContactPoint, LegActivation
 from gaitcli.predict.layout import box_bounds
+from gaitcli.predict.pointwise import PointFunction
 from gaitcli.predict.splines import is_casadi
 from gaitcli.predict.variables import (
-    LIFTED_SCALE,
     REACTION_SCALE_N,
     Variables,
 )
@@ -119,6 +119,8 @@ class Rows:
     expressions: list = field(default_factory=list)
     lows: list = field(default_factory=list)
     highs: list = field(default_factory=list)
+    #: (point function, its output, first row in the group) of the rows that are a point function's
+    points: list = field(default_factory=list)
 
     def add(self, expression, low, high) -> None:
         """Append ``expression``'s entries (column-major) with bounds ``low`` ≤ · ≤ ``high`` (scalars or arrays)."""
@@ -127,6 +129,11 @@ class Rows:
         self.expressions.append(expression)
         self.lows.append(np.broadcast_to(low, (k,)).astype(float))
         self.highs.append(np.broadcast_to(high, (k,)).astype(float))
+
+    def add_point(self, function: PointFunction, output: str, low, high) -> None:
+        """Append a point function's output at every instant (instant-major) with its bounds."""
+        self.points.append((function, output, self.size))
+        self.add(function.outputs[output], low, high)
 
     @property
     def size(self) -> int:
@@ -159,30 +166,18 @@ def nodal_rows(v: Variables) -> Rows:
     return rows
 
 
-def splines_rows(v: Variables, at_instants: dict) -> Rows:
-    """The lifted y, ẏ, ÿ, ŝ are the splines' values at the instants (``variables.instant_splines``), scaled."""
+def splines_rows(splines: list[PointFunction]) -> Rows:
+    """The lifted y, ẏ, ÿ, ŝ are the splines' values at the instants, scaled (``variables.spline_functions``)."""
     rows = Rows()
-
-    def tie(block, i, values, names):
-        for row, name in zip(values, names):
-            keep = v.columns if name == "stretch" else list(range(row.shape[1]))
-            rows.add((v.lifted[(block, name)][i, keep] - row[:, keep]) / LIFTED_SCALE[name], 0.0, 0.0)
-
-    for i in range(v.n_i):
-        if v.symmetric:
-            tie("Q", i, at_instants[("leg", i)], ("y", "yd", "ydd", "stretch"))
-            if i < v.half:
-                tie("P", i, at_instants[("trunk", i)], ("y", "yd", "ydd"))
-        else:
-            tie("Q", i, at_instants[("coordinates", i)], ("y", "yd", "ydd", "stretch"))
+    for function in splines:
+        rows.add_point(function, "splines", 0.0, 0.0)
     return rows
 
 
-def dynamics_rows(residuals: list) -> Rows:
-    """rhs − Φ = 0 (5.1) at the stated instants (``dynamics.dynamics_residuals``), per 100 N."""
+def dynamics_rows(dynamics: PointFunction) -> Rows:
+    """rhs − Φ = 0 (5.1) at the stated instants (``dynamics.dynamics_function``), per 100 N."""
     rows = Rows()
-    for residual in residuals:
-        rows.add(residual / LIFTED_SCALE["rhs"], 0.0, 0.0)
+    rows.add_point(dynamics, "dynamics", 0.0, 0.0)
     return rows
 
 
@@ -195,15 +190,15 @@ def paths_rows(residuals: list) -> Rows:
     return rows
 
 
-def activation_rows(v: Variables, legs: list[LegInversion]) -> Rows:
-    """The fibre's force balance (2.18) per F_max of every modelled muscle and instant."""
+def activation_rows(muscles: PointFunction) -> Rows:
+    """The fibre's force balance (2.18) per F_max of every modelled muscle, leg and instant
+    (``dynamics.muscle_function``)."""
     rows = Rows()
-    for leg in legs:
-        rows.add(leg.balance[v.kept, :], 0.0, 0.0)
+    rows.add_point(muscles, "activation", 0.0, 0.0)
     return rows
 
 
-def excitation_rows(v: Variables, legs: list[LegInversion]) -> Rows:
+def excitation_rows(v: Variables, legs: list[LegActivation]) -> Rows:
     """0 ≤ u ≤ 1 (5.32) as ȧ + t2·a ≥ 0 and (1 − a)(t1 + t2) − ȧ ≥ 0 of every modelled muscle and instant."""
     rows = Rows()
     for leg in legs:

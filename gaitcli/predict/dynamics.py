@@ -21,8 +21,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from gaitcli.predict.grid import periodic_derivative
-from gaitcli.predict.variables import Variables
+from gaitcli.predict.grid import periodic_derivative, step_derivative
+from gaitcli.predict.pointwise import PointFunction
+from gaitcli.predict.variables import LIFTED_SCALE, Variables, instant_steps
 
 
 def muscle_forces(v: Variables, max_isometric_force_N) -> list:
@@ -31,15 +32,19 @@ def muscle_forces(v: Variables, max_isometric_force_N) -> list:
     return [ca.DM(f_max) * v.values["stretch"][i] ** 2 for i in range(v.n_i)]
 
 
-def dynamics_residuals(v: Variables, model, muscles, forces: list) -> list:
-    """rhs − Φ (5.1) at every stated instant: rhs the lifted generalized forces, Φ from the model."""
-    out = []
-    for i in v.dynamics_instants:
-        y, yd, ydd = v.values["y"][i], v.values["yd"][i], v.values["ydd"][i]
-        physics = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.tissue(y, yd)
-                   - muscles.device(y, yd, v.coefficients) - muscles.moment_arms(y) @ forces[i])
-        out.append(v.generalized_forces[i] - physics)
-    return out
+def dynamics_function(v: Variables, model, muscles) -> PointFunction:
+    """(rhs − Φ)/100 N (5.1) at every stated instant, a point function of z = (y, ẏ, ÿ (9 each), ŝ (16),
+    rhs (9), the device's coefficients): rhs the lifted generalized forces, Φ from the model."""
+    n_d = v.coefficients.numel()
+    z = ca.SX.sym("z", 52 + n_d)
+    y, yd, ydd, stretch, rhs, device = z[0:9], z[9:18], z[18:27], z[27:43], z[43:52], z[52:]
+    forces = ca.DM(np.tile(np.asarray(muscles.muscle.params.max_isometric_force_N), 2)) * stretch ** 2  # (2.19)
+    physics = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.tissue(y, yd)
+               - muscles.device(y, yd, device) - muscles.moment_arms(y) @ forces)
+    function = ca.Function("dynamics", [z], [(rhs - physics) / LIFTED_SCALE["rhs"]], ["z"], ["dynamics"])
+    columns = [ca.vertcat(v.values["y"][i], v.values["yd"][i], v.values["ydd"][i], v.values["stretch"][i],
+                          v.generalized_forces[i], v.coefficients) for i in v.dynamics_instants]
+    return PointFunction("dynamics", function, ca.horzcat(*columns))
 
 
 def path_residuals(v: Variables, muscles) -> list:
@@ -52,55 +57,73 @@ def path_residuals(v: Variables, muscles) -> list:
     return out
 
 
-@dataclass
-class LegInversion:
-    """One leg's inverted muscle states (8 × I each): ``balance`` the fibre's force balance per F_max (2.18),
-    ``rate`` the heat rate Ė, W (I × 8), ``adot`` ȧ and ``a`` (I × 8), ``t1``, ``t2`` the activation rate
-    constants (I × 8), 1/s."""
+def muscle_function(v: Variables, transcriber, weight) -> PointFunction:
+    """The muscles' inversion (5.25–5.26, as EID's 4.10–4.19) of one leg at one instant, a point function:
 
-    balance: ca.SX
-    rate: ca.SX
+        z = (ŝ_{i−1}, ŝ_i, ŝ_{i+1}, a_{i−1}, a_i, a_{i+1}, l_m, v_m (8 each), h1, h2, ΔS)
+        balance = (a·F_max·g(l_ce, v_ce) − f_ce)/F_max             the fibre's force balance (2.18, 4.18)
+        cost    = Σ_m Ė_m·(h1 + h2)/2 / ΔS                         instant i's share of Et (5.27), J/m
+
+    of the modelled muscles, with l_se = l_slack·(1 + ε0·ŝ), its rate and ȧ by the unequal-step derivative
+    (``grid.step_derivative``), l_ce, v_ce (4.15, 4.17), u of (2.17) (the root of 4.3.3) and Ė (A.12, kinks
+    smoothed); stated at every (leg, instant), the symmetric model's right leg only (its Et counted twice).
+    ``weight`` (of p) multiplies Σ cost in J."""
+    muscle = transcriber.muscles.muscle
+    params = muscle.params
+    z = ca.SX.sym("z", 8 * 8 + 3)
+    stretch, a = [z[8 * k:8 * k + 8] for k in range(3)], [z[8 * k:8 * k + 8] for k in range(3, 6)]
+    l_m, v_m = z[48:56], z[56:64]
+    h1, h2, stride = z[64], z[65], z[66]
+    slack, eps0 = ca.DM(params.tendon_slack_length_m), params.tendon_strain_at_max_force
+    f_max = ca.DM(params.max_isometric_force_N)
+    l_se = [slack * (1 + eps0 * s) for s in stretch]
+    v_se, adot = step_derivative(*l_se, h1, h2), step_derivative(*a, h1, h2)
+    l_ce, v_ce = muscle.fibre_kinematics(l_se[1], v_se, l_m, v_m)
+    # the root of 4.3.3 is real only above a slowest ȧ, below the feasible ȧ ≥ −t2·a (u ≥ 0, the first
+    # excitation bound); a start beyond it (a neighbouring case's unconverged solution) would make Et NaN
+    # and stop IPOPT at iteration 0, so ȧ is raised to that floor (MuscleModel.slowest_activation_rate):
+    # u exact and smooth on the feasible set and near it, finite everywhere
+    u = muscle.excitation(a[1], ca.fmax(adot, muscle.slowest_activation_rate(a[1])))
+    f_ce = f_max * stretch[1] ** 2 / ca.DM(np.cos(params.pennation_rad))
+    # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
+    # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small
+    balance = (muscle.fibre_force(a[1], l_ce, v_ce) - f_ce) / f_max
+    rate = transcriber.metabolic(u, a[1], l_ce, v_ce, f_ce)
+    cost = v.energy_factor * ca.sum1(rate[v.kept]) * (h1 + h2) / 2 / stride
+    function = ca.Function("muscles", [z], [balance[v.kept], cost], ["z"], ["activation", "cost"])
+    h1s, h2s = instant_steps(v)
+    columns = []
+    for k in range(v.muscle_columns.stop // 8):
+        c = slice(8 * k, 8 * k + 8)
+        for i in range(v.n_i):
+            near = [(i - 1) % v.n_i, i, (i + 1) % v.n_i]
+            columns.append(ca.vertcat(*[v.values["stretch"][j][c] for j in near], *[v.values["a"][j][c] for j in near],
+                                      v.values["l_m"][i][c], v.values["v_m"][i][c], h1s[i], h2s[i], v.stride))
+    return PointFunction("muscles", function, ca.horzcat(*columns), weight)
+
+
+@dataclass
+class LegActivation:
+    """One leg's activations ``a`` and their rates ``adot`` (I × 8, 1/s; the unequal-step derivative) with the
+    activation rate constants ``t1``, ``t2`` (I × 8), 1/s: what the excitation bounds (5.32) read."""
+
     a: ca.SX
     adot: ca.SX
     t1: ca.SX
     t2: ca.SX
 
 
-def invert_muscles(v: Variables, transcriber, forces: list) -> list[LegInversion]:
-    """The muscles' inversion (5.25–5.26, as EID's 4.10–4.19) for each stated leg (module docstring)."""
-    muscle = transcriber.muscles.muscle
-    params = muscle.params
-
-    def matrix(name):
-        return ca.horzcat(*v.values[name]).T  # (I × 16)
-
-    stretch_m, a_m = matrix("stretch"), matrix("a")
-    force_m = ca.horzcat(*forces).T
-    slack = np.tile(np.asarray(params.tendon_slack_length_m), 2)
-    f_max_n = np.tile(np.asarray(params.max_isometric_force_N), 2)
-    l_se = ca.repmat(ca.DM(slack).T, v.n_i, 1) * (1 + params.tendon_strain_at_max_force * stretch_m)
-    v_se = periodic_derivative(l_se, v.times, v.period)
+def leg_activations(v: Variables, params) -> list[LegActivation]:
+    """:class:`LegActivation` of each stated leg."""
+    a_m = ca.horzcat(*v.values["a"]).T  # (I × 16)
     adot = periodic_derivative(a_m, v.times, v.period)
     t1 = np.tile(np.asarray(params.activation_t1_per_s), 2)
     t2 = np.tile(np.asarray(params.activation_t2_per_s), 2)
     legs = []
     for k in range(v.muscle_columns.stop // 8):
         c = slice(8 * k, 8 * k + 8)
-        l_ce, v_ce = muscle.fibre_kinematics(l_se[:, c].T, v_se[:, c].T, matrix("l_m")[:, c].T, matrix("v_m")[:, c].T)
-        # the root of 4.3.3 is real only above a slowest ȧ, below the feasible ȧ ≥ −t2·a (u ≥ 0, the first
-        # excitation bound); a start beyond it (a neighbouring case's unconverged solution) would make Et NaN
-        # and stop IPOPT at iteration 0, so ȧ is raised to that floor (MuscleModel.slowest_activation_rate):
-        # u exact and smooth on the feasible set and near it, finite everywhere
-        a_rows = a_m[:, c].T
-        u = muscle.excitation(a_rows, ca.fmax(adot[:, c].T, muscle.slowest_activation_rate(a_rows)))
-        f_ce = force_m[:, c].T / ca.repmat(ca.DM(np.cos(params.pennation_rad)), 1, v.n_i)
-        # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
-        # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small
-        f_max = ca.repmat(ca.DM(f_max_n[c]), 1, v.n_i)
-        balance = (muscle.fibre_force(a_m[:, c].T, l_ce, v_ce) - f_ce) / f_max
-        rate = transcriber.metabolic(u, a_m[:, c].T, l_ce, v_ce, f_ce).T
-        legs.append(LegInversion(balance=balance, rate=rate, a=a_m[:, c], adot=adot[:, c],
-                                 t1=ca.repmat(ca.DM(t1[c]).T, v.n_i, 1), t2=ca.repmat(ca.DM(t2[c]).T, v.n_i, 1)))
+        legs.append(LegActivation(a=a_m[:, c], adot=adot[:, c], t1=ca.repmat(ca.DM(t1[c]).T, v.n_i, 1),
+                                  t2=ca.repmat(ca.DM(t2[c]).T, v.n_i, 1)))
     return legs
 
 

@@ -148,7 +148,18 @@ def unequal_step_weights(times, period):
         first, last = ca.DM(first), ca.DM(last)
     h1 = t - t[before] + period * first  # t_{−1} = t_{I−1} − T
     h2 = t[after] - t + period * last  # t_I = t_0 + T
+    return step_weights(h1, h2)
+
+
+def step_weights(h1, h2):
+    """(a, b, c) of ẋ ≈ a·x_{−1} + b·x_0 + c·x_{+1} with steps h1 before and h2 after (module docstring)."""
     return -h2 / (h1 * (h1 + h2)), (h2 - h1) / (h1 * h2), h1 / (h2 * (h1 + h2))
+
+
+def step_derivative(before, now, after, h1, h2):
+    """ẋ at one instant from x one step ``h1`` before, now and one step ``h2`` after (module docstring)."""
+    a, b, c = step_weights(h1, h2)
+    return a * before + b * now + c * after
 
 
 def periodic_derivative(values, times, period):

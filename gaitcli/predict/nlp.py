@@ -23,15 +23,17 @@ import numpy as np
 from gaitcli.predict import constraints as groups
 from gaitcli.predict.dynamics import (
     contact_points,
-    dynamics_residuals,
-    invert_muscles,
+    dynamics_function,
+    leg_activations,
     muscle_forces,
+    muscle_function,
     path_residuals,
 )
 from gaitcli.predict.grid import instant_times
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
-from gaitcli.predict.objective import energy, objective, tracking
+from gaitcli.predict.objective import cost_weights, deviation_function, tracking_extras
+from gaitcli.predict.pointwise import Placement, derivatives
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
 from gaitcli.predict.splines import segment_of
@@ -43,6 +45,7 @@ from gaitcli.predict.variables import (
     gait_function,
     half_spline,
     instant_splines,
+    spline_functions,
 )
 from gaitcli.signal.bands import Band
 
@@ -82,7 +85,15 @@ class NLP:
     parts: dict = field(default_factory=dict)
     intervals: dict = field(default_factory=dict)
     blocks: dict = field(default_factory=dict)
+    point_functions: list = field(default_factory=list)
+    placements: list = field(default_factory=list)
+    rest_cost: ca.SX = field(default_factory=lambda: ca.SX(0))
     key: tuple = ()
+
+    def derivatives(self) -> dict[str, ca.Function]:
+        """IPOPT's ∇J, the Jacobian of g and the Hessian of the Lagrangian (``pointwise.derivatives``)."""
+        return derivatives(self.w, self.parameters, self.constraints, self.cost, self.rest_cost,
+                           self.point_functions, self.placements)
 
     def parameter_values(self, settings: PredictSettings) -> np.ndarray:
         """p = (v, w1, w2) of ``settings``."""
@@ -254,39 +265,71 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     if segments is None:
         guess = np.clip(initial_guess(transcriber, reference, s, symmetric=symmetric), *box_bounds(layout))
         segments = instant_segments(transcriber, layout, guess)
-    model, muscles = transcriber.model, transcriber.muscles
     v = Variables(transcriber, layout)
-    at_instants = instant_splines(v, segments, reach)
-    forces = muscle_forces(v, muscles.muscle.params.max_isometric_force_N)
-    legs = invert_muscles(v, transcriber, forces)
     points = contact_points(v, transcriber.contact)
-    rows = {"nodes": groups.nodal_rows(v), "splines": groups.splines_rows(v, at_instants),
-            "dynamics": groups.dynamics_rows(dynamics_residuals(v, model, muscles, forces)),
-            "paths": groups.paths_rows(path_residuals(v, muscles)), "activation": groups.activation_rows(v, legs),
+    functions = point_functions(v, transcriber, reference, points)
+    at_instants = instant_splines(v, segments, reach)
+    rows = constraint_rows(v, transcriber, s, functions, points, segments, reach)
+    extras = tracking_extras(v, points, s, transcriber)
+    lbw, ubw = v.bounds(transcriber.muscles.present, s.step_m)
+    g, lbg, ubg, slices, placements = _stacked(rows)
+    rest_cost = functions["deviation"].weight * extras
+    cost = functions["muscles"].cost + functions["deviation"].cost + rest_cost
+    return NLP(w=v.w, cost=cost, constraints=g, lbg=lbg, ubg=ubg, groups=slices, lbw=lbw, ubw=ubw,
+               transcriber=transcriber, layout=layout, splines=v.splines, segments=segments, reach=reach,
+               values=gait_function(v, at_instants), lifted=v.lifted_blocks,
+               parameters=v.parameters, device_size=0 if v.device is None else v.device.numel(),
+               device_law=v.device_law,
+               parts={"Et": functions["muscles"].total, "Jdev": functions["deviation"].total + extras},
+               intervals=v.intervals, blocks=v.blocks(), point_functions=_distinct(functions, placements),
+               placements=placements, rest_cost=rest_cost,
+               key=nlp_key(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach))
+
+
+def point_functions(v: Variables, transcriber: Transcriber, reference: Band, points: list) -> dict:
+    """The problem's point functions (``pointwise.py``): the dynamics (5.1), the muscles' inversion with Et's
+    shares (5.25–5.27) and Jdev's shares (5.28), weighted in J by (5.29)."""
+    et_weight, jdev_weight = cost_weights(v)
+    model = transcriber.model
+    return {"dynamics": dynamics_function(v, model, transcriber.muscles),
+            "muscles": muscle_function(v, transcriber, et_weight),
+            "deviation": deviation_function(v, reference, points, model.total_mass_kg, jdev_weight)}
+
+
+def constraint_rows(v: Variables, transcriber: Transcriber, settings: PredictSettings, functions: dict,
+                    points: list, segments: dict, reach: int) -> dict:
+    """Each constraint group's :class:`~gaitcli.predict.constraints.Rows` (``constraints.GROUPS``): ``functions``
+    (:func:`point_functions`), the stated control points (``dynamics.contact_points``) and the splines'
+    windows."""
+    s, model, muscles = settings, transcriber.model, transcriber.muscles
+    forces = muscle_forces(v, muscles.muscle.params.max_isometric_force_N)
+    return {"nodes": groups.nodal_rows(v), "splines": groups.splines_rows(spline_functions(v, segments, reach)),
+            "dynamics": groups.dynamics_rows(functions["dynamics"]),
+            "paths": groups.paths_rows(path_residuals(v, muscles)),
+            "activation": groups.activation_rows(functions["muscles"]),
             "reactions": groups.reactions_rows(points),
             "moment": groups.moment_rows(points, transcriber.joint_map_pinv, s.moment_tolerance_Nm),
             "contact": groups.contact_rows(v, points, transcriber.contact, s.contact_tolerance_m),
             "unilateral": groups.unilateral_rows(points), "mtp": groups.mtp_rows(points, s.mtp_moment_Nm),
             "friction": groups.friction_rows(points, s.friction_coefficient),
             "clearance": groups.clearance_rows(points, model, s.clearance_m),
-            "excitation": groups.excitation_rows(v, legs), "speed": groups.speed_rows(v),
-            "shape": groups.shape_rows(v), "hip_bound": groups.hip_bound_rows(v, s, model, muscles, forces),
+            "excitation": groups.excitation_rows(v, leg_activations(v, muscles.muscle.params)),
+            "speed": groups.speed_rows(v), "shape": groups.shape_rows(v),
+            "hip_bound": groups.hip_bound_rows(v, s, model, muscles, forces),
             "windows": groups.windows_rows(v, segments, reach), "monotone": groups.monotone_rows(v, s)}
-    et, jdev = energy(v, legs), tracking(v, reference, points, s, transcriber)
-    lbw, ubw = v.bounds(muscles.present, s.step_m)
-    g, lbg, ubg, slices = _stacked(rows)
-    return NLP(w=v.w, cost=objective(v, et, jdev), constraints=g, lbg=lbg, ubg=ubg, groups=slices, lbw=lbw, ubw=ubw,
-               transcriber=transcriber, layout=layout, splines=v.splines, segments=segments, reach=reach,
-               values=gait_function(v, at_instants), lifted=v.lifted_blocks, parameters=v.parameters,
-               device_size=0 if v.device is None else v.device.numel(), device_law=v.device_law,
-               parts={"Et": et, "Jdev": jdev},
-               intervals=v.intervals, blocks=v.blocks(),
-               key=nlp_key(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach))
+
+
+def _distinct(functions: dict, placements: list[Placement]) -> list:
+    """Every point function of the problem once: those of ``functions`` and those placed in g."""
+    out = {id(f): f for f in functions.values()}
+    out.update({id(p.function): p.function for p in placements})
+    return list(out.values())
 
 
 def _stacked(rows: dict) -> tuple:
-    """g, lbg, ubg and each group's slice of g: the non-empty groups in the order of ``constraints.GROUPS``."""
-    exprs, lows, highs, slices, start = [], [], [], {}, 0
+    """g, lbg, ubg, each group's slice of g and where each point function's rows lie: the non-empty groups in
+    the order of ``constraints.GROUPS``."""
+    exprs, lows, highs, slices, placements, start = [], [], [], {}, [], 0
     for name in groups.GROUPS:
         group = rows[name]
         if not group.expressions:
@@ -296,5 +339,6 @@ def _stacked(rows: dict) -> tuple:
         lows += group.lows
         highs += group.highs
         slices[name] = slice(start, start + block.size1())
+        placements += [Placement(function, output, start + first) for function, output, first in group.points]
         start += block.size1()
-    return ca.vertcat(*exprs), np.concatenate(lows), np.concatenate(highs), slices
+    return ca.vertcat(*exprs), np.concatenate(lows), np.concatenate(highs), slices, placements

@@ -20,21 +20,16 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.kinematics.conventions import walker_joint_angles
-from gaitcli.predict.cost import cost_of_transport, deviation
-from gaitcli.predict.dynamics import ContactPoint, LegInversion
+from gaitcli.predict.cost import deviation
+from gaitcli.predict.dynamics import ContactPoint
+from gaitcli.predict.pointwise import PointFunction
 from gaitcli.predict.reference import VARIABLES, jdev_sd
-from gaitcli.predict.variables import Variables
+from gaitcli.predict.variables import Variables, instant_steps
 from gaitcli.signal.bands import Band
 from gaitcli.signal.cycles import CYCLE_PCT
 
 #: the fraction of its stance over which a foot's centre of pressure is tracked from heel to MTP
 COP_PROGRESSION_STANCE = 0.85
-
-
-def energy(v: Variables, legs: list[LegInversion]) -> ca.SX:
-    """Et (5.27), J/m, from the heat rates of the modelled muscles."""
-    rate = [leg.rate[:, v.kept] for leg in legs]
-    return v.energy_factor * cost_of_transport(ca.horzcat(*rate), v.times, v.period, v.stride)
 
 
 def _interpolants(table: np.ndarray) -> list[ca.Function]:
@@ -52,21 +47,31 @@ def _per_side(v: Variables, table: dict, i: int) -> dict:
     return {"r": mirrored["l"], "l": mirrored["r"]}
 
 
-def reference_deviation(v: Variables, reference: Band, points: list[ContactPoint], mass_kg: float) -> ca.SX:
-    """The dissertation's Jdev (5.28): joint angles and ground forces against ``reference``."""
-    feet_at = {p.j: p.feet for p in points}
-    rows = []
-    for i in range(len(v.grid.instant_points)):
-        y = v.values["y"][i]
-        angles = [*walker_joint_angles(y[2], y[3], y[4], y[5]), *walker_joint_angles(y[2], y[6], y[7], y[8])]
-        feet = _per_side(v, feet_at, i)
-        ground = [feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1]]
-        rows.append(ca.horzcat(*[angle * 180 / np.pi for angle in angles], *[f / mass_kg for f in ground]))
-    pct = 100 * v.fractions
+def deviation_function(v: Variables, reference: Band, points: list[ContactPoint], mass_kg: float,
+                       weight) -> PointFunction:
+    """The dissertation's Jdev (5.28), joint angles and ground forces against ``reference``, as instant i's
+    share, a point function of z = (y (9), the feet's f_x, f_z right then left (4), N, t_i, T, h1, h2, s):
+
+        cost = Σ_k ((x_k − x̂_k)/σ_k)²·(h1 + h2)/2   at the cycle percentage 100·t_i/T
+
+    (the periodic trapezoid rule); ``weight`` (of p) multiplies Σ cost in J."""
+    z = ca.SX.sym("z", 17)
+    y, ground, t, period, h1, h2 = z[0:9], z[9:13], z[13], z[14], z[15], z[16]
+    angles = [*walker_joint_angles(y[2], y[3], y[4], y[5]), *walker_joint_angles(y[2], y[6], y[7], y[8])]
+    x = ca.vertcat(*[angle * 180 / np.pi for angle in angles], ground / mass_kg)
+    pct = 100 * t / period
     mean, sd = reference.arrays(VARIABLES)
-    means = ca.horzcat(*[f(pct) for f in _interpolants(mean)])
-    sds = ca.horzcat(*[f(pct) for f in _interpolants(jdev_sd(sd))])
-    return deviation(ca.vertcat(*rows), means, sds, v.times, v.period)
+    means = ca.vertcat(*[f(pct) for f in _interpolants(mean)])
+    sds = ca.vertcat(*[f(pct) for f in _interpolants(jdev_sd(sd))])
+    function = ca.Function("deviation", [z], [ca.sumsqr((x - means) / sds) * (h1 + h2) / 2], ["z"], ["cost"])
+    feet_at = {p.j: p.feet for p in points}
+    h1s, h2s = instant_steps(v)
+    columns = []
+    for i in range(len(v.grid.instant_points)):
+        feet = _per_side(v, feet_at, i)
+        columns.append(ca.vertcat(v.values["y"][i], feet["r"][0], feet["r"][1], feet["l"][0], feet["l"][1],
+                                  v.times[i], v.period, h1s[i], h2s[i]))
+    return PointFunction("deviation", function, ca.horzcat(*columns), weight)
 
 
 def centre_of_pressure(v: Variables, points: list[ContactPoint], heel_to_mtp_m: float, weight_N: float,
@@ -96,18 +101,18 @@ def trunk_rate(v: Variables, sd_deg_s: float) -> ca.SX:
     return deviation(rate, ca.DM.zeros(v.n_i, 1), ca.DM.ones(v.n_i, 1) * sd_deg_s, v.times, v.period)
 
 
-def tracking(v: Variables, reference: Band, points: list[ContactPoint], settings, transcriber) -> ca.SX:
-    """Jdev (5.28) with the opt-in terms of ``settings`` (module docstring)."""
+def tracking_extras(v: Variables, points: list[ContactPoint], settings, transcriber) -> ca.SX:
+    """The opt-in tracking terms of ``settings`` (module docstring), added to Jdev."""
     model = transcriber.model
-    jdev = reference_deviation(v, reference, points, model.total_mass_kg)
+    extras = ca.SX(0)
     if settings.cop_sd_m > 0:
-        jdev = jdev + centre_of_pressure(v, points, transcriber.contact.heel_to_mtp_m,
-                                         model.total_mass_kg * model.gravity_m_s2, settings.cop_sd_m)
+        extras += centre_of_pressure(v, points, transcriber.contact.heel_to_mtp_m,
+                                     model.total_mass_kg * model.gravity_m_s2, settings.cop_sd_m)
     if settings.trunk_rate_sd_deg_s > 0:
-        jdev = jdev + trunk_rate(v, settings.trunk_rate_sd_deg_s)
-    return jdev
+        extras += trunk_rate(v, settings.trunk_rate_sd_deg_s)
+    return extras
 
 
-def objective(v: Variables, et: ca.SX, jdev: ca.SX) -> ca.SX:
-    """J = w1·Et/100 + w2·Jdev (5.29) with (w1, w2) the NLP's parameters (checked by ``cost.check_weights``)."""
-    return v.parameters[1] * et / 100.0 + v.parameters[2] * jdev
+def cost_weights(v: Variables) -> tuple:
+    """(w1/100, w2) of (5.29): the weights of Et and Jdev in J, with (w1, w2) the NLP's parameters."""
+    return v.parameters[1] / 100.0, v.parameters[2]

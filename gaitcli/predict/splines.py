@@ -303,20 +303,38 @@ def window_values(spline: PeriodicSpline, coefficients, period, fraction: float 
     The segment is ⌊N·s⌋ clamped into the window (beyond it the nearest window segment's polynomial is
     extrapolated), so the expression depends on the window's coefficients alone: what makes the NLP's
     Jacobian and Hessian sparse. A caller checks that ⌊N·s⌋ lies in the window at the solution
-    (:func:`segment_of`); then the value is the spline's. The segment's coefficients are selected once and
-    its polynomial differentiated for every r (Σ_κ [k = κ]·Σ_p c_κp·τ^p = Σ_p (Σ_κ [k = κ]·c_κp)·τ^p: a
-    third of the expression of one polynomial per window segment and derivative).
+    (:func:`segment_of`); then the value is the spline's (:func:`local_values`).
     """
+    first, last = window
+    return local_values(spline, window_coefficients(spline, coefficients, window), period,
+                        fraction * spline.intervals - first, derivatives)
+
+
+def window_coefficients(spline: PeriodicSpline, coefficients, window: tuple[int, int]):
+    """The rows of the segment coefficients ``coefficients`` ((d + 1)·N × columns) of the segments ``window`` =
+    (first, last), indices modulo N, in order: ((d + 1)·(last − first + 1) × columns)."""
     n, width = spline.intervals, spline.degree + 1
     first, last = window
-    x = fraction * n
-    k = ca.fmin(ca.fmax(ca.floor(x), first), last)
-    tau = x - k
-    if last > first:
-        rows = sum((k == kappa) * coefficients[width * (kappa % n):width * (kappa % n + 1), :]
-                   for kappa in range(first, last + 1))
+    return ca.vertcat(*[coefficients[width * (kappa % n):width * (kappa % n + 1), :]
+                        for kappa in range(first, last + 1)])
+
+
+def local_values(spline: PeriodicSpline, coefficients, period, position, derivatives=(0,)) -> list:
+    """[d^r y/dt^r for r in ``derivatives``] (each 1 × columns) at ``position`` segments from the start of a
+    window whose segment coefficients are ``coefficients`` ((d + 1)·K × columns, :func:`window_coefficients`).
+
+    The segment is ⌊position⌋ clamped into the window's K, τ = position − segment; its coefficients are
+    selected once and its polynomial differentiated for every r (Σ_κ [k = κ]·Σ_p c_κp·τ^p = Σ_p (Σ_κ [k =
+    κ]·c_κp)·τ^p: a third of the expression of one polynomial per window segment and derivative).
+    """
+    n, width = spline.intervals, spline.degree + 1
+    count = coefficients.shape[0] // width
+    k = ca.fmin(ca.fmax(ca.floor(position), 0), count - 1)
+    tau = position - k
+    if count > 1:
+        rows = sum((k == kappa) * coefficients[width * kappa:width * (kappa + 1), :] for kappa in range(count))
     else:
-        rows = coefficients[width * (first % n):width * (first % n + 1), :]
+        rows = coefficients[:width, :]
     return [sum(rate * tau ** (p - r) * rows[p, :] for p, rate in _terms(spline, r)) / (period / n) ** r
             for r in derivatives]
 

@@ -51,8 +51,9 @@ import numpy as np
 
 from gaitcli.predict.grid import instant_times
 from gaitcli.predict.layout import DesignLayout, box_bounds, half_cycle_intervals
+from gaitcli.predict.pointwise import PointFunction
 from gaitcli.predict.prosthesis import DEFAULT_LAW
-from gaitcli.predict.splines import PeriodicSpline, quartic, window_values
+from gaitcli.predict.splines import PeriodicSpline, local_values, quartic, window_coefficients, window_values
 
 REACTION_SCALE_N = 100.0
 DURATION_SCALE_S = 0.1
@@ -261,6 +262,15 @@ class Variables:
         return np.concatenate(lbw), np.concatenate(ubw)
 
 
+def instant_steps(v: Variables) -> tuple[list, list]:
+    """h1_i = t_i − t_{i−1} and h2_i = t_{i+1} − t_i of every instant, periodic (5.2.6), s: linear in the
+    durations."""
+    t, n = v.times, v.n_i
+    h1 = [t[i] - t[i - 1] + (v.period if i == 0 else 0) for i in range(n)]
+    h2 = [t[(i + 1) % n] - t[i] + (v.period if i == n - 1 else 0) for i in range(n)]
+    return h1, h2
+
+
 def instant_splines(v: Variables, segments: dict, reach: int) -> dict:
     """The splines at the instants, each read from its window of segments ``segments[key][i]`` ± ``reach``
     (:func:`gaitcli.predict.splines.window_values`): (family, i) → [y, ẏ, ÿ] (coordinates; hip x with its
@@ -290,6 +300,59 @@ def instant_splines(v: Variables, segments: dict, reach: int) -> dict:
             coordinates[1][0] += drift
             rows[("coordinates", i)] = coordinates + at("stretch", i, fraction, v.period, (0,))
     return rows
+
+
+#: the spline families' lifted quantities: (block of w, quantities and their time derivatives, hip x drifts)
+SPLINE_QUANTITIES = {"coordinates": ("Q", (("y", 0), ("yd", 1), ("ydd", 2)), True),
+                     "leg": ("Q", (("y", 0), ("yd", 1), ("ydd", 2)), False),
+                     "trunk": ("P", (("y", 0), ("yd", 1), ("ydd", 2)), True),
+                     "stretch": ("Q", (("stretch", 0),), False)}
+
+
+def spline_functions(v: Variables, segments: dict, reach: int) -> list[PointFunction]:
+    """The lifted y, ẏ, ÿ, ŝ are the splines' values at the instants (5.10–5.12), one point function per spline
+    family: at instant i, (lifted − spline)/scale of its quantities (``SPLINE_QUANTITIES``; hip x with its
+    drift ΔS/T; ŝ of the modelled muscles), the spline read from its window of segments ``segments[key][i]`` ±
+    ``reach`` only (:func:`gaitcli.predict.splines.local_values`), of
+
+        z = (the window's segment coefficients ((d + 1)·(2·reach + 1) × columns), the lifted values, t_i, T, ΔS,
+             the window's first segment)
+
+    The symmetric model's trunk is T/2-periodic, read over the first half cycle."""
+    out = []
+    for b in v.splines:
+        block, quantities, drifts = SPLINE_QUANTITIES[b.name]
+        columns = v.columns if b.name == "stretch" else list(range(b.variables.shape[1]))
+        half = b.windows == "half"
+        instants = range(v.half) if half else range(v.n_i)
+        function = _spline_function(b, len(columns), quantities, drifts, 2.0 if half else 1.0, reach)
+        inputs = []
+        for i in instants:
+            first = int(segments[b.windows][i]) - reach
+            window = window_coefficients(b.spline, b.coefficients[:, columns], (first, first + 2 * reach))
+            lifted = [v.lifted[(block, q)][i, columns].T for q, _ in quantities]
+            inputs.append(ca.vertcat(ca.vec(window), *lifted, v.times[i], v.period, v.stride, first))
+        out.append(PointFunction(f"splines_{b.name}", function, ca.horzcat(*inputs)))
+    return out
+
+
+def _spline_function(b: SplineBlock, columns: int, quantities: tuple, drifts: bool, cycles: float,
+                     reach: int) -> ca.Function:
+    """:func:`spline_functions`' function of one family (``cycles`` of the spline per gait cycle)."""
+    size = (b.spline.degree + 1) * (2 * reach + 1) * columns
+    z = ca.SX.sym("z", size + len(quantities) * columns + 4)
+    coefficients = ca.reshape(z[:size], size // columns, columns)
+    t, period, stride, first = z[-4], z[-3], z[-2], z[-1]
+    position = cycles * t / period * b.spline.intervals - first
+    values = local_values(b.spline, coefficients, period / cycles, position, [r for _, r in quantities])
+    if drifts:  # y1 = periodic part + (ΔS/T)·t (splines.py, "Hip x")
+        values[0][0] += stride / period * t
+        values[1][0] += stride / period
+    rows = []
+    for k, ((name, _), value) in enumerate(zip(quantities, values)):
+        lifted = z[size + k * columns:size + (k + 1) * columns]
+        rows.append((lifted - value.T) / LIFTED_SCALE[name])
+    return ca.Function(f"splines_{b.name}", [z], [ca.vertcat(*rows)], ["z"], ["splines"])
 
 
 def gait_function(v: Variables, rows: dict) -> ca.Function:

@@ -72,32 +72,19 @@ def tiny():
 def _group_sizes(transcriber, symmetric, settings):
     """Each constraint group function's row count, called one by one as build_nlp calls them."""
     from gaitcli.predict import constraints as c
-    from gaitcli.predict.dynamics import (
-        contact_points,
-        dynamics_residuals,
-        invert_muscles,
-        muscle_forces,
-        path_residuals,
-    )
+    from gaitcli.predict.dynamics import contact_points
     from gaitcli.predict.layout import DesignLayout
-    from gaitcli.predict.variables import Variables, instant_splines
+    from gaitcli.predict.nlp import constraint_rows, point_functions
+    from gaitcli.predict.reference import read_reference
+    from gaitcli.predict.variables import Variables
+    from gaitcli.resources import bundled_reference
 
     v = Variables(transcriber, DesignLayout.build(6, symmetric=symmetric))
-    model, muscles = transcriber.model, transcriber.muscles
     segments = {"cycle": np.arange(v.n_i) * 5 // v.n_i, **({"half": np.arange(v.half) * 3 // v.half} if symmetric
                                                               else {})}
-    forces = muscle_forces(v, muscles.muscle.params.max_isometric_force_N)
-    legs, points = invert_muscles(v, transcriber, forces), contact_points(v, transcriber.contact)
-    rows = {"nodes": c.nodal_rows(v), "splines": c.splines_rows(v, instant_splines(v, segments, 1)),
-            "dynamics": c.dynamics_rows(dynamics_residuals(v, model, muscles, forces)),
-            "paths": c.paths_rows(path_residuals(v, muscles)), "activation": c.activation_rows(v, legs),
-            "excitation": c.excitation_rows(v, legs), "reactions": c.reactions_rows(points),
-            "moment": c.moment_rows(points, transcriber.joint_map_pinv, 2.0),
-            "contact": c.contact_rows(v, points, transcriber.contact, 0.002), "unilateral": c.unilateral_rows(points),
-            "mtp": c.mtp_rows(points, (-10.0, 0.0)), "friction": c.friction_rows(points, 0.8),
-            "clearance": c.clearance_rows(points, model, 0.0), "speed": c.speed_rows(v), "shape": c.shape_rows(v),
-            "hip_bound": c.hip_bound_rows(v, settings, model, muscles, forces),
-            "windows": c.windows_rows(v, segments, 1), "monotone": c.monotone_rows(v, settings)}
+    points = contact_points(v, transcriber.contact)
+    functions = point_functions(v, transcriber, read_reference(bundled_reference()), points)
+    rows = constraint_rows(v, transcriber, settings, functions, points, segments, 1)
     for name, group in rows.items():  # the bounds come with the rows
         assert sum(len(low) for low in group.lows) == sum(len(high) for high in group.highs) == group.size, name
     assert set(rows) == set(c.GROUPS)
