@@ -4,6 +4,7 @@
     dynamics.py     the equations of motion, the muscle paths and inversion, the ground at the control points
     objective.py    J = w1·Et/100 + w2·Jdev (5.29) and the opt-in tracking terms
     constraints.py  each constraint group g (its table of equations) in its own function
+    pointwise.py    the per-instant functions' derivatives, built once and scattered into IPOPT's
     solve.py        IPOPT through ``core/ipopt.py``, the cache of built problems, the window strategy
 
 Each instant reads the spline segments ``segments[i]`` ± ``reach`` only (``windows`` rows keep it there), so

@@ -7,8 +7,8 @@ windows where the start puts the instants and, while a solution presses on a win
 and solves again from the last solution (warm, with its multipliers).
 
 :class:`NlpCache` holds the built problems (one per structure, :func:`gaitcli.predict.nlp.nlp_key`) and
-their compiled IPOPT solvers (one per problem and option set; a later solver of a problem takes the first
-one's derivatives instead of deriving them anew): the speed and the weights are parameters, so a study's
+their compiled IPOPT solvers (one per problem and option set, all taking the problem's derivative functions,
+``NLP.derivatives``, built once): the speed and the weights are parameters, so a study's
 cases reuse them. The runner owns the cache and passes it in; a hit is returned as stored, never changed.
 """
 
@@ -101,7 +101,7 @@ def ipopt_options(settings: PredictSettings, warm: bool) -> dict:
 
 @dataclass
 class _Built:
-    """One cached problem, its compiled solvers by their options, and the derivatives the first exact one made."""
+    """One cached problem, its compiled solvers by their options, and its derivative functions once built."""
 
     nlp: NLP
     solvers: dict = field(default_factory=dict)
@@ -142,7 +142,7 @@ class NlpCache:
         return dict(self._entry(nlp.key, lambda: nlp).solvers)
 
     def derivatives(self, nlp: NLP) -> dict:
-        """∇J, the Jacobian of g and the Hessian of the Lagrangian as the first exact solver of ``nlp`` made them."""
+        """∇J, the Jacobian of g and the Hessian of the Lagrangian of ``nlp`` (empty before its first solver)."""
         return dict(self._entry(nlp.key, lambda: nlp).derivatives)
 
     def solver(self, nlp: NLP, opts: dict) -> tuple[ca.Function, IterationReport]:
