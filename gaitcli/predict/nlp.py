@@ -33,7 +33,7 @@ from gaitcli.predict.dynamics import (
 from gaitcli.predict.grid import instant_times
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
-from gaitcli.predict.objective import cost_weights, deviation_function, tracking_extras
+from gaitcli.predict.objective import cost_weights, deviation_function, proximity, tracking_extras
 from gaitcli.predict.pointwise import Placement, derivatives
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
@@ -96,9 +96,11 @@ class NLP:
         return derivatives(self.w, self.parameters, self.constraints, self.cost, self.rest_cost,
                            self.point_functions, self.placements)
 
-    def parameter_values(self, settings: PredictSettings) -> np.ndarray:
-        """p = (v, w1, w2) of ``settings``."""
-        return settings.parameter_values()
+    def parameter_values(self, settings: PredictSettings, anchor: np.ndarray | None = None) -> np.ndarray:
+        """p = (v, w1, w2, ρ, anchor) of ``settings``: ρ = 1 towards ``anchor`` (w's spline part,
+        :meth:`coefficients_of`), else 0."""
+        target = np.zeros(self.spline_size) if anchor is None else np.asarray(anchor, float).ravel()
+        return np.concatenate([settings.parameter_values(), [0.0 if anchor is None else 1.0], target])
 
     def device_bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
         """Bounds on D: fixed at ``curve``'s coefficients (a device of the problem's law), or the optimal
@@ -121,12 +123,12 @@ class NLP:
     def constraint_values(self, w, settings: PredictSettings | None = None) -> np.ndarray:
         """g(w) at the parameters of ``settings``."""
         f = ca.Function("g", [self.w, self.parameters], [self.constraints])
-        return np.array(f(np.asarray(w, float), (settings or PredictSettings()).parameter_values())).ravel()
+        return np.array(f(np.asarray(w, float), self.parameter_values(settings or PredictSettings()))).ravel()
 
     def cost_parts(self, w, settings: PredictSettings | None = None) -> tuple[float, float, float]:
         """(J, Et, Jdev) of w at the parameters of ``settings`` (the optimiser's smoothed heat rates)."""
         f = ca.Function("f", [self.w, self.parameters], [self.cost, self.parts["Et"], self.parts["Jdev"]])
-        out = f(np.asarray(w, float), (settings or PredictSettings()).parameter_values())
+        out = f(np.asarray(w, float), self.parameter_values(settings or PredictSettings()))
         return tuple(float(v) for v in out)
 
     def device(self, w) -> np.ndarray:
@@ -274,7 +276,7 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     extras = tracking_extras(v, points, s, transcriber)
     lbw, ubw = v.bounds(transcriber.muscles.present, s.step_m)
     g, lbg, ubg, slices, placements = _stacked(rows)
-    rest_cost = functions["deviation"].weight * extras
+    rest_cost = functions["deviation"].weight * extras + proximity(v)
     cost = functions["muscles"].cost + functions["deviation"].cost + rest_cost
     return NLP(w=v.w, cost=cost, constraints=g, lbg=lbg, ubg=ubg, groups=slices, lbw=lbw, ubw=ubw,
                transcriber=transcriber, layout=layout, splines=v.splines, segments=segments, reach=reach,

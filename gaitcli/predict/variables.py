@@ -121,7 +121,9 @@ class Variables:
         self.period, self.stride = ca.sum1(self.durations), self.steps_r + self.steps_l
         self.times = instant_times(self.grid, self.durations)
         self.fractions = self.times / self.period
-        self.parameters = ca.SX.sym("p", 3)  # v, w1, w2
+        #: p = (v, w1, w2, ρ, anchor): the speed (5.43), the weights (5.29), and the weight and target of the
+        #: proximity term ρ·|head − anchor|² (ρ = 0 but in a projection onto the constraints, ``solve.project``)
+        self.parameters = ca.vertcat(ca.SX.sym("p", 3), ca.SX.sym("rho"), ca.SX.sym("anchor", self.head.numel()))
         muscles = transcriber.muscles
         self.present = muscles.present[self.muscle_columns]
         self.kept = [k for k in range(8) if self.present[k]]  # of each leg's 8 muscles, those the model has
