@@ -23,18 +23,12 @@ from gaitcli.kinematics.conventions import walker_joint_angles
 from gaitcli.predict.cost import deviation
 from gaitcli.predict.dynamics import ContactPoint
 from gaitcli.predict.pointwise import PointFunction
-from gaitcli.predict.reference import VARIABLES, jdev_sd
+from gaitcli.predict.reference import reference_curves
 from gaitcli.predict.variables import Variables, instant_steps
 from gaitcli.signal.bands import Band
-from gaitcli.signal.cycles import CYCLE_PCT
 
 #: the fraction of its stance over which a foot's centre of pressure is tracked from heel to MTP
 COP_PROGRESSION_STANCE = 0.85
-
-
-def _interpolants(table: np.ndarray) -> list[ca.Function]:
-    """Linear interpolants over the cycle (%) of a reference table's columns (101 × 10)."""
-    return [ca.interpolant(f"reference_{k}", "linear", [CYCLE_PCT], table[:, k]) for k in range(len(VARIABLES))]
 
 
 def _per_side(v: Variables, table: dict, i: int) -> dict:
@@ -59,10 +53,9 @@ def deviation_function(v: Variables, reference: Band, points: list[ContactPoint]
     y, ground, t, period, h1, h2 = z[0:9], z[9:13], z[13], z[14], z[15], z[16]
     angles = [*walker_joint_angles(y[2], y[3], y[4], y[5]), *walker_joint_angles(y[2], y[6], y[7], y[8])]
     x = ca.vertcat(*[angle * 180 / np.pi for angle in angles], ground / mass_kg)
+    mean_at, sd_at = reference_curves(reference)
     pct = 100 * t / period
-    mean, sd = reference.arrays(VARIABLES)
-    means = ca.vertcat(*[f(pct) for f in _interpolants(mean)])
-    sds = ca.vertcat(*[f(pct) for f in _interpolants(jdev_sd(sd))])
+    means, sds = mean_at(pct), sd_at(pct)
     function = ca.Function("deviation", [z], [ca.sumsqr((x - means) / sds) * (h1 + h2) / 2], ["z"], ["cost"])
     feet_at = {p.j: p.feet for p in points}
     h1s, h2s = instant_steps(v)

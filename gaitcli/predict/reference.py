@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import casadi as ca
 import numpy as np
 
 from gaitcli.errors import InputError
@@ -68,6 +69,29 @@ def _shift(curve: np.ndarray, offset_pct: float) -> np.ndarray:
     source = (CYCLE_PCT - offset_pct) % 100.0
     return np.column_stack([np.interp(source, CYCLE_PCT[:-1], curve[:-1, k], period=100.0)
                             for k in range(curve.shape[1])])
+
+
+#: samples of the cycle before 0 % and after 100 % (wrapped) that make the cubic periodic in effect at its ends
+WRAPPED_SAMPLES = 10
+
+
+def reference_curves(reference: Band) -> tuple[ca.Function, ca.Function]:
+    """The reference's mean and Jdev's SD (:func:`jdev_sd`) of :data:`VARIABLES` between its 1 % samples:
+    Functions of the cycle percentage (0–100; a row of n percentages gives 10 × n), numeric or CasADi alike.
+
+    Cubic B-splines through the samples, the cycle wrapped by :data:`WRAPPED_SAMPLES` at either end: C2, so that
+    Jdev (5.28) is smooth in the phase durations. A linear interpolant's slope jumps wherever an instant
+    crosses a sample; IPOPT stalled at such kinks (e.g. Flex-Foot at 1.33 m/s, c): J fixed to 6 digits for
+    1 000+ iterations, converged in 103 with the cubic; ``benchmarks/README.md``)."""
+    mean, sd = reference.arrays(VARIABLES)
+    wrap = WRAPPED_SAMPLES
+    grid = np.concatenate([CYCLE_PCT[-1 - wrap:-1] - 100.0, CYCLE_PCT, CYCLE_PCT[1:1 + wrap] + 100.0])
+
+    def curve(name, table):
+        wrapped = np.vstack([table[-1 - wrap:-1], table, table[1:1 + wrap]])
+        return ca.interpolant(name, "bspline", [grid], wrapped.ravel())  # row-major: the variables fastest
+
+    return curve("reference_mean", mean), curve("reference_sd", jdev_sd(sd))
 
 
 def jdev_sd(sd: np.ndarray) -> np.ndarray:

@@ -36,11 +36,10 @@ from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.nlp import build_nlp, instant_segments
 from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.prosthesis import CHOICES, COEFFICIENTS, curve_for
-from gaitcli.predict.reference import VARIABLES, jdev_sd
+from gaitcli.predict.reference import VARIABLES, reference_curves
 from gaitcli.predict.settings import PredictSettings
 from gaitcli.predict.solve import NlpCache, PredictSolution, WarmStart, project, solve_windowed
 from gaitcli.signal.bands import Band
-from gaitcli.signal.cycles import CYCLE_PCT
 
 #: phases with the right foot on the floor (HSr … TOr) and with both feet down (Fig. 5.3)
 RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
@@ -502,8 +501,8 @@ def _costs(tr: Transcriber, t, period: float, stride: float, reference: Band,
     pct = 100 * times / period
     grf = _ground_forces(tr, t) if grf is None else grf
     values = np.column_stack([walker_to_clinical(t.y[opening]), grf[opening] / tr.model.total_mass_kg])
-    means = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[v]) for v in VARIABLES])
-    sds = np.column_stack([np.interp(pct, CYCLE_PCT, sd) for sd in jdev_sd(reference.arrays(VARIABLES)[1]).T])
+    mean_at, sd_at = reference_curves(reference)
+    means, sds = np.array(mean_at(pct[None, :])).T, np.array(sd_at(pct[None, :])).T
     return (float(cost_of_transport(t.metabolic_rate_W, times, period, stride)),
             float(deviation(values, means, sds, times, period)))
 

@@ -87,3 +87,24 @@ def test_csv_round_trip_and_errors(tmp_path):
         read_reference(tmp_path / "negative.csv")
     with pytest.raises(InputError, match="reference file not found"):
         read_reference(tmp_path / "none.csv")
+
+
+def test_the_reference_between_its_samples_passes_through_them_with_a_continuous_slope():
+    # Jdev (5.28) must be smooth in the phase durations: the curves interpolate the 1 % samples and their slope
+    # does not jump there (a linear interpolant's jumps by the samples' second difference), across 0/100 % too
+    import casadi as ca
+
+    from gaitcli.predict.reference import reference_curves
+    from gaitcli.resources import bundled_reference
+
+    reference = read_reference(bundled_reference())
+    mean_at, sd_at = reference_curves(reference)
+    mean, sd = reference.arrays(VARIABLES)
+    np.testing.assert_allclose(np.array(mean_at(CYCLE_PCT[None, :])).T, mean, atol=1e-10)
+    np.testing.assert_allclose(np.array(sd_at(CYCLE_PCT[None, :])).T, jdev_sd(sd), atol=1e-10)
+    pct = ca.MX.sym("pct")
+    slope = ca.Function("slope", [pct], [ca.jacobian(mean_at(pct), pct)])
+    for sample in (0.0, 37.0, 63.0, 100.0):
+        below, above = np.array(slope(sample - 1e-7)), np.array(slope(sample + 1e-7))
+        assert np.max(np.abs(below - above)) < 1e-4 * max(1.0, np.max(np.abs(below)))
+    assert np.abs(np.diff(mean[36:39], 2, axis=0)).max() > 1e-2  # where a linear interpolant's slope would jump
