@@ -9,9 +9,10 @@
     J     = w1·Et/100 + w2·Jdev                                           (5.29)
 
 with the integrals by the periodic trapezoid rule (``cost.py``), the heat rates' kinks smoothed for the
-optimiser as in EID (reported costs use the exact model) and (w1, w2) parameters of the NLP. The symmetric
-model's Et counts its right leg's muscles twice; its second half cycle's ground forces are the first half's,
-sides swapped.
+optimiser as in EID (reported costs use the exact model) and (w1, w2) parameters of the NLP. Et's and Jdev's
+shares of each instant are point functions (``pointwise.py``; Et's with the muscles' inversion,
+``dynamics.muscle_function``). The symmetric model's Et counts its right leg's muscles twice; its second half
+cycle's ground forces are the first half's, sides swapped.
 """
 
 from __future__ import annotations
