@@ -122,7 +122,7 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     # Dask cluster (a task on another process) gives the same case key and objective; a prosthesis case waiting
     # for its normal case's future is the same task graph as tests/test_cluster.py's chains on Dask. --starts goes
     # to the cluster by the same run.cluster.workers: given a scheduler nobody serves, it says so before building
-    # anything. (Every case here builds its problem: 10 s of derivatives each.)
+    # anything. (Every case here builds its problem, about 2 s each.)
     address, _ = dask_cluster
     # at the default speed: the normal case is the problem the session's stopped prediction built (conftest), which
     # a runner that made it holds (its NlpCache; the local study runs in the runner, --workers 1)
