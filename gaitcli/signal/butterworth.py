@@ -24,7 +24,7 @@ import numpy as np
 from gaitcli.core.numerics import true_runs
 from gaitcli.errors import InputError, shown
 
-__all__ = ["correction_factor", "design_frequency_hz", "design_sos", "pad_length", "lowpass"]
+__all__ = ["correction_factor", "design_frequency_hz", "design_sos", "pad_length", "lowpass", "zero_lag"]
 
 
 def correction_factor(*, order: int = 2, passes: int = 2) -> float:
@@ -32,10 +32,12 @@ def correction_factor(*, order: int = 2, passes: int = 2) -> float:
     return (2.0 ** (1.0 / passes) - 1.0) ** (1.0 / (2.0 * order))
 
 
-def design_frequency_hz(cutoff_hz: float, rate_hz: float, *, order: int = 2, passes: int = 2) -> float:
+def design_frequency_hz(cutoff_hz: float, rate_hz: float, *, order: int = 2, passes: int = 2,
+                        btype: str = "low") -> float:
     """Single-pass design frequency (Hz) giving a net half-power cut-off ``cutoff_hz`` after ``passes`` passes.
 
-    ``f_d = (f_s/pi) atan(tan(pi f_c/f_s) / C)`` (3.1.4; docs/model_constants.md §3).
+    Low-pass: ``f_d = (f_s/pi) atan(tan(pi f_c/f_s) / C)`` (3.1.4; docs/model_constants.md §3); high-pass
+    (``btype="high"``, |H|² = 1/(1 + (tan(pi f_d/f_s)/tan(pi f/f_s))^(2n))): ``atan(C tan(pi f_c/f_s))``.
     Raises :class:`InputError` unless ``0 < cutoff_hz < rate_hz / 2``.
     """
     _check_rates(cutoff_hz, rate_hz)
@@ -44,15 +46,17 @@ def design_frequency_hz(cutoff_hz: float, rate_hz: float, *, order: int = 2, pas
     if int(passes) != passes or passes < 1:
         raise InputError(None, "passes", f"got {shown(passes)} (expected an integer >= 1)")
     c = correction_factor(order=order, passes=passes)
-    return rate_hz / math.pi * math.atan(math.tan(math.pi * cutoff_hz / rate_hz) / c)
+    scale = c if btype == "high" else 1.0 / c
+    return rate_hz / math.pi * math.atan(math.tan(math.pi * cutoff_hz / rate_hz) * scale)
 
 
-def design_sos(cutoff_hz: float, rate_hz: float, *, order: int = 2) -> np.ndarray:
-    """Second-order sections of the single-pass low-pass filter, designed at :func:`design_frequency_hz`."""
-    f_d = design_frequency_hz(cutoff_hz, rate_hz, order=order, passes=2)
+def design_sos(cutoff_hz: float, rate_hz: float, *, order: int = 2, btype: str = "low") -> np.ndarray:
+    """Second-order sections of the single-pass low- (or high-) pass filter, designed at
+    :func:`design_frequency_hz`."""
+    f_d = design_frequency_hz(cutoff_hz, rate_hz, order=order, passes=2, btype=btype)
     from scipy.signal import butter  # here, not at import: scipy.signal slows every command's start-up
 
-    return butter(int(order), f_d, btype="low", fs=rate_hz, output="sos")
+    return butter(int(order), f_d, btype=btype, fs=rate_hz, output="sos")
 
 
 #: the longest impulse response :func:`pad_length` looks for (a cut-off of ~1e-5 of the rate)
@@ -111,10 +115,15 @@ def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int
     numpy.ndarray
         The filtered signal, same shape and units as ``x``.
     """
+    return zero_lag(x, design_sos(cutoff_hz, rate_hz, order=order), axis=axis)
+
+
+def zero_lag(x, sos: np.ndarray, *, axis: int = 0) -> np.ndarray:
+    """``x`` filtered by the sections ``sos`` forward and backward along ``axis`` (:func:`lowpass`'s rules for
+    NaN and padding)."""
     from scipy.signal import sosfiltfilt
 
     x = np.asarray(x, dtype=float)
-    sos = design_sos(cutoff_hz, rate_hz, order=order)
     padlen = pad_length(sos)
     moved = np.moveaxis(x, axis, 0)
     n = moved.shape[0]
