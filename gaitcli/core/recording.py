@@ -72,12 +72,29 @@ class ForcePlate:
 
 
 @dataclass
+class Analogs:
+    """A trial's analog channels other than its force plates' (EMG, foot switches, …): ``values`` (samples ×
+    channels) in the file's ``units`` per channel (e.g. "V", "mV"), sampled at ``rate_hz`` from the first marker
+    frame on."""
+
+    labels: tuple[str, ...]
+    units: tuple[str, ...]
+    rate_hz: float
+    values: np.ndarray
+
+    @property
+    def n_samples(self) -> int:
+        return self.values.shape[0]
+
+
+@dataclass
 class Recording:
     """One trial as read from disk: markers, plates, where it came from and what was noticed.
 
     ``subject_metadata``: numbers the file itself records about the subject, by their C3D
     parameter (``{"PROCESSING:Bodymass": 73.4}``), in the file's units. ``events``: the gait events the file
     records (C3D EVENT group; source ``file``), seconds from the first marker frame; empty where it has none.
+    ``analogs``: its analog channels that are no force plate's (None where it has none).
     """
 
     markers: Markers
@@ -87,3 +104,4 @@ class Recording:
     notes: list[str] = field(default_factory=list)
     subject_metadata: dict[str, float] = field(default_factory=dict)
     events: Events = field(default_factory=Events)
+    analogs: Analogs | None = None

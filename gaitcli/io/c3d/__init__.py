@@ -27,11 +27,11 @@ except ImportError:  # Windows: no address-space cap
     resource = None
 
 from gaitcli.core.interrupts import end_with_parent
-from gaitcli.core.recording import Recording
+from gaitcli.core.recording import Analogs, Recording
 from gaitcli.errors import InputError
 from gaitcli.io.axes import apply_rotation, infer_lab_to_model
 from gaitcli.io.c3d.events import read_events
-from gaitcli.io.c3d.header import C3D_MAX_NUMBERS, check_file, one_line, param, warn
+from gaitcli.io.c3d.header import C3D_MAX_NUMBERS, check_file, one_line, param, strings, warn
 from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, planned_frames
 from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
 from gaitcli.io.c3d.plates import PLATFORM_SAMPLES, plate_axes, plates_from, platform_outputs
@@ -172,11 +172,12 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
         if header_frames is not None and n_frames < header_frames:
             raise InputError(path, "data", f"cannot read C3D: file is truncated ({n_frames} of {header_frames} "
                                            "frames)")
-        params, header = c["parameters"], c["header"]["points"]
-        points, residuals, platforms = _part_arrays(c)
+        params, header, analog_rate = c["parameters"], c["header"]["points"], c["header"]["analogs"]["frame_rate"]
+        points, residuals, platforms, others = _part_arrays(c)
         del c
     else:
-        params, header, points, residuals, platforms = _read_in_parts(path, total, part_frames)
+        params, header, points, residuals, platforms, others = _read_in_parts(path, total, part_frames)
+        analog_rate = float(np.asarray(param(params, "ANALOG", "RATE", [0.0]), dtype=float).ravel()[0])
     notes: list[str] = []
     if total is not None and total > part_frames:
         notes.append(f"{total} frames read in parts of {part_frames}"
@@ -193,7 +194,8 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
     events = read_events(path, params, rate_hz=markers.rate_hz, first_frame=markers.first_frame,
                          n_frames=markers.n_frames, notes=notes)
     recording = Recording(markers=markers, plates=plates, source=path, lab_to_model=np.eye(3), notes=notes,
-                          subject_metadata=subject_metadata(params), events=events)
+                          subject_metadata=subject_metadata(params), events=events,
+                          analogs=analogs_from(params, others, analog_rate))
     R = infer_lab_to_model(markers.positions_m, plates)
     rows = "; ".join(" ".join(f"{v + 0.0:+.4f}" for v in row) for row in R)
     if to_model_axes:
@@ -247,19 +249,46 @@ def _open(path: Path):
         raise InputError(path, None, f"cannot read C3D: {text}") from None
 
 
-def _part_arrays(c) -> tuple[np.ndarray, np.ndarray, list]:
-    """The points (4, markers, frames), their residuals (1, markers, frames) and the force-platform outputs
-    (:func:`~.plates.platform_outputs`) of ezc3d's ``c``, as arrays that outlive it."""
+def _part_arrays(c) -> tuple[np.ndarray, np.ndarray, list, np.ndarray]:
+    """The points (4, markers, frames), their residuals (1, markers, frames), the force-platform outputs
+    (:func:`~.plates.platform_outputs`) and the other analog channels (channels, samples; :func:`other_channels`)
+    of ezc3d's ``c``, as arrays that outlive it."""
     points = np.asarray(c["data"]["points"], dtype=float)
     residuals = np.asarray(c["data"]["meta_points"]["residuals"], dtype=float)
-    return points, residuals, platform_outputs(c)
+    analogs = c["data"]["analogs"]
+    others = other_channels(c["parameters"], analogs.shape[1])
+    return points, residuals, platform_outputs(c), np.asarray(analogs[0, others, :], dtype=float)
+
+
+def other_channels(params, count: int) -> list[int]:
+    """The analog channels (0-based, of ``count``) that FORCE_PLATFORM:CHANNEL does not give to a plate."""
+    used = np.asarray(param(params, "FORCE_PLATFORM", "CHANNEL", np.zeros((0, 0))), dtype=float).ravel()
+    plates = {int(k) - 1 for k in used if np.isfinite(k) and k >= 1}
+    return [k for k in range(count) if k not in plates]
+
+
+def analogs_from(params, values: np.ndarray, rate_hz: float) -> Analogs | None:
+    """The :class:`Analogs` of the channels :func:`other_channels` keeps (``values``: channels × samples), their
+    labels and units from ANALOG:LABELS and ANALOG:UNITS; None where there are none."""
+    if values.shape[0] == 0:
+        return None
+    used = int(np.asarray(param(params, "ANALOG", "USED", [0]), dtype=float).ravel()[0])
+    others = other_channels(params, used)
+    if len(others) != values.shape[0]:
+        return None  # ANALOG:USED disagrees with the data: nothing to name the channels by
+    labels, units = strings(params, "ANALOG", "LABELS"), strings(params, "ANALOG", "UNITS")
+
+    def pick(names):
+        return tuple(names[k].strip() if k < len(names) else "" for k in others)
+
+    return Analogs(labels=pick(labels), units=pick(units), rate_hz=float(rate_hz), values=values.T.copy())
 
 
 def _read_in_parts(path: Path, total: int, part_frames: int) -> tuple:
     """(parameters, point header, points, residuals, platform outputs) of a trial of ``total`` frames read
     ``part_frames`` at a time (:func:`~.long.chunk_files`): the library's objects for one part at a time, the
     trial's arrays joined. The parameters and the first frame are the file's own, not the parts'."""
-    points, residuals, platforms = [], [], []
+    points, residuals, platforms, others = [], [], [], []
     params = header = None
     with chunk_files(path, total, part_frames, start_frame=0) as parts:
         for part, count in parts:
@@ -271,13 +300,14 @@ def _read_in_parts(path: Path, total: int, part_frames: int) -> tuple:
             if more[0].shape[1:] != (points[0].shape[1] if points else more[0].shape[1], count) or (
                     platforms and [isinstance(p, str) for p in more[2]] != [isinstance(p, str) for p in platforms[0]]):
                 raise InputError(path, "data", "cannot read C3D: its parts do not match (a damaged file?)")
-            for whole, new in zip((points, residuals, platforms), more):
+            for whole, new in zip((points, residuals, platforms, others), more):
                 whole.append(new)
     header["first_frame"] = _first_frame(path)
     joined = [{k: (np.concatenate([p[i][k] for p in platforms], axis=1) if k in PLATFORM_SAMPLES else v)
                for k, v in plate.items()} if not isinstance(plate, str) else plate
               for i, plate in enumerate(platforms[0])]
-    return params, header, np.concatenate(points, axis=2), np.concatenate(residuals, axis=2), joined
+    return (params, header, np.concatenate(points, axis=2), np.concatenate(residuals, axis=2), joined,
+            np.concatenate(others, axis=1))
 
 
 def _first_frame(path: Path) -> int:
