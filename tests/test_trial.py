@@ -608,3 +608,14 @@ def test_two_statics_one_named(tmp_path):
     folder = _session(tmp_path, ["Static 01.c3d", "Static 02.c3d", "Walking 01.c3d"],
                       {**BASE, "static": "Static 02.c3d"})
     assert open_trial(folder / "Walking 01.c3d").static_path == folder / "Static 02.c3d"
+
+
+def test_an_emg_map_names_each_channels_muscle_and_side():
+    s = subject_from_dict(_with(emg={"RTIBA": "tibialis_anterior_r", "EMG 4": " Soleus_L "}))
+    assert s.emg == {"RTIBA": "tibialis_anterior_r", "EMG 4": "soleus_l"}
+    assert subject_from_dict(BASE).emg == {}
+    for emg, field, words in (({"RTIBA": "tibialis_anterior"}, "emg.RTIBA", "expected a muscle and its side"),
+                              ({"RTIBA": "deltoid_r"}, "emg.RTIBA", "expected a muscle and its side"),
+                              (["RTIBA"], "emg", "expected a mapping of EMG channel label")):
+        err = _error(_with(emg=emg))
+        assert err.field == field and words in str(err)

@@ -23,6 +23,7 @@ from gaitcli.io.vsk import VskSubject
 from gaitcli.io.yamlfile import read_yaml
 from gaitcli.kinematics.disturbances import Disturbance
 from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
+from gaitcli.signal.emg_channels import sided_muscle
 
 SEXES = ("male", "female")
 #: the largest frame number a subject file may name (a C3D counts frames in 32 bits)
@@ -56,6 +57,7 @@ class Subject:
     # the .vsk's parameters {"PROCESSING:<NAME>": value} (mm, kg, rad), merged over the C3D's subject data
     measurements: dict[str, float] = field(default_factory=dict)
     measurements_source: str | None = None  # the file they came from (the .vsk's name)
+    emg: dict[str, str] = field(default_factory=dict)  # EMG channel label → sided muscle (signal/emg_channels.py)
     mass_source: str = "subject.yaml"  # where mass_kg came from
     notes: tuple[str, ...] = ()  # where the subject's numbers came from, and what was assumed
 
@@ -67,7 +69,7 @@ class Subject:
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
         "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances", "knee_width_mm",
-        "ankle_width_mm", "marker_diameter_mm", "vsk", "trials")
+        "ankle_width_mm", "marker_diameter_mm", "vsk", "trials", "emg")
 #: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
 #: (2007); Hara et al. (2016); Davis et al. (1991, Plug-in Gait's); functional (SCORE, Ehrig et al. 2006, from the
 #: trial's hip motion); the lab's points
@@ -181,9 +183,15 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     if data.get("marker_diameter_mm") is not None:
         widths["marker_diameter_mm"] = _number(path, "marker_diameter_mm", data["marker_diameter_mm"], low=0,
                                                high=40, expected="a marker diameter in mm, > 0 and ≤ 40")
+    emg = data.get("emg") or {}
+    if not isinstance(emg, dict) or not all(isinstance(k, str) for k in emg):
+        raise InputError(path, "emg", f"got {shown(emg)} (expected a mapping of EMG channel label → muscle and side, "
+                                      "e.g. RTIBA: tibialis_anterior_r)")
+    emg = {label.strip(): sided_muscle(muscle, f"emg.{label}", path) for label, muscle in emg.items()}
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
                    trials=tuple(trials or ()), vsk=data.get("vsk"), static_frames=frames, marker_map=dict(marker_map),
-                   disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, **lengths, **widths)
+                   disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, emg=emg, **lengths,
+                   **widths)
 
 
 def load_subject(path: str | Path) -> Subject:

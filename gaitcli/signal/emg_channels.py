@@ -63,13 +63,14 @@ def muscle_of(label: str) -> str | None:
     return f"{_WORD_TO_MUSCLE[word]}_{side}" if word in _WORD_TO_MUSCLE else None
 
 
-def _sided_muscle(value, where: str, label: str) -> str:
-    """A map's muscle name checked: a known muscle with ``_r`` or ``_l``."""
+def sided_muscle(value, where: str, path=None) -> str:
+    """A map's muscle name, lower case, checked: a known muscle with ``_r`` or ``_l``; else an InputError naming
+    ``where`` (the map's key) in ``path``."""
     known = MODEL_MUSCLES + OTHER_MUSCLES
-    text = str(value).strip().lower() if isinstance(value, str) else ""
+    text = value.strip().lower() if isinstance(value, str) else ""
     if not (text[-2:] in ("_r", "_l") and text[:-2] in known):
-        raise InputError(None, f"{where}.{label}", f"got {shown(value)} (expected a muscle and its side, e.g. "
-                                                   f"tibialis_anterior_r; muscles: {', '.join(known)})")
+        raise InputError(path, where, f"got {shown(value)} (expected a muscle and its side, e.g. "
+                                      f"tibialis_anterior_r; muscles: {', '.join(known)})")
     return text
 
 
@@ -79,7 +80,8 @@ def channel_map(labels, mapping: dict | None = None, *, where: str = "emg", sour
     names. Two channels of one muscle: an InputError naming both."""
     labels = [str(label).strip() for label in labels]
     if mapping:
-        out = {str(label).strip(): _sided_muscle(muscle, where, str(label)) for label, muscle in mapping.items()}
+        out = {str(label).strip(): sided_muscle(muscle, f"{where}.{label}", source)
+               for label, muscle in mapping.items()}
         missing = [label for label in out if label not in labels]
         if missing:
             raise InputError(source, where, f"channels {', '.join(missing)} are not in the trial (its analog "
