@@ -26,10 +26,16 @@ from gaitcli.predict.pointwise import PointFunction
 from gaitcli.predict.variables import LIFTED_SCALE, Variables, instant_steps
 
 
+def tendon_force(stretch, max_isometric_force_N):
+    """F = F_max·ŝ² (2.19), N, of the tendon stretches ``stretch`` (16: both legs, or 8: one leg's;
+    ``max_isometric_force_N`` one leg's 8)."""
+    f_max = np.asarray(max_isometric_force_N, float)
+    return ca.DM(np.tile(f_max, stretch.numel() // f_max.size)) * stretch ** 2
+
+
 def muscle_forces(v: Variables, max_isometric_force_N) -> list:
-    """F = F_max·ŝ² (2.19), N, at every instant (16 each; ``max_isometric_force_N`` one leg's 8)."""
-    f_max = np.tile(np.asarray(max_isometric_force_N), 2)
-    return [ca.DM(f_max) * v.values["stretch"][i] ** 2 for i in range(v.n_i)]
+    """F (2.19), N, at every instant (16 each; :func:`tendon_force`)."""
+    return [tendon_force(v.values["stretch"][i], max_isometric_force_N) for i in range(v.n_i)]
 
 
 def dynamics_function(v: Variables, model, muscles) -> PointFunction:
@@ -38,7 +44,7 @@ def dynamics_function(v: Variables, model, muscles) -> PointFunction:
     n_d = v.coefficients.numel()
     z = ca.SX.sym("z", 52 + n_d)
     y, yd, ydd, stretch, rhs, device = z[0:9], z[9:18], z[18:27], z[27:43], z[43:52], z[52:]
-    forces = ca.DM(np.tile(np.asarray(muscles.muscle.params.max_isometric_force_N), 2)) * stretch ** 2  # (2.19)
+    forces = tendon_force(stretch, muscles.muscle.params.max_isometric_force_N)
     physics = (model.mass_matrix(y) @ ydd + model.bias(y, yd) - model.gravity(y) - muscles.tissue(y, yd)
                - muscles.device(y, yd, device) - muscles.moment_arms(y) @ forces)
     function = ca.Function("dynamics", [z], [(rhs - physics) / LIFTED_SCALE["rhs"]], ["z"], ["dynamics"])
@@ -84,7 +90,7 @@ def muscle_function(v: Variables, transcriber, weight) -> PointFunction:
     # and stop IPOPT at iteration 0, so ȧ is raised to that floor (MuscleModel.slowest_activation_rate):
     # u exact and smooth on the feasible set and near it, finite everywhere
     u = muscle.excitation(a[1], ca.fmax(adot, muscle.slowest_activation_rate(a[1])))
-    f_ce = f_max * stretch[1] ** 2 / ca.DM(np.cos(params.pennation_rad))
+    f_ce = tendon_force(stretch[1], params.max_isometric_force_N) / ca.DM(np.cos(params.pennation_rad))
     # the activation that makes F, as the fibre's force balance a·F_max·g(l_ce, v_ce) = f_ce (2.18) per
     # F_max: a = f_ce/(F_max·g) (4.18) itself has slopes ∝ 1/g², unbounded where g is small
     balance = (muscle.fibre_force(a[1], l_ce, v_ce) - f_ce) / f_max

@@ -135,9 +135,9 @@ def _neighbours(n: int) -> tuple[list[int], list[int]]:
     return [n - 1] + list(range(n - 1)), list(range(1, n)) + [0]
 
 
-def unequal_step_weights(times, period):
-    """Weights (a, b, c) of ẋ_j ≈ a_j x_{j−1} + b_j x_j + c_j x_{j+1} at ``times``
-    (one cycle of ``period``, wrapped)."""
+def periodic_steps(times, period):
+    """(h1, h2): each instant's step back to the one before and on to the one after, s, at ``times`` (one cycle
+    of ``period``, wrapped: t_{−1} = t_{I−1} − T, t_I = t_0 + T); columns, numpy or CasADi alike."""
     symbolic = is_casadi(times, period)
     t = casadi_column(times) if symbolic else np.asarray(times, float).ravel()
     n = t.shape[0]
@@ -146,9 +146,13 @@ def unequal_step_weights(times, period):
     last = np.eye(n)[-1]
     if symbolic:
         first, last = ca.DM(first), ca.DM(last)
-    h1 = t - t[before] + period * first  # t_{−1} = t_{I−1} − T
-    h2 = t[after] - t + period * last  # t_I = t_0 + T
-    return step_weights(h1, h2)
+    return t - t[before] + period * first, t[after] - t + period * last
+
+
+def unequal_step_weights(times, period):
+    """Weights (a, b, c) of ẋ_j ≈ a_j x_{j−1} + b_j x_j + c_j x_{j+1} at ``times``
+    (one cycle of ``period``, wrapped)."""
+    return step_weights(*periodic_steps(times, period))
 
 
 def step_weights(h1, h2):

@@ -140,11 +140,16 @@ def _padded(a: sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:
     return cols, vals
 
 
+def _rows_of(padded, n_z: int, instants: int, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A_i's rows ``rows`` at every instant: (columns, coefficients), each (instants × entries × width)."""
+    cols, vals = padded
+    index = (np.arange(instants) * n_z)[:, None] + rows
+    return cols[index], vals[index]
+
+
 def _single(padded, n_z: int, instants: int, rows: np.ndarray):
     """For entries reading z's rows ``rows``: every (instant, entry, w column, coefficient) of A_i's row."""
-    cols, vals = padded
-    base = (np.arange(instants) * n_z)[:, None]
-    c, v = cols[base + rows], vals[base + rows]  # (instants, entries, width)
+    c, v = _rows_of(padded, n_z, instants, rows)
     inst = np.broadcast_to(np.arange(instants)[:, None, None], c.shape)
     entry = np.broadcast_to(np.arange(rows.size)[None, :, None], c.shape)
     keep = v != 0
@@ -154,10 +159,8 @@ def _single(padded, n_z: int, instants: int, rows: np.ndarray):
 def _pairs(padded, n_z: int, instants: int, left: np.ndarray, right: np.ndarray):
     """For entries (left[e], right[e]) of a per-instant n_z × n_z matrix: every (instant, entry, w column of
     A_i's row left[e], w column of its row right[e], product of their coefficients)."""
-    cols, vals = padded
-    base = (np.arange(instants) * n_z)[:, None]
-    lc, lv = cols[base + left], vals[base + left]  # (instants, entries, width)
-    rc, rv = cols[base + right], vals[base + right]
+    lc, lv = _rows_of(padded, n_z, instants, left)
+    rc, rv = _rows_of(padded, n_z, instants, right)
     coef = lv[:, :, :, None] * rv[:, :, None, :]
     shape = coef.shape
     inst = np.broadcast_to(np.arange(instants)[:, None, None, None], shape)

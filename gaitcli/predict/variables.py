@@ -49,7 +49,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from gaitcli.predict.grid import instant_times
+from gaitcli.predict.grid import instant_times, periodic_steps
 from gaitcli.predict.layout import DesignLayout, box_bounds, half_cycle_intervals
 from gaitcli.predict.pointwise import PointFunction
 from gaitcli.predict.prosthesis import DEFAULT_LAW
@@ -265,12 +265,10 @@ class Variables:
 
 
 def instant_steps(v: Variables) -> tuple[list, list]:
-    """h1_i = t_i − t_{i−1} and h2_i = t_{i+1} − t_i of every instant, periodic (5.2.6), s: linear in the
+    """h1_i = t_i − t_{i−1} and h2_i = t_{i+1} − t_i of every instant (``grid.periodic_steps``), s: linear in the
     durations."""
-    t, n = v.times, v.n_i
-    h1 = [t[i] - t[i - 1] + (v.period if i == 0 else 0) for i in range(n)]
-    h2 = [t[(i + 1) % n] - t[i] + (v.period if i == n - 1 else 0) for i in range(n)]
-    return h1, h2
+    h1, h2 = periodic_steps(v.times, v.period)
+    return [h1[i] for i in range(v.n_i)], [h2[i] for i in range(v.n_i)]
 
 
 def instant_splines(v: Variables, segments: dict, reach: int) -> dict:
