@@ -82,7 +82,7 @@ def reference_curves(reference: Band) -> tuple[ca.Function, ca.Function]:
     Cubic B-splines through the samples, the cycle wrapped by :data:`WRAPPED_SAMPLES` at either end: C2, so that
     Jdev (5.28) is smooth in the phase durations. A linear interpolant's slope jumps wherever an instant
     crosses a sample; IPOPT stalled at such kinks (e.g. Flex-Foot at 1.33 m/s, c): J fixed to 6 digits for
-    1 000+ iterations, converged in 103 with the cubic; ``benchmarks/README.md``)."""
+    1 000+ iterations, converged in 117 with the cubic; ``benchmarks/README.md``)."""
     mean, sd = reference.arrays(VARIABLES)
     wrap = WRAPPED_SAMPLES
     grid = np.concatenate([CYCLE_PCT[-1 - wrap:-1] - 100.0, CYCLE_PCT, CYCLE_PCT[1:1 + wrap] + 100.0])
