@@ -16,6 +16,11 @@ from gaitcli.errors import InputError
 
 __all__ = ["kinematic_events"]
 
+#: no event within this long of either end of a marker's (or the pelvis's) trajectory, s
+EDGE_MARGIN_S = 0.1
+#: the pelvis centre moving faster than this from one frame to the next has jumped (a marker lost or found), m/s
+PELVIS_JUMP_M_S = 8.0
+
 
 def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, refine: bool = False,
                      min_prominence_m: float = 0.05, min_interval_s: float = 0.4,
@@ -24,9 +29,10 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
 
     Heel strike: a maximum of the heel's horizontal position relative to the pelvis
     centre along the walking direction; toe off: a minimum of the toe's. The walking
-    direction is the pelvis's horizontal displacement over ±0.5 s, so walking towards
-    −x or along a curve works as well. Each time is refined to a fraction of a frame
-    by a parabola through the three samples around the peak.
+    direction is the pelvis's horizontal displacement over ±0.5 s (less within 0.5 s of the ends of its
+    trajectory, which a jump faster than :data:`PELVIS_JUMP_M_S` also ends; no event within
+    :data:`EDGE_MARGIN_S` of them), so walking towards −x or along a curve works as well. Each time is refined
+    to a fraction of a frame by a parabola through the three samples around the peak.
 
     The method finds the instant the foot's forward speed equals the pelvis's, which
     is before the true heel strike (the heel is still decelerating) and after the
@@ -63,9 +69,17 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
     if heel.shape != (n, 3) or toe.shape != (n, 3) or pelvis.shape != (n, 3):
         raise InputError(None, "markers", f"got heel {heel.shape}, toe {toe.shape}, pelvis {pelvis.shape} "
                                           "(expected three (frames, 3) arrays)")
+    # a pelvis marker appearing or disappearing moves the centre of those seen at once: the trajectory is cut
+    # there, as at a gap
+    speed = np.linalg.norm(np.diff(pelvis[:, :2], axis=0), axis=1) * rate_hz
+    with np.errstate(invalid="ignore"):
+        pelvis = np.where(np.concatenate([[False], speed > PELVIS_JUMP_M_S])[:, None], np.nan, pelvis)
     half = max(1, int(round(0.5 * rate_hz)))
     idx = np.arange(n)
-    ahead, behind = np.minimum(idx + half, n - 1), np.maximum(idx - half, 0)
+    first, last = np.zeros(n, int), np.full(n, n - 1)  # the pelvis's finite run around each frame
+    for a, b in zip(*true_runs(np.isfinite(pelvis[:, :2]).all(axis=1))):
+        first[a:b], last[a:b] = a, b - 1
+    ahead, behind = np.minimum(idx + half, last), np.maximum(idx - half, first)  # ±0.5 s, less at a run's ends
     step = pelvis[ahead, :2] - pelvis[behind, :2]
     length = np.linalg.norm(step, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -75,8 +89,9 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
     heel_rel = np.einsum("ij,ij->i", heel[:, :2] - pelvis[:, :2], direction)
     toe_rel = np.einsum("ij,ij->i", toe[:, :2] - pelvis[:, :2], direction)
     distance = max(1, int(round(min_interval_s * rate_hz)))
-    strikes = _peak_times(heel_rel, distance, min_prominence_m) / rate_hz
-    offs = _peak_times(-toe_rel, distance, min_prominence_m) / rate_hz
+    margin = max(1, int(round(EDGE_MARGIN_S * rate_hz)))
+    strikes = _peak_times(heel_rel, distance, min_prominence_m, margin) / rate_hz
+    offs = _peak_times(-toe_rel, distance, min_prominence_m, margin) / rate_hz
     if refine:
         strikes = _heel_landing(strikes, heel[:, 2], rate_hz, window_s=(-0.02, 0.1))
     return Events.concatenate([
@@ -85,8 +100,9 @@ def kinematic_events(heel, toe, pelvis_centre, rate_hz: float, side: str, *, ref
     ])
 
 
-def _peak_times(y: np.ndarray, distance: int, prominence: float) -> np.ndarray:
-    """Sub-frame positions (in frames) of the maxima of ``y``, found in each finite run separately."""
+def _peak_times(y: np.ndarray, distance: int, prominence: float, margin: int = 1) -> np.ndarray:
+    """Sub-frame positions (in frames) of the maxima of ``y``, found in each finite run separately, at least
+    ``margin`` frames inside it (a marker's last frames before a gap are its least reliable)."""
     times = []
     for a, b in zip(*true_runs(np.isfinite(y))):
         seg = y[a:b]
@@ -95,6 +111,7 @@ def _peak_times(y: np.ndarray, distance: int, prominence: float) -> np.ndarray:
         from scipy.signal import find_peaks  # here, not at import: scipy.signal is slow to import
 
         peaks, _ = find_peaks(seg, distance=distance, prominence=prominence)
+        peaks = peaks[(peaks >= margin) & (peaks < seg.size - margin)]
         if peaks.size == 0:
             continue
         y0, y1, y2 = seg[peaks - 1], seg[peaks], seg[peaks + 1]
