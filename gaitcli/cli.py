@@ -28,6 +28,7 @@ from gaitcli.kinematics.subject import SEXES
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.run.config import configure
+from gaitcli.signal.emg_stage import EmgConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.synth.gait import CONDITIONS
 from gaitcli.synth.recording import DEFAULT_NOISE_MM, SYNTH_GAITS, SYNTH_MARKER_SETS
@@ -240,6 +241,20 @@ def _run_exporting(console: Console, trial, names, cfg, *, out, plots: bool, exp
             console.info(f"idyn: exported {path}")
 
 
+@gait.command("emg")
+@_trial_options
+@_config_option(EmgConfig, "normalise", "--normalise")
+@_config_option(EmgConfig, "envelope_cutoff_hz", "--envelope-cutoff")
+@_config_option(FilterConfig, "events", "--events")
+@click.pass_obj
+def emg_command(console: Console, trial, out, pipeline, no_plots, normalise, envelope_cutoff_hz, events):
+    """EMG: band-pass, rectify, linear envelope, on/off, mean ± SD over each muscle's strides (4.5.4); channels
+    by subject.yaml's emg map, else by their labels."""
+    cfg = configure(pipeline, emg={"normalise": normalise, "envelope_cutoff_hz": envelope_cutoff_hz},
+                    filter={"events": events})
+    console.run(trial, ["emg"], cfg, out=out, plots=not no_plots, show="emg")
+
+
 @gait.command("muscles")
 @_trial_options
 @_config_option(MusclesConfig, "method", "--method")
@@ -350,9 +365,12 @@ def predict_command(console: Console, trial, out, reference, subject, init, work
                    "subject.yaml; walk k has the seed SEED + k - 1.")
 @click.option("--walks", type=click.IntRange(min=1, max=99), default=3, show_default=True,
               help="With --session: the number of walks.")
+@click.option("--emg", is_flag=True,
+              help="Also an EMG channel per muscle and leg (mV), modulated by the truth's activations (EID on the "
+                   "true motion; truth/activations.csv), mapped in subject.yaml.")
 @click.pass_obj
 def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides,
-                  mass_kg, stature_m, sex, period_s, marker_set, gait_kind, session, walks):
+                  mass_kg, stature_m, sex, period_s, marker_set, gait_kind, session, walks, emg):
     """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/), or with
     --session a session folder of several walks."""
     from gaitcli.synth import write_trial
@@ -363,13 +381,15 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
                "plate_noise_N": plate_noise_N, "strides": strides, "mass_kg": mass_kg, "stature_m": stature_m,
                "sex": sex, "period_s": period_s, "marker_set": marker_set, "gait": gait_kind}
     if session:
+        if emg:
+            raise click.UsageError("--emg writes one trial (not with --session)")
         written = write_session(out_dir, walks=walks, seed=seed, **options)
         console.info(f"synth: wrote {out_dir} ({condition}, a static and {len(written)} walks of "
                      f"{written[0].design.speed_m_s:.2f} m/s)")
         return
-    trial = write_trial(out_dir, seed=seed, **options)
+    trial = write_trial(out_dir, seed=seed, emg=emg, **options)
     console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames, "
-                 f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates)")
+                 f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates{', 16 EMG channels' if emg else ''})")
 
 
 @gait.command("reference")
@@ -443,7 +463,10 @@ def run_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, fra
         return
     if exports and "idyn" not in cfg.stages:
         raise click.UsageError("--export exports idyn's results: the pipeline has no idyn stage")
-    _run_exporting(console, trial, cfg.stages, cfg, out=out, plots=not no_plots, exports=exports, show=None,
+    from gaitcli.run.pipeline import trial_stages
+
+    _run_exporting(console, trial, trial_stages(trial, cfg), cfg, out=out, plots=not no_plots, exports=exports,
+                   show=None,
                    workers=workers, scheduler=scheduler)
 
 

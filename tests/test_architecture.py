@@ -158,7 +158,8 @@ def test_every_hdf5_file_is_opened_by_io_h5():
 def test_report_holds_the_page_and_the_figures_only():
     # stage writers live beside their stage, exports in io/, the progress display beside the CLI, bands in signal/
     assert {p.stem for p in (PACKAGE / "report").glob("*.py")} == {"__init__", "html", "plots", "predict_plots",
-                                                                     "study_plots", "session_plots", "compare_plots"}
+                                                                     "study_plots", "session_plots", "compare_plots",
+                                                                     "emg_plots"}
     classes = {n.name for path in sources("report") for n in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
                if isinstance(n, ast.ClassDef)}
     assert classes == {"Page"}  # the pages written; no container a stage could come to need

@@ -7,16 +7,17 @@ import dataclasses
 import pytest
 import yaml
 
-from gaitcli.core.registry import stage_names
 from gaitcli.dynamics.stage import IdynConfig
 from gaitcli.errors import InputError
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.resources import pipeline_file
 from gaitcli.run.config import PipelineConfig, configure, load_pipeline, pipeline_from_dict, to_yaml, with_overrides
+from gaitcli.signal.emg_stage import EmgConfig
 from gaitcli.signal.stage import FilterConfig
 
-SECTIONS = {"filter": FilterConfig, "idyn": IdynConfig, "muscles": MusclesConfig, "predict": PredictConfig}
+SECTIONS = {"filter": FilterConfig, "idyn": IdynConfig, "emg": EmgConfig, "muscles": MusclesConfig,
+            "predict": PredictConfig}
 
 
 def _error(data, path="p.yaml") -> InputError:
@@ -77,7 +78,7 @@ def test_partial_file_keeps_other_defaults(tmp_path):
     path = tmp_path / "p.yaml"
     path.write_text("stages: [idyn, filter, muscles]\nfilter:\n  cutoff_hz: 8\nmuscles:\n  method: so\n")
     cfg = load_pipeline(path)
-    assert cfg.stages == stage_names()[:3]  # run in pipeline order whatever the file's order
+    assert cfg.stages == ("filter", "idyn", "muscles")  # run in pipeline order whatever the file's order
     assert cfg.filter == dataclasses.replace(FilterConfig(), cutoff_hz=8.0)
     assert isinstance(cfg.filter.cutoff_hz, float)
     assert cfg.muscles == dataclasses.replace(MusclesConfig(), method="so")

@@ -50,7 +50,8 @@ def registered():
 
 
 def test_builtin_stages_in_dependency_order():
-    assert stage_names()[:4] == ("filter", "idyn", "muscles", "predict")
+    assert stage_names()[:5] == ("filter", "idyn", "emg", "muscles", "predict")
+    assert requirements("emg") == ("filter", "emg")
     assert requirements("muscles") == ("filter", "idyn", "muscles")
     assert requirements("filter") == ("filter",)
     assert requirements("predict") == ("predict",)  # idyn is optional: asked for only with a trial
@@ -59,7 +60,7 @@ def test_builtin_stages_in_dependency_order():
 
 def test_a_stage_that_depends_on_an_unknown_stage_is_refused():
     config = example_namespace()["CadenceConfig"]
-    with pytest.raises(InputError, match="expected one of filter, idyn, muscles"):
+    with pytest.raises(InputError, match="expected one of filter, idyn, emg, muscles"):
         register(Stage(name="x", config=config, depends=("filtre",), h5_name="x.h5", run=lambda c, g: None))
     with pytest.raises(InputError, match="stage y: optional: got 'idin'"):
         register(Stage(name="y", config=config, optional=("idin",), h5_name="y.h5", run=lambda c, g: None))

@@ -34,7 +34,7 @@ import ezc3d
 import numpy as np
 
 from gaitcli.core.events import Events
-from gaitcli.core.recording import ForcePlate, Markers
+from gaitcli.core.recording import Analogs, ForcePlate, Markers
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import atomic_path
 from gaitcli.io.c3d import plate_axes
@@ -63,12 +63,14 @@ def write_c3d(
     model_to_lab=None,
     origin_mm=DEFAULT_ORIGIN_MM,
     metadata: Mapping[str, float] | None = None,
+    analogs: Analogs | None = None,
 ) -> Path:
     """Write markers (model axes, metres) and plates (model axes, SI) to a C3D file; return its path.
 
     ``origin_mm``: ORIGIN of every plate (surface centre → transducer origin in
     plate axes, mm). ``metadata``: subject parameters ``{"GROUP:NAME": number}`` (e.g.
-    ``PROCESSING:RightKneeWidth`` in mm, as Vicon writes them). The file appears atomically.
+    ``PROCESSING:RightKneeWidth`` in mm, as Vicon writes them). ``analogs``: further channels (EMG) after the
+    plates', at the plates' analog rate, in their own units. The file appears atomically.
     """
     path = Path(path)
     R = _check_rotation(path, model_to_lab)
@@ -94,7 +96,7 @@ def write_c3d(
     c["data"]["meta_points"]["camera_masks"] = np.zeros((7, len(markers.labels), n_frames), dtype=bool)
 
     if plates:
-        analogs, analog_rate, corners, origins = _plate_channels(path, plates, R, up_lab, n_frames, point_rate,
+        plate_analogs, analog_rate, corners, origins = _plate_channels(path, plates, R, up_lab, n_frames, point_rate,
                                                                  np.asarray(origin_mm, dtype=float))
         n = len(plates)
         labels = [f"{c}{k + 1}" for k in range(n) for c in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
@@ -111,16 +113,38 @@ def write_c3d(
         fp["CORNERS"]["value"] = corners
         fp["ORIGIN"]["value"] = origins
         fp["CHANNEL"]["value"] = np.arange(1, 6 * n + 1, dtype=int).reshape(n, 6).T
-        c["data"]["analogs"] = analogs
+        c["data"]["analogs"] = plate_analogs
     else:
-        params["ANALOG"]["RATE"]["value"] = np.array([point_rate])
-        c["data"]["analogs"] = np.zeros((1, 0, n_frames))
+        params["ANALOG"]["RATE"]["value"] = np.array([point_rate if analogs is None else analogs.rate_hz])
+        c["data"]["analogs"] = np.zeros((1, 0, n_frames if analogs is None else analogs.n_samples))
+    if analogs is not None:
+        _append_analogs(path, c, analogs)
 
     for key, value in (metadata or {}).items():
         group, name = key.split(":")
         c.add_parameter(group, name, [float(value)])
     write_frame_count(c, n_frames)  # more than 65 535 frames: the TRIAL fields hold the count
     return _write_atomically(c, path)
+
+
+def _append_analogs(path: Path, c, analogs: Analogs) -> None:
+    """``analogs``' channels after those already in ``c`` (same rate and samples), labels and units with them."""
+    params = c["parameters"]["ANALOG"]
+    rate = float(np.asarray(params["RATE"]["value"]).ravel()[0])
+    data = c["data"]["analogs"]
+    if data.shape[1] and (analogs.rate_hz != rate or analogs.n_samples != data.shape[2]):
+        raise InputError(path, "analogs", f"{analogs.n_samples} samples at {analogs.rate_hz:g} Hz (expected the "
+                                          f"plates' {data.shape[2]} at {rate:g} Hz)")
+    count = data.shape[1]
+    for name, values in (("LABELS", analogs.labels), ("DESCRIPTIONS", ("EMG",) * len(analogs.labels)),
+                         ("UNITS", analogs.units)):
+        before = list(params[name]["value"]) if count else []
+        params[name]["value"] = before + list(values)
+    params["SCALE"]["value"] = np.concatenate([np.ravel(params["SCALE"]["value"])[:count],
+                                               np.ones(len(analogs.labels))])
+    params["OFFSET"]["value"] = np.concatenate([np.ravel(params["OFFSET"]["value"])[:count],
+                                                np.zeros(len(analogs.labels))]).astype(int)
+    c["data"]["analogs"] = np.concatenate([data, analogs.values.T[None]], axis=1)
 
 
 def _plate_channels(path, plates, R, up_lab, n_frames, point_rate, origin_mm):

@@ -58,6 +58,7 @@ class Subject:
     measurements: dict[str, float] = field(default_factory=dict)
     measurements_source: str | None = None  # the file they came from (the .vsk's name)
     emg: dict[str, str] = field(default_factory=dict)  # EMG channel label → sided muscle (signal/emg_channels.py)
+    emg_mvc: str | None = None  # a C3D in the trial folder with maximal contractions of the same EMG channels
     mass_source: str = "subject.yaml"  # where mass_kg came from
     notes: tuple[str, ...] = ()  # where the subject's numbers came from, and what was assumed
 
@@ -69,7 +70,7 @@ class Subject:
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
         "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances", "knee_width_mm",
-        "ankle_width_mm", "marker_diameter_mm", "vsk", "trials", "emg")
+        "ankle_width_mm", "marker_diameter_mm", "vsk", "trials", "emg", "emg_mvc")
 #: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
 #: (2007); Hara et al. (2016); Davis et al. (1991, Plug-in Gait's); functional (SCORE, Ehrig et al. 2006, from the
 #: trial's hip motion); the lab's points
@@ -190,8 +191,8 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     emg = {label.strip(): sided_muscle(muscle, f"emg.{label}", path) for label, muscle in emg.items()}
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
                    trials=tuple(trials or ()), vsk=data.get("vsk"), static_frames=frames, marker_map=dict(marker_map),
-                   disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, emg=emg, **lengths,
-                   **widths)
+                   disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, emg=emg,
+                   emg_mvc=data.get("emg_mvc"), **lengths, **widths)
 
 
 def load_subject(path: str | Path) -> Subject:

@@ -1,5 +1,6 @@
-"""Writes the muscle stage's files: forces.csv, activations.csv, excitations.csv, metabolics.csv and
-muscles.h5 (the whole :class:`~gaitcli.muscles.stage.MuscleResult` under ``result/``), and gives its summary."""
+"""Writes the muscle stage's files: forces.csv, activations.csv, excitations.csv, metabolics.csv, where the trial
+has EMG emg_agreement.csv, and muscles.h5 (the whole :class:`~gaitcli.muscles.stage.MuscleResult` under
+``result/``), and gives its summary."""
 
 from __future__ import annotations
 
@@ -48,6 +49,12 @@ def write_muscle_outputs(folder: Path, result: MuscleResult, attrs: dict) -> dic
     metabolics = per_muscle(result, result.metabolic_rate_W, "metabolic_rate_W")
     metabolics["total_metabolic_rate_W"] = result.metabolic_rate_W.sum(axis=1)
     write_table(folder / "metabolics.csv", metabolics)
+    if result.emg is not None:
+        agreement = result.emg
+        write_table(folder / "emg_agreement.csv", {
+            "muscle": agreement.muscles, "channel": agreement.channels, "correlation": agreement.correlation,
+            "lag_s": agreement.lag_s, "lagged_correlation": agreement.lagged_correlation,
+            "on_off_agreement_pct": agreement.on_off_agreement_pct})
     data = record_datasets("result", result)
     for name in ("joint_moments_Nm", "passive_moments_Nm", "damping_moments_Nm", "muscle_moments_Nm",
                  "moment_error_Nm", "moment_shortfall_Nm"):

@@ -19,6 +19,7 @@ from gaitcli.dynamics.sagittal import SagittalExport, SagittalMotion
 from gaitcli.errors import InputError
 
 from .eid import JOINT_NAMES, OBJECTIVES, moment_shortfall, quadrature_weights, solve_eid
+from .emg_comparison import EmgAgreement
 from .forward import ValidationResult, validate_forward
 from .interval import prepare_leg
 from .limb import LimbParameters, MotionInterpolant
@@ -154,6 +155,7 @@ class MuscleResult:
     interval_s: tuple[float, ...] = ()
     events: Events | None = None  # the analysed side's events
     history: tuple[str, ...] = ()  # the processing steps that made it
+    emg: EmgAgreement | None = None  # the activations against the trial's EMG, where it has some (4.5.4)
 
     @property
     def max_moment_error_Nm(self) -> float:
@@ -177,6 +179,12 @@ class MuscleResult:
             out["max_moment_shortfall_Nm"] = dict(zip(JOINT_NAMES,
                                                       np.abs(self.moment_shortfall_Nm).max(axis=0).tolist()))
             out["diagnosis"] = self.diagnosis
+        if self.emg is not None:
+            out["emg"] = {name: {"channel": channel, "correlation": num(r), "lag_s": num(lag),
+                                 "lagged_correlation": num(r_lag), "on_off_agreement_pct": num(agree)}
+                          for name, channel, r, lag, r_lag, agree in zip(
+                              self.emg.muscles, self.emg.channels, self.emg.correlation, self.emg.lag_s,
+                              self.emg.lagged_correlation, self.emg.on_off_agreement_pct)}
         return out
 
 

@@ -282,7 +282,8 @@ def idyn_figures(h5_path: Path, folder: Path, *, title: str = "", band="default"
 
 def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path]:
     """Figs. 4.7–4.9: force, activation and excitation of each muscle over the interval (heel strikes and toe
-    offs of the analysed side marked), and ``metabolic_cost.png``: the metabolic energy of each muscle."""
+    offs of the analysed side marked), ``metabolic_cost.png``: the metabolic energy of each muscle, and where the
+    trial has EMG ``activations_emg.png`` (Fig. 4.13)."""
     from gaitcli.muscles.stage import MuscleResult
 
     result = read_result(h5_path, MuscleResult, what="gait muscles")
@@ -333,4 +334,8 @@ def muscle_figures(h5_path: Path, folder: Path, *, title: str = "") -> list[Path
                  fontsize=9)
     fig.subplots_adjust(left=0.25, right=0.97, top=0.9, bottom=0.14)
     written.append(save(fig, folder / "metabolic_cost.png"))
+    if result.emg is not None:
+        from gaitcli.report.emg_plots import activation_emg_figure
+
+        written.append(activation_emg_figure(result, folder, title=title))
     return written

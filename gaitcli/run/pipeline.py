@@ -377,6 +377,15 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
     return sorted(outcomes, key=lambda o: order[o.stage])
 
 
+def trial_stages(trial: Path | None, cfg: PipelineConfig) -> tuple[str, ...]:
+    """What ``gait run`` performs on one trial: the pipeline's stages, and ``emg`` where the trial's subject.yaml
+    maps EMG channels (``emg:``)."""
+    names = tuple(cfg.stages)
+    if "emg" not in names and trial is not None and open_trial(trial).subject.emg:
+        names += ("emg",)
+    return names
+
+
 def run_stage(trial: Path | None, name: str, cfg: PipelineConfig, **options) -> StageOutcome:
     """Run one stage (and whatever it needs) on one trial; the outcome of ``name`` (see :func:`run_stages`)."""
     return next(o for o in run_stages(trial, [name], cfg, **options) if o.stage == name)

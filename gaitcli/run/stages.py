@@ -32,6 +32,7 @@ from gaitcli.muscles.stage import MuscleResult, MusclesConfig, run_muscles_stage
 from gaitcli.predict.checks import failed_checks
 from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult
+from gaitcli.signal.emg_stage import EmgConfig, EmgResult
 from gaitcli.signal.stage import FilterConfig, filter_trial
 
 
@@ -45,11 +46,50 @@ def _idyn(ctx: StageContext, cfg: IdynConfig):
 
 
 def _muscles(ctx: StageContext, cfg: MusclesConfig):
+    """The muscle stage; where subject.yaml maps EMG channels, its activations against the emg stage's
+    envelopes (:func:`gaitcli.muscles.emg_comparison.compare_with_emg`)."""
+    from dataclasses import replace
+
+    from gaitcli.muscles.emg_comparison import compare_with_emg
+
     ctx.report(f"muscles ({cfg.method.upper()})", 0, 1)
     result = run_muscles_stage(ctx.inputs["idyn"], cfg, stature_m=ctx.subject.stature_m, sex=ctx.subject.sex,
                                source=ctx.input_paths.get("idyn"))
     ctx.report(f"muscles ({cfg.method.upper()})", 1, 1)
+    if ctx.subject.emg:
+        emg = ctx.optional("emg")
+        result = replace(result, emg=compare_with_emg(result.time_s, result.activations, result.muscle_names,
+                                                      result.side, emg))
     return result
+
+
+def _emg(ctx: StageContext, cfg: EmgConfig) -> EmgResult:
+    """The emg stage on the trial's analog channels and the filter stage's events; the MVC trial subject.yaml
+    names (``emg_mvc``, checked inside the trial folder by run/trial.py) read for its channels alone."""
+    import warnings
+
+    from gaitcli.errors import GaitWarning
+    from gaitcli.io.c3d import read_c3d
+    from gaitcli.signal.emg_stage import run_emg
+
+    trial = ctx.inputs["filter"]
+    mvc_path = ctx.folder / ctx.subject.emg_mvc if ctx.subject.emg_mvc else None
+    mvc = None
+    if mvc_path is not None and cfg.normalise != "peak":
+        with warnings.catch_warnings():  # markers and plates of a contraction trial are not read
+            warnings.filterwarnings("ignore", category=GaitWarning)
+            mvc = read_c3d(mvc_path, to_model_axes=False).analogs
+        if mvc is None:
+            raise InputError(mvc_path, "emg_mvc", "the MVC trial has no analog channels besides its force plates "
+                                                  "(expected the EMG channels of the trial)")
+    return run_emg(ctx.recording().analogs, trial.events, ctx.subject.emg or None, cfg, mvc=mvc,
+                   source=ctx.trial_path, map_source=ctx.subject_path, mvc_source=mvc_path, history=trial.history)
+
+
+def _emg_figures(h5_path, folder, title):
+    from gaitcli.report.emg_plots import emg_figures
+
+    return emg_figures(h5_path, folder, title=title)
 
 
 def _unconverged_muscles(result: MuscleResult) -> str:
@@ -92,6 +132,13 @@ def describe_idyn(s: dict) -> str:
             f"{_number(s.get('stance_right_pct'), '.0f')}/{_number(s.get('stance_left_pct'), '.0f')} %")
 
 
+def describe_emg(s: dict) -> str:
+    """``emg: 8 channels, 4 strides, normalised to peak`` (and the channels that clip)."""
+    text = (f"{len(s.get('channels', []))} channels, {s.get('strides')} strides, normalised to "
+            f"{s.get('normalisation')}")
+    return text + (f"; clipping: {', '.join(s['clipped'])}" if s.get("clipped") else "")
+
+
 def describe_muscles(s: dict) -> str:
     """``muscles: eid right: converged, 215 J`` (and excitations outside [0, 1], the validation's RMS)."""
     side = {"r": "right", "l": "left"}.get(s.get("side"), s.get("side"))
@@ -127,8 +174,13 @@ IDYN = register(Stage(
     read=lambda path: read_result(path, SagittalExport, "sagittal"), handoff=lambda result: result.sagittal,
     h5_name="idyn.h5", plots=_figures("idyn_figures"), describe=describe_idyn))
 
+EMG = register(Stage(
+    name="emg", config=EmgConfig, depends=("filter",), run=_emg,
+    write=_writer("gaitcli.signal.outputs", "write_emg_outputs"), result=EmgResult, h5_name="emg.h5",
+    plots=lambda h5_path, folder, title: _emg_figures(h5_path, folder, title), describe=describe_emg))
+
 MUSCLES = register(Stage(
-    name="muscles", config=MusclesConfig, depends=("idyn",), run=_muscles,
+    name="muscles", config=MusclesConfig, depends=("idyn",), optional=("emg",), run=_muscles,
     write=_writer("gaitcli.muscles.outputs", "write_muscle_outputs"),
     result=MuscleResult, h5_name="muscles.h5",
     plots=_figures("muscle_figures"), folder=lambda cfg: f"muscles/{cfg.variant}",

@@ -39,6 +39,7 @@ class TrialFolder:
     static_path: Path | None = None
     vsk_path: Path | None = None  # the Vicon subject file whose parameters are the subject's measurements
     walk: bool = False  # one walk of a session folder (trial_path), not a trial folder
+    emg_mvc_path: Path | None = None  # the MVC trial subject.yaml names (emg_mvc)
 
     @property
     def name(self) -> str:
@@ -62,7 +63,8 @@ class TrialFolder:
         return output_root(self.ref)
 
     def input_files(self) -> list[Path]:
-        paths = (self.subject_path, self.trial_path, self.forces_path, self.static_path, self.vsk_path)
+        paths = (self.subject_path, self.trial_path, self.forces_path, self.static_path, self.vsk_path,
+                 self.emg_mvc_path)
         return list(dict.fromkeys(p for p in paths if p))
 
 
@@ -239,7 +241,8 @@ def open_walk(path: str | Path) -> TrialFolder:
         raise InputError(walk, None, f"a walk may not be named {SESSION_OUTPUT!r}: gait_out/{SESSION_OUTPUT}/ holds "
                                      "the session's own outputs (rename the file)")
     return TrialFolder(folder=folder, subject_path=subject_path, subject=subject, trial_path=walk,
-                       static_path=session_static(folder, subject), vsk_path=vsk_path, walk=True)
+                       static_path=session_static(folder, subject), vsk_path=vsk_path, walk=True,
+                       emg_mvc_path=_named_file(folder, subject.emg_mvc, "emg_mvc"))
 
 
 def open_trial(folder: str | Path) -> TrialFolder:
@@ -270,7 +273,8 @@ def open_trial(folder: str | Path) -> TrialFolder:
     if static is None and (folder / "static.c3d").is_file():
         static = _found_file(folder, folder / "static.c3d")
     return TrialFolder(folder=folder, subject_path=subject_path, subject=subject,
-                       trial_path=trial, forces_path=forces, static_path=static, vsk_path=vsk_path)
+                       trial_path=trial, forces_path=forces, static_path=static, vsk_path=vsk_path,
+                       emg_mvc_path=_named_file(folder, subject.emg_mvc, "emg_mvc"))
 
 
 def sha256(path: str | Path) -> str:

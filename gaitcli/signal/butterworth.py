@@ -87,7 +87,8 @@ def pad_length(sos: np.ndarray) -> int:
                                         "(expected a cut-off nearer the signal's rate)")
 
 
-def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int = 0) -> np.ndarray:
+def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int = 0,
+            padtype: str = "odd") -> np.ndarray:
     """Zero-lag low-pass Butterworth filter along ``axis`` (3.1.4); net half-power cut-off ``cutoff_hz``.
 
     An ``order``-th order filter designed at :func:`design_frequency_hz` is run forward and
@@ -109,16 +110,19 @@ def lowpass(x, /, *, rate_hz: float, cutoff_hz: float, order: int = 2, axis: int
         Order of one pass (the net filter's is twice that).
     axis : int
         The time axis.
+    padtype : str
+        ``"odd"`` (a trajectory continues its trend) or ``"even"`` (a rectified signal keeps its level: EMG
+        envelopes, whose odd extension about a sample near zero would be negative).
 
     Returns
     -------
     numpy.ndarray
         The filtered signal, same shape and units as ``x``.
     """
-    return zero_lag(x, design_sos(cutoff_hz, rate_hz, order=order), axis=axis)
+    return zero_lag(x, design_sos(cutoff_hz, rate_hz, order=order), axis=axis, padtype=padtype)
 
 
-def zero_lag(x, sos: np.ndarray, *, axis: int = 0) -> np.ndarray:
+def zero_lag(x, sos: np.ndarray, *, axis: int = 0, padtype: str = "odd") -> np.ndarray:
     """``x`` filtered by the sections ``sos`` forward and backward along ``axis`` (:func:`lowpass`'s rules for
     NaN and padding)."""
     from scipy.signal import sosfiltfilt
@@ -141,7 +145,7 @@ def zero_lag(x, sos: np.ndarray, *, axis: int = 0) -> np.ndarray:
             if stop - start < 2:
                 out[start:stop, cols] = seg
                 continue
-            out[start:stop, cols] = sosfiltfilt(sos, seg, axis=0, padtype="odd",
+            out[start:stop, cols] = sosfiltfilt(sos, seg, axis=0, padtype=padtype,
                                                 padlen=min(padlen, stop - start - 1))
     return np.moveaxis(out.reshape(moved.shape), 0, axis)
 

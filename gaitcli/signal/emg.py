@@ -3,7 +3,8 @@ with EMG envelopes).
 
     raw (V or mV) → the channel's mean removed (DC offset) → zero-lag Butterworth band-pass (default 20–450 Hz;
     the upper edge at most :data:`NYQUIST_FRACTION` of the Nyquist frequency) → full-wave rectification →
-    zero-lag low-pass (default 6 Hz): the linear envelope, in the channel's unit
+    zero-lag low-pass (default 6 Hz; the record's ends extended evenly, as a rectified signal's level continues):
+    the linear envelope, in the channel's unit
 
 Every filter runs forward and backward (no lag), each edge designed so that the net response is −3 dB there
 (``butterworth.design_frequency_hz``). On/off (:func:`activity`): a muscle is on where its onset envelope (the
@@ -67,7 +68,8 @@ def rectified(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ)
 def linear_envelope(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ,
                     cutoff_hz: float = ENVELOPE_CUTOFF_HZ) -> np.ndarray:
     """The linear envelope (module docstring) of raw EMG (samples, channels), in the channels' unit."""
-    return lowpass(rectified(raw, rate_hz=rate_hz, band_hz=band_hz), rate_hz=rate_hz, cutoff_hz=cutoff_hz)
+    return lowpass(rectified(raw, rate_hz=rate_hz, band_hz=band_hz), rate_hz=rate_hz, cutoff_hz=cutoff_hz,
+                   padtype="even")
 
 
 def activity(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ,
@@ -75,11 +77,19 @@ def activity(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ,
              min_burst_s: float = MIN_BURST_S) -> np.ndarray:
     """Whether each channel of raw EMG (samples, channels) is on at each sample (module docstring)."""
     rect = rectified(raw, rate_hz=rate_hz, band_hz=band_hz)
-    envelope = lowpass(rect, rate_hz=rate_hz, cutoff_hz=envelope_cutoff_hz)
-    onset = lowpass(rect, rate_hz=rate_hz, cutoff_hz=min(ONSET_CUTOFF_HZ, NYQUIST_FRACTION * rate_hz / 2))
-    baseline = np.nanpercentile(envelope, BASELINE_PERCENTILE, axis=0)
-    threshold = baseline + fraction * (np.nanmax(envelope, axis=0) - baseline)
-    on = onset > threshold
+    envelope = lowpass(rect, rate_hz=rate_hz, cutoff_hz=envelope_cutoff_hz, padtype="even")
+    return on_off(rect, envelope, rate_hz=rate_hz, fraction=fraction, min_burst_s=min_burst_s)
+
+
+def on_off(rect: np.ndarray, envelope: np.ndarray, *, rate_hz: float, fraction: float = ONSET_FRACTION,
+           min_burst_s: float = MIN_BURST_S) -> np.ndarray:
+    """On/off (samples, channels) from rectified EMG and its linear envelope (module docstring); False where
+    either is NaN."""
+    onset = lowpass(rect, rate_hz=rate_hz, cutoff_hz=min(ONSET_CUTOFF_HZ, NYQUIST_FRACTION * rate_hz / 2),
+                    padtype="even")
+    with np.errstate(invalid="ignore"):
+        baseline = np.nanpercentile(envelope, BASELINE_PERCENTILE, axis=0)
+        on = onset > baseline + fraction * (np.nanmax(envelope, axis=0) - baseline)
     shortest = max(1, int(round(min_burst_s * rate_hz)))
     for k in range(on.shape[1]):
         on[:, k] = _without_short_runs(on[:, k], shortest)

@@ -84,8 +84,9 @@ def channel_map(labels, mapping: dict | None = None, *, where: str = "emg", sour
                for label, muscle in mapping.items()}
         missing = [label for label in out if label not in labels]
         if missing:
-            raise InputError(source, where, f"channels {', '.join(missing)} are not in the trial (its analog "
-                                            f"channels: {', '.join(labels) or 'none'})")
+            said = f"channels {', '.join(missing)} are" if len(missing) > 1 else f"channel {missing[0]} is"
+            raise InputError(source, where, f"{said} not in the trial (its analog channels: "
+                                            f"{', '.join(labels) or 'none'})")
     else:
         out = {label: muscle for label in labels if (muscle := muscle_of(label))}
     seen: dict[str, str] = {}

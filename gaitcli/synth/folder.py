@@ -23,9 +23,10 @@ DISTURBED_SIDE = "r"
 
 
 def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, stature_m: float, sex: str,
-                 marker_set: str = "dissertation") -> str:
-    """The trial's ``subject.yaml``: the subject, its marker set (unless the dissertation's) and the condition's
-    added masses written out; the condition and its disturbed side as a comment."""
+                 marker_set: str = "dissertation", emg: dict[str, str] | None = None) -> str:
+    """The trial's ``subject.yaml``: the subject, its marker set (unless the dissertation's), the condition's
+    added masses written out and the EMG channels' map (``emg``); the condition and its disturbed side as a
+    comment."""
     from gaitcli.kinematics.disturbances import preset_disturbances
 
     data = {"mass_kg": mass_kg, "stature_m": stature_m, "sex": sex}
@@ -41,6 +42,8 @@ def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, statu
              "inertia_kgm2": [round(float(x), 8) for x in np.diag(np.asarray(d.inertia_kgm2))],
              "com_offset_m": [round(float(x), 6) for x in d.com_offset_m]}
             for d in preset_disturbances(condition, trial.calibration.segments, side=DISTURBED_SIDE)]
+    if emg:
+        data["emg"] = dict(emg)
     return f"# written by `gait synth`; the truth is in truth/\n{comment}\n" + yaml.safe_dump(data, sort_keys=False)
 
 
@@ -78,10 +81,12 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
 def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = DEFAULT_NOISE_MM,
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
                 stature_m: float = 1.78, sex: str = "male", period_s: float | None = None,
-                marker_set: str = "dissertation", gait: str = "normative") -> SyntheticTrial:
+                marker_set: str = "dissertation", gait: str = "normative", emg: bool = False) -> SyntheticTrial:
     """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/.
 
-    The options are those of :func:`~gaitcli.synth.recording.simulate_trial`; returns the trial written.
+    The options are those of :func:`~gaitcli.synth.recording.simulate_trial`; ``emg``: the trial also has an
+    EMG channel per muscle and leg (:mod:`gaitcli.synth.emg`; the activations in truth/activations.csv).
+    Returns the trial written.
     """
     from gaitcli.io.atomic import atomic_path, make_parent
     from gaitcli.io.c3d_write import write_c3d
@@ -92,13 +97,26 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(out, None, "is a file (expected the trial folder to write)")
+    analogs = activations = mapping = None
+    if emg:
+        from gaitcli.synth.emg import emg_channels, emg_map, truth_activations
+
+        activations = truth_activations(trial, stature_m=stature_m, sex=sex, mass_kg=mass_kg)
+        plates = trial.plates[0]
+        analogs = emg_channels(activations, trial.markers.time_s, plates.rate_hz, plates.n_samples,
+                               np.random.default_rng([seed, 39]))
+        mapping = emg_map()
     make_parent(out / "trial.c3d")
-    write_c3d(out / "trial.c3d", trial.markers, trial.plates, metadata=trial.metadata)
+    write_c3d(out / "trial.c3d", trial.markers, trial.plates, metadata=trial.metadata, analogs=analogs)
     write_c3d(out / "static.c3d", trial.static, [], metadata=trial.metadata)
     with atomic_path(out / "subject.yaml") as tmp:
         tmp.write_text(subject_yaml(trial, condition=condition, mass_kg=mass_kg, stature_m=stature_m, sex=sex,
-                                    marker_set=marker_set))
+                                    marker_set=marker_set, emg=mapping))
     write_truth(out / "truth", trial)
+    if activations is not None:
+        from gaitcli.io.outputs import write_table
+
+        write_table(out / "truth" / "activations.csv", {"time_s": trial.markers.time_s, **activations})
     return trial
 
 
