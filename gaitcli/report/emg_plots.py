@@ -16,8 +16,9 @@ from gaitcli.signal.emg_stage import EmgResult
 
 
 def muscle_title(muscle: str) -> str:
-    """``tibialis_anterior_r`` → ``tibialis anterior (right)``."""
-    return f"{muscle[:-2].replace('_', ' ')} ({'right' if muscle.endswith('_r') else 'left'})"
+    """``tibialis_anterior_r`` → ``tibialis anterior (right)``; a name without a side as it is."""
+    side = {"_r": " (right)", "_l": " (left)"}.get(muscle[-2:])
+    return f"{muscle[:-2].replace('_', ' ')}{side}" if side else muscle.replace("_", " ")
 
 
 def _grid(n: int):

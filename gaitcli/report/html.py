@@ -115,6 +115,22 @@ def _summary(folder: Path, numbers: tuple[str, ...]) -> dict:
     return summary
 
 
+def _records(folder: Path, summary: dict, key: str, numbers: tuple[str, ...]) -> dict[str, dict]:
+    """``summary[key]``, a mapping of name → record (a muscle's figures), each record's ``numbers`` numbers or
+    null; anything else an InputError naming the summary and the key."""
+    value = summary.get(key) or {}
+    path = folder / "summary.json"
+    if not isinstance(value, dict) or not all(isinstance(v, dict) for v in value.values()):
+        raise InputError(path, key, f"got {shown(value)} (expected a mapping of muscle → its figures)")
+    for name, record in value.items():
+        for field in numbers:
+            number = record.get(field)
+            if number is not None and (isinstance(number, bool) or not isinstance(number, (int, float))
+                                       or abs(number) > 1e300):
+                raise InputError(path, f"{key}.{name}.{field}", f"got {shown(number)} (expected a number)")
+    return value
+
+
 def _number(value, digits: int) -> str:
     return "—" if value is None else f"{float(value):.{digits}f}"
 
@@ -207,6 +223,8 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
                                "the left), and its centre of pressure, with the gait events (heel strike solid, toe "
                                "off dashed)."}
         parts.append("<h2>Signals</h2>" + "".join(_figure(p, captions.get(p.name, p.stem)) for p in figures))
+    if (root / "emg" / "emg.h5").is_file():
+        parts.append(emg_section(root / "emg", name, work / "emg"))
     for h5 in sorted((root / "muscles").glob("*/muscles.h5")) if (root / "muscles").is_dir() else ():
         method = h5.parent.name
         summary = _summary(h5.parent, ("metabolic_cost_J", "cost_of_transport_J_per_m"))
@@ -220,10 +238,44 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
         names = {"forces.png": "forces (N)", "activations.png": "activations (0–1)",
                  "excitations.png": "excitations (0–1)", "metabolic_cost.png": "metabolic energy per muscle (J)"}
         parts += [_figure(p, f"The 8 muscles of Table A.1: {names.get(p.name, p.stem)}, {method.upper()}.")
-                  for p in figures]
+                  for p in figures if p.name != "activations_emg.png"]
+        if summary.get("emg"):
+            agreement = _records(h5.parent, summary, "emg", ("correlation", "lag_s", "on_off_agreement_pct"))
+            rows = [(muscle.replace("_", " "), str(values.get("channel", "")), _number(values.get("correlation"), 2),
+                     _number(None if values.get("lag_s") is None else 1e3 * values["lag_s"], 0),
+                     _number(values.get("on_off_agreement_pct"), 0)) for muscle, values in agreement.items()]
+            parts.append("<h3>Activations against the trial's EMG (4.5.4)</h3>" + _table(
+                ("muscle", "EMG channel", "r", "lag (ms, EMG leading)", "on/off agreement (%)"), rows))
+            parts += [_figure(p, f"{method.upper()} activations (colour) over the EMG envelopes (black), normalised "
+                                 "to the peak of the mean over strides; bars: on (activation above, EMG below).")
+                      for p in figures if p.name == "activations_emg.png"]
     if (root / "predict" / "predict.h5").is_file():
         parts.append(predict_section(root / "predict", name, work / "predict"))
     return "".join(parts)
+
+
+def emg_section(folder: Path, name: str, work: Path) -> str:
+    """The EMG section: per muscle its channel, strides, where its mean envelope peaks and how much of the cycle
+    it is on; the clipping channels; the raw and cycle figures."""
+    from gaitcli.report.emg_plots import emg_figures, muscle_title
+
+    summary = _summary(folder, ("strides_right", "strides_left"))
+    muscles = _records(folder, summary, "muscles", ("strides", "peak_pct", "on_pct"))
+    rows = [(muscle_title(muscle), str(values.get("channel", "")), _number(values.get("strides"), 0),
+             _number(values.get("peak_pct"), 0), _number(values.get("on_pct"), 0))
+            for muscle, values in muscles.items()]
+    reference = "an MVC trial" if summary.get("normalisation") == "mvc" else "the peak of its mean over strides"
+    clipped = summary.get("clipped") or []
+    note = (f' <span class="bad">Clipping: {html.escape(", ".join(map(str, clipped)))}</span> (envelopes too low '
+            "where the signal is at the amplifier's limit).") if isinstance(clipped, list) and clipped else ""
+    figures = emg_figures(folder / "emg.h5", work, title=name)
+    captions = {"emg_raw.png": "Raw EMG (mV, mean removed), its linear envelope and on/off over the trial.",
+                "emg_cycle.png": f"Each muscle's envelope over its foot's gait cycle, mean ± SD over the strides "
+                                 f"(normalised to {reference}), and its on/off per stride."}
+    return (f"<h2>EMG</h2><p>{len(rows)} channels, {summary.get('strides_right', 0)} right and "
+            f"{summary.get('strides_left', 0)} left strides; envelopes normalised to {reference}.{note}</p>"
+            + _table(("muscle", "channel", "strides", "mean envelope peaks at (% cycle)", "on (% of cycle)"), rows)
+            + "".join(_figure(p, captions.get(p.name, p.stem)) for p in figures))
 
 
 def predict_section(folder: Path, name: str, work: Path) -> str:
@@ -498,7 +550,7 @@ def find_report(out_dir: Path) -> tuple[str, Path]:
         if (study / "study.csv").is_file():
             return "study", study
     for root in (out_dir, out_dir / "gait_out"):
-        if any((root / s / "summary.json").is_file() for s in ("filter", "idyn", "predict")) or \
+        if any((root / s / "summary.json").is_file() for s in ("filter", "idyn", "emg", "predict")) or \
                 list(root.glob("muscles/*/summary.json")):
             return "trial", root
     raise InputError(out_dir, None, "holds no stage outputs (expected filter/, idyn/, muscles/ or predict/ with "

@@ -28,7 +28,8 @@ from .conftest import MINIMAL_SUBJECT, build_once, copy_sample, gait, gait_many,
 def _build(root):
     trial = root / "synth"
     steps = {}
-    for args in (("synth", trial, "--emg"), ("run", trial), ("muscles", trial, "--method", "eid")):
+    for args in (("synth", trial, "--emg"), ("run", trial), ("muscles", trial, "--method", "eid"),
+                 ("report", trial)):
         steps[args[0]] = gait(*args, cwd=root).to_json()
     return steps
 
@@ -82,6 +83,16 @@ def test_eid_activations_agree_with_the_envelopes_and_swapped_channels_do_not(sy
                                dataclasses.replace(emg, muscles=tuple(muscles)))
     assert np.median(swapped.correlation) <= 0.5, swapped.correlation
     assert np.mean(swapped.correlation) <= table.correlation.mean() - 0.4
+
+
+def test_the_report_has_an_emg_section_and_the_agreement_table(synth):
+    trial, steps = synth
+    page = (trial / "gait_out" / "report.html").read_text()
+    emg = page[page.index("<h2>EMG</h2>"):page.index("<h2>Muscles: EID")]
+    assert "16 channels, 3 right and 3 left strides" in emg and emg.count("<img") == 2
+    assert emg.count("<tr>") == 17 and "<td>tibialis anterior (right)</td><td>R TA</td>" in emg
+    agreement = page[page.index("Activations against the trial's EMG"):]
+    assert agreement.count("<tr>") == 9 and "activations (colour) over the EMG envelopes" in agreement
 
 
 def test_bad_emg_input_stops_with_one_line_and_writes_nothing(synth, tmp_path):
