@@ -23,12 +23,12 @@ from gaitcli.core.interrupts import terminate_as_interrupt
 from gaitcli.core.registry import stage
 from gaitcli.core.validate import check_parameter, expected_one_of, parameter_spec
 from gaitcli.dynamics.stage import IdynConfig
+from gaitcli.emg.stage import EmgConfig
 from gaitcli.errors import GaitError, GaitWarning, InputError, NotConvergedError
 from gaitcli.kinematics.subject import SEXES
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.run.config import configure
-from gaitcli.signal.emg_stage import EmgConfig
 from gaitcli.signal.stage import FilterConfig
 from gaitcli.synth.gait import CONDITIONS
 from gaitcli.synth.recording import DEFAULT_NOISE_MM, SYNTH_GAITS, SYNTH_MARKER_SETS

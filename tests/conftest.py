@@ -38,7 +38,8 @@ def shared_pig_dir() -> Path:
 HEAVY_FILES = {
     "tests/cli/test_predict_cli.py": 36, "tests/cli/test_muscles_cli.py": 29, "tests/cli/test_muscles_samples.py": 24,
     "tests/cli/test_interrupts.py": 19, "tests/io/test_c3d_fuzz.py": 19, "tests/cli/test_batch_cli.py": 16,
-    "tests/cli/test_report_cli.py": 14, "tests/cli/test_emg.py": 24, "tests/io/test_c3d.py": 11, "tests/predict/test_nlp.py": 11,
+    "tests/cli/test_report_cli.py": 14, "tests/cli/test_emg.py": 20, "tests/io/test_c3d.py": 11,
+    "tests/predict/test_nlp.py": 11,
     "tests/dynamics/test_stage.py": 10, "tests/cli/test_regression_baseline.py": 10, "tests/muscles/test_methods.py": 9,
     "tests/cli/test_idyn_cli.py": 9, "tests/io/test_c3d_long.py": 8, "tests/cli/test_session_cli.py": 7,
     "tests/cli/test_compare_conditions_cli.py": 7, "tests/test_cluster.py": 6, "tests/predict/test_stage.py": 6,

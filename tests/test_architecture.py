@@ -12,7 +12,7 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "gaitcli"
 #: the stage packages, each allowed to import only the ones before it
-STAGE_ORDER = ("signal", "kinematics", "dynamics", "muscles", "predict")
+STAGE_ORDER = ("signal", "emg", "kinematics", "dynamics", "muscles", "predict")
 #: the edges: what no stage package may import
 EDGES = ("__main__", "cli", "progress", "run", "report", "synth")
 #: what every part may import: the package itself ("": ``from gaitcli import __version__``), and below it

@@ -8,12 +8,12 @@ import pytest
 import yaml
 
 from gaitcli.dynamics.stage import IdynConfig
+from gaitcli.emg.stage import EmgConfig
 from gaitcli.errors import InputError
 from gaitcli.muscles.stage import MusclesConfig
 from gaitcli.predict.stage import PredictConfig
 from gaitcli.resources import pipeline_file
 from gaitcli.run.config import PipelineConfig, configure, load_pipeline, pipeline_from_dict, to_yaml, with_overrides
-from gaitcli.signal.emg_stage import EmgConfig
 from gaitcli.signal.stage import FilterConfig
 
 SECTIONS = {"filter": FilterConfig, "idyn": IdynConfig, "emg": EmgConfig, "muscles": MusclesConfig,

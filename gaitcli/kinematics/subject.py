@@ -18,12 +18,12 @@ from typing import Any
 import numpy as np
 
 from gaitcli.core.validate import known_keys, number, one_of
+from gaitcli.emg.channels import sided_muscle
 from gaitcli.errors import InputError, shown
 from gaitcli.io.vsk import VskSubject
 from gaitcli.io.yamlfile import read_yaml
 from gaitcli.kinematics.disturbances import Disturbance
 from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
-from gaitcli.signal.emg_channels import sided_muscle
 
 SEXES = ("male", "female")
 #: the largest frame number a subject file may name (a C3D counts frames in 32 bits)
@@ -57,7 +57,7 @@ class Subject:
     # the .vsk's parameters {"PROCESSING:<NAME>": value} (mm, kg, rad), merged over the C3D's subject data
     measurements: dict[str, float] = field(default_factory=dict)
     measurements_source: str | None = None  # the file they came from (the .vsk's name)
-    emg: dict[str, str] = field(default_factory=dict)  # EMG channel label → sided muscle (signal/emg_channels.py)
+    emg: dict[str, str] = field(default_factory=dict)  # EMG channel label → sided muscle (emg/channels.py)
     emg_mvc: str | None = None  # a C3D in the trial folder with maximal contractions of the same EMG channels
     mass_source: str = "subject.yaml"  # where mass_kg came from
     notes: tuple[str, ...] = ()  # where the subject's numbers came from, and what was assumed

@@ -16,10 +16,10 @@ import numpy as np
 from gaitcli.core.events import SIDES, Events
 from gaitcli.core.validate import one_of, parameter
 from gaitcli.dynamics.sagittal import SagittalExport, SagittalMotion
+from gaitcli.emg.comparison import EmgAgreement
 from gaitcli.errors import InputError
 
 from .eid import JOINT_NAMES, OBJECTIVES, moment_shortfall, quadrature_weights, solve_eid
-from .emg_comparison import EmgAgreement
 from .forward import ValidationResult, validate_forward
 from .interval import prepare_leg
 from .limb import LimbParameters, MotionInterpolant

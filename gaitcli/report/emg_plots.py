@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.core.events import SIDE_NAMES
+from gaitcli.emg.stage import EmgResult
 from gaitcli.io.h5 import read_result
 from gaitcli.report.plots import SIDE_COLOUR, plt, save
 from gaitcli.signal.cycles import CYCLE_PCT
-from gaitcli.signal.emg_stage import EmgResult
 
 
 def muscle_title(muscle: str) -> str:

@@ -35,7 +35,7 @@ from gaitcli.io.outputs import plain_text, spreadsheet_text
 from gaitcli.run.cluster import Task, completed
 from gaitcli.run.cluster import workers as cluster_workers
 from gaitcli.run.config import PipelineConfig, to_yaml
-from gaitcli.run.pipeline import needed_stages
+from gaitcli.run.pipeline import needed_stages, trial_stages
 from gaitcli.run.trial import is_walk, open_trial, output_root, session_walks
 
 BATCH_SUMMARY = "batch_summary.csv"
@@ -166,7 +166,7 @@ def stale_stages(folder: Path, name: str, cfg: PipelineConfig, key: str) -> tupl
     except GaitError:
         return stages_of(cfg), []
     stale, rows = [], []
-    for stage in stages_of(cfg):
+    for stage in needed_stages(trial_stages(folder, cfg)):
         path = run.fresh(stage)
         try:
             summary = None if path is None else json.loads((path.parent / "summary.json").read_text())
@@ -263,7 +263,10 @@ def plan(lab_dir: Path, cfg: PipelineConfig, *, force: bool = False,
         name = folder.relative_to(lab_dir).as_posix() if folder != lab_dir else "."
         key = input_key(folder, cfg)
         if force:
-            todo.append((folder, name, key, tuple(cfg.stages)))
+            try:
+                todo.append((folder, name, key, trial_stages(folder, cfg)))
+            except GaitError:  # running it gives the reason
+                todo.append((folder, name, key, tuple(cfg.stages)))
             continue
         before = previous.get(name, [])
         if before and all(r.status == "failed" and r.exit_code == 2 and r.input_key == key for r in before):

@@ -26,13 +26,13 @@ from gaitcli.core.container import Trial
 from gaitcli.core.registry import Progress, Stage, StageContext, register
 from gaitcli.dynamics.sagittal import SagittalExport
 from gaitcli.dynamics.stage import IdynConfig, run_idyn
+from gaitcli.emg.stage import EmgConfig, EmgResult
 from gaitcli.errors import InputError
 from gaitcli.io.h5 import read_result
 from gaitcli.muscles.stage import MuscleResult, MusclesConfig, run_muscles_stage
 from gaitcli.predict.checks import failed_checks
 from gaitcli.predict.solve import NlpCache
 from gaitcli.predict.stage import PredictConfig, PredictResult
-from gaitcli.signal.emg_stage import EmgConfig, EmgResult
 from gaitcli.signal.stage import FilterConfig, filter_trial
 
 
@@ -47,10 +47,10 @@ def _idyn(ctx: StageContext, cfg: IdynConfig):
 
 def _muscles(ctx: StageContext, cfg: MusclesConfig):
     """The muscle stage; where subject.yaml maps EMG channels, its activations against the emg stage's
-    envelopes (:func:`gaitcli.muscles.emg_comparison.compare_with_emg`)."""
+    envelopes (:func:`gaitcli.emg.comparison.compare_with_emg`)."""
     from dataclasses import replace
 
-    from gaitcli.muscles.emg_comparison import compare_with_emg
+    from gaitcli.emg.comparison import compare_with_emg
 
     ctx.report(f"muscles ({cfg.method.upper()})", 0, 1)
     result = run_muscles_stage(ctx.inputs["idyn"], cfg, stature_m=ctx.subject.stature_m, sex=ctx.subject.sex,
@@ -68,9 +68,9 @@ def _emg(ctx: StageContext, cfg: EmgConfig) -> EmgResult:
     names (``emg_mvc``, checked inside the trial folder by run/trial.py) read for its channels alone."""
     import warnings
 
+    from gaitcli.emg.stage import run_emg
     from gaitcli.errors import GaitWarning
     from gaitcli.io.c3d import read_c3d
-    from gaitcli.signal.emg_stage import run_emg
 
     trial = ctx.inputs["filter"]
     mvc_path = ctx.folder / ctx.subject.emg_mvc if ctx.subject.emg_mvc else None
@@ -176,7 +176,7 @@ IDYN = register(Stage(
 
 EMG = register(Stage(
     name="emg", config=EmgConfig, depends=("filter",), run=_emg,
-    write=_writer("gaitcli.signal.outputs", "write_emg_outputs"), result=EmgResult, h5_name="emg.h5",
+    write=_writer("gaitcli.emg.outputs", "write_emg_outputs"), result=EmgResult, h5_name="emg.h5",
     plots=lambda h5_path, folder, title: _emg_figures(h5_path, folder, title), describe=describe_emg))
 
 MUSCLES = register(Stage(

@@ -21,10 +21,10 @@ from gaitcli.core.container import FootLoad, Trial
 from gaitcli.core.events import SIDES, Events
 from gaitcli.core.recording import Analogs
 from gaitcli.dynamics.sagittal import sagittal_export
+from gaitcli.emg.processing import BAND_HZ, bandpass
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.muscles.parameters import MUSCLE_NAMES
 from gaitcli.muscles.stage import MusclesConfig, run_muscles_stage
-from gaitcli.signal.emg import BAND_HZ, bandpass
 
 #: the channel label's muscle word (a lab's abbreviation; subject.yaml's emg map names the muscle)
 LABELS = {"iliopsoas": "IL", "rectus_femoris": "RF", "glutei": "GMAX", "hamstrings": "HAM", "vasti": "VAS",

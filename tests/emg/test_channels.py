@@ -1,12 +1,12 @@
-"""Which channel records which muscle (gaitcli/signal/emg_channels.py): labels as labs write them, a lab's own
+"""Which channel records which muscle (gaitcli/emg/channels.py): labels as labs write them, a lab's own
 map, and the errors that name what is wrong."""
 
 from __future__ import annotations
 
 import pytest
 
+from gaitcli.emg.channels import channel_map, muscle_of
 from gaitcli.errors import InputError
-from gaitcli.signal.emg_channels import channel_map, muscle_of
 
 #: the two real trials' EMG labels (../shared/data: c3d/BTS.c3d, emg/Gait.c3d) and what they record
 BTS = {"Left Rectus femoris": "rectus_femoris_l", "Right Rectus femoris": "rectus_femoris_r",
@@ -50,8 +50,8 @@ def test_two_channels_of_one_muscle_are_refused():
 
 
 def test_the_model_muscles_are_the_muscle_models():
-    # signal/ may not import muscles/ (docs/architecture.md): the names are written twice, kept equal here
+    # emg/ may not import muscles/ (docs/architecture.md): the names are written twice, kept equal here
+    from gaitcli.emg.channels import MODEL_MUSCLES
     from gaitcli.muscles.parameters import MUSCLE_NAMES
-    from gaitcli.signal.emg_channels import MODEL_MUSCLES
 
     assert MODEL_MUSCLES == MUSCLE_NAMES

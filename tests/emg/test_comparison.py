@@ -1,4 +1,4 @@
-"""Activations against EMG envelopes (gaitcli/muscles/emg_comparison.py) with known answers: an envelope that is
+"""Activations against EMG envelopes (gaitcli/emg/comparison.py) with known answers: an envelope that is
 the activation delayed by a known time gives that lag and r = 1 there, on/off agreeing everywhere; the
 channels of other muscles give low correlations."""
 
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcli.muscles.emg_comparison import compare_with_emg
-from gaitcli.signal.emg_stage import EmgResult
+from gaitcli.emg.comparison import compare_with_emg
+from gaitcli.emg.stage import EmgResult
 
 RATE_HZ = 1000.0
 NODES = np.linspace(1.0, 2.1, 51)  # a cycle's nodes, s

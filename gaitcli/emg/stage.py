@@ -3,7 +3,7 @@
 
 A pure function from the trial's analog channels, its gait events and the ``{channel label: muscle}`` map to an
 :class:`EmgResult`. Each channel: in volts (``ANALOG:UNITS`` V, mV or µV), the linear envelope and on/off of
-:mod:`gaitcli.signal.emg`, normalised (the peak of its stride-averaged envelope, or the same channel's envelope
+:mod:`gaitcli.emg.processing`, normalised (the peak of its stride-averaged envelope, or the same channel's envelope
 in an MVC trial: :func:`mvc_reference`), then cut into its own side's strides (heel strike to heel strike of the
 muscle's foot) and time-normalised to 0–100 % of the cycle.
 
@@ -23,11 +23,11 @@ import numpy as np
 from gaitcli.core.events import Events
 from gaitcli.core.recording import Analogs
 from gaitcli.core.validate import parameter
+from gaitcli.emg.channels import channel_map
+from gaitcli.emg.processing import BAND_HZ, ENVELOPE_CUTOFF_HZ, MIN_BURST_S, ONSET_FRACTION, on_off, rectified
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.signal.butterworth import lowpass
 from gaitcli.signal.cycles import CYCLE_POINTS, Stride, normalise, strides
-from gaitcli.signal.emg import BAND_HZ, ENVELOPE_CUTOFF_HZ, MIN_BURST_S, ONSET_FRACTION, on_off, rectified
-from gaitcli.signal.emg_channels import channel_map
 
 #: an analog rate below this carries no surface EMG (its power lies up to ~450 Hz), Hz
 MIN_RATE_HZ = 500.0
@@ -167,7 +167,7 @@ def _check_rate(analogs: Analogs, labels, source) -> None:
 
 
 def envelopes(raw_V: np.ndarray, rate_hz: float, cfg: EmgConfig) -> tuple[np.ndarray, np.ndarray]:
-    """The linear envelope (V) and on/off of raw EMG in volts (samples, channels) (:mod:`gaitcli.signal.emg`)."""
+    """The linear envelope (V) and on/off of raw EMG in volts (samples, channels) (:mod:`gaitcli.emg.processing`)."""
     rect = rectified(raw_V, rate_hz=rate_hz, band_hz=cfg.band_hz)
     envelope = lowpass(rect, rate_hz=rate_hz, cutoff_hz=cfg.envelope_cutoff_hz, padtype="even")
     return envelope, on_off(rect, envelope, rate_hz=rate_hz, fraction=cfg.onset_fraction,

@@ -8,7 +8,7 @@ result's nodes):
 - ``lag_s``: the delay τ in ±:data:`MAX_LAG_S` that maximises r between a(t) and e(t − τ) (τ > 0: the EMG
   leads, as the electromechanical delay makes it), and ``lagged_correlation`` that r;
 - ``on_off_agreement_pct``: the share of the nodes at which both are on or both off, each on by the same rule
-  (above its 5th percentile + :data:`~gaitcli.signal.emg.ONSET_FRACTION` of its range over the span; the EMG's
+  (above its 5th percentile + :data:`~gaitcli.emg.processing.ONSET_FRACTION` of its range over the span; the EMG's
   own on/off from the emg stage).
 """
 
@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitcli.signal.emg import BASELINE_PERCENTILE, ONSET_FRACTION
-from gaitcli.signal.emg_stage import EmgResult
+from gaitcli.emg.processing import BASELINE_PERCENTILE, ONSET_FRACTION
+from gaitcli.emg.stage import EmgResult
 
 #: the cross-correlation's lags are searched within ±this, s, in steps of :data:`LAG_STEP_S`
 MAX_LAG_S = 0.15

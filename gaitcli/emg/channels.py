@@ -14,7 +14,7 @@ import re
 
 from gaitcli.errors import InputError, shown
 
-#: the muscle model's muscles (muscles.parameters.MUSCLE_NAMES; signal/ may not import muscles/)
+#: the muscle model's muscles (muscles.parameters.MUSCLE_NAMES; emg/ may not import muscles/)
 MODEL_MUSCLES = ("iliopsoas", "rectus_femoris", "glutei", "hamstrings", "vasti", "gastrocnemius",
                  "tibialis_anterior", "soleus")
 #: muscles labs record that the model lumps with others or leaves out

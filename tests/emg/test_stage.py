@@ -1,4 +1,4 @@
-"""The emg stage (gaitcli/signal/emg_stage.py) on synthetic channels with known truth: envelopes over each
+"""The emg stage (gaitcli/emg/stage.py) on synthetic channels with known truth: envelopes over each
 muscle's own strides recover the activation that modulates them, whatever the channel's unit; peak and MVC
 normalisation; and bad EMG (a slow analog rate, an empty channel, a clipping channel, an MVC trial without the
 channel, a map naming absent channels) stopped or warned with the channel named."""
@@ -12,11 +12,11 @@ import pytest
 
 from gaitcli.core.events import Events
 from gaitcli.core.recording import Analogs
+from gaitcli.emg.stage import EmgConfig, run_emg
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.signal.cycles import CYCLE_PCT
-from gaitcli.signal.emg_stage import EmgConfig, run_emg
 
-from .test_emg import RATE_HZ, synthetic_emg
+from .test_processing import RATE_HZ, synthetic_emg
 
 PERIOD_S = 1.1
 DURATION_S = 6.0

@@ -1,4 +1,4 @@
-"""EMG processing (gaitcli/signal/emg.py) on synthetic EMG with known truth: the band-pass is zero-phase with its
+"""EMG processing (gaitcli/emg/processing.py) on synthetic EMG with known truth: the band-pass is zero-phase with its
 −3 dB points at the stated edges, the linear envelope recovers the activation that modulates band-limited noise,
 and on/off detection finds known bursts within 10 ms."""
 
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from gaitcli.emg.processing import BAND_HZ, activity, band_edges, bandpass, bursts, linear_envelope
 from gaitcli.errors import InputError
-from gaitcli.signal.emg import BAND_HZ, activity, band_edges, bandpass, bursts, linear_envelope
 
 RATE_HZ = 1000.0
 
