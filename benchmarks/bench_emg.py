@@ -18,9 +18,8 @@ import tempfile
 import warnings
 from pathlib import Path
 
-from timing import median_s, one_core
-
 import numpy as np
+from timing import median_s, one_core
 
 from gaitcli.core.events import Events
 from gaitcli.core.recording import Analogs
@@ -30,7 +29,8 @@ from gaitcli.emg.stage import EmgConfig, run_emg
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 REAL = {"BTS.c3d": (SHARED / "c3d" / "BTS.c3d", "mass_kg: 70\nstature_m: 1.75\nsex: male\nmarker_map: "
                     "{r heel: CAr, l heel: CAl, r met: MT2r, l met: MT2l}\n"),
-        "Gait.c3d": (SHARED / "emg" / "Gait.c3d", "mass_kg: 70\nstature_m: 1.75\nsex: male\nmarker_set: plug_in_gait\n")}
+        "Gait.c3d": (SHARED / "emg" / "Gait.c3d",
+                     "mass_kg: 70\nstature_m: 1.75\nsex: male\nmarker_set: plug_in_gait\n")}
 
 
 def synthetic(duration_s: float, rate_hz: float, channels: int = 16) -> tuple[Analogs, Events]:
@@ -77,7 +77,7 @@ def main(argv=None) -> int:
     for name, analogs, events in cases:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            seconds, result = median_s(lambda: run_emg(analogs, events, None, EmgConfig()), args.repeat)
+            seconds, result = median_s(lambda a=analogs, e=events: run_emg(a, e, None, EmgConfig()), args.repeat)
         duration = analogs.n_samples / analogs.rate_hz
         print(f"{name:<26} {len(result.channels):>8} {analogs.n_samples:>9} {seconds:>12.3f} "
               f"{duration / seconds:>12.0f} {result.stride_side.size:>8}")

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitcli.emg.processing import BASELINE_PERCENTILE, ONSET_FRACTION
+from gaitcli.emg.processing import on_threshold
 from gaitcli.emg.stage import EmgResult
 
 #: the cross-correlation's lags are searched within ±this, s, in steps of :data:`LAG_STEP_S`
@@ -51,10 +51,6 @@ def _r(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.corrcoef(x[ok], y[ok])[0, 1])
 
 
-def activity_of(values: np.ndarray, fraction: float = ONSET_FRACTION) -> np.ndarray:
-    """On where ``values`` (n, m) exceed their 5th percentile + ``fraction`` of their range (per column)."""
-    baseline = np.nanpercentile(values, BASELINE_PERCENTILE, axis=0)
-    return values > baseline + fraction * (np.nanmax(values, axis=0) - baseline)
 
 
 def compare_with_emg(time_s: np.ndarray, activations: np.ndarray, muscle_names, side: str,
@@ -73,7 +69,7 @@ def compare_with_emg(time_s: np.ndarray, activations: np.ndarray, muscle_names, 
                                 for _, j in pairs])
     emg_on = np.column_stack([np.interp(time_s, t_emg, emg.on[:, j].astype(float)) > 0.5 for _, j in pairs])
     a = np.asarray(activations, float)[:, [k for k, _ in pairs]]
-    activation_on = activity_of(a)
+    activation_on = a > on_threshold(a)
     for c, (_, j) in enumerate(pairs):
         shifted = [_r(a[:, c], np.interp(time_s - lag, t_emg, emg.envelope[:, j], left=np.nan, right=np.nan))
                    for lag in lags]

@@ -88,12 +88,18 @@ def on_off(rect: np.ndarray, envelope: np.ndarray, *, rate_hz: float, fraction: 
     onset = lowpass(rect, rate_hz=rate_hz, cutoff_hz=min(ONSET_CUTOFF_HZ, NYQUIST_FRACTION * rate_hz / 2),
                     padtype="even")
     with np.errstate(invalid="ignore"):
-        baseline = np.nanpercentile(envelope, BASELINE_PERCENTILE, axis=0)
-        on = onset > baseline + fraction * (np.nanmax(envelope, axis=0) - baseline)
+        on = onset > on_threshold(envelope, fraction)
     shortest = max(1, int(round(min_burst_s * rate_hz)))
     for k in range(on.shape[1]):
         on[:, k] = _without_short_runs(on[:, k], shortest)
     return on
+
+
+def on_threshold(values: np.ndarray, fraction: float = ONSET_FRACTION) -> np.ndarray:
+    """Per column of ``values`` (samples, channels): its :data:`BASELINE_PERCENTILE`-th percentile + ``fraction``
+    of its range above that (NaN samples ignored)."""
+    baseline = np.nanpercentile(values, BASELINE_PERCENTILE, axis=0)
+    return baseline + fraction * (np.nanmax(values, axis=0) - baseline)
 
 
 def _without_short_runs(on: np.ndarray, shortest: int) -> np.ndarray:

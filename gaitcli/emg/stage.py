@@ -205,6 +205,17 @@ def _cycles(values: np.ndarray, time_s: np.ndarray, found: list[Stride]) -> np.n
     return np.stack([normalise(values, time_s, s) for s in found])
 
 
+def _over_own_strides(per_stride: np.ndarray, own: np.ndarray, reduce, minimum: int = 1) -> np.ndarray:
+    """(101, channels): ``reduce`` of each channel's cycles (``per_stride`` (strides, 101, channels)) over its own
+    strides (``own`` (strides, channels)); NaN where it has fewer than ``minimum``."""
+    out = np.full(per_stride.shape[1:], np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a percentage no stride covers (NaN at the record's end)
+        for k in np.flatnonzero(own.sum(axis=0) >= minimum):
+            out[:, k] = reduce(per_stride[own[:, k], :, k])
+    return out
+
+
 def run_emg(analogs: Analogs | None, events: Events, mapping: dict[str, str] | None, cfg: EmgConfig, *,
             mvc: Analogs | None = None, source=None, map_source=None, mvc_source=None,
             history: tuple[str, ...] = ()) -> EmgResult:
@@ -242,29 +253,21 @@ def run_emg(analogs: Analogs | None, events: Events, mapping: dict[str, str] | N
 
     envelope_V, on = envelopes(raw, analogs.rate_hz, cfg)
     time_s = np.arange(raw.shape[0]) / analogs.rate_hz
-    span = (time_s[0], time_s[-1])
-    cycles = [s for s in strides(events) if s.start_s >= span[0] and s.end_s <= span[1]]
+    cycles = [s for s in strides(events) if s.start_s >= time_s[0] and s.end_s <= time_s[-1]]
     side = np.array([s.side for s in cycles], dtype="<U1")
-    own = np.array([[s == m[-1] for m in muscles] for s in side], bool).reshape(len(cycles), len(muscles))
+    own = (side[:, None] == np.array([m[-1] for m in muscles])[None, :]).reshape(len(cycles), len(muscles))
     stride_envelope_V = _cycles(envelope_V, time_s, cycles)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # a side without strides: NaN
-        mean_V = np.stack([np.nanmean(stride_envelope_V[own[:, k], :, k], axis=0) for k in range(len(channels))],
-                          axis=1)
-        if reference is None:  # the peak of the stride-averaged envelope; without strides, of the envelope
-            reference = np.where(np.isfinite(np.nanmax(mean_V, axis=0)), np.nanmax(mean_V, axis=0),
-                                 np.nanmax(envelope_V, axis=0))
+    mean_V = _over_own_strides(stride_envelope_V, own, lambda x: np.nanmean(x, axis=0))
+    if reference is None:  # the peak of the stride-averaged envelope; without strides, of the envelope
+        peak_of_mean = np.max(np.where(np.isfinite(mean_V), mean_V, -np.inf), axis=0)
+        reference = np.where(np.isfinite(peak_of_mean), peak_of_mean, np.nanmax(envelope_V, axis=0))
     for k in np.flatnonzero(~own.any(axis=0)):
         warnings.warn(f"{source or 'trial'}: EMG channel {channels[k]} ({muscles[k]}): no complete stride of its "
                       "foot in the trial: no cycle average, normalised to its peak", GaitWarning, stacklevel=2)
     stride_envelope = stride_envelope_V / reference
     stride_on = _cycles(on.astype(float), time_s, cycles) > 0.5
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        sd = np.stack([np.nanstd(stride_envelope[own[:, k], :, k], axis=0, ddof=1) if own[:, k].sum() > 1
-                       else np.full(CYCLE_POINTS, np.nan) for k in range(len(channels))], axis=1)
-        on_share = np.stack([stride_on[own[:, k], :, k].mean(axis=0) if own[:, k].any()
-                             else np.full(CYCLE_POINTS, np.nan) for k in range(len(channels))], axis=1)
+    sd = _over_own_strides(stride_envelope, own, lambda x: np.nanstd(x, axis=0, ddof=1), minimum=2)
+    on_share = _over_own_strides(stride_on.astype(float), own, lambda x: x.mean(axis=0))
     step = (f"emg: {len(channels)} channels, band {cfg.band_low_hz:g}–{cfg.band_high_hz:g} Hz, envelope "
             f"{cfg.envelope_cutoff_hz:g} Hz, normalised to {'the MVC trial' if normalisation == 'mvc' else 'peak'}"
             f", {len(cycles)} strides")
