@@ -57,8 +57,8 @@ class EmgConfig:
     min_burst_s: float = parameter(MIN_BURST_S, low=0.0, help="Bursts and gaps shorter than this are dropped, s.")
     normalise: str = parameter("auto", choices=NORMALISATIONS,
                                help="Envelopes as a fraction of: the peak of the stride-averaged envelope (peak), "
-                                    "the MVC trial's peak envelope (mvc: subject.yaml's emg_mvc), or mvc where "
-                                    "subject.yaml names one, else peak (auto).")
+                                    "the MVC trial's highest 0.5 s mean envelope (mvc: subject.yaml's emg_mvc), or "
+                                    "mvc where subject.yaml names one, else peak (auto).")
 
     @property
     def band_hz(self) -> tuple[float, float]:
