@@ -278,12 +278,17 @@ def speed_rows(v: Variables) -> Rows:
     return rows
 
 
-def shape_rows(v: Variables) -> Rows:
-    """LSE over the chosen phases' instants of a knee (swing) or a thigh (late stance) ≥ its bound (5.45–5.48)."""
+def shape_rows(v: Variables, foot_flat_min_pct: float = 0.0) -> Rows:
+    """LSE over the chosen phases' instants of a knee (swing) or a thigh (late stance) ≥ its bound (5.45–5.48);
+    each heel rocker (phases 1 and 5, HS→TC) ≥ ``foot_flat_min_pct`` % of the cycle, s (our addition,
+    ``PredictSettings.foot_flat_min_pct``; the symmetric model's phase 5 is its phase 1)."""
     rows, grid = Rows(), v.grid
     for index, shape_phases, minimum in GAIT_SHAPE.values():
         chosen = sorted({int(grid.instant[j]) for j in range(grid.points) if v.phases[j] in shape_phases})
         rows.add(smooth_max(ca.vertcat(*[v.values["y"][i][index] for i in chosen])), minimum, np.inf)
+    if foot_flat_min_pct > 0:
+        for phase in (0,) if v.symmetric else (0, 4):
+            rows.add(v.durations[phase] - foot_flat_min_pct / 100 * v.period, 0.0, np.inf)
     return rows
 
 

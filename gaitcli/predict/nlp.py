@@ -317,7 +317,7 @@ def constraint_rows(v: Variables, transcriber: Transcriber, settings: PredictSet
             "friction": groups.friction_rows(points, s.friction_coefficient),
             "clearance": groups.clearance_rows(points, model, s.clearance_m),
             "excitation": groups.excitation_rows(v, leg_activations(v, muscles.muscle.params)),
-            "speed": groups.speed_rows(v), "shape": groups.shape_rows(v),
+            "speed": groups.speed_rows(v), "shape": groups.shape_rows(v, s.foot_flat_min_pct),
             "hip_bound": groups.hip_bound_rows(v, s, model, muscles, forces),
             "windows": groups.windows_rows(v, segments, reach), "monotone": groups.monotone_rows(v, s)}
 

@@ -52,6 +52,11 @@ class PredictSettings:
     swing_hip_moment_Nm_per_kg: float = 0.0
     #: > 0: the hip moments stay within ± this, N·m/kg, at every instant; 0: unbounded, as in the dissertation
     hip_moment_Nm_per_kg: float = 0.0
+    #: each foot's heel rocker (heel strike to the forefoot's contact, HS→TC) lasts at least this % of the cycle;
+    #: 0: free, as in the dissertation (whose durations are all free). 7 %: the earliest foot flat of 9 stances
+    #: of 5 real level-walking trials (mean 9.2 ± 1.8 %, benchmarks/survey_foot_events.py); free, the optimum
+    #: lands the forefoot at 4.7 % and carries the body on it (no knee extensor moment, vasti silent)
+    foot_flat_min_pct: float = 7.0
 
     def parameter_values(self) -> np.ndarray:
         """p = (v, w1, w2): the NLP's parameters (the speed (5.43) and the weights (5.29))."""

@@ -150,6 +150,10 @@ class PredictConfig:
         MONOTONE_RANGE_DEG, parse=angle_range_deg, metavar="LOW,HIGH",
         expected="LOW,HIGH in degrees, −60 ≤ LOW < HIGH ≤ 60",
         help="Ankle angles (deg, negative = dorsiflexion) over which a prosthesis's spring moment must decrease.")
+    foot_flat_min_pct: float = parameter(
+        PredictSettings.foot_flat_min_pct, low=0.0, high=30.0,
+        help="Each heel rocker (heel strike to the forefoot's contact) lasts at least this % of the cycle (7: the "
+             "earliest of 9 real stances; 0: free, as in the dissertation).")
     start: str = parameter("walk", choices=STARTS,
                            help="Where IPOPT starts without --init: walk (the shipped normal walk on these nodes, "
                                 "retimed to the speed) or guess (5.2.10's initial guess from the reference).")
@@ -298,7 +302,7 @@ def violated_groups(violations: dict, tolerance: float = FEASIBILITY_TOLERANCE) 
 def settings_of(cfg: PredictConfig) -> PredictSettings:
     """The NLP's settings for ``cfg``."""
     return PredictSettings(speed_m_s=cfg.speed_m_s, weights=cfg.weights, max_iterations=cfg.max_iterations,
-                           monotone_range_rad=cfg.monotone_range_rad())
+                           monotone_range_rad=cfg.monotone_range_rad(), foot_flat_min_pct=cfg.foot_flat_min_pct)
 
 
 def walker_muscles(cfg: PredictConfig, device: ProsthesisLaw | None) -> WalkerMuscles:

@@ -95,7 +95,8 @@ def test_each_constraint_group_has_its_rows_on_a_tiny_grid(tiny):
     # counted by hand from the phase table (contact.py): the stated points are the first half cycle's 8 (phases
     # 1, 1, 2, 2, 3, 3, 4, 4) in the symmetric model, all 16 in the full one. Per phase 1 … 4 (5 … 8 mirrored):
     # reactions 5, 5, 3, 3; contact rows 4, 5, 3, 2; f_z ≥ 0 rows 2, 3, 2, 1; an MTP moment in 1 and 4; feet down
-    # 2, 2, 1, 1 (two friction rows each); points clear of the floor 2, 1, 2, 3
+    # 2, 2, 1, 1 (two friction rows each); points clear of the floor 2, 1, 2, 3; the shape bounds 4 and a heel
+    # rocker's length per foot stated
     from gaitcli.predict.settings import PredictSettings
 
     bounded = PredictSettings(hip_moment_Nm_per_kg=0.9, swing_hip_moment_Nm_per_kg=0.3)
@@ -104,15 +105,34 @@ def test_each_constraint_group_has_its_rows_on_a_tiny_grid(tiny):
                  "dynamics": 9 * 4, "paths": 2 * 8 * 8, "activation": 8 * 8, "excitation": 2 * 8 * 8,
                  "reactions": 2 * (5 + 5 + 3 + 3), "moment": 6 * 8, "contact": 2 * (4 + 5 + 3 + 2),
                  "unilateral": 2 * (2 + 3 + 2 + 1), "mtp": 2 * 2, "friction": 2 * 2 * (2 + 2 + 1 + 1),
-                 "clearance": 2 * (2 + 1 + 2 + 3), "speed": 1, "shape": 4, "hip_bound": 8, "windows": 8 + 4,
+                 "clearance": 2 * (2 + 1 + 2 + 3), "speed": 1, "shape": 4 + 1, "hip_bound": 8, "windows": 8 + 4,
                  "monotone": 0}
     assert _group_sizes(tiny, True, bounded) == symmetric
     full = {"nodes": 5 * 9 + 5 * 16, "splines": 8 * (9 + 9 + 9 + 16), "dynamics": 9 * 8,
             "paths": 2 * 16 * 8, "activation": 16 * 8, "excitation": 2 * 16 * 8, "reactions": 2 * 2 * (5 + 5 + 3 + 3),
             "moment": 6 * 16, "contact": 2 * 2 * (4 + 5 + 3 + 2), "unilateral": 2 * 2 * (2 + 3 + 2 + 1),
             "mtp": 2 * 2 * 2, "friction": 2 * 2 * 2 * (2 + 2 + 1 + 1), "clearance": 2 * 2 * (2 + 1 + 2 + 3),
-            "speed": 1, "shape": 4, "hip_bound": 0, "windows": 8, "monotone": 0}
+            "speed": 1, "shape": 4 + 2, "hip_bound": 0, "windows": 8, "monotone": 0}
     assert _group_sizes(tiny, False, PredictSettings()) == full
+
+
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_each_heel_rocker_is_at_least_its_share_of_the_cycle(tiny, symmetric):
+    # the shape group's last rows: T_1 − f·ΣT (and T_5 − f·ΣT), f = foot_flat_min_pct / 100, ≥ 0; none at 0
+    from gaitcli.predict.constraints import shape_rows
+    from gaitcli.predict.layout import DesignLayout
+    from gaitcli.predict.variables import DURATION_SCALE_S, Variables
+
+    v = Variables(tiny, DesignLayout.build(6, symmetric=symmetric))
+    assert shape_rows(v, 0.0).size == 4
+    rows = shape_rows(v, 7.0)
+    stated = ca.vertcat(*rows.expressions[4:])
+    durations = np.array([0.08, 0.12, 0.2, 0.15] + ([] if symmetric else [0.06, 0.1, 0.25, 0.15]))
+    value = ca.Function("rows", [v.durations_z], [stated])(durations / DURATION_SCALE_S)
+    full = np.tile(durations, 2) if symmetric else durations
+    expected = [full[k] - 0.07 * full.sum() for k in ((0,) if symmetric else (0, 4))]
+    np.testing.assert_allclose(value.full().ravel(), expected, rtol=1e-12)
+    assert np.all(np.concatenate(rows.lows[4:]) == 0) and np.all(np.isinf(np.concatenate(rows.highs[4:])))
 
 
 def test_a_prosthetic_models_groups_leave_out_the_removed_muscles_and_add_the_monotonicity_rows():

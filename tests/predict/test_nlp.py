@@ -55,7 +55,8 @@ def test_group_sizes(transcriber, built):
     assert sizes["unilateral"] == sum(sum(1 for _, axis, _ in PHASE_TABLE[p - 1].rows if axis == "z") for p in phases)
     assert sizes["mtp"] == sum(1 for p in phases if PHASE_TABLE[p - 1].mtp_moment_side)
     assert sizes["excitation"] == 2 * muscles * grid.instants  # the two ȧ bounds per muscle and instant
-    assert sizes["speed"] == 1 and sizes["shape"] == 4
+    # the 4 shape bounds (5.45–5.48) and each heel rocker stated (PredictSettings.foot_flat_min_pct)
+    assert sizes["speed"] == 1 and sizes["shape"] == 4 + (1 if symmetric else 2)
     assert nlp.constraints.size1() == len(nlp.lbg) == len(nlp.ubg) == sum(sizes.values())
     assert nlp.layout.size == (219 if symmetric else 435)
 
