@@ -50,6 +50,9 @@ FEASIBILITY_TOLERANCE = 1e-5
 FINE_GRID_REFINEMENT = 4
 #: the spline windows (segments either side) of a solve started from a solution
 WARM_WINDOW_REACH = 1
+#: the full model's windows after the symmetric solution and its projection: ±1 took 484 iterations, 207 s,
+#: ±2 283 and 131 s, ±3 319 and 144 s, all to J 10.0933 (benchmarks/README.md)
+FULL_WINDOW_REACH = 2
 JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
 
 
@@ -386,8 +389,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         history += _solve_notes(first, f"symmetric model (the full model's start), {label}")
         x0 = (full_from_symmetric(cfg.nodes, first.x) if first.outcome.converged
               else default_start(cfg, transcriber, reference, settings, symmetric=False))
-        if first.outcome.converged:  # near a solution: windows of ±1 segment, as for any start from a solution
-            settings = dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
+        if first.outcome.converged:  # near a solution: narrow windows, as for any start from a solution
+            settings = dataclasses.replace(settings, window_reach=FULL_WINDOW_REACH)
             # half a cycle is no whole number of the full model's N = nn − 1 (odd) intervals, so the fit misses
             # the constraints (by 22.6 at nn = 18) and IPOPT crept from there; a feasible start near it does not
             # (benchmarks/README.md)
