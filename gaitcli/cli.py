@@ -466,8 +466,7 @@ def run_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, fra
     from gaitcli.run.pipeline import trial_stages
 
     _run_exporting(console, trial, trial_stages(trial, cfg), cfg, out=out, plots=not no_plots, exports=exports,
-                   show=None,
-                   workers=workers, scheduler=scheduler)
+                   show=None, workers=workers, scheduler=scheduler)
 
 
 def _run_session(console: Console, folder: Path, cfg, *, plots: bool, workers: int | None,

@@ -96,8 +96,8 @@ def write_c3d(
     c["data"]["meta_points"]["camera_masks"] = np.zeros((7, len(markers.labels), n_frames), dtype=bool)
 
     if plates:
-        plate_analogs, analog_rate, corners, origins = _plate_channels(path, plates, R, up_lab, n_frames, point_rate,
-                                                                 np.asarray(origin_mm, dtype=float))
+        plate_analogs, analog_rate, corners, origins = _plate_channels(
+            path, plates, R, up_lab, n_frames, point_rate, np.asarray(origin_mm, dtype=float))
         n = len(plates)
         labels = [f"{c}{k + 1}" for k in range(n) for c in ("Fx", "Fy", "Fz", "Mx", "My", "Mz")]
         params["ANALOG"]["RATE"]["value"] = np.array([analog_rate])

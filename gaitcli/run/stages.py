@@ -177,7 +177,7 @@ IDYN = register(Stage(
 EMG = register(Stage(
     name="emg", config=EmgConfig, depends=("filter",), run=_emg,
     write=_writer("gaitcli.emg.outputs", "write_emg_outputs"), result=EmgResult, h5_name="emg.h5",
-    plots=lambda h5_path, folder, title: _emg_figures(h5_path, folder, title), describe=describe_emg))
+    plots=_emg_figures, describe=describe_emg))
 
 MUSCLES = register(Stage(
     name="muscles", config=MusclesConfig, depends=("idyn",), optional=("emg",), run=_muscles,
