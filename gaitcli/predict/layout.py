@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, MAX_POINT_SPACING_S
+from gaitcli.predict.grid import MAX_POINT_SPACING_S, PHASE_LENGTH_POINTS
 from gaitcli.predict.splines import cubic, evaluation_matrix, is_casadi, quartic
 
 #: box bounds of the nodal values (5.44 prints none: ranges wide enough for walking), per coordinate y1 … y9
@@ -121,7 +121,7 @@ def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple
             low[start + k * rows:start + (k + 1) * rows], high[start + k * rows:start + (k + 1) * rows] = lo, hi
     # no phase so long that its control points lie more than MAX_POINT_SPACING_S apart (grid.py says why)
     start, rows, _ = layout.blocks["durations"]
-    longest = np.array([(c - 1) * MAX_POINT_SPACING_S for c in DEFAULT_CONTROL_POINTS[:rows]])
+    longest = np.array([(c - 1) * MAX_POINT_SPACING_S for c in PHASE_LENGTH_POINTS[:rows]])
     high[start:start + rows] = np.minimum(high[start:start + rows], longest)
     return low, high
 

@@ -89,8 +89,7 @@ def test_the_physics_holds_between_the_control_points(prediction):
     fine = prediction.fine_grid
     assert fine["cost_of_transport_J_per_m"] == pytest.approx(prediction.cost_of_transport_J_per_m, rel=0.02)
     assert fine["deviation"] == pytest.approx(prediction.deviation, rel=0.05)
-    # between the points the moment balance and the excitations hold less well: measured 7.2 N·m (εm = 2) and
-    # u −0.22 … 1.54, the gastrocnemius's in the sparse phase from heel off to the other heel strike (without
-    # the heel rocker's bound 3.1 N·m and −0.20 … 1.28)
-    assert fine["max_moment_error_Nm"] <= 8.0 and fine["max_contact_error_m"] <= 0.003
-    assert -0.25 <= fine["min_excitation"] and fine["max_excitation"] <= 1.6
+    # the moment balance within 1.5 εm (measured 2.84 N·m); the excitations leave [0, 1] by a little (measured
+    # −0.08 … 1.11; with 8 points from heel off to the other heel strike 7.2 N·m and −0.22 … 1.54)
+    assert fine["max_moment_error_Nm"] <= 1.5 * 2.0 and fine["max_contact_error_m"] <= 0.003
+    assert -0.1 <= fine["min_excitation"] and fine["max_excitation"] <= 1.15
