@@ -35,7 +35,7 @@ from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
 from gaitcli.predict.objective import cost_weights, deviation_function, proximity, tracking_extras
 from gaitcli.predict.pointwise import Placement, derivatives
-from gaitcli.predict.problem import Transcriber
+from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
 from gaitcli.predict.splines import segment_of
 from gaitcli.predict.variables import (
@@ -43,9 +43,7 @@ from gaitcli.predict.variables import (
     LIFTED_SCALE,
     REACTION_SCALE_N,
     Variables,
-    gait_function,
     half_spline,
-    instant_splines,
     spline_functions,
 )
 from gaitcli.signal.bands import Band
@@ -58,9 +56,8 @@ class NLP:
     """The symbolic problem: w, J(w; p), g(w; p) with bounds, per-group slices of g, box bounds on w.
 
     ``segments`` (name → per-instant segment index) are where each spline family's windows were placed and
-    ``intervals`` their splines' interval counts; ``values`` maps w's spline part to the gait (durations (8,),
-    L_r, L_l, y, ẏ, ÿ, ŝ at the I instants, the full model's 9 coordinates and 16 muscles) that
-    :meth:`Transcriber.at` transcribes; ``parts`` holds Et and Jdev as expressions of w; ``blocks`` each
+    ``intervals`` their splines' interval counts (:meth:`gait` gives the gait at the I instants that
+    :meth:`Transcriber.at` transcribes); ``parts`` holds Et and Jdev as expressions of w; ``blocks`` each
     block of w (``variables.py``) as a slice; ``key`` what makes two built problems the same (:func:`nlp_key`).
     ``transcriber`` is the one it was built for: any of the same ``key`` transcribes its variables alike.
     """
@@ -78,7 +75,6 @@ class NLP:
     splines: list
     segments: dict
     reach: int
-    values: ca.Function
     lifted: tuple
     parameters: ca.SX = field(default_factory=lambda: ca.SX.sym("p", 0))
     device_size: int = 0
@@ -149,10 +145,11 @@ class NLP:
         return np.concatenate(parts + [blocks["durations"].ravel() / DURATION_SCALE_S, blocks["steps"].ravel()])
 
     def gait(self, w) -> tuple:
-        """(durations (8,), L_r, L_l, (y, ẏ, ÿ, ŝ) at the instants) of w, for :meth:`Transcriber.at`."""
-        out = self.values(np.asarray(w, float).ravel()[:self.spline_size])
-        durations = np.array(out[0]).ravel()
-        return durations, float(out[1]), float(out[2]), tuple(np.array(v) for v in out[3:])
+        """(durations (8,), L_r, L_l, (y, ẏ, ÿ, ŝ) at the instants) of w, for :meth:`Transcriber.at`: its χ's
+        splines evaluated there (``problem.gait_at``; inside their windows, the windowed polynomials are the
+        splines themselves)."""
+        x = self.design(w)
+        return gait_at(self.layout, x, instant_times(self.transcriber.grid, self.layout.phase_durations(x)))
 
     def start(self, x: np.ndarray, device=None, transcriber: Transcriber | None = None) -> np.ndarray:
         """w for the design vector χ ``x`` clipped into its box, with the activations clipped into [0, 1]:
@@ -271,7 +268,6 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     v = Variables(transcriber, layout)
     points = contact_points(v, transcriber.contact)
     functions = point_functions(v, transcriber, reference, points)
-    at_instants = instant_splines(v, segments, reach)
     rows = constraint_rows(v, transcriber, s, functions, points, segments, reach)
     extras = tracking_extras(v, points, s, transcriber)
     lbw, ubw = v.bounds(transcriber.muscles.present, s.step_m)
@@ -280,7 +276,7 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     cost = functions["muscles"].cost + functions["deviation"].cost + rest_cost
     return NLP(w=v.w, cost=cost, constraints=g, lbg=lbg, ubg=ubg, groups=slices, lbw=lbw, ubw=ubw,
                transcriber=transcriber, layout=layout, splines=v.splines, segments=segments, reach=reach,
-               values=gait_function(v, at_instants), lifted=v.lifted_blocks,
+               lifted=v.lifted_blocks,
                parameters=v.parameters, device_size=0 if v.device is None else v.device.numel(),
                device_law=v.device_law,
                parts={"Et": functions["muscles"].total, "Jdev": functions["deviation"].total + extras},

@@ -53,7 +53,7 @@ from gaitcli.predict.grid import instant_times, periodic_steps
 from gaitcli.predict.layout import DesignLayout, box_bounds, half_cycle_intervals
 from gaitcli.predict.pointwise import PointFunction
 from gaitcli.predict.prosthesis import DEFAULT_LAW
-from gaitcli.predict.splines import PeriodicSpline, local_values, quartic, window_coefficients, window_values
+from gaitcli.predict.splines import PeriodicSpline, local_values, quartic, window_coefficients
 
 REACTION_SCALE_N = 100.0
 DURATION_SCALE_S = 0.1
@@ -271,37 +271,6 @@ def instant_steps(v: Variables) -> tuple[list, list]:
     return [h1[i] for i in range(v.n_i)], [h2[i] for i in range(v.n_i)]
 
 
-def instant_splines(v: Variables, segments: dict, reach: int) -> dict:
-    """The splines at the instants, each read from its window of segments ``segments[key][i]`` ± ``reach``
-    (:func:`gaitcli.predict.splines.window_values`): (family, i) → [y, ẏ, ÿ] (coordinates; hip x with its
-    drift ΔS/T) or those and [ŝ], family "coordinates" (full model) or "leg" and, over the first half
-    cycle, "trunk" (symmetric)."""
-    drift = v.stride / v.period  # hip x: y1 = periodic + (ΔS/T)·t (splines.py, "Hip x")
-    by_name = {b.name: b for b in v.splines}
-
-    def at(name, i, fraction, span, derivatives):
-        b = by_name[name]
-        k = int(segments[b.windows][i])
-        return window_values(b.spline, b.coefficients, span, fraction, (k - reach, k + reach), derivatives)
-
-    rows = {}
-    for i in range(v.n_i):
-        fraction = v.fractions[i]
-        if v.symmetric:
-            rows[("leg", i)] = at("leg", i, fraction, v.period, range(3)) + at("stretch", i, fraction, v.period, (0,))
-            if i < v.half:
-                trunk = at("trunk", i, 2 * fraction, v.period / 2, range(3))
-                trunk[0][0] += drift * v.times[i]
-                trunk[1][0] += drift
-                rows[("trunk", i)] = trunk
-        else:
-            coordinates = at("coordinates", i, fraction, v.period, range(3))
-            coordinates[0][0] += drift * v.times[i]
-            coordinates[1][0] += drift
-            rows[("coordinates", i)] = coordinates + at("stretch", i, fraction, v.period, (0,))
-    return rows
-
-
 #: the spline families' lifted quantities: (block of w, quantities and their time derivatives, hip x drifts)
 SPLINE_QUANTITIES = {"coordinates": ("Q", (("y", 0), ("yd", 1), ("ydd", 2)), True),
                      "leg": ("Q", (("y", 0), ("yd", 1), ("ydd", 2)), False),
@@ -353,26 +322,3 @@ def _spline_function(b: SplineBlock, columns: int, quantities: tuple, drifts: bo
         lifted = z[size + k * columns:size + (k + 1) * columns]
         rows.append((lifted - value.T) / LIFTED_SCALE[name])
     return ca.Function(f"splines_{b.name}", [z], [ca.vertcat(*rows)], ["z"], ["splines"])
-
-
-def gait_function(v: Variables, rows: dict) -> ca.Function:
-    """w's spline part → (durations (8,), L_r, L_l, y, ẏ, ÿ (I × 9), ŝ (I × 16)) from the splines at the
-    instants (:func:`instant_splines`): the gait that :meth:`Transcriber.at` transcribes."""
-    full = []
-    for r in range(3):
-        if v.symmetric:
-            per_instant = []
-            for i in range(v.n_i):
-                trunk = rows[("trunk", i % v.half)][r]
-                if r == 0 and i >= v.half:
-                    trunk = trunk + ca.horzcat(v.stride / 2, 0, 0)
-                per_instant.append(ca.horzcat(trunk, rows[("leg", i)][r], rows[("leg", (i + v.half) % v.n_i)][r]))
-        else:
-            per_instant = [rows[("coordinates", i)][r] for i in range(v.n_i)]
-        full.append(ca.vertcat(*per_instant))
-    if v.symmetric:
-        full.append(ca.vertcat(*[ca.horzcat(rows[("leg", i)][3], rows[("leg", (i + v.half) % v.n_i)][3])
-                                 for i in range(v.n_i)]))
-    else:
-        full.append(ca.vertcat(*[rows[("coordinates", i)][3] for i in range(v.n_i)]))
-    return ca.Function("gait_values", [v.head], [v.durations, v.steps_r, v.steps_l, *full])
