@@ -68,17 +68,28 @@ def rectified(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ)
 def linear_envelope(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ,
                     cutoff_hz: float = ENVELOPE_CUTOFF_HZ) -> np.ndarray:
     """The linear envelope (module docstring) of raw EMG (samples, channels), in the channels' unit."""
-    return lowpass(rectified(raw, rate_hz=rate_hz, band_hz=band_hz), rate_hz=rate_hz, cutoff_hz=cutoff_hz,
-                   padtype="even")
+    return _envelope_of(rectified(raw, rate_hz=rate_hz, band_hz=band_hz), rate_hz, cutoff_hz)
 
 
-def activity(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ,
-             envelope_cutoff_hz: float = ENVELOPE_CUTOFF_HZ, fraction: float = ONSET_FRACTION,
-             min_burst_s: float = MIN_BURST_S) -> np.ndarray:
-    """Whether each channel of raw EMG (samples, channels) is on at each sample (module docstring)."""
+def envelope_and_activity(raw, /, *, rate_hz: float, band_hz: tuple[float, float] = BAND_HZ,
+                          envelope_cutoff_hz: float = ENVELOPE_CUTOFF_HZ, fraction: float = ONSET_FRACTION,
+                          min_burst_s: float = MIN_BURST_S) -> tuple[np.ndarray, np.ndarray]:
+    """The linear envelope of raw EMG (samples, channels), in the channels' unit, and whether each channel is on
+    at each sample (module docstring), from one rectification."""
     rect = rectified(raw, rate_hz=rate_hz, band_hz=band_hz)
-    envelope = lowpass(rect, rate_hz=rate_hz, cutoff_hz=envelope_cutoff_hz, padtype="even")
-    return on_off(rect, envelope, rate_hz=rate_hz, fraction=fraction, min_burst_s=min_burst_s)
+    envelope = _envelope_of(rect, rate_hz, envelope_cutoff_hz)
+    return envelope, on_off(rect, envelope, rate_hz=rate_hz, fraction=fraction, min_burst_s=min_burst_s)
+
+
+def activity(raw, /, **options) -> np.ndarray:
+    """Whether each channel of raw EMG (samples, channels) is on at each sample (:func:`envelope_and_activity`'s
+    options)."""
+    return envelope_and_activity(raw, **options)[1]
+
+
+def _envelope_of(rect: np.ndarray, rate_hz: float, cutoff_hz: float) -> np.ndarray:
+    """Rectified EMG low-passed at ``cutoff_hz``, zero-lag, its ends extended evenly (module docstring)."""
+    return lowpass(rect, rate_hz=rate_hz, cutoff_hz=cutoff_hz, padtype="even")
 
 
 def on_off(rect: np.ndarray, envelope: np.ndarray, *, rate_hz: float, fraction: float = ONSET_FRACTION,

@@ -24,9 +24,8 @@ from gaitcli.core.events import Events
 from gaitcli.core.recording import Analogs
 from gaitcli.core.validate import parameter
 from gaitcli.emg.channels import channel_map
-from gaitcli.emg.processing import BAND_HZ, ENVELOPE_CUTOFF_HZ, MIN_BURST_S, ONSET_FRACTION, on_off, rectified
+from gaitcli.emg.processing import BAND_HZ, ENVELOPE_CUTOFF_HZ, MIN_BURST_S, ONSET_FRACTION, envelope_and_activity
 from gaitcli.errors import GaitWarning, InputError
-from gaitcli.signal.butterworth import lowpass
 from gaitcli.signal.cycles import CYCLE_POINTS, Stride, normalise, strides
 
 #: an analog rate below this carries no surface EMG (its power lies up to ~450 Hz), Hz
@@ -167,11 +166,10 @@ def _check_rate(analogs: Analogs, labels, source) -> None:
 
 
 def envelopes(raw_V: np.ndarray, rate_hz: float, cfg: EmgConfig) -> tuple[np.ndarray, np.ndarray]:
-    """The linear envelope (V) and on/off of raw EMG in volts (samples, channels) (:mod:`gaitcli.emg.processing`)."""
-    rect = rectified(raw_V, rate_hz=rate_hz, band_hz=cfg.band_hz)
-    envelope = lowpass(rect, rate_hz=rate_hz, cutoff_hz=cfg.envelope_cutoff_hz, padtype="even")
-    return envelope, on_off(rect, envelope, rate_hz=rate_hz, fraction=cfg.onset_fraction,
-                            min_burst_s=cfg.min_burst_s)
+    """The linear envelope (V) and on/off of raw EMG in volts (samples, channels) with ``cfg``'s settings."""
+    return envelope_and_activity(raw_V, rate_hz=rate_hz, band_hz=cfg.band_hz,
+                                 envelope_cutoff_hz=cfg.envelope_cutoff_hz, fraction=cfg.onset_fraction,
+                                 min_burst_s=cfg.min_burst_s)
 
 
 def mvc_reference(mvc: Analogs, channels, cfg: EmgConfig, source=None) -> np.ndarray:

@@ -108,11 +108,15 @@ def _summary(folder: Path, numbers: tuple[str, ...]) -> dict:
     if not isinstance(summary, dict):
         raise InputError(path, None, f"holds a {type(summary).__name__} (expected a mapping: a stage's summary)")
     for key in numbers:  # NaN is allowed: a feature that could not be measured
-        value = summary.get(key)
-        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
-                                  or abs(value) > 1e300):
-            raise InputError(path, key, f"got {shown(value)} (expected a number)")
+        if not _number_or_null(summary.get(key)):
+            raise InputError(path, key, f"got {shown(summary[key])} (expected a number)")
     return summary
+
+
+def _number_or_null(value) -> bool:
+    """Whether a summary's value is a number (NaN allowed; no bool, nothing beyond 1e300) or null."""
+    return value is None or (not isinstance(value, bool) and isinstance(value, (int, float)) and
+                             not abs(value) > 1e300)
 
 
 def _records(folder: Path, summary: dict, key: str, numbers: tuple[str, ...]) -> dict[str, dict]:
@@ -124,10 +128,8 @@ def _records(folder: Path, summary: dict, key: str, numbers: tuple[str, ...]) ->
         raise InputError(path, key, f"got {shown(value)} (expected a mapping of muscle → its figures)")
     for name, record in value.items():
         for field in numbers:
-            number = record.get(field)
-            if number is not None and (isinstance(number, bool) or not isinstance(number, (int, float))
-                                       or abs(number) > 1e300):
-                raise InputError(path, f"{key}.{name}.{field}", f"got {shown(number)} (expected a number)")
+            if not _number_or_null(record.get(field)):
+                raise InputError(path, f"{key}.{name}.{field}", f"got {shown(record[field])} (expected a number)")
     return value
 
 
