@@ -155,7 +155,9 @@ def test_sigterm_ends_the_workers_at_once(tmp_path, dask):
     parent.send_signal(signal.SIGTERM)
     _, stderr = parent.communicate(timeout=30)
     assert parent.returncode == 130 and "Traceback" not in stderr, stderr
-    assert time.monotonic() - started < 3.0  # the grace of the pool's workers, 1 s, and the exit
+    # the grace of the pool's workers (1 s), or the Dask client's and cluster's closes (1 s each), and the exit;
+    # the workers themselves are gone in 0.01-0.03 s
+    assert time.monotonic() - started < 4.0
     assert _gone(pids, 1.0)
 
 

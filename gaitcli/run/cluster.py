@@ -255,8 +255,8 @@ def _local_dask(count: int, dashboard: bool, before: set) -> Iterator[Workers]:
 
 def _stop_dask(cluster, client, before: set) -> None:
     """End a local cluster now: no nanny restarts its worker, every worker process is killed, then the
-    cluster closes (quickly: nothing is left to wait for; a close that does not end in time is left to the
-    exit, whose workers are gone). distributed's own loggers are silenced first: the comms its killed workers
+    cluster closes (quickly: nothing is left to wait for; a close that does not end in time is abandoned:
+    its workers are gone). distributed's own loggers are silenced first: the comms its killed workers
     leave closed are logged with a traceback, which is no news to a lab that pressed Ctrl-C."""
     logging.getLogger("distributed").setLevel(logging.CRITICAL)
     for nanny in list(cluster.workers.values()):
@@ -271,6 +271,10 @@ def _stop_dask(cluster, client, before: set) -> None:
     for process in _started_since(before):  # one a nanny started in between
         process.kill()
         process.join(STOP_GRACE_S)
+    # a close that timed out would be retried at exit by distributed, which waits 10 s there for the workers
+    # just killed (seen on a loaded machine: Ctrl-C took 11.6 s instead of 0.5 s)
+    from distributed.deploy.spec import SpecCluster
+    SpecCluster._instances.discard(cluster)
 
 
 def map_in_order(pool: Workers, fn: Callable, items: Sequence, *, on_done: Callable[[int, Any], None] | None = None,
