@@ -38,7 +38,7 @@ Which contact points each group applies to follows from the phase table
   in late stance (phases 4–6 right, 1, 2, 8 left) a thigh extends at least θ_hip = 5° — the absolute thigh
   angle y4/y7, as the equations say. The non-smooth max over control points becomes the log-sum-exp
   surrogate LSE_β(x) = max x + log Σ exp(β(x − max x))/β, an upper bound within ln(n)/β of the max
-  (β = 500 rad⁻¹: ≤ 0.51° for 88 points); the true max is reported; with them (our addition) each heel
+  (β = 500 rad⁻¹: ≤ 0.54° for 112 points); the true max is reported; with them (our addition) each heel
   rocker, HS→TC, lasts at least ``foot_flat_min_pct`` of the cycle (docs/prediction.md, "The heel rocker");
 - excitation (5.32): 0 ≤ u ≤ 1 is stated on ȧ, linear in the lifted a, by (2.17) solved for u at its ends.
 

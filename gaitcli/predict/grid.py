@@ -4,20 +4,21 @@ Control points (5.2.5, 5.2.10; docs/prediction.md, "Control points")
     Independent of the spline nodes and uniform within each of the 8 phases: phase ph of
     duration T_ph (s) has n_c,ph points at t = t0_ph + T_ph·i/(n_c,ph − 1), i = 0 … n_c,ph − 1,
     t0_ph = Σ_{q<ph} T_q, time 0 at the cycle's first instant (HSr). The default counts
-    5, 10, 21, 12, 5, 10, 21, 12 include both end points, so a transition instant is an
-    evaluation point of both adjacent phases: Σn_c,ph = 96 points, Σ(n_c,ph − 1) = 88 distinct
+    9, 10, 21, 20, 9, 10, 21, 20 include both end points, so a transition instant is an
+    evaluation point of both adjacent phases: Σn_c,ph = 120 points, Σ(n_c,ph − 1) = 112 distinct
     instants per cycle. The contact-dependent quantities (λ, joint moments, e_m, c_ph,
-    clearance, friction) are evaluated at all 96 points, a transition once with each adjacent
-    phase's constraint set; the continuous ones (muscle forces, activations) at the 88
+    clearance, friction) are evaluated at all 120 points, a transition once with each adjacent
+    phase's constraint set; the continuous ones (muscle forces, activations) at the 112
     instants (:attr:`ControlGrid.instant`). The last point of phase 8 is the instant t = T,
     which is instant 0 of the next cycle.
 
-    Deviation: 5.2.10 has 4 points in phases 4 and 8 (HOr→HSl). With the durations free the
-    optimizer lengthened that sparsest phase and hid the push-off's muscle work between its
-    points; no phase longer than :data:`MAX_POINT_SPACING_S` per interval of
-    :data:`PHASE_LENGTH_POINTS` (``layout.box_bounds``) keeps it short, and 12 points there (8 until
-    the heel rocker's bound made the gastrocnemius's push-off work change faster) keep the physics
-    holding between the points (docs/decisions.md, "Control points").
+    Deviation: 5.2.10 has 5 points in phases 1 and 5 (HS→TC) and 4 in phases 4 and 8 (HOr→HSl).
+    With the durations free the optimizer lengthened the sparsest phase and hid the push-off's
+    muscle work between its points; no phase longer than :data:`MAX_POINT_SPACING_S` per interval
+    of :data:`PHASE_LENGTH_POINTS` (``layout.box_bounds``) keeps it short, and 9 points in the heel
+    rocker and 20 from heel off keep the excitations within [−0.05, 1.05] between the points, where
+    the tibialis anterior and rectus femoris at heel strike and the gastrocnemius's push-off change
+    faster than 5 and 12 points follow (docs/decisions.md, "Control points").
 
     Every point's time is linear in the durations: t_j = W_j · [T_1 … T_8] with the constant
     matrix W = :attr:`ControlGrid.time_weights`, so the times are numpy or CasADi expressions
@@ -46,8 +47,8 @@ from gaitcli.predict.splines import casadi_column, is_casadi
 
 #: phases of the cycle (HSr→TCr, TCr→TOl, TOl→HOr, HOr→HSl and the mirrored four; Fig. 5.3)
 PHASES = 8
-#: n_c,ph per phase, both end points included (5.2.10, phases 4 and 8 denser: module docstring)
-DEFAULT_CONTROL_POINTS = (5, 10, 21, 12, 5, 10, 21, 12)
+#: n_c,ph per phase, both end points included (5.2.10; phases 1, 4, 5 and 8 denser: module docstring)
+DEFAULT_CONTROL_POINTS = (9, 10, 21, 20, 9, 10, 21, 20)
 #: the time between control points, s, that bounds each phase's duration: ≤ (n_ph − 1) × this with n_ph of
 #: :data:`PHASE_LENGTH_POINTS` (0.16, 0.36, 0.80, 0.28 s)
 MAX_POINT_SPACING_S = 0.04
@@ -71,12 +72,12 @@ class ControlGrid:
 
     @property
     def points(self) -> int:
-        """P = Σn_c,ph evaluation points (96 by default)."""
+        """P = Σn_c,ph evaluation points (120 by default)."""
         return len(self.phase)
 
     @property
     def instants(self) -> int:
-        """I = Σ(n_c,ph − 1) distinct instants per cycle (88 by default)."""
+        """I = Σ(n_c,ph − 1) distinct instants per cycle (112 by default)."""
         return sum(self.counts) - len(self.counts)
 
     @property

@@ -4,7 +4,7 @@ w is the transcription's intermediate quantities made variables ("lifted") and t
 constraints (``constraints.py``): the problem is (5.24)'s over χ (``layout.py``), but each constraint touches
 only a few variables. Blocks in order, each stored column-major (a column's values contiguous), every
 variable O(1) as value / scale; N = nn − 1 spline intervals, N_h the half cycle's (odd), I the distinct
-control instants (88 by default), I/2 the first half cycle's; in brackets the sizes at nn = 18 on the default
+control instants (112 by default), I/2 the first half cycle's; in brackets the sizes at nn = 18 on the default
 grid (:meth:`Variables.blocks` gives each block's place in w):
 
     block  full model       symmetric model   content                                          unit / scale
@@ -18,16 +18,16 @@ grid (:meth:`Variables.blocks` gives each block's place in w):
     T      8                4                 the phase durations T_1 … (symmetric: T_5…8 =      s / 0.1
                                               T_1…4)
     L      2                1                 the step lengths L_r, L_l (symmetric: L_l = L_r)   m / 1
-    Q      I × 100 (8800)   I × 41 (3608)     per instant: y, ẏ, ÿ (9 each; symmetric: the right LIFTED_SCALE
+    Q      I × 100 (11200)  I × 41 (4592)     per instant: y, ẏ, ÿ (9 each; symmetric: the right LIFTED_SCALE
                                               leg's 3), ŝ (16; 8), rhs (9; full model only),
                                               l_m, v_m, a (16 each; symmetric: 8)
-    P      —                I/2 × 18 (792)    the first half cycle's trunk y, ẏ, ÿ (3 each) and  LIFTED_SCALE
+    P      —                I/2 × 18 (1008)    the first half cycle's trunk y, ẏ, ÿ (3 each) and  LIFTED_SCALE
                                               rhs (9)
-    Λ      Σ widths (348)   first half's (174)  the ground reactions λ_j of every stated control  N, N·m / 100
+    Λ      Σ widths (436)   first half's (218)  the ground reactions λ_j of every stated control  N, N·m / 100
                                               point in grid order (the phase's reaction names)
     D      6 (prosthetic models only)         the device's coefficients in its law's order:       the law's SCALE
                                               (a_p, b_p, c0, a_n, b_n, d_prosth) of (5.58)–(5.59)
-    w      9 583 (9 589 with D)  4 793 (4 799 with D)
+    w      12 071 (12 077 with D)  6 037 (6 043 with D)
 
 A C block holds the coefficients c_j of periodic uniform B-splines (``splines.bspline_matrix``): the same
 splines as (5.10)–(5.23), each segment's polynomial p_{k,0…d} a fixed linear function of d + 1 neighbouring

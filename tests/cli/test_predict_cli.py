@@ -78,7 +78,7 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
         assert set(PREDICT_SUMMARY_KEYS) <= set(summary) and summary["converged"] is False
         assert summary["violations"]["moment"] > 2.0  # the guess's moment error, far beyond εm = 2 N·m
         motion = pd.read_csv(folder / "motion.csv")
-        assert motion.columns[0] == "time_s" and len(motion) == 88
+        assert motion.columns[0] == "time_s" and len(motion) == 112
         with h5py.File(folder / "predict.h5", "r") as h5:
             assert h5.attrs["converged"] == 0 and "result/design" in h5
             design = np.asarray(h5["result/design"][()])

@@ -15,10 +15,10 @@ DURATIONS = np.array([0.05, 0.11, 0.36, 0.06, 0.05, 0.11, 0.36, 0.06])  # s, a t
 
 def test_default_grid_counts_points_and_instants():
     g = grid.control_grid()
-    assert g.counts == (5, 10, 21, 12, 5, 10, 21, 12)
-    assert (g.points, g.instants) == (96, 88)
+    assert g.counts == (9, 10, 21, 20, 9, 10, 21, 20)
+    assert (g.points, g.instants) == (120, 112)
     assert np.array_equal(np.bincount(g.phase), g.counts)
-    assert sorted(set(g.instant)) == list(range(88))
+    assert sorted(set(g.instant)) == list(range(112))
 
 
 def test_points_are_uniform_within_each_phase_and_transitions_appear_twice():
@@ -32,7 +32,7 @@ def test_points_are_uniform_within_each_phase_and_transitions_appear_twice():
     assert np.array_equal(g.instant[last[:-1]], g.instant[last[:-1] + 1])  # the same instant
     assert t[-1] == pytest.approx(DURATIONS.sum()) and g.instant[-1] == 0  # t = T is instant 0 of the next cycle
     instants = grid.instant_times(g, DURATIONS)
-    assert len(instants) == 88 and instants[0] == 0 and np.all(np.diff(instants) > 0)
+    assert len(instants) == 112 and instants[0] == 0 and np.all(np.diff(instants) > 0)
     assert instants[-1] < DURATIONS.sum() == pytest.approx(grid.cycle_period(DURATIONS))
 
 
@@ -87,7 +87,7 @@ def test_periodic_wrap_does_not_depend_on_where_the_cycle_starts():
     shift = 17  # start the cycle at instant 17 instead
     rotated = grid.periodic_derivative(np.roll(x, -shift), np.concatenate([t[shift:], t[:shift] + period]), period)
     np.testing.assert_allclose(rotated, np.roll(xdot, -shift), rtol=1e-12, atol=1e-12)
-    # and it is a derivative: second order on the 88 instants of a 1.16 s cycle
+    # and it is a derivative: second order on the 112 instants of a 1.16 s cycle
     exact = 2 * np.pi / period * (np.cos(2 * np.pi * t / period) - 0.9 * np.sin(6 * np.pi * t / period))
     assert np.max(np.abs(xdot - exact)) < 0.02 * np.max(np.abs(exact))
 
@@ -95,8 +95,8 @@ def test_periodic_wrap_does_not_depend_on_where_the_cycle_starts():
 def test_casadi_times_and_derivatives_equal_numpy():
     g = grid.control_grid()
     durations = ca.SX.sym("T_ph", 8)
-    x = ca.SX.sym("x", 88, 2)
-    values = np.random.default_rng(3).normal(size=(88, 2))
+    x = ca.SX.sym("x", 112, 2)
+    values = np.random.default_rng(3).normal(size=(112, 2))
     xdot = grid.periodic_derivative(x, grid.instant_times(g, durations), grid.cycle_period(durations))
     f = ca.Function("f", [durations, x], [grid.point_times(g, durations), xdot])
     times, derivative = f(DURATIONS, values)

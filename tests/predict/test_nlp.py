@@ -50,7 +50,7 @@ def test_group_sizes(transcriber, built):
     assert sizes["dynamics"] == 9 * grid.instants // share
     assert sizes["paths"] == 2 * muscles * grid.instants and sizes["activation"] == muscles * grid.instants
     assert sizes["reactions"] == sum(widths)  # one normal equation per reaction and point
-    assert sizes["moment"] == 6 * len(points)  # 576 full
+    assert sizes["moment"] == 6 * len(points)  # 720 full
     assert sizes["contact"] == sum(rows)
     assert sizes["unilateral"] == sum(sum(1 for _, axis, _ in PHASE_TABLE[p - 1].rows if axis == "z") for p in phases)
     assert sizes["mtp"] == sum(1 for p in phases if PHASE_TABLE[p - 1].mtp_moment_side)
@@ -64,11 +64,11 @@ def test_group_sizes(transcriber, built):
 def test_the_variables_are_laid_out_as_documented(built):
     # variables.py's table at nn = 18 on the default grid: each block's size, in order, filling w
     symmetric, nlp = built
-    expected = ({"C_t": 9 * 3, "C_y": 17 * 3, "C_s": 17 * 8, "T": 4, "L": 1, "Q": 88 * 41, "P": 44 * 18,
-                 "Λ": 174} if symmetric else
-                {"C_y": 17 * 9, "C_s": 17 * 16, "T": 8, "L": 2, "Q": 88 * 100, "Λ": 348})
+    expected = ({"C_t": 9 * 3, "C_y": 17 * 3, "C_s": 17 * 8, "T": 4, "L": 1, "Q": 112 * 41, "P": 56 * 18,
+                 "Λ": 218} if symmetric else
+                {"C_y": 17 * 9, "C_s": 17 * 16, "T": 8, "L": 2, "Q": 112 * 100, "Λ": 436})
     assert [(k, s.stop - s.start) for k, s in nlp.blocks.items()] == list(expected.items())
-    assert nlp.w.size1() == nlp.lbw.size == sum(expected.values()) == (4793 if symmetric else 9583)
+    assert nlp.w.size1() == nlp.lbw.size == sum(expected.values()) == (6037 if symmetric else 12071)
 
 
 def test_lifted_start_solves_the_defining_equations(transcriber, reference, built):

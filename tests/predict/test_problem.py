@@ -41,7 +41,7 @@ def test_numeric_and_symbolic_transcriptions_agree(transcriber):
                                atol=1e-8)
     np.testing.assert_allclose(np.array(contact).ravel(), np.concatenate(numeric.contact_error_m), atol=1e-12)
     np.testing.assert_allclose(np.array(rate), numeric.metabolic_rate_W, rtol=1e-8, atol=1e-6)
-    assert numeric.y.shape == (96, 9) and numeric.metabolic_rate_W.shape == (88, 16)
+    assert numeric.y.shape == (120, 9) and numeric.metabolic_rate_W.shape == (112, 16)
 
 
 def test_hip_progresses_by_the_two_steps_per_cycle(transcriber):

@@ -49,7 +49,7 @@ def test_the_result_parts_agree(stopped):
     summary = result.summary()
     assert summary["stance_pct"] == pytest.approx(100 * d[:6].sum() / d.sum())
     assert summary["converged"] is False and set(summary["gait_checks"]) >= {"stance_pct", "vertical_grf"}
-    assert result.excitations.shape == (88, 16) and result.grf_N.shape == (96, 4)
+    assert result.excitations.shape == (112, 16) and result.grf_N.shape == (120, 4)
 
 
 def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(cache):
@@ -120,7 +120,7 @@ def test_a_warm_start_of_another_layout_is_refused():
 
 def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     """The full model's result through the predict writer (the CLI test runs the symmetric one): its 435
-    design values and ``symmetric: false`` in predict.h5 and summary.json, every table with 88 instants."""
+    design values and ``symmetric: false`` in predict.h5 and summary.json, every table with 112 instants."""
     import json
 
     import h5py
@@ -137,7 +137,7 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     with h5py.File(tmp_path / "predict.h5", "r") as h5:
         assert np.asarray(h5["result/design"][()]).size == 435
     for name in ("motion.csv", "muscles.csv"):
-        assert len((tmp_path / name).read_text().splitlines()) == 89  # header + 88 instants
+        assert len((tmp_path / name).read_text().splitlines()) == 113  # header + 112 instants
     # trunk lean: forward positive, as the HAT's centre of mass ahead of the hip says
     import pandas as pd
 
