@@ -2,7 +2,8 @@
 and two peers; the stride across speeds against Winter's cadences.
 
 Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--full 18]
-[--start walk guess] [--speeds 1.0 1.1275 1.325]``. One core (``BENCH_CORE``: which, timing.py); asserts nothing.
+[--start walk guess] [--speeds 1.0 1.1275 1.325]
+[--stride-sweep 1.325 1.12 1.28 1.44]``. One core (``BENCH_CORE``: which, timing.py); asserts nothing.
 
 Per node count, model and start (``PredictConfig.start``: the shipped walk, or 5.2.10's guess): normal walking
 (subject 1, the bundled reference, weights 4/3, 2/3, 1.1275 m/s) by ``run_predict``. The problem and its first
@@ -14,6 +15,9 @@ problem's construction, its ``construct s`` is the symmetric
 problem's. Printed: IPOPT iterations and solves, J, Et, Jdev, the non-zeros of the constraint Jacobian and
 of the Hessian of the Lagrangian (lower triangle, as IPOPT counts them), the ratio to Table 5.1's hours and
 to Falisse et al.'s 2-D predictions (44–55 s).
+
+``--stride-sweep SPEED STRIDE…``: the default prediction at SPEED with every step fixed at half of each STRIDE
+(m), printing J, Et and Jdev: which stride the cost prefers.
 
 ``--speeds``: the stride at each speed beside Winter's slow, natural and fast cadences, the data 5.3.3 tracks
 at 1.00, 1.33 and 1.68 m/s (87, 105, 123 steps per minute: Winter's means as recalled, not checked against
@@ -62,10 +66,10 @@ def construct(cfg: PredictConfig, settings, reference, cache: NlpCache) -> tuple
     return seconds, jacobian, hessian
 
 
-def predict(cfg: PredictConfig, reference, cop_sd_m: float = 0.0) -> dict:
+def predict(cfg: PredictConfig, reference, cop_sd_m: float = 0.0, step_m: float = 0.0) -> dict:
     """One prediction, its construction timed apart (module docstring); ``cop_sd_m`` > 0: Jdev also tracks the
-    feet's centres of pressure (``PredictSettings.cop_sd_m``)."""
-    cache, settings = NlpCache(), dataclasses.replace(settings_of(cfg), cop_sd_m=cop_sd_m)
+    feet's centres of pressure (``PredictSettings.cop_sd_m``); ``step_m`` > 0: every step this long."""
+    cache, settings = NlpCache(), dataclasses.replace(settings_of(cfg), cop_sd_m=cop_sd_m, step_m=step_m)
     built, jacobian, hessian = construct(cfg, settings, reference, cache)
     began = time.perf_counter()
     result = run_predict(cfg, reference=reference, cache=cache, settings=settings)
@@ -108,6 +112,8 @@ def main() -> None:
     parser.add_argument("--speeds", type=float, nargs="*", default=[1.0, 1.1275, 1.325])
     parser.add_argument("--iterations", type=int, default=3000)
     parser.add_argument("--cop-sd-m", type=float, default=0.0, help="> 0: Jdev also tracks the centres of pressure")
+    parser.add_argument("--stride-sweep", type=float, nargs="*", default=[], metavar="SPEED STRIDE",
+                        help="a speed, m/s, then strides, m: J, Et and Jdev with every step fixed at half of each")
     args = parser.parse_args()
     one_core()
     reference = read_reference(bundled_reference())
@@ -145,6 +151,20 @@ def main() -> None:
         print(f"{speed:9.4f} {stride:8.3f} {period:8.3f} {winter:8.3f} {stride / winter:6.2f} {str(r.converged):>5}"
               f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f}", flush=True)
         print("    " + kinetics(r), flush=True)
+    if args.stride_sweep:
+        stride_sweep(args.stride_sweep[0], args.stride_sweep[1:], reference, args.iterations)
+
+
+def stride_sweep(speed: float, strides: list[float], reference, iterations: int) -> None:
+    """J, Et and Jdev at ``speed`` with the stride fixed at each of ``strides`` (``PredictSettings.step_m``):
+    which stride the cost itself prefers, apart from where IPOPT stops from the shipped walk's."""
+    print(f"\nstrides fixed at {speed} m/s\n{'stride m':>8} {'period s':>8} {'conv':>5} {'iter':>5} {'J':>8}"
+          f" {'Et J/m':>7} {'Jdev':>6}")
+    for stride in strides:
+        cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=iterations)
+        r = predict(cfg, reference, step_m=stride / 2)["result"]
+        print(f"{stride:8.3f} {float(np.sum(r.phase_durations_s)):8.3f} {str(r.converged):>5} {r.iterations:>5}"
+              f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f}", flush=True)
 
 
 if __name__ == "__main__":
