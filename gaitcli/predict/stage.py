@@ -50,10 +50,8 @@ FEASIBILITY_TOLERANCE = 1e-5
 FINE_GRID_REFINEMENT = 4
 #: the spline windows (segments either side) of a solve started from a solution
 WARM_WINDOW_REACH = 1
-#: the full model's windows after the symmetric solution and its projection: on 5, 10, 21, 12 control points ±1
-#: took 484 iterations, 207 s, ±2 283 and 131 s, ±3 319 and 144 s, all to J 10.0933; on today's 9, 10, 21, 20
-#: the projection at ±2 diverged (IPOPT's regularisation 1e8, unconverged after 240 s), at ±3 it took 125
-#: iterations and the full solve 161, 157 s in all (benchmarks/README.md)
+#: the full model's windows after the symmetric solution and its projection: ±1 and ±2 are faster on a sparser
+#: grid, but on the default one the projection at ±2 diverges (benchmarks/README.md, "Twenty points")
 FULL_WINDOW_REACH = 3
 JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
 

@@ -21,7 +21,7 @@ grid (:meth:`Variables.blocks` gives each block's place in w):
     Q      I × 100 (11200)  I × 41 (4592)     per instant: y, ẏ, ÿ (9 each; symmetric: the right LIFTED_SCALE
                                               leg's 3), ŝ (16; 8), rhs (9; full model only),
                                               l_m, v_m, a (16 each; symmetric: 8)
-    P      —                I/2 × 18 (1008)    the first half cycle's trunk y, ẏ, ÿ (3 each) and  LIFTED_SCALE
+    P      —                I/2 × 18 (1008)   the first half cycle's trunk y, ẏ, ÿ (3 each) and  LIFTED_SCALE
                                               rhs (9)
     Λ      Σ widths (436)   first half's (218)  the ground reactions λ_j of every stated control  N, N·m / 100
                                               point in grid order (the phase's reaction names)

@@ -271,8 +271,8 @@ def _stop_dask(cluster, client, before: set) -> None:
     for process in _started_since(before):  # one a nanny started in between
         process.kill()
         process.join(STOP_GRACE_S)
-    # a close that timed out would be retried at exit by distributed, which waits 10 s there for the workers
-    # just killed (seen on a loaded machine: Ctrl-C took 11.6 s instead of 0.5 s)
+    # a close that timed out would be retried at exit by distributed, which waits up to 10 s there for the
+    # workers just killed: the interrupted command would hang that long
     from distributed.deploy.spec import SpecCluster
     SpecCluster._instances.discard(cluster)
 
