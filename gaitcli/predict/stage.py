@@ -10,7 +10,6 @@ its cost parts and every constraint group's largest violation. The CLI writes it
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import time
 from dataclasses import dataclass, field
@@ -48,11 +47,6 @@ DOUBLE_SUPPORT_PHASES = (1, 2, 5, 6)
 FEASIBILITY_TOLERANCE = 1e-5
 #: how many times finer than the control points the reported fine-grid costs are evaluated
 FINE_GRID_REFINEMENT = 4
-#: the spline windows (segments either side) of a solve started from a solution
-WARM_WINDOW_REACH = 1
-#: the full model's windows after the symmetric solution and its projection: ±1 and ±2 are faster on a sparser
-#: grid, but on the default one the projection at ±2 diverges (benchmarks/README.md, "Twenty points")
-FULL_WINDOW_REACH = 3
 JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
 
 
@@ -374,9 +368,10 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     cache = cache if cache is not None else NlpCache()
     solve_options = {"device": device, "optimal_device": optimal, "deadline": deadline, "cache": cache}
     if init is not None:
-        # a start from a solution (of a neighbouring case): windows of ±1 segment, cheaper to factorise
-        # (benchmarks/README.md); a window that binds is moved and the problem solved again (solve_windowed)
-        x0, settings = init, dataclasses.replace(settings, window_reach=WARM_WINDOW_REACH)
+        # a start from a solution (of a neighbouring case) keeps the default windows: ±1 segment, cheaper to
+        # factorise, made IPOPT creep from another case's gait on the default grid (benchmarks/README.md,
+        # "Twenty points"); a window that binds is moved and the problem solved again (solve_windowed)
+        x0 = init
     elif cfg.symmetric:
         x0 = default_start(cfg, transcriber, reference, settings, symmetric=True)
     else:
@@ -389,11 +384,11 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
         history += _solve_notes(first, f"symmetric model (the full model's start), {label}")
         x0 = (full_from_symmetric(cfg.nodes, first.x) if first.outcome.converged
               else default_start(cfg, transcriber, reference, settings, symmetric=False))
-        if first.outcome.converged:  # near a solution: narrow windows, as for any start from a solution
-            settings = dataclasses.replace(settings, window_reach=FULL_WINDOW_REACH)
+        if first.outcome.converged:
             # half a cycle is no whole number of the full model's N = nn − 1 (odd) intervals, so the fit misses
             # the constraints (by 22.6 at nn = 18) and IPOPT crept from there; a feasible start near it does not
-            # (benchmarks/README.md)
+            # (benchmarks/README.md). The default windows: narrower ones made this projection diverge on the
+            # default grid (benchmarks/README.md, "Twenty points")
             projected = project(transcriber, reference, x0, settings, symmetric=False, report=report,
                                 **solve_options)
             iterations, rounds = iterations + projected.outcome.iterations, rounds + projected.rounds
