@@ -348,12 +348,6 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
         multipliers = (lam_g, out.lam_x)
         if segments is None or not out.converged:
             break
-        if k == rounds - 2 and settings.window_reach < PredictSettings.window_reach:
-            # still pressing after the narrow windows' rounds (a start far from its optimum, e.g. Flex-Foot from
-            # the SACH solution): the last two rounds with the default reach
-            settings = dataclasses.replace(settings, window_reach=PredictSettings.window_reach)
-            segments = instant_segments(transcriber, layout, x)
-            multipliers = None
     outcome = dataclasses.replace(out, iterations=iterations, time_s=seconds, outside=outside)
     return PredictSolution(outcome=outcome, x=x, device=nlp.device(out.x), nlp=nlp, rounds=k,
                            windows_hold=segments is None)
