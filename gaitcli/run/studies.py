@@ -42,6 +42,7 @@ from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.guess import SHIPPED_WALK
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
+from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
 from gaitcli.predict.starts import agreeing, predict_optimal, solve_start, start_seeds
 from gaitcli.run.cluster import Task, Workers, completed, map_in_order, workers
@@ -55,7 +56,7 @@ WEIGHT_SETS = {k: weight_pair(v) for k, v in {"a": "1,1", "b": "4/3,2/3", "c": "
 #: the predict settings a study file may set for every case
 SHARED = ("nodes", "strength_scale", "starts", "max_iterations", "time_limit_s")
 #: a study file's keys
-KEYS = ("name", "speeds_m_s", "weights", "conditions", "foot_mass_kg", *SHARED)
+KEYS = ("name", "speeds_m_s", "weights", "conditions", "foot_mass_kg", "references", *SHARED)
 #: the foot_mass condition's added mass per foot, kg (5.3.2)
 FOOT_MASS_KG = 2.0
 #: study.csv's columns after the case's labels
@@ -70,7 +71,10 @@ def _field(name: str) -> dataclasses.Field:
 class StudySpec:
     """A study file: speeds (m/s) × weight sets × conditions; ``weights``: (label, (w1, w2)) per set, the label
     "a"–"d" for Table 5.2's sets, else the file's text; ``foot_mass_kg``: the foot_mass condition's added mass;
-    ``base``: what every case shares (the predict defaults with the file's :data:`SHARED` settings)."""
+    ``base``: what every case shares (the predict defaults with the file's :data:`SHARED` settings);
+    ``references``: (speed, file) where a speed tracks its own reference (5.3.3: Winter's slow, natural and fast
+    cadence at 1.00, 1.33 and 1.68 m/s), the file's path resolved against the study file's folder; the other
+    speeds track the run's."""
 
     name: str
     speeds_m_s: tuple[float, ...]
@@ -78,6 +82,7 @@ class StudySpec:
     conditions: tuple[str, ...]
     foot_mass_kg: float = FOOT_MASS_KG
     base: PredictConfig = field(default_factory=PredictConfig)
+    references: tuple[tuple[float, Path], ...] = ()
 
     @classmethod
     def from_mapping(cls, data, path) -> StudySpec:
@@ -105,13 +110,36 @@ class StudySpec:
             raise InputError(path, "conditions", f"optimal needs {', '.join(COMMERCIAL_FEET)} as well (its warm "
                                                  "starts, 5.3.3)")
         foot_mass = data.get("foot_mass_kg", FOOT_MASS_KG)
-        return cls(name=str(data.get("name", "study")),
-                   speeds_m_s=tuple(check_parameter(_field("speed_m_s"), v, where="speeds_m_s", path=path)
-                                    for v in listed("speeds_m_s")),
+        speeds = tuple(check_parameter(_field("speed_m_s"), v, where="speeds_m_s", path=path)
+                       for v in listed("speeds_m_s"))
+        return cls(name=str(data.get("name", "study")), speeds_m_s=speeds, references=_references(data, speeds, path),
                    weights=tuple(weight_set(v) for v in listed("weights")), conditions=conditions,
                    foot_mass_kg=check_parameter(_field("foot_mass_kg"), foot_mass, where="foot_mass_kg", path=path),
                    base=replace_checked(PredictConfig(), {k: data[k] for k in SHARED if k in data}, section=None,
                                         path=path))
+
+
+def _references(data: dict, speeds: tuple[float, ...], path) -> tuple[tuple[float, Path], ...]:
+    """A study file's ``references``: {speed: file}, each speed one of ``speeds_m_s``, each file a reference
+    table (``gait reference``) that exists, its path relative to the study file's folder."""
+    given = data.get("references", {})
+    if not isinstance(given, dict):
+        raise InputError(path, "references", f"got {shown(given)} (expected a mapping of a speed in speeds_m_s, "
+                                             "m/s, to a reference file)")
+    out = []
+    for speed, name in given.items():
+        match = [v for v in speeds if isinstance(speed, (int, float)) and abs(v - speed) < 1e-9]
+        if not match:
+            raise InputError(path, "references", f"got the speed {shown(speed)} (expected one of speeds_m_s: "
+                                                 f"{', '.join(f'{v:g}' for v in speeds)})")
+        if not isinstance(name, str) or not name:
+            raise InputError(path, f"references: {speed:g}", f"got {shown(name)} (expected a reference file)")
+        file = Path(path).parent / name
+        if not file.is_file():
+            raise InputError(path, f"references: {speed:g}", f"{file}: file not found (expected a reference "
+                                                               "table, gait reference)")
+        out.append((match[0], file))
+    return tuple(out)
 
 
 def read_study(path: Path) -> StudySpec:
@@ -311,17 +339,21 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
     from gaitcli.run.stages import prediction_inputs
 
     spec = read_study(study_path)
+    references = {speed: read_reference(file) for speed, file in spec.references}  # checked before any output
     run = TrialRun(trial, out, cfg, files=files, needs_trial=False)
     check_output_folder(run.out_root)
     start = prediction_inputs(run.context("predict", progress=progress, plots=False), spec.base)
     run.record("predict", Path(study_path))
+    for _, file in spec.references:
+        run.record("predict", file)
     inputs = {**run.inputs, **run.read.get("predict", {})}
     chains = study_cases(spec)
     cases = [case for chain in chains for case in chain]
     root = (run.out_root / "study").resolve()  # the workers may run elsewhere, in other folders
     root.mkdir(parents=True, exist_ok=True)
     first = first_start_keys()
-    tasks = {case.name: Task(run_case, (case, str(root), start.params, start.reference, repr(start.params), cfg,
+    tasks = {case.name: Task(run_case, (case, str(root), start.params,
+                                        references.get(case.speed_m_s, start.reference), repr(start.params), cfg,
                                         inputs, force, first), case.starts_from) for case in cases}
     rows: dict[str, dict] = {}
     progress(Progress("study", "cases", 0, len(cases)))

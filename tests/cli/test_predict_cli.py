@@ -14,6 +14,8 @@ import numpy as np
 import pandas as pd
 from PIL import Image
 
+from gaitcli.predict.reference import VARIABLES
+from gaitcli.resources import bundled_reference
 from gaitcli.run.stages import read_warm
 
 from .conftest import Runner, copy_sample, gait_many, snapshot
@@ -129,9 +131,18 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     grid = "speeds_m_s: [1.1275]\nweights: [b]\nnodes: 6\nmax_iterations: 1\n"
     (tmp_path / "tiny.yaml").write_text(f"name: tiny\nconditions: [normal, sach]\n{grid}")
     (tmp_path / "normal.yaml").write_text(f"name: normal\nconditions: [normal]\n{grid}")
+    # a speed's own reference (5.3.3's Winter data per speed): the bundled one with the knees 5° more flexed
+    reference = pd.read_csv(bundled_reference())
+    for side in "rl":
+        reference[f"knee_{side}_flexion_deg_mean"] += 5.0
+    (tmp_path / "refs").mkdir()
+    reference.to_csv(tmp_path / "refs" / "flexed.csv", index=False)
+    (tmp_path / "own.yaml").write_text(f"name: own\nconditions: [normal]\n{grid}references:\n  1.1275: "
+                                       "refs/flexed.csv\n")
     jobs = {"study": (("predict", "--study", "tiny.yaml", "-o", "out", "--workers", "1"), tmp_path)}
     runs = gait_many({**jobs, "dask": (("predict", "--study", "normal.yaml", "-o", "dask", "--scheduler", address),
                                        tmp_path),
+                      "own": (("predict", "--study", "own.yaml", "-o", "own", "--workers", "1"), tmp_path),
                       "starts": (("predict", "--nodes", "6", "--starts", "2", "-o", "starts",
                                   "--scheduler", "tcp://127.0.0.1:1"), tmp_path)}, workers=3)
     assert runs["dask"].returncode == 3, runs["dask"].describe()
@@ -143,6 +154,13 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     keys = [json.loads((tmp_path / name / "study" / "v1.13_b_normal" / "summary.json").read_text())["case_key"]
             for name in ("out", "dask")]
     assert keys[0] == keys[1]
+    own = tmp_path / "own" / "study" / "v1.13_b_normal"
+    assert json.loads((own / "summary.json").read_text())["case_key"] != keys[0], runs["own"].describe()
+    with h5py.File(own / "predict.h5", "r") as h5:
+        tracked = h5["result/reference_mean"][()]
+    knee = [f"knee_{side}_flexion_deg" for side in "rl"]
+    np.testing.assert_allclose(tracked[:, [VARIABLES.index(k) for k in knee]],
+                               reference[[f"{k}_mean" for k in knee]].to_numpy(), atol=1e-6)
     run = runs["study"]
     assert run.returncode == 3 and "2 of 2 study cases did not converge" in run.stderr, run.describe()
     study = tmp_path / "out" / "study"

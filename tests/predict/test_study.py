@@ -159,3 +159,25 @@ def test_a_study_file_is_checked_by_the_predict_stages_validator():
         with pytest.raises(InputError) as caught:
             studies.StudySpec.from_mapping({**data, **change}, "study.yaml")
         assert str(caught.value).startswith(message), str(caught.value)
+
+
+def test_a_study_file_gives_a_speed_its_own_reference_beside_the_study_file(tmp_path):
+    # 5.3.3 tracks Winter's slow, natural and fast cadence at their speeds: ``references`` maps a speed of the
+    # grid to a reference table, its path relative to the study file; a speed not listed, or a file that is not
+    # there, is refused naming the key
+    (tmp_path / "refs").mkdir()
+    (tmp_path / "refs" / "slow.csv").write_text("cycle_pct\n")
+    path = tmp_path / "study.yaml"
+    data = {"speeds_m_s": [1.0, 1.33], "weights": ["b"], "conditions": ["normal"],
+            "references": {1.0: "refs/slow.csv"}}
+    spec = studies.StudySpec.from_mapping(data, path)
+    assert spec.references == ((1.0, tmp_path / "refs" / "slow.csv"),)
+    assert studies.StudySpec.from_mapping({**data, "references": {}}, path).references == ()
+    for references, message in [({1.68: "refs/slow.csv"}, "references: got the speed 1.68 (expected one of "
+                                                          "speeds_m_s: 1, 1.33)"),
+                                ({1.33: "refs/fast.csv"}, "references: 1.33: "),
+                                ({1.33: 2}, "references: 1.33: got 2 (expected a reference file)"),
+                                (["refs/slow.csv"], "references: got ['refs/slow.csv'] (expected a mapping")]:
+        with pytest.raises(InputError) as caught:
+            studies.StudySpec.from_mapping({**data, "references": references}, path)
+        assert str(caught.value).startswith(f"{path}: {message}"), str(caught.value)
