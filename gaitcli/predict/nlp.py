@@ -92,11 +92,12 @@ class NLP:
         return derivatives(self.w, self.parameters, self.constraints, self.cost, self.rest_cost,
                            self.point_functions, self.placements)
 
-    def parameter_values(self, settings: PredictSettings, anchor: np.ndarray | None = None) -> np.ndarray:
-        """p = (v, w1, w2, ρ, anchor) of ``settings``: ρ = 1 towards ``anchor`` (w's spline part,
-        :meth:`coefficients_of`), else 0."""
+    def parameter_values(self, settings: PredictSettings, anchor: np.ndarray | None = None,
+                         proximity_weight: float = 1.0) -> np.ndarray:
+        """p = (v, w1, w2, ρ, anchor) of ``settings``: ρ = ``proximity_weight`` towards ``anchor`` (w's spline
+        part, :meth:`coefficients_of`), else 0."""
         target = np.zeros(self.spline_size) if anchor is None else np.asarray(anchor, float).ravel()
-        return np.concatenate([settings.parameter_values(), [0.0 if anchor is None else 1.0], target])
+        return np.concatenate([settings.parameter_values(), [0.0 if anchor is None else proximity_weight], target])
 
     def device_bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
         """Bounds on D: fixed at ``curve``'s coefficients (a device of the problem's law), or the optimal

@@ -193,7 +193,8 @@ def test_speed_and_weights_are_parameters(built, transcriber, reference):
 
 
 def test_a_projection_costs_the_distance_from_its_anchor_and_nothing_else(built, transcriber, reference):
-    # p = (v, w1, w2, ρ, anchor): with an anchor ρ = 1, and with the weights 0 J is |head − anchor|² alone
+    # p = (v, w1, w2, ρ, anchor): with an anchor ρ as given (1 by default), and with the weights 0 J is
+    # ρ·|head − anchor|² alone
     import casadi as ca
 
     symmetric, nlp = built
@@ -201,8 +202,9 @@ def test_a_projection_costs_the_distance_from_its_anchor_and_nothing_else(built,
     anchor = w0[:nlp.spline_size] + np.linspace(-0.01, 0.02, nlp.spline_size)
     cost = ca.Function("cost", [nlp.w, nlp.parameters], [nlp.cost])
     zero = PredictSettings(weights=(0.0, 0.0))
-    assert float(cost(w0, nlp.parameter_values(zero, anchor))) == pytest.approx(
-        np.sum((w0[:nlp.spline_size] - anchor) ** 2), rel=1e-12)
+    distance = np.sum((w0[:nlp.spline_size] - anchor) ** 2)
+    assert float(cost(w0, nlp.parameter_values(zero, anchor))) == pytest.approx(distance, rel=1e-12)
+    assert float(cost(w0, nlp.parameter_values(zero, anchor, 1e4))) == pytest.approx(1e4 * distance, rel=1e-12)
 
 
 def test_steady_trunk_and_centre_of_pressure_terms_add_their_integrals(built, transcriber, reference):
