@@ -2,7 +2,7 @@
 and two peers; the stride across speeds against Winter's cadences.
 
 Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--full 18]
-[--start walk guess] [--speeds 1.0 1.1275 1.325]
+[--start walk guess] [--speeds 1.0 1.1275 1.325] [--reference-at 1.0=slow.csv …]
 [--stride-sweep 1.325 1.12 1.28 1.44]``. One core (``BENCH_CORE``: which, timing.py); asserts nothing.
 
 Per node count, model and start (``PredictConfig.start``: the shipped walk, or 5.2.10's guess): normal walking
@@ -19,7 +19,8 @@ to Falisse et al.'s 2-D predictions (44–55 s).
 ``--stride-sweep SPEED STRIDE…``: the default prediction at SPEED with every step fixed at half of each STRIDE
 (m), printing J, Et and Jdev: which stride the cost prefers.
 
-``--speeds``: the stride at each speed beside Winter's slow, natural and fast cadences, the data 5.3.3 tracks
+``--speeds``: the stride at each speed (``--reference-at SPEED=FILE``: tracking that speed's own reference, as
+5.3.3 does; else the bundled one) beside Winter's slow, natural and fast cadences, the data 5.3.3 tracks
 at 1.00, 1.33 and 1.68 m/s (87, 105, 123 steps per minute: Winter's means as recalled, not checked against
 his book here; 1.325 m/s for the natural one), stride = 2·60·v/cadence, the cadence interpolated linearly.
 """
@@ -110,6 +111,8 @@ def main() -> None:
     parser.add_argument("--full", type=int, nargs="*", default=[18], help="node counts of the full model")
     parser.add_argument("--start", nargs="+", default=["walk"], choices=["walk", "guess"])
     parser.add_argument("--speeds", type=float, nargs="*", default=[1.0, 1.1275, 1.325])
+    parser.add_argument("--reference-at", nargs="*", default=[], metavar="SPEED=FILE",
+                        help="--speeds: the reference table this speed tracks (5.3.3: Winter's per speed)")
     parser.add_argument("--iterations", type=int, default=3000)
     parser.add_argument("--cop-sd-m", type=float, default=0.0, help="> 0: Jdev also tracks the centres of pressure")
     parser.add_argument("--stride-sweep", type=float, nargs="*", default=[], metavar="SPEED STRIDE",
@@ -142,9 +145,10 @@ def main() -> None:
     if args.speeds:
         print(f"\n{'speed m/s':>9} {'stride m':>8} {'period s':>8} {'Winter m':>8} {'ratio':>6} {'conv':>5} {'J':>8}"
               f" {'Et J/m':>7}")
+    own = {float(speed): read_reference(file) for speed, file in (a.split("=", 1) for a in args.reference_at)}
     for speed in args.speeds:
         cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=args.iterations)
-        r = predict(cfg, reference, args.cop_sd_m)["result"]
+        r = predict(cfg, own.get(speed, reference), args.cop_sd_m)["result"]
         stride = float(np.sum(r.step_lengths_m))
         period = float(np.sum(r.phase_durations_s))
         winter = winter_stride_m(speed)
