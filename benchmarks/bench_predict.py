@@ -3,7 +3,8 @@ and two peers; the stride across speeds against Winter's cadences.
 
 Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--full 18]
 [--start walk guess] [--speeds 1.0 1.1275 1.325] [--reference-at 1.0=slow.csv …]
-[--stride-sweep 1.325 1.12 1.28 1.44]``. One core (``BENCH_CORE``: which, timing.py); asserts nothing.
+[--stride-sweep 1.325 1.12 1.28 1.44] [--stride-follows 1.325 1.45]``. One core (``BENCH_CORE``: which,
+timing.py); asserts nothing.
 
 Per node count, model and start (``PredictConfig.start``: the shipped walk, or 5.2.10's guess): normal walking
 (subject 1, the bundled reference, weights 4/3, 2/3, 1.1275 m/s) by ``run_predict``. The problem and its first
@@ -18,6 +19,9 @@ to Falisse et al.'s 2-D predictions (44–55 s).
 
 ``--stride-sweep SPEED STRIDE…``: the default prediction at SPEED with every step fixed at half of each STRIDE
 (m), printing J, Et and Jdev: which stride the cost prefers.
+
+``--stride-follows SPEED STRIDE``: the walk at SPEED forced to STRIDE, made a reference, then tracked with the
+stride free: whether the stride follows a speed's own reference (5.3.3's per-speed data).
 
 ``--speeds``: the stride at each speed (``--reference-at SPEED=FILE``: tracking that speed's own reference, as
 5.3.3 does; else the bundled one) beside Winter's slow, natural and fast cadences, the data 5.3.3 tracks
@@ -37,10 +41,11 @@ from timing import one_core
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.nlp import instant_segments
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.reference import read_reference
+from gaitcli.predict.reference import VARIABLES, as_reference, read_reference
 from gaitcli.predict.solve import NlpCache, checked_design, ipopt_options
 from gaitcli.predict.stage import PredictConfig, default_start, run_predict, settings_of
 from gaitcli.resources import bundled_reference
+from gaitcli.signal.cycles import CYCLE_PCT
 
 TABLE_5_1_HOURS = {14: 11.3, 16: 15.9, 18: 22.3, 20: 28.9}
 FALISSE_S = (44.0, 55.0)
@@ -111,6 +116,8 @@ def main() -> None:
     parser.add_argument("--full", type=int, nargs="*", default=[18], help="node counts of the full model")
     parser.add_argument("--start", nargs="+", default=["walk"], choices=["walk", "guess"])
     parser.add_argument("--speeds", type=float, nargs="*", default=[1.0, 1.1275, 1.325])
+    parser.add_argument("--stride-follows", type=float, nargs=2, metavar=("SPEED", "STRIDE"),
+                        help="a speed, m/s, and a stride, m: the walk at that stride as the reference, the stride free")
     parser.add_argument("--reference-at", nargs="*", default=[], metavar="SPEED=FILE",
                         help="--speeds: the reference table this speed tracks (5.3.3: Winter's per speed)")
     parser.add_argument("--iterations", type=int, default=3000)
@@ -157,6 +164,8 @@ def main() -> None:
         print("    " + kinetics(r), flush=True)
     if args.stride_sweep:
         stride_sweep(args.stride_sweep[0], args.stride_sweep[1:], reference, args.iterations)
+    if args.stride_follows:
+        stride_follows(*args.stride_follows, reference, args.iterations)
 
 
 def stride_sweep(speed: float, strides: list[float], reference, iterations: int) -> None:
@@ -169,6 +178,29 @@ def stride_sweep(speed: float, strides: list[float], reference, iterations: int)
         r = predict(cfg, reference, step_m=stride / 2)["result"]
         print(f"{stride:8.3f} {float(np.sum(r.phase_durations_s)):8.3f} {str(r.converged):>5} {r.iterations:>5}"
               f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f}", flush=True)
+
+
+def reference_of(result, reference):
+    """The :data:`~gaitcli.predict.reference.VARIABLES` of a predicted cycle over 0–100 % as a reference, with
+    ``reference``'s SDs: a walker at that speed and stride, the data a speed's own reference would hold."""
+    pct, point_pct = result.cycle_pct, 100 * result.point_time_s / result.phase_durations_s.sum()
+    columns = [np.interp(CYCLE_PCT, pct, a, period=100.0) for a in result.clinical_angles_deg.T]
+    columns += [np.interp(CYCLE_PCT, point_pct, f / result.body_mass_kg, period=100.0) for f in result.grf_N.T]
+    return as_reference(np.column_stack(columns), reference.arrays(VARIABLES)[1], np.zeros(len(VARIABLES)),
+                        "a predicted walk")
+
+
+def stride_follows(speed: float, stride: float, reference, iterations: int) -> None:
+    """Whether the stride follows the reference, as 5.3.3's per-speed references need: the walk at ``speed``
+    with every step fixed at half of ``stride``, made a reference (:func:`reference_of`), then tracked with the
+    stride free from the default start."""
+    cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=iterations)
+    forced = predict(cfg, reference, step_m=stride / 2)["result"]
+    free = predict(cfg, reference_of(forced, reference))["result"]
+    print(f"\nat {speed} m/s the walk at a {stride} m stride as the reference: the stride free returns to "
+          f"{float(np.sum(free.step_lengths_m)):.3f} m (period {float(np.sum(free.phase_durations_s)):.3f} s, "
+          f"converged {free.converged}, {free.iterations} iterations, J {free.objective:.4f}, Jdev "
+          f"{free.deviation:.3f}; the forced walk's J {forced.objective:.4f})", flush=True)
 
 
 if __name__ == "__main__":
