@@ -181,3 +181,16 @@ def test_a_study_file_gives_a_speed_its_own_reference_beside_the_study_file(tmp_
         with pytest.raises(InputError) as caught:
             studies.StudySpec.from_mapping({**data, "references": references}, path)
         assert str(caught.value).startswith(f"{path}: {message}"), str(caught.value)
+
+
+def test_a_bad_reference_of_a_speed_stops_the_study_before_it_writes_anything(tmp_path):
+    from gaitcli.run.config import PipelineConfig
+
+    (tmp_path / "refs").mkdir()
+    (tmp_path / "refs" / "slow.csv").write_text("cycle_pct,hip_r_flexion_deg_mean\n0,1\n")
+    study = tmp_path / "study.yaml"
+    study.write_text("speeds_m_s: [1.0]\nweights: [b]\nconditions: [normal]\nreferences: {1.0: refs/slow.csv}\n")
+    with pytest.raises(InputError) as caught:
+        studies.run_study(None, study, PipelineConfig(), out=tmp_path / "out")
+    assert str(caught.value).startswith(f"{tmp_path / 'refs' / 'slow.csv'}: "), str(caught.value)
+    assert not (tmp_path / "out").exists()
