@@ -90,7 +90,7 @@ def kinetics(r) -> str:
     the cycle, where the ankle's plantarflexor moment peaks in stance, the vasti's largest stance activation,
     the share of the cycle each saturated muscle spends above 0.95, the excitations on the 4× grid."""
     moments = r.joint_moments_Nm / r.body_mass_kg  # senses of the clinical angles: flexion, dorsiflexion > 0
-    pct = 100 * r.point_time_s / r.phase_durations_s.sum()
+    pct = 100 * r.point_time_s / r.period_s
     stance_pct = r.summary()["stance_pct"]
     early, stance = (pct >= 5) & (pct <= 20), pct <= stance_pct
     names = list(r.muscle_names)
@@ -154,10 +154,10 @@ def main() -> None:
               f" {'Et J/m':>7}")
     own = {float(speed): read_reference(file) for speed, file in (a.split("=", 1) for a in args.reference_at)}
     for speed in args.speeds:
-        cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=args.iterations)
+        cfg = at_speed(speed, args.iterations)
         r = predict(cfg, own.get(speed, reference), args.cop_sd_m)["result"]
         stride = float(np.sum(r.step_lengths_m))
-        period = float(np.sum(r.phase_durations_s))
+        period = r.period_s
         winter = winter_stride_m(speed)
         print(f"{speed:9.4f} {stride:8.3f} {period:8.3f} {winter:8.3f} {stride / winter:6.2f} {str(r.converged):>5}"
               f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f}", flush=True)
@@ -168,22 +168,26 @@ def main() -> None:
         stride_follows(*args.stride_follows, reference, args.iterations)
 
 
+def at_speed(speed: float, iterations: int) -> PredictConfig:
+    """The default prediction at ``speed`` (m/s), stopped after ``iterations``."""
+    return dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=iterations)
+
+
 def stride_sweep(speed: float, strides: list[float], reference, iterations: int) -> None:
     """J, Et and Jdev at ``speed`` with the stride fixed at each of ``strides`` (``PredictSettings.step_m``):
     which stride the cost itself prefers, apart from where IPOPT stops from the shipped walk's."""
     print(f"\nstrides fixed at {speed} m/s\n{'stride m':>8} {'period s':>8} {'conv':>5} {'iter':>5} {'J':>8}"
           f" {'Et J/m':>7} {'Jdev':>6}")
     for stride in strides:
-        cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=iterations)
-        r = predict(cfg, reference, step_m=stride / 2)["result"]
-        print(f"{stride:8.3f} {float(np.sum(r.phase_durations_s)):8.3f} {str(r.converged):>5} {r.iterations:>5}"
+        r = predict(at_speed(speed, iterations), reference, step_m=stride / 2)["result"]
+        print(f"{stride:8.3f} {r.period_s:8.3f} {str(r.converged):>5} {r.iterations:>5}"
               f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f}", flush=True)
 
 
 def reference_of(result, reference):
     """The :data:`~gaitcli.predict.reference.VARIABLES` of a predicted cycle over 0–100 % as a reference, with
     ``reference``'s SDs: a walker at that speed and stride, the data a speed's own reference would hold."""
-    pct, point_pct = result.cycle_pct, 100 * result.point_time_s / result.phase_durations_s.sum()
+    pct, point_pct = result.cycle_pct, 100 * result.point_time_s / result.period_s
     columns = [np.interp(CYCLE_PCT, pct, a, period=100.0) for a in result.clinical_angles_deg.T]
     columns += [np.interp(CYCLE_PCT, point_pct, f / result.body_mass_kg, period=100.0) for f in result.grf_N.T]
     return as_reference(np.column_stack(columns), reference.arrays(VARIABLES)[1], np.zeros(len(VARIABLES)),
@@ -194,11 +198,11 @@ def stride_follows(speed: float, stride: float, reference, iterations: int) -> N
     """Whether the stride follows the reference, as 5.3.3's per-speed references need: the walk at ``speed``
     with every step fixed at half of ``stride``, made a reference (:func:`reference_of`), then tracked with the
     stride free from the default start."""
-    cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=iterations)
+    cfg = at_speed(speed, iterations)
     forced = predict(cfg, reference, step_m=stride / 2)["result"]
     free = predict(cfg, reference_of(forced, reference))["result"]
     print(f"\nat {speed} m/s the walk at a {stride} m stride as the reference: the stride free returns to "
-          f"{float(np.sum(free.step_lengths_m)):.3f} m (period {float(np.sum(free.phase_durations_s)):.3f} s, "
+          f"{float(np.sum(free.step_lengths_m)):.3f} m (period {free.period_s:.3f} s, "
           f"converged {free.converged}, {free.iterations} iterations, J {free.objective:.4f}, Jdev "
           f"{free.deviation:.3f}; the forced walk's J {forced.objective:.4f})", flush=True)
 

@@ -33,6 +33,11 @@ from gaitcli.signal.bands import Band
 #: how many built problems a cache keeps: a study alternates between at most two structures (intact,
 #: prosthetic)
 BUILT_NLPS_KEPT = 3
+#: ρ of a projection's distance term ρ·|head − anchor|²: large, so that the Hessian of the Lagrangian is
+#: ρ·I on the coefficients and each Newton step the least change that meets the linearised constraints. At
+#: ρ = 1 the full model's projection (nn = 18) wandered (the distance rose from 0.07 to 36 before falling to
+#: 0.12) in 125 iterations; at 1e4 it reaches the same point in 55 (60 → 26 s; benchmarks/README.md)
+PROJECTION_WEIGHT = 1e4
 
 
 class IterationReport(ca.Callback):
@@ -351,13 +356,6 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
     outcome = dataclasses.replace(out, iterations=iterations, time_s=seconds, outside=outside)
     return PredictSolution(outcome=outcome, x=x, device=nlp.device(out.x), nlp=nlp, rounds=k,
                            windows_hold=segments is None)
-
-
-#: ρ of a projection's distance term ρ·|head − anchor|²: large, so that the Hessian of the Lagrangian is
-#: ρ·I on the coefficients and each Newton step the least change that meets the linearised constraints. At
-#: ρ = 1 the full model's projection (nn = 18) wandered (the distance rose from 0.07 to 36 before falling to
-#: 0.12) in 125 iterations; at 1e4 it reaches the same point in 55 (60 → 26 s; benchmarks/README.md)
-PROJECTION_WEIGHT = 1e4
 
 
 def project(transcriber: Transcriber, reference: Band, x0: np.ndarray, settings: PredictSettings | None = None,

@@ -372,8 +372,8 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     cache = cache if cache is not None else NlpCache()
     solve_options = {"device": device, "optimal_device": optimal, "deadline": deadline, "cache": cache}
     if init is not None:
-        # a start from a solution (of a neighbouring case) keeps the default windows: ±1 segment, cheaper to
-        # factorise, made IPOPT creep from another case's gait on the default grid (benchmarks/README.md,
+        # a start from a solution (of a neighbouring case) keeps the default windows: ±1 segment, though cheaper
+        # to factorise, made IPOPT creep from another case's gait on the default grid (benchmarks/README.md,
         # "Twenty points"); a window that binds is moved and the problem solved again (solve_windowed)
         x0 = init
     elif cfg.symmetric:
