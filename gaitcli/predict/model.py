@@ -137,6 +137,12 @@ class WalkerParameters:
         return replace(self, limb=limb, body_mass_kg=self.body_mass_kg + 2 * m,
                        notes=self.notes + (f"{m:g} kg added to each foot {where}",))
 
+    @property
+    def leg_length_m(self) -> float:
+        """Hip centre to the sole of a flat foot, m: thigh + shank + the ankle's height (the L of Hof's
+        dimensionless speed, ``speed_reference.py``)."""
+        return self.limb.thigh_length_m + self.limb.shank_length_m + self.contact_below_ankle_m
+
     @classmethod
     def subject_1(cls) -> WalkerParameters:
         """The dissertation's subject 1 (73.0 kg, 1.792 m; thigh 0.475 m, shank 0.429 m)."""
