@@ -23,10 +23,14 @@ to Falisse et al.'s 2-D predictions (44–55 s).
 ``--stride-follows SPEED STRIDE``: the walk at SPEED forced to STRIDE, made a reference, then tracked with the
 stride free: whether the stride follows a speed's own reference (5.3.3's per-speed data).
 
-``--speeds``: the stride at each speed (``--reference-at SPEED=FILE``: tracking that speed's own reference, as
-5.3.3 does; else the bundled one) beside Winter's slow, natural and fast cadences, the data 5.3.3 tracks
-at 1.00, 1.33 and 1.68 m/s (87, 105, 123 steps per minute: Winter's means as recalled, not checked against
-his book here; 1.325 m/s for the natural one), stride = 2·60·v/cadence, the cadence interpolated linearly.
+``--speeds``: the stride and cadence at each speed as ``gait predict --speed V`` walks by default (tracking the
+shipped reference of that speed, the stride bounded by its group's ± 1 SD: ``predict/speed_reference.py``),
+beside the tracked group's stride and cadence for subject 1, whether the stride bound is active, and the
+joint moments' shapes against Schwartz et al.'s free-speed group's means (the package's normal band;
+Pearson r of hip, knee and ankle sagittal moments over the cycle). ``--reference-at SPEED=FILE``: that speed
+tracks FILE instead, the stride in the box; ``--bundled``: every speed tracks the bundled reference (the
+previous default) with the stride in the box. Winter's cadences as recalled (87, 105, 123 steps per minute at
+1.00, 1.325 and 1.68 m/s; not checked against his book here) are printed beside.
 """
 
 from __future__ import annotations
@@ -39,12 +43,15 @@ import numpy as np
 from timing import one_core
 
 from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.model import WalkerParameters
 from gaitcli.predict.nlp import instant_segments
 from gaitcli.predict.problem import Transcriber
 from gaitcli.predict.reference import VARIABLES, as_reference, read_reference
 from gaitcli.predict.solve import NlpCache, checked_design, ipopt_options
+from gaitcli.predict.speed_reference import speed_reference
 from gaitcli.predict.stage import PredictConfig, default_start, run_predict, settings_of
 from gaitcli.resources import bundled_reference
+from gaitcli.signal.bands import BAND_FILE, read_band
 from gaitcli.signal.cycles import CYCLE_PCT
 
 TABLE_5_1_HOURS = {14: 11.3, 16: 15.9, 18: 22.3, 20: 28.9}
@@ -104,6 +111,20 @@ def kinetics(r) -> str:
             f"{saturated or '-'}, excitations on the 4× grid {fine['min_excitation']:.2f}…{fine['max_excitation']:.2f}")
 
 
+def moment_shapes(r) -> str:
+    """Pearson r of the predicted hip, knee and ankle sagittal moments over the cycle against the normal band's
+    means (Schwartz et al.'s free group; the band's extensor / plantarflexor senses, hence −r)."""
+    band = read_band(BAND_FILE)
+    pct = 100 * r.point_time_s / r.period_s
+    moments = r.joint_moments_Nm / r.body_mass_kg  # flexion, flexion, dorsiflexion positive
+    out = []
+    for k, (joint, name) in enumerate((("hip", "hip_extensor"), ("knee", "knee_extensor"),
+                                       ("ankle", "ankle_plantarflexor"))):
+        mean = np.interp(pct, CYCLE_PCT, band.mean[f"{name}_moment_per_kg"])
+        out.append(f"{joint} {-np.corrcoef(moments[:, k], mean)[0, 1]:.2f}")
+    return "moment shapes r vs the free group's means: " + ", ".join(out)
+
+
 def winter_stride_m(speed: float) -> float:
     """Winter's stride at ``speed`` (m/s): 2·60·v/cadence, the cadence interpolated between his three."""
     speeds, cadences = np.array(WINTER_CADENCE).T
@@ -120,6 +141,8 @@ def main() -> None:
                         help="a speed, m/s, and a stride, m: the walk at that stride as the reference, the stride free")
     parser.add_argument("--reference-at", nargs="*", default=[], metavar="SPEED=FILE",
                         help="--speeds: the reference table this speed tracks (5.3.3: Winter's per speed)")
+    parser.add_argument("--bundled", action="store_true",
+                        help="--speeds: every speed tracks the bundled reference, the stride in the box")
     parser.add_argument("--iterations", type=int, default=3000)
     parser.add_argument("--cop-sd-m", type=float, default=0.0, help="> 0: Jdev also tracks the centres of pressure")
     parser.add_argument("--stride-sweep", type=float, nargs="*", default=[], metavar="SPEED STRIDE",
@@ -150,18 +173,35 @@ def main() -> None:
         print(f"{nodes:>3} {model:<9} {'guess':<5} {'-':>11} {old['solve_s']:8.1f} {old['iterations']:>5} {'':>6}"
               f" {'True':>5} {old['J']:8.4f} {'':>7} {'':>6} {'-':>8} {old['hess']:>8}   (previous formulation)")
     if args.speeds:
-        print(f"\n{'speed m/s':>9} {'stride m':>8} {'period s':>8} {'Winter m':>8} {'ratio':>6} {'conv':>5} {'J':>8}"
-              f" {'Et J/m':>7}")
+        print(f"\n{'speed m/s':>9} {'stride m':>8} {'period s':>8} {'cad/min':>7} {'group m':>7} {'ratio':>6}"
+              f" {'grp cad':>7} {'ratio':>6} {'bound':>13} {'Winter m':>8} {'conv':>5} {'iter':>5} {'solve s':>7}"
+              f" {'J':>8} {'Et J/m':>7} {'Jdev':>6}")
     own = {float(speed): read_reference(file) for speed, file in (a.split("=", 1) for a in args.reference_at)}
+    leg = WalkerParameters.subject_1().leg_length_m
     for speed in args.speeds:
-        cfg = at_speed(speed, args.iterations)
-        r = predict(cfg, own.get(speed, reference), args.cop_sd_m)["result"]
-        stride = float(np.sum(r.step_lengths_m))
-        period = r.period_s
-        winter = winter_stride_m(speed)
-        print(f"{speed:9.4f} {stride:8.3f} {period:8.3f} {winter:8.3f} {stride / winter:6.2f} {str(r.converged):>5}"
-              f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f}", flush=True)
+        cfg, group = at_speed(speed, args.iterations), speed_reference(speed, leg)
+        tracked = own.get(speed, reference if args.bundled else None)
+        if tracked is None:
+            tracked = group.reference
+            cfg = dataclasses.replace(cfg, stride_range_m=(round(group.stride_m - group.stride_sd_m, 4),
+                                                           round(group.stride_m + group.stride_sd_m, 4)))
+        run = predict(cfg, tracked, args.cop_sd_m)
+        r = run["result"]
+        stride, cadence = float(np.sum(r.step_lengths_m)), 120.0 / r.period_s
+        bound = cfg.stride_range_m
+        active = "-" if bound is None else ("low" if stride <= bound[0] + 1e-4 else
+                                            "high" if stride >= bound[1] - 1e-4 else "inside")
+        shown = "box" if bound is None else f"{bound[0]:.3f}–{bound[1]:.3f}"
+        print(f"{speed:9.4f} {stride:8.3f} {r.period_s:8.3f} {cadence:7.1f} {group.stride_m:7.3f}"
+              f" {stride / group.stride_m:6.2f} {group.cadence_steps_per_min:7.1f}"
+              f" {cadence / group.cadence_steps_per_min:6.2f} {shown:>11} {active[:1]}"
+              f" {winter_stride_m(speed):8.3f} {str(r.converged):>5} {r.iterations:>5} {run['solve_s']:7.1f}"
+              f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f}", flush=True)
+        checks = r.gait_checks()
+        print("    gait checks: " + ", ".join(f"{k} {v['value']} {'ok' if v['ok'] else 'FAILS'}"
+                                              for k, v in checks.items()), flush=True)
         print("    " + kinetics(r), flush=True)
+        print("    " + moment_shapes(r) + f"; tracked: {tracked.source or 'bundled'}", flush=True)
     if args.stride_sweep:
         stride_sweep(args.stride_sweep[0], args.stride_sweep[1:], reference, args.iterations)
     if args.stride_follows:

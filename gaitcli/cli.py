@@ -283,7 +283,8 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 @_config_option(PredictConfig, "max_iterations", "--max-iterations")
 @_config_option(PredictConfig, "time_limit_s", "--time-limit")
 @click.option("--reference", "reference", type=click.Path(path_type=Path, dir_okay=False),
-              help="Reference CSV of `gait reference` (default: the trial's own, or the bundled normal one).")
+              help="Reference CSV of `gait reference` (default: the trial's own, or the shipped reference of the "
+                   "speed, Schwartz et al. 2008's groups).")
 @click.option("--subject", "subject", type=click.Path(path_type=Path, dir_okay=False),
               help="subject.yaml of the person to predict for (default: the trial's, or the dissertation's "
                    "subject 1, 73.0 kg, 1.792 m).")
@@ -295,6 +296,7 @@ def muscles_command(console: Console, trial, out, pipeline, no_plots, method, si
 @_config_option(PredictConfig, "prosthesis", "--prosthesis")
 @_config_option(PredictConfig, "strength_scale", "--strength-scale")
 @_config_option(PredictConfig, "monotone_range_deg", "--monotone-range")
+@_config_option(PredictConfig, "stride_range_m", "--stride-range")
 @_config_option(PredictConfig, "starts", "--starts")
 @_config_option(PredictConfig, "seed", "--seed")
 @click.option("--workers", "workers", type=click.IntRange(min=1, max=256), default=None,

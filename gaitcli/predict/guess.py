@@ -29,25 +29,47 @@ GUESS_PHASE_FRACTIONS = (0.07, 0.13, 0.55, 0.25)
 GUESS_STRETCH = float(np.sqrt(0.1))
 #: the guess's hip height per leg length (thigh + shank + ankle to sole): the standing foot on the floor
 GUESS_HIP_HEIGHT = 0.97
-#: the shipped normal walk: χ of ``gait predict`` with its defaults (subject 1, 1.1275 m/s, weights 4/3, 2/3,
-#: the bundled reference), symmetric model, on this many nodes
-SHIPPED_WALK = Path(__file__).resolve().parent / "data" / "normal_symmetric_nn18.csv"
+DATA = Path(__file__).resolve().parent / "data"
+#: a converged normal walk: χ of ``gait predict`` at 1.1275 m/s tracking the bundled reference (subject 1, weights
+#: 4/3, 2/3), symmetric model, on this many nodes; the start where no speed group's walk is shipped
+SHIPPED_WALK = DATA / "normal_symmetric_nn18.csv"
 SHIPPED_WALK_NODES = 18
+#: the default starts: subject 1's prediction at each speed group's speed, tracking its reference
+#: (``scripts/make_speed_walks.py``; the speed in each file's first header line)
+SPEED_WALKS = tuple(sorted(DATA.glob("walk_*_nn18.csv")))
+
+
+def walk_speed_m_s(path: Path) -> float:
+    """The speed of a shipped walk (its header's ``speed_m_s: V``)."""
+    with open(path) as f:
+        return float(f.readline().split("speed_m_s:")[1])
+
+
+def nearest_walk(speed_m_s: float) -> Path:
+    """The shipped walk of the speed nearest ``speed_m_s`` (:data:`SHIPPED_WALK` where none is shipped)."""
+    if not SPEED_WALKS:
+        return SHIPPED_WALK
+    return min(SPEED_WALKS, key=lambda path: abs(walk_speed_m_s(path) - speed_m_s))
+
+
 #: the starts ``PredictConfig.start`` names
 STARTS = ("walk", "guess")
 
 
 def shipped_walk(nodes: int, settings: PredictSettings | None = None, *, symmetric: bool = False) -> np.ndarray:
-    """The default start χ: the shipped normal walk (:data:`SHIPPED_WALK`) on ``nodes`` nodes (its splines
-    fitted, ``layout.symmetric_on_nodes``, and clipped into the box; the full model's as
-    ``layout.full_from_symmetric``), its step fixed at ``settings.step_m`` where that is set, its phase
-    durations scaled so that it walks at the settings' speed (5.43: ΣT = ΔS/v)."""
+    """The default start χ: the shipped walk of the nearest speed (:func:`nearest_walk`) on ``nodes`` nodes (its
+    splines fitted, ``layout.symmetric_on_nodes``, and clipped into the box; the full model's as
+    ``layout.full_from_symmetric``), its step fixed at ``settings.step_m`` where that is set (else brought into
+    ``settings.step_range_m``), its phase durations scaled so that it walks at the settings' speed (5.43:
+    ΣT = ΔS/v)."""
     s = settings or PredictSettings()
-    x = symmetric_on_nodes(np.loadtxt(SHIPPED_WALK), SHIPPED_WALK_NODES, nodes)
+    x = symmetric_on_nodes(np.loadtxt(nearest_walk(s.speed_m_s)), SHIPPED_WALK_NODES, nodes)
     layout = DesignLayout.build(nodes, symmetric=True)
     blocks = layout.unpack(x)
     if s.step_m > 0:
         blocks["steps"] = np.full_like(blocks["steps"], s.step_m)
+    elif s.step_range_m is not None:
+        blocks["steps"] = np.clip(blocks["steps"], *s.step_range_m)
     period = 2 * float(blocks["steps"].sum()) / s.speed_m_s
     blocks["durations"] = blocks["durations"] * period / (2 * float(blocks["durations"].sum()))
     x = np.clip(layout.pack(blocks), *box_bounds(layout))  # a fit on other nodes may overshoot a bound a little
@@ -83,7 +105,7 @@ def initial_guess(transcriber: Transcriber, reference: Band, settings: PredictSe
     mean = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[v]) for v in VARIABLES])
     rad = np.radians
     hip_flex_r, knee_r, dorsi_r, hip_flex_l, knee_l, dorsi_l = (mean[:, VARIABLES.index(v)] for v in VARIABLES[:6])
-    leg = p.limb.thigh_length_m + p.limb.shank_length_m + p.contact_below_ankle_m
+    leg = p.leg_length_m
     right = [-rad(hip_flex_r), rad(knee_r), -rad(dorsi_r)]
     half = GUESS_STEP_M / s.speed_m_s  # s: half a cycle
     phases = np.array(GUESS_PHASE_FRACTIONS) * half

@@ -271,7 +271,7 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     functions = point_functions(v, transcriber, reference, points)
     rows = constraint_rows(v, transcriber, s, functions, points, segments, reach)
     extras = tracking_extras(v, points, s, transcriber)
-    lbw, ubw = v.bounds(transcriber.muscles.present, s.step_m)
+    lbw, ubw = v.bounds(transcriber.muscles.present, s.step_m, s.step_range_m)
     g, lbg, ubg, slices, placements = _stacked(rows)
     rest_cost = functions["deviation"].weight * extras + proximity(v)
     cost = functions["muscles"].cost + functions["deviation"].cost + rest_cost

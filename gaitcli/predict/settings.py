@@ -40,6 +40,9 @@ class PredictSettings:
     monotone_samples: int = 71
     #: > 0: every step this long, m (a walk at a chosen stride, e.g. the synthetic trials'); 0: free in STEP_RANGE_M
     step_m: float = 0.0
+    #: (low, high): each step within these, m (5.44's "reasonable step lengths": the speed's reference group's
+    #: stride ± 1 SD, halved; ``speed_reference.py``); None: the box's ``layout.STEP_RANGE_M``
+    step_range_m: tuple[float, float] | None = None
     #: > 0: Jdev (5.28) also tracks the HAT's pitch rate ẏ3 against 0 with this SD, deg/s (a steady trunk, e.g.
     #: the synthetic walk's); 0: the dissertation's Jdev
     trunk_rate_sd_deg_s: float = 0.0

@@ -29,7 +29,7 @@ from gaitcli.predict.checks import gait_checks
 from gaitcli.predict.cost import check_weights, cost_of_transport, deviation, objective
 from gaitcli.predict.grid import DEFAULT_CONTROL_POINTS, control_grid, instant_times
 from gaitcli.predict.guess import STARTS, initial_guess, shipped_walk
-from gaitcli.predict.layout import DesignLayout, full_from_symmetric
+from gaitcli.predict.layout import STEP_RANGE_M, DesignLayout, full_from_symmetric
 from gaitcli.predict.model import WalkerParameters, WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.nlp import build_nlp, instant_segments
@@ -84,6 +84,17 @@ def foot_position_m(value) -> tuple[float, float] | None:
     if abs(forward) > 0.3 or abs(down) > 0.3:
         raise ValueError("a position near the ankle")
     return forward, down
+
+
+def stride_range_m(value) -> tuple[float, float] | None:
+    """(low, high) in m of "LOW,HIGH" or a pair, 0.4 ≤ low < high ≤ 2.4 (each step within the box's 0.2–1.2 m);
+    None (or "") for the default (:attr:`PredictConfig.stride_range_m`)."""
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    low, high = number_pair(value)
+    if not 2 * STEP_RANGE_M[0] <= low < high <= 2 * STEP_RANGE_M[1]:
+        raise ValueError("an increasing range")
+    return low, high
 
 
 def even_nodes(nodes: int) -> int:
@@ -155,6 +166,11 @@ class PredictConfig:
         PredictSettings.foot_flat_min_pct, low=0.0, high=30.0,
         help="Each heel rocker (heel strike to the forefoot's contact) lasts at least this % of the cycle (7: the "
              "earliest of 9 real stances; 0: free, as in the dissertation).")
+    stride_range_m: tuple[float, float] | None = parameter(
+        None, parse=stride_range_m, metavar="LOW,HIGH", expected="LOW,HIGH in m, 0.4 ≤ LOW < HIGH ≤ 2.4",
+        help="Bounds on the stride, m (5.44's reasonable step lengths; each step half of it). Default: the stride of "
+             "the speed's reference group ± 1 SD where the prediction tracks the shipped per-speed reference, "
+             "else 0.4–2.4.")
     start: str = parameter("walk", choices=STARTS,
                            help="Where IPOPT starts without --init: walk (the shipped normal walk on these nodes, "
                                 "retimed to the speed) or guess (5.2.10's initial guess from the reference).")
@@ -303,7 +319,9 @@ def violated_groups(violations: dict, tolerance: float = FEASIBILITY_TOLERANCE) 
 def settings_of(cfg: PredictConfig) -> PredictSettings:
     """The NLP's settings for ``cfg``."""
     return PredictSettings(speed_m_s=cfg.speed_m_s, weights=cfg.weights, max_iterations=cfg.max_iterations,
-                           monotone_range_rad=cfg.monotone_range_rad(), foot_flat_min_pct=cfg.foot_flat_min_pct)
+                           monotone_range_rad=cfg.monotone_range_rad(), foot_flat_min_pct=cfg.foot_flat_min_pct,
+                           step_range_m=(None if cfg.stride_range_m is None
+                                         else (cfg.stride_range_m[0] / 2, cfg.stride_range_m[1] / 2)))
 
 
 def walker_muscles(cfg: PredictConfig, device: ProsthesisLaw | None) -> WalkerMuscles:

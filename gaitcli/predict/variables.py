@@ -232,15 +232,19 @@ class Variables:
             out[name], start = slice(start, start + size), start + size
         return out
 
-    def bounds(self, present: np.ndarray, step_m: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(self, present: np.ndarray, step_m: float = 0.0,
+               step_range_m: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """lbw, ubw without D: the durations and steps as :func:`box_bounds` (the steps fixed at ``step_m``
-        when > 0), the B-spline coefficients free (``constraints.nodal_rows`` bounds their nodal values); ŝ ≥ 0
-        (a taut or just slack tendon) and 0 ≤ a ≤ 1; the ``present`` (16,) muscles' values free, the others'
-        fixed at 0."""
+        when > 0, else within ``step_range_m`` where given), the B-spline coefficients free
+        (``constraints.nodal_rows`` bounds their nodal values); ŝ ≥ 0 (a taut or just slack tendon) and
+        0 ≤ a ≤ 1; the ``present`` (16,) muscles' values free, the others' fixed at 0."""
         low, high = box_bounds(self.layout, present)
         blocks_low, blocks_high = self.layout.unpack(low), self.layout.unpack(high)
         if step_m > 0:
             blocks_low["steps"] = blocks_high["steps"] = np.full_like(blocks_low["steps"], step_m)
+        elif step_range_m is not None:
+            blocks_low["steps"] = np.full_like(blocks_low["steps"], step_range_m[0])
+            blocks_high["steps"] = np.full_like(blocks_high["steps"], step_range_m[1])
         lbw, ubw = [], []
         for b in self.splines:  # the B-splines' coefficients free: their nodal values are bounded (``nodes`` rows)
             lo, hi = np.full(b.variables.shape, -np.inf), np.full(b.variables.shape, np.inf)

@@ -81,12 +81,19 @@ def optimal_curves(rows: list[dict], path: Path, title: str) -> Path:
     return save(fig, path)
 
 
+def _shown(value, width: int, digits: int) -> str:
+    """A number right-aligned in ``width``, or "-" where a row has none."""
+    return f"{value:>{width}.{digits}f}" if isinstance(value, (int, float)) else f"{'-':>{width}}"
+
+
 def study_text(rows: list[dict]) -> str:
     """The study table (as Table 5.3) as aligned text: one line per case; unconverged cases marked '*'."""
-    head = f"{'speed':>6} {'weights':>8} {'condition':>10} {'J':>8} {'Et J/m':>8} {'Jdev':>8}  status"
+    head = (f"{'speed':>6} {'weights':>8} {'condition':>10} {'J':>8} {'Et J/m':>8} {'Jdev':>8} {'stride m':>8}"
+            f" {'steps/min':>9}  status")
     lines = [head, "-" * len(head)]
     for r in rows:
         status = ("converged" if r["converged"] else "* NOT CONVERGED") + (" (reused)" if r["reused"] else "")
         lines.append(f"{r['speed_m_s']:>6.2f} {r['weights']:>8} {r['condition']:>10} {r['objective']:>8.3f} "
-                     f"{r['cost_of_transport_J_per_m']:>8.1f} {r['deviation']:>8.2f}  {status}")
+                     f"{r['cost_of_transport_J_per_m']:>8.1f} {r['deviation']:>8.2f} {_shown(r.get('stride_m'), 8, 3)}"
+                     f" {_shown(r.get('cadence_steps_per_min'), 9, 1)}  {status}")
     return "\n".join(lines)

@@ -17,7 +17,7 @@ else the bundled one), the prostheses' curve and the ``init`` solution.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -190,15 +190,30 @@ MUSCLES = register(Stage(
 # ------------------------------------------------------------------------------------------------------- predict
 @dataclass(frozen=True)
 class PredictionInputs:
-    """What a prediction starts from besides its configuration: the subject's model parameters (None: subject
-    1), the reference of Jdev, the prostheses' curve of a commercial foot or a file (None otherwise) and a
-    design vector to start from (None: the default guess)."""
+    """What a prediction starts from besides its configuration: the subject's model parameters, the reference
+    of Jdev (None: the shipped one of each prediction's speed, :meth:`at_speed`), the prostheses' curve of a
+    commercial foot or a file (None otherwise) and a design vector to start from (None: the default guess)."""
 
     params: object
     reference: object
     device: object = None
     init: np.ndarray | None = None
     warm: object = None  # the init file's variables and multipliers (predict.solve.WarmStart), where it has them
+
+    def at_speed(self, cfg: PredictConfig, reference=None):
+        """(cfg, reference, speed reference) of a prediction at ``cfg``'s speed: ``reference`` or the given one
+        as it is (speed reference None); else the shipped reference at that speed for this subject
+        (:func:`gaitcli.predict.speed_reference.speed_reference`), whose group's stride ± 1 SD bounds the stride
+        (5.44) unless ``cfg.stride_range_m`` is set."""
+        from gaitcli.predict.speed_reference import speed_reference
+
+        if reference is not None or self.reference is not None:
+            return cfg, (reference if reference is not None else self.reference), None
+        by_speed = speed_reference(cfg.speed_m_s, self.params.leg_length_m, self.params.limb.gravity_m_s2)
+        if cfg.stride_range_m is None:
+            cfg = replace(cfg, stride_range_m=(round(by_speed.stride_m - by_speed.stride_sd_m, 4),
+                                               round(by_speed.stride_m + by_speed.stride_sd_m, 4)))
+        return cfg, by_speed.reference, by_speed
 
 
 @dataclass(frozen=True)
@@ -210,6 +225,7 @@ class Prediction:
     cfg: PredictConfig
     starts: dict | None = None
     agreed: int = 0
+    by_speed: object = None  # the shipped per-speed reference it tracked (predict.speed_reference), if it did
 
     @property
     def history(self) -> tuple[str, ...]:
@@ -282,7 +298,7 @@ def prediction_inputs(ctx: StageContext, cfg: PredictConfig) -> PredictionInputs
     from gaitcli.dynamics.outputs import read_idyn_output
     from gaitcli.predict.model import WalkerParameters
     from gaitcli.predict.reference import read_reference, reference_from_idyn
-    from gaitcli.resources import bundled_reference
+    from gaitcli.predict.speed_reference import GROUPS_FILE, SpeedGroups, group_file
 
     device = prosthesis_curve(ctx, cfg)
     init = read_init(ctx.files["init"]) if "init" in ctx.files else None
@@ -302,13 +318,13 @@ def prediction_inputs(ctx: StageContext, cfg: PredictConfig) -> PredictionInputs
                 reference, _, _ = reference_from_idyn([idyn], sources=[ctx.folder.resolve().name])
             if mass is None:
                 mass = float(sagittal.body_mass_kg)
-    if reference is None:
-        reference = read_reference(bundled_reference())
-        ctx.uses(bundled_reference())
     params = (WalkerParameters.from_subject(mass, subject.stature_m, subject.sex,
                                             thigh_length_m=subject.thigh_length_m,
                                             shank_length_m=subject.shank_length_m)
               if subject is not None else WalkerParameters.subject_1())
+    if reference is None:  # each speed's own (PredictionInputs.at_speed): the shipped tables are its inputs
+        for path in (GROUPS_FILE, *(group_file(g) for g in SpeedGroups.read().names)):
+            ctx.uses(path)
     return PredictionInputs(params, reference, device, init, warm)
 
 
@@ -328,13 +344,15 @@ def _predict(ctx: StageContext, cfg: PredictConfig) -> Prediction:
     from gaitcli.predict.starts import predict_optimal
 
     start = prediction_inputs(ctx, cfg)
+    cfg, reference, by_speed = start.at_speed(cfg)
+    start = replace(start, reference=reference)
     if cfg.starts > 1:
         from gaitcli.run.studies import best_of_starts
 
         result, table, agreed = best_of_starts(cfg, params=start.params, reference=start.reference,
                                                device=start.device, workers_count=ctx.workers, scheduler=ctx.scheduler,
                                                progress=ctx.progress)
-        return Prediction(result, cfg, table, agreed)
+        return Prediction(result, cfg, table, agreed, by_speed)
 
     def iteration(k, objective, violation):
         ctx.progress(Progress("predict", "IPOPT iterations", k + 1, cfg.max_iterations,
@@ -346,7 +364,7 @@ def _predict(ctx: StageContext, cfg: PredictConfig) -> Prediction:
     else:
         result = run_predict(cfg, params=start.params, reference=start.reference, init=start.init,
                              warm=start.warm, report=iteration, device=start.device, cache=prediction_cache())
-    return Prediction(result, cfg)
+    return Prediction(result, cfg, by_speed=by_speed)
 
 
 def _write_prediction(folder: Path, prediction: Prediction, attrs: dict) -> dict:
@@ -355,6 +373,10 @@ def _write_prediction(folder: Path, prediction: Prediction, attrs: dict) -> dict
     from gaitcli.predict.outputs import write_predict_outputs
 
     summary = write_predict_outputs(folder, prediction.result, attrs)
+    if prediction.by_speed is not None:
+        summary.update(prediction.by_speed.summary())
+    if prediction.cfg.stride_range_m is not None:
+        summary["stride_range_m"] = list(prediction.cfg.stride_range_m)
     if prediction.starts is not None:
         write_table(folder / "starts.csv", prediction.starts)
         summary.update({"starts": prediction.cfg.starts, "starts_converged": int(sum(prediction.starts["converged"])),

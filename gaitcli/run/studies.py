@@ -40,7 +40,7 @@ from gaitcli.errors import InputError, shown
 from gaitcli.io.atomic import check_output_folder, remove_stale
 from gaitcli.io.h5 import provenance, read_result
 from gaitcli.io.outputs import stage_folder, write_json, write_table
-from gaitcli.predict.guess import SHIPPED_WALK
+from gaitcli.predict.guess import SHIPPED_WALK, SPEED_WALKS
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.reference import read_reference
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
@@ -199,6 +199,17 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
     return chains
 
 
+def tracked_cases(cases: list[StudyCase], start, references: dict) -> tuple[list[StudyCase], dict]:
+    """The cases with the stride bounds of the reference each tracks, and that reference by case name: its
+    speed's in ``references`` (a study file's), else the run's (``--reference``, a trial's strides), else the
+    shipped one of its speed (:meth:`gaitcli.run.stages.PredictionInputs.at_speed`)."""
+    out, tracked = [], {}
+    for case in cases:
+        cfg, tracked[case.name], _ = start.at_speed(case.cfg, references.get(case.speed_m_s))
+        out.append(dataclasses.replace(case, cfg=cfg))
+    return out, tracked
+
+
 def width(cases: list[StudyCase]) -> int:
     """How many of ``cases`` can run at once: the most at one depth of their starts."""
     depth: dict[str, int] = {}
@@ -246,7 +257,9 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
     fine = result.fine_grid or {}
     row = {"case": case.name, "speed_m_s": case.speed_m_s, "weights": case.weight_set, "condition": case.condition,
            "objective": result.objective, "cost_of_transport_J_per_m": result.cost_of_transport_J_per_m,
-           "deviation": result.deviation, "fine_cost_of_transport_J_per_m": fine.get("cost_of_transport_J_per_m"),
+           "deviation": result.deviation, "stride_m": float(np.sum(result.step_lengths_m)),
+           "cadence_steps_per_min": 120.0 / result.period_s,
+           "fine_cost_of_transport_J_per_m": fine.get("cost_of_transport_J_per_m"),
            "fine_deviation": fine.get("deviation"), "converged": bool(result.converged),
            "iterations": int(result.iterations), "solve_time_s": float(result.solve_time_s),
            "wall_time_s": float(wall_s), "reused": bool(reused), "starts_agreeing": int(agreed),
@@ -257,9 +270,12 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
 
 
 def first_start_keys() -> tuple[str, ...]:
-    """The key of a chain's first start, ``gait predict``'s default start: the shipped normal walk's SHA-256
-    (``guess.shipped_walk``; fitted to the case's nodes and speed, which its own key holds)."""
-    return (f"shipped {hashlib.sha256(SHIPPED_WALK.read_bytes()).hexdigest()}",)
+    """The key of a chain's first start, ``gait predict``'s default start: the shipped walks' SHA-256
+    (``guess.shipped_walk``: the nearest speed's, fitted to the case's nodes and speed, which its own key holds)."""
+    digest = hashlib.sha256()
+    for path in (SHIPPED_WALK, *SPEED_WALKS):
+        digest.update(path.read_bytes())
+    return (f"shipped {digest.hexdigest()}",)
 
 
 def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[PredictResult, int]:
@@ -347,13 +363,11 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
     for _, file in spec.references:
         run.record("predict", file)
     inputs = {**run.inputs, **run.read.get("predict", {})}
-    chains = study_cases(spec)
-    cases = [case for chain in chains for case in chain]
+    cases, tracked = tracked_cases([case for chain in study_cases(spec) for case in chain], start, references)
     root = (run.out_root / "study").resolve()  # the workers may run elsewhere, in other folders
     root.mkdir(parents=True, exist_ok=True)
     first = first_start_keys()
-    tasks = {case.name: Task(run_case, (case, str(root), start.params,
-                                        references.get(case.speed_m_s, start.reference), repr(start.params), cfg,
+    tasks = {case.name: Task(run_case, (case, str(root), start.params, tracked[case.name], repr(start.params), cfg,
                                         inputs, force, first), case.starts_from) for case in cases}
     rows: dict[str, dict] = {}
     progress(Progress("study", "cases", 0, len(cases)))

@@ -12,9 +12,12 @@ import time
 import h5py
 import numpy as np
 import pandas as pd
+import pytest
 from PIL import Image
 
+from gaitcli.predict.model import WalkerParameters
 from gaitcli.predict.reference import VARIABLES
+from gaitcli.predict.speed_reference import speed_reference
 from gaitcli.resources import bundled_reference
 from gaitcli.run.stages import read_warm
 
@@ -95,9 +98,19 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
     with Image.open(tmp_path / "out" / "predict" / "plots" / "walk.gif") as gif:  # one frame per motion row
         assert gif.n_frames == len(pd.read_csv(tmp_path / "out" / "predict" / "motion.csv"))
     assert not (tmp_path / "normal" / "gait_out" / "predict" / "plots").exists()
-    # the trial's own subject (75 kg) and reference, and its idyn made on the way
+    # without a trial: the shipped reference of the speed, the stride bounded by its group's ± 1 SD (written in the
+    # configuration); the trial's own subject (75 kg) and reference, the stride in the box, and its idyn made
+    default_summary = json.loads((tmp_path / "out" / "predict" / "summary.json").read_text())
+    by_speed = speed_reference(1.1275, WalkerParameters.subject_1().leg_length_m)
+    assert default_summary["reference"] == by_speed.reference.source
+    assert default_summary["reference_stride_m"] == pytest.approx(by_speed.stride_m, abs=1e-4)
+    assert default_summary["stride_range_m"] == pytest.approx([by_speed.stride_m - by_speed.stride_sd_m,
+                                                               by_speed.stride_m + by_speed.stride_sd_m], abs=1e-4)
+    with h5py.File(tmp_path / "out" / "predict" / "predict.h5", "r") as h5:
+        np.testing.assert_allclose(h5["result/reference_mean"][()], by_speed.reference.arrays(VARIABLES)[0],
+                                   atol=1e-9)
     trial_summary = json.loads((tmp_path / "normal" / "gait_out" / "predict" / "summary.json").read_text())
-    assert trial_summary["symmetric"] is True
+    assert trial_summary["symmetric"] is True and "reference" not in trial_summary
     assert (tmp_path / "normal" / "gait_out" / "idyn" / "idyn.h5").is_file()
     with h5py.File(tmp_path / "normal" / "gait_out" / "predict" / "predict.h5", "r") as h5:
         assert abs(float(h5["result/body_mass_kg"][()]) - 75.0) < 0.5

@@ -194,3 +194,34 @@ def test_a_bad_reference_of_a_speed_stops_the_study_before_it_writes_anything(tm
         studies.run_study(None, study, PipelineConfig(), out=tmp_path / "out")
     assert str(caught.value).startswith(f"{tmp_path / 'refs' / 'slow.csv'}: "), str(caught.value)
     assert not (tmp_path / "out").exists()
+
+
+def test_each_speed_of_a_study_tracks_its_own_reference_and_stride(tmp_path):
+    # without references: each speed the shipped reference of its own speed, the stride bounded by its group's
+    # (± 1 SD); a speed listed in references: that file, the stride in the box; the case keys differ by speed
+    from gaitcli.predict.model import WalkerParameters
+    from gaitcli.predict.speed_reference import speed_reference
+    from gaitcli.run.stages import PredictionInputs
+
+    params = WalkerParameters.subject_1()
+    spec = studies.StudySpec.from_mapping({"speeds_m_s": [1.0, 1.33, 1.68], "weights": ["b"],
+                                           "conditions": ["normal", "sach"]}, tmp_path / "study.yaml")
+    cases = [case for chain in studies.study_cases(spec) for case in chain]
+    own = read_reference(bundled_reference())
+    bounded, tracked = studies.tracked_cases(cases, PredictionInputs(params, None), {1.68: own})
+    by_name = {case.name: case for case in bounded}
+    for speed in (1.0, 1.33):
+        expected = speed_reference(speed, params.leg_length_m)
+        for case in (c for c in bounded if c.speed_m_s == speed):
+            assert tracked[case.name].digest() == expected.reference.digest()
+            low, high = case.cfg.stride_range_m
+            assert low == pytest.approx(expected.stride_m - expected.stride_sd_m, abs=1e-4)
+            assert high == pytest.approx(expected.stride_m + expected.stride_sd_m, abs=1e-4)
+    fast = [c for c in bounded if c.speed_m_s == 1.68]
+    assert all(tracked[c.name] is own and c.cfg.stride_range_m is None for c in fast)
+    keys = {studies.case_key(by_name[name], "subject 1", tracked[name].digest(), ())
+            for name in ("v1.00_b_normal", "v1.33_b_normal", "v1.68_b_normal")}
+    assert len(keys) == 3
+    # a run's own reference (--reference, a trial's strides) is every speed's, the stride in the box
+    _, given = studies.tracked_cases(cases, PredictionInputs(params, own), {})
+    assert all(reference is own for reference in given.values())

@@ -40,6 +40,8 @@ def test_one_panel_per_speed_and_one_bar_per_case_hatched_where_unconverged(tmp_
 def test_the_terminal_table_marks_the_unconverged_cases():
     lines = study_plots.study_text(ROWS).splitlines()
     assert len(lines) == 2 + len(ROWS)
-    assert lines[3].split() == ["1.10", "4/3,2/3", "sach", "1.500", "15.0", "0.15", "*", "NOT", "CONVERGED"]
+    assert lines[3].split() == ["1.10", "4/3,2/3", "sach", "1.500", "15.0", "0.15", "-", "-", "*", "NOT", "CONVERGED"]
     assert [line.endswith("converged") for line in lines[2:]] == [True, False, True, True]
+    walked = study_plots.study_text([{**ROWS[0], "stride_m": 1.3937, "cadence_steps_per_min": 114.06}])
+    assert walked.splitlines()[2].split()[6:8] == ["1.394", "114.1"]
     assert np.isclose(float(lines[5].split()[3]), 3.0)
