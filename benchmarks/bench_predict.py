@@ -2,12 +2,14 @@
 and two peers; the stride across speeds against Winter's cadences.
 
 Run from the repository root: ``python benchmarks/bench_predict.py [--nodes 14 16 18 20] [--full 18]
-[--start walk guess] [--speeds 1.0 1.1275 1.325] [--reference-at 1.0=slow.csv …]
+[--start walk guess] [--speeds 1.0 1.1275 1.325 1.6] [--reference-at 1.0=slow.csv …] [--bundled]
 [--stride-sweep 1.325 1.12 1.28 1.44] [--stride-follows 1.325 1.45]``. One core (``BENCH_CORE``: which,
 timing.py); asserts nothing.
 
 Per node count, model and start (``PredictConfig.start``: the shipped walk, or 5.2.10's guess): normal walking
-(subject 1, the bundled reference, weights 4/3, 2/3, 1.1275 m/s) by ``run_predict``. The problem and its first
+as ``gait predict`` walks by default (subject 1, weights 4/3, 2/3, 1.1275 m/s, the shipped reference of that
+speed and its group's stride ± 1 SD; ``--bundled``: every prediction tracks the bundled reference, the earlier
+default, the stride in the box) by ``run_predict``. The problem and its first
 IPOPT solver are built first into the run's cache (``construct s``: CasADi's expressions, then IPOPT's
 derivative functions), so that ``solve s`` is IPOPT's iterations (with the transcription of the result). The
 full model solves the symmetric model first, fits its splines to that solution and projects the fit onto its
@@ -17,8 +19,8 @@ problem's. Printed: IPOPT iterations and solves, J, Et, Jdev, the non-zeros of t
 of the Hessian of the Lagrangian (lower triangle, as IPOPT counts them), the ratio to Table 5.1's hours and
 to Falisse et al.'s 2-D predictions (44–55 s).
 
-``--stride-sweep SPEED STRIDE…``: the default prediction at SPEED with every step fixed at half of each STRIDE
-(m), printing J, Et and Jdev: which stride the cost prefers.
+``--stride-sweep SPEED STRIDE…``: the default prediction at SPEED (its reference) with every step fixed at half
+of each STRIDE (m), printing J, Et and Jdev: which stride the cost prefers.
 
 ``--stride-follows SPEED STRIDE``: the walk at SPEED forced to STRIDE, made a reference, then tracked with the
 stride free: whether the stride follows a speed's own reference (5.3.3's per-speed data).
@@ -28,8 +30,7 @@ shipped reference of that speed, the stride bounded by its group's ± 1 SD: ``pr
 beside the tracked group's stride and cadence for subject 1, whether the stride bound is active, and the
 joint moments' shapes against Schwartz et al.'s free-speed group's means (the package's normal band;
 Pearson r of hip, knee and ankle sagittal moments over the cycle). ``--reference-at SPEED=FILE``: that speed
-tracks FILE instead, the stride in the box; ``--bundled``: every speed tracks the bundled reference (the
-previous default) with the stride in the box. Winter's cadences as recalled (87, 105, 123 steps per minute at
+tracks FILE instead, the stride in the box. Winter's cadences as recalled (87, 105, 123 steps per minute at
 1.00, 1.325 and 1.68 m/s; not checked against his book here) are printed beside.
 """
 
@@ -51,6 +52,7 @@ from gaitcli.predict.solve import NlpCache, checked_design, ipopt_options
 from gaitcli.predict.speed_reference import speed_reference
 from gaitcli.predict.stage import PredictConfig, default_start, run_predict, settings_of
 from gaitcli.resources import bundled_reference
+from gaitcli.run.stages import PredictionInputs
 from gaitcli.signal.bands import BAND_FILE, read_band
 from gaitcli.signal.cycles import CYCLE_PCT
 
@@ -142,7 +144,8 @@ def main() -> None:
     parser.add_argument("--reference-at", nargs="*", default=[], metavar="SPEED=FILE",
                         help="--speeds: the reference table this speed tracks (5.3.3: Winter's per speed)")
     parser.add_argument("--bundled", action="store_true",
-                        help="--speeds: every speed tracks the bundled reference, the stride in the box")
+                        help="every prediction tracks the bundled reference (the previous default), the stride "
+                             "in the box")
     parser.add_argument("--iterations", type=int, default=3000)
     parser.add_argument("--cop-sd-m", type=float, default=0.0, help="> 0: Jdev also tracks the centres of pressure")
     parser.add_argument("--stride-sweep", type=float, nargs="*", default=[], metavar="SPEED STRIDE",
@@ -157,7 +160,8 @@ def main() -> None:
     for nodes, symmetric in cases:
         for start in args.start:
             cfg = PredictConfig(nodes=nodes, symmetric=symmetric, start=start, max_iterations=args.iterations)
-            run = predict(cfg, reference, args.cop_sd_m)
+            cfg, tracked, _ = tracking(cfg, reference if args.bundled else None)
+            run = predict(cfg, tracked, args.cop_sd_m)
             r, wall = run["result"], run["construct_s"] + run["solve_s"]
             hours = TABLE_5_1_HOURS.get(nodes)
             print(f"{nodes:>3} {'symmetric' if symmetric else 'full':<9} {start:<5} {run['construct_s']:11.1f}"
@@ -165,10 +169,7 @@ def main() -> None:
                   f" {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f} {run['jac']:>8} {run['hess']:>8}"
                   f" {f'{hours * 3600 / wall:,.0f}x' if hours else '-':>12}"
                   f" {FALISSE_S[0] / wall:5.1f}–{FALISSE_S[1] / wall:.1f}x", flush=True)
-            checks = r.gait_checks()
-            print("    gait checks: " + ", ".join(f"{k} {v['value']} {'ok' if v['ok'] else 'FAILS'}"
-                                                  for k, v in checks.items()), flush=True)
-            print("    " + kinetics(r), flush=True)
+            print_checks(r)
     for (model, nodes), old in PREVIOUS.items():
         print(f"{nodes:>3} {model:<9} {'guess':<5} {'-':>11} {old['solve_s']:8.1f} {old['iterations']:>5} {'':>6}"
               f" {'True':>5} {old['J']:8.4f} {'':>7} {'':>6} {'-':>8} {old['hess']:>8}   (previous formulation)")
@@ -177,14 +178,9 @@ def main() -> None:
               f" {'grp cad':>7} {'ratio':>6} {'bound':>13} {'Winter m':>8} {'conv':>5} {'iter':>5} {'solve s':>7}"
               f" {'J':>8} {'Et J/m':>7} {'Jdev':>6}")
     own = {float(speed): read_reference(file) for speed, file in (a.split("=", 1) for a in args.reference_at)}
-    leg = WalkerParameters.subject_1().leg_length_m
     for speed in args.speeds:
-        cfg, group = at_speed(speed, args.iterations), speed_reference(speed, leg)
-        tracked = own.get(speed, reference if args.bundled else None)
-        if tracked is None:
-            tracked = group.reference
-            cfg = dataclasses.replace(cfg, stride_range_m=(round(group.stride_m - group.stride_sd_m, 4),
-                                                           round(group.stride_m + group.stride_sd_m, 4)))
+        cfg, tracked, group = tracking(at_speed(speed, args.iterations),
+                                       own.get(speed, reference if args.bundled else None))
         run = predict(cfg, tracked, args.cop_sd_m)
         r = run["result"]
         stride, cadence = float(np.sum(r.step_lengths_m)), 120.0 / r.period_s
@@ -197,15 +193,32 @@ def main() -> None:
               f" {cadence / group.cadence_steps_per_min:6.2f} {shown:>11} {active[:1]}"
               f" {winter_stride_m(speed):8.3f} {str(r.converged):>5} {r.iterations:>5} {run['solve_s']:7.1f}"
               f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f}", flush=True)
-        checks = r.gait_checks()
-        print("    gait checks: " + ", ".join(f"{k} {v['value']} {'ok' if v['ok'] else 'FAILS'}"
-                                              for k, v in checks.items()), flush=True)
-        print("    " + kinetics(r), flush=True)
+        print_checks(r)
         print("    " + moment_shapes(r) + f"; tracked: {tracked.source or 'bundled'}", flush=True)
+    given = reference if args.bundled else None
     if args.stride_sweep:
-        stride_sweep(args.stride_sweep[0], args.stride_sweep[1:], reference, args.iterations)
+        stride_sweep(args.stride_sweep[0], args.stride_sweep[1:], given, args.iterations)
     if args.stride_follows:
-        stride_follows(*args.stride_follows, reference, args.iterations)
+        stride_follows(*args.stride_follows, given, args.iterations)
+
+
+def tracking(cfg: PredictConfig, reference=None):
+    """(cfg, reference, speed reference) as ``gait predict`` resolves them for subject 1
+    (``run.stages.PredictionInputs.at_speed``): ``reference`` with the stride in the box, else the shipped one
+    of cfg's speed with its group's stride ± 1 SD. The speed reference is returned either way (its stride and
+    cadence are the comparison)."""
+    params = WalkerParameters.subject_1()
+    group = speed_reference(cfg.speed_m_s, params.leg_length_m)
+    cfg, tracked, _ = PredictionInputs(params, reference).at_speed(cfg)
+    return cfg, tracked, group
+
+
+def print_checks(r) -> None:
+    """The five gait checks and the kinetics of result ``r``."""
+    checks = r.gait_checks()
+    print("    gait checks: " + ", ".join(f"{k} {v['value']} {'ok' if v['ok'] else 'FAILS'}"
+                                          for k, v in checks.items()), flush=True)
+    print("    " + kinetics(r), flush=True)
 
 
 def at_speed(speed: float, iterations: int) -> PredictConfig:
@@ -218,8 +231,9 @@ def stride_sweep(speed: float, strides: list[float], reference, iterations: int)
     which stride the cost itself prefers, apart from where IPOPT stops from the shipped walk's."""
     print(f"\nstrides fixed at {speed} m/s\n{'stride m':>8} {'period s':>8} {'conv':>5} {'iter':>5} {'J':>8}"
           f" {'Et J/m':>7} {'Jdev':>6}")
+    cfg, tracked, _ = tracking(at_speed(speed, iterations), reference)
     for stride in strides:
-        r = predict(at_speed(speed, iterations), reference, step_m=stride / 2)["result"]
+        r = predict(cfg, tracked, step_m=stride / 2)["result"]
         print(f"{stride:8.3f} {r.period_s:8.3f} {str(r.converged):>5} {r.iterations:>5}"
               f" {r.objective:8.4f} {r.cost_of_transport_J_per_m:7.1f} {r.deviation:6.2f}", flush=True)
 
@@ -238,9 +252,9 @@ def stride_follows(speed: float, stride: float, reference, iterations: int) -> N
     """Whether the stride follows the reference, as 5.3.3's per-speed references need: the walk at ``speed``
     with every step fixed at half of ``stride``, made a reference (:func:`reference_of`), then tracked with the
     stride free from the default start."""
-    cfg = at_speed(speed, iterations)
-    forced = predict(cfg, reference, step_m=stride / 2)["result"]
-    free = predict(cfg, reference_of(forced, reference))["result"]
+    cfg, tracked, _ = tracking(at_speed(speed, iterations), reference)
+    forced = predict(cfg, tracked, step_m=stride / 2)["result"]
+    free = predict(dataclasses.replace(cfg, stride_range_m=None), reference_of(forced, tracked))["result"]
     print(f"\nat {speed} m/s the walk at a {stride} m stride as the reference: the stride free returns to "
           f"{float(np.sum(free.step_lengths_m)):.3f} m (period {free.period_s:.3f} s, "
           f"converged {free.converged}, {free.iterations} iterations, J {free.objective:.4f}, Jdev "

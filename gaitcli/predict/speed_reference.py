@@ -54,7 +54,10 @@ class SpeedGroups:
             if column not in table.columns:
                 raise InputError(path, column, "missing column (expected group and <speed|cadence|step_length>_"
                                                "mean, _sd)")
-        values = table[columns[1:]].to_numpy(float)
+        try:
+            values = table[columns[1:]].to_numpy(float)
+        except ValueError:
+            raise InputError(path, None, "expected numbers in every column but group") from None
         speeds = values[:, 0]
         if len(table) == 0 or not np.all(np.isfinite(values)) or np.any(values <= 0) or np.any(np.diff(speeds) <= 0):
             raise InputError(path, None, "expected positive numbers, the groups in rising speed_mean")

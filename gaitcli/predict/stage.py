@@ -172,8 +172,9 @@ class PredictConfig:
              "the speed's reference group ± 1 SD where the prediction tracks the shipped per-speed reference, "
              "else 0.4–2.4.")
     start: str = parameter("walk", choices=STARTS,
-                           help="Where IPOPT starts without --init: walk (the shipped normal walk on these nodes, "
-                                "retimed to the speed) or guess (5.2.10's initial guess from the reference).")
+                           help="Where IPOPT starts without --init: walk (the shipped walk of the nearest speed on "
+                                "these nodes, retimed to the speed) or guess (5.2.10's initial guess from the "
+                                "reference).")
     starts: int = parameter(1, low=1, high=100,
                             help="Solve from this many starts (the default start and seeded perturbations of "
                                  "5.2.10's guess) in parallel and keep the best; every start in starts.csv.")

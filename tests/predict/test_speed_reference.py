@@ -101,6 +101,13 @@ def test_a_missing_or_damaged_table_is_an_error_naming_the_file(tmp_path):
     (tmp_path / "schwartz2008_fast.csv").unlink()
     with pytest.raises(InputError, match="schwartz2008_fast.csv"):
         speed_reference(1.6, 0.974, groups_file=tmp_path / "schwartz2008_groups.csv")
-    (tmp_path / "schwartz2008_groups.csv").write_text("group,speed_mean\nfree,abc\n")
-    with pytest.raises(InputError, match=r"schwartz2008_groups.csv.*(step_length|cadence|speed)"):
-        speed_reference(1.6, 0.974, groups_file=tmp_path / "schwartz2008_groups.csv")
+    groups = tmp_path / "schwartz2008_groups.csv"
+    groups.write_text("group,speed_mean\nfree,0.4\n")
+    with pytest.raises(InputError, match=r"schwartz2008_groups.csv: speed_sd: missing column"):
+        speed_reference(1.6, 0.974, groups_file=groups)
+    header = "group,speed_mean,speed_sd,cadence_mean,cadence_sd,step_length_mean,step_length_sd\n"
+    bad = (("free,abc,1,1,1,1,1", "expected numbers"), ("free,0.4,1,1,1,-1,1", "expected positive numbers"))
+    for row, message in bad:
+        groups.write_text(header + row + "\n")
+        with pytest.raises(InputError, match=f"schwartz2008_groups.csv: {message}"):
+            speed_reference(1.6, 0.974, groups_file=groups)
