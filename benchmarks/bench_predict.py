@@ -183,7 +183,7 @@ def main() -> None:
                                        own.get(speed, reference if args.bundled else None))
         run = predict(cfg, tracked, args.cop_sd_m)
         r = run["result"]
-        stride, cadence = float(np.sum(r.step_lengths_m)), 120.0 / r.period_s
+        stride, cadence = r.stride_m, r.cadence_steps_per_min
         bound = cfg.stride_range_m
         active = "-" if bound is None else ("low" if stride <= bound[0] + 1e-4 else
                                             "high" if stride >= bound[1] - 1e-4 else "inside")
@@ -256,7 +256,7 @@ def stride_follows(speed: float, stride: float, reference, iterations: int) -> N
     forced = predict(cfg, tracked, step_m=stride / 2)["result"]
     free = predict(dataclasses.replace(cfg, stride_range_m=None), reference_of(forced, tracked))["result"]
     print(f"\nat {speed} m/s the walk at a {stride} m stride as the reference: the stride free returns to "
-          f"{float(np.sum(free.step_lengths_m)):.3f} m (period {free.period_s:.3f} s, "
+          f"{free.stride_m:.3f} m (period {free.period_s:.3f} s, "
           f"converged {free.converged}, {free.iterations} iterations, J {free.objective:.4f}, Jdev "
           f"{free.deviation:.3f}; the forced walk's J {forced.objective:.4f})", flush=True)
 

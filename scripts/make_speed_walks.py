@@ -40,7 +40,7 @@ def walk(group: str) -> tuple[np.ndarray, str]:
     speed = (PredictSettings.speed_m_s if group == "default" else
              round(float(groups.mean["speed"][groups.names.index(group)] * np.sqrt(gravity * leg)), 4))
     at = speed_reference(speed, leg, gravity)
-    low, high = round(at.stride_m - at.stride_sd_m, 4), round(at.stride_m + at.stride_sd_m, 4)
+    low, high = at.stride_range_m
     cfg = dataclasses.replace(PredictConfig(), speed_m_s=speed, max_iterations=3000)
     # the first solve from the default start (guess.shipped_walk); the default speed's bounded at once: its start,
     # the free group's walk, lies inside its bounds (the continuation ended in a worse optimum: J 4.913 at 1.221 m
@@ -50,7 +50,7 @@ def walk(group: str) -> tuple[np.ndarray, str]:
         began = time.perf_counter()
         r = run_predict(dataclasses.replace(cfg, stride_range_m=(bound, high) if bound else None),
                         reference=at.reference, init=x)
-        stride = float(np.sum(r.step_lengths_m))
+        stride = r.stride_m
         print(f"{group}: lower bound {bound:.3f} m → stride {stride:.3f} m, J {r.objective:.4f}, converged "
               f"{r.converged}, {r.iterations} iterations, {time.perf_counter() - began:.0f} s", flush=True)
         if not r.converged:

@@ -90,7 +90,11 @@ class SpeedReference:
     cadence_steps_per_min: float
     cadence_sd_steps_per_min: float
     groups: tuple[tuple[str, float], ...]  # (group, weight)
-    files: tuple[Path, ...]
+
+    @property
+    def stride_range_m(self) -> tuple[float, float]:
+        """The stride ± 1 SD, m, to 0.1 mm: 5.44's bounds (``PredictConfig.stride_range_m``)."""
+        return round(self.stride_m - self.stride_sd_m, 4), round(self.stride_m + self.stride_sd_m, 4)
 
     def summary(self) -> dict:
         """What summary.json says of it."""
@@ -106,8 +110,8 @@ def speed_reference(speed_m_s: float, leg_length_m: float, gravity_m_s2: float =
     scale = np.sqrt(gravity_m_s2 * leg_length_m)
     v_hat = speed_m_s / scale
     weights = groups.weights(v_hat)
-    files = tuple(groups_file.parent / group_file(groups.names[k]).name for k, _ in weights)
-    tables = [read_reference(f).arrays(VARIABLES) for f in files]
+    tables = [read_reference(groups_file.parent / group_file(groups.names[k]).name).arrays(VARIABLES)
+              for k, _ in weights]
     mean = sum(w * t[0] for (_, w), t in zip(weights, tables))
     sd = sum(w * t[1] for (_, w), t in zip(weights, tables))
 
@@ -122,4 +126,4 @@ def speed_reference(speed_m_s: float, leg_length_m: float, gravity_m_s2: float =
               + f" (v̂ {v_hat:.3f}, leg {leg_length_m:.3f} m)")
     return SpeedReference(as_reference(mean, sd, np.zeros(len(VARIABLES), int), source), float(v_hat),
                           2.0 * step * leg_length_m, 2.0 * step_sd * leg_length_m, cadence * per_min,
-                          cadence_sd * per_min, named, files)
+                          cadence_sd * per_min, named)

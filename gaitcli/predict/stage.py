@@ -268,6 +268,15 @@ class PredictResult:
     def period_s(self) -> float:
         return float(self.phase_durations_s.sum())
 
+    @property
+    def stride_m(self) -> float:
+        """The two steps' sum, m."""
+        return float(np.sum(self.step_lengths_m))
+
+    @property
+    def cadence_steps_per_min(self) -> float:
+        return 120.0 / self.period_s
+
     def summary(self) -> dict:
         """summary.json: the predict keys of README.md's outputs table ("A tour of the CLI"): costs, durations, steps,
         stance, double support, ‖e‖ per phase, violations, checks."""

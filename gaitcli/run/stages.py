@@ -211,8 +211,7 @@ class PredictionInputs:
             return cfg, (reference if reference is not None else self.reference), None
         by_speed = speed_reference(cfg.speed_m_s, self.params.leg_length_m, self.params.limb.gravity_m_s2)
         if cfg.stride_range_m is None:
-            cfg = replace(cfg, stride_range_m=(round(by_speed.stride_m - by_speed.stride_sd_m, 4),
-                                               round(by_speed.stride_m + by_speed.stride_sd_m, 4)))
+            cfg = replace(cfg, stride_range_m=by_speed.stride_range_m)
         return cfg, by_speed.reference, by_speed
 
 

@@ -257,8 +257,8 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
     fine = result.fine_grid or {}
     row = {"case": case.name, "speed_m_s": case.speed_m_s, "weights": case.weight_set, "condition": case.condition,
            "objective": result.objective, "cost_of_transport_J_per_m": result.cost_of_transport_J_per_m,
-           "deviation": result.deviation, "stride_m": float(np.sum(result.step_lengths_m)),
-           "cadence_steps_per_min": 120.0 / result.period_s,
+           "deviation": result.deviation, "stride_m": result.stride_m,
+           "cadence_steps_per_min": result.cadence_steps_per_min,
            "fine_cost_of_transport_J_per_m": fine.get("cost_of_transport_J_per_m"),
            "fine_deviation": fine.get("deviation"), "converged": bool(result.converged),
            "iterations": int(result.iterations), "solve_time_s": float(result.solve_time_s),
