@@ -471,6 +471,16 @@ def run_command(console: Console, trial, out, pipeline, no_plots, cutoff_hz, fra
                    show=None, workers=workers, scheduler=scheduler)
 
 
+def _name_vsk_subjects(console: Console, lab_dir: Path, command: str) -> None:
+    """One line per folder below ``lab_dir`` whose subject is its .vsk alone: which file, and that sex is assumed."""
+    from gaitcli.run.batch import vsk_subjects
+
+    for folder, vsk in vsk_subjects(lab_dir):
+        where = "" if folder == Path(lab_dir) else f"{folder.relative_to(lab_dir).as_posix()}: "
+        console.info(f"{command}: {where}subject from {vsk.name} (no subject.yaml; male assumed, `sex:` in a "
+                     "subject.yaml says otherwise)")
+
+
 def _run_session(console: Console, folder: Path, cfg, *, plots: bool, workers: int | None,
                  scheduler: str | None) -> None:
     """``gait run SESSION``: the walks as a batch with its progress display, then one line per failed walk and
@@ -481,6 +491,7 @@ def _run_session(console: Console, folder: Path, cfg, *, plots: bool, workers: i
     from gaitcli.run.batch import stages_of
     from gaitcli.run.session import run_session
 
+    _name_vsk_subjects(console, folder, "session")
     with BatchProgress(stages_of(cfg), enabled=not console.quiet) as progress:
         def started(total, to_run, dashboard):
             progress.start(total)
@@ -539,6 +550,7 @@ def batch_command(ctx, lab_dir, pipeline, workers, scheduler, force, no_plots, b
         raise InputError(baseline, "--baseline", "not found (expected a folder of stored outputs, as gait batch "
                                                  "left them below a lab folder)")
 
+    _name_vsk_subjects(console, lab_dir, "batch")
     with BatchProgress(stages_of(cfg), enabled=not console.quiet) as progress:
         def started(total, to_run, dashboard):
             progress.start(total)

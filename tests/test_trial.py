@@ -407,11 +407,47 @@ def test_a_vsk_beside_subject_yaml_gives_the_measurements(tmp_path):
     assert (s.mass_source, s.measurements_source, s.vsk) == ("subject.yaml", "Subject.vsk", "Subject.vsk")
     assert (t.subject_path, t.vsk_path) == (folder / "subject.yaml", vsk)
     assert t.input_files() == [folder / "subject.yaml", folder / "trial.c3d", vsk]
-    (note,) = s.notes
+    # the keys subject.yaml leaves out that the .vsk gives: its model's marker set and hip joint centres
+    assert (s.marker_set, s.hip_joint_centre) == ("plug_in_gait", "davis")
+    *filled, note = s.notes
+    assert filled == [f"Subject.vsk's model 'PlugInGait FullBody Ai': {key} {value} (subject.yaml gives none)"
+                      for key, value in (("marker_set", "plug_in_gait"), ("hip_joint_centre", "davis"))]
     assert note.startswith("subject measurements: Subject.vsk ('PlugInGait FullBody Ai'): 7 parameters as "
                            "PROCESSING:<NAME>") and "under subject.yaml's keys" in note
     # what the stages will use: not the knee widths (subject.yaml gives them), nor Bodymass (mass_kg given)
     assert note.endswith("used: RightLegLength 902, LeftLegLength 898")
+
+
+def test_a_subject_yaml_naming_only_its_vsk_takes_every_key_the_vsk_gives(tmp_path):
+    """stature_m from Height (mm → m), sex male assumed and said, the model's marker set and hip centres; Bodymass
+    stays a measurement (mass_kg absent is the .vsk's, as the stages read it); subject.yaml's own keys win."""
+    folder = _folder(tmp_path, "trial.c3d", subject={"vsk": "Subject.vsk"})
+    _vsk(folder, Height=1632)
+    s = open_trial(folder).subject
+    assert (s.stature_m, s.sex, s.mass_kg, s.marker_set, s.hip_joint_centre) == (1.632, "male", None,
+                                                                                "plug_in_gait", "davis")
+    assert s.measurements["PROCESSING:Bodymass"] == 81.5
+    assert any(n.startswith("Subject.vsk records no sex: male assumed") for n in s.notes)
+    assert "Subject.vsk's Height: stature_m 1.632 (subject.yaml gives none)" in s.notes
+    (folder / "subject.yaml").write_text(yaml.safe_dump({"vsk": "Subject.vsk", "sex": "female", "stature_m": 1.6,
+                                                        "hip_joint_centre": "harrington"}))
+    s = open_trial(folder).subject
+    assert (s.stature_m, s.sex, s.hip_joint_centre, s.marker_set) == (1.6, "female", "harrington", "plug_in_gait")
+
+
+def test_a_subject_yaml_naming_a_vsk_without_height_still_needs_stature(tmp_path):
+    folder = _folder(tmp_path, "trial.c3d", subject={"vsk": "Subject.vsk", "sex": "female"})
+    _vsk(folder, Height="")
+    with pytest.raises(InputError, match="stature_m: missing"):
+        open_trial(folder)
+
+
+def test_a_vsk_height_out_of_range_is_refused_naming_the_vsk(tmp_path):
+    folder = _folder(tmp_path, "trial.c3d", subject={"vsk": "Subject.vsk", "sex": "female"})
+    _vsk(folder, Height=17.5)
+    with pytest.raises(InputError) as info:
+        open_trial(folder)
+    assert (info.value.path, info.value.field) == (folder / "Subject.vsk", "Height")
 
 
 def test_without_subject_yaml_the_vsk_describes_the_subject(tmp_path):

@@ -101,10 +101,18 @@ def _per_side_mm(path, key, value, *, low: float, high: float) -> dict[str, floa
             for s, v in zip("rl", values)}
 
 
-def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
-    """Validate the parsed ``subject.yaml``; every problem is an :class:`InputError` naming the key."""
+def subject_from_dict(data: Any, path: str | Path = "subject.yaml", vsk: VskSubject | None = None,
+                      vsk_name: str | None = None) -> Subject:
+    """Validate the parsed ``subject.yaml``; every problem is an :class:`InputError` naming the key. ``vsk``
+    (named ``vsk_name``, the trial folder's Vicon subject file) gives the keys subject.yaml leaves out
+    (:func:`vsk_keys`), each said in the subject's notes."""
     if not isinstance(data, dict):
         raise InputError(path, None, "expected a YAML mapping with mass_kg, stature_m and sex")
+    filled: dict[str, str] = {}
+    if vsk is not None:
+        given, notes = vsk_keys(vsk, vsk_name or vsk.source.name)
+        filled = {key: notes[key] for key in given if data.get(key) is None}
+        data = {**data, **{key: given[key] for key in filled}}
     for key in RETIRED_KEYS:
         if key in data:
             raise InputError(path, key, "no longer read (it described the synthetic experiment; expected the line "
@@ -192,7 +200,8 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml") -> Subject:
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
                    trials=tuple(trials or ()), vsk=data.get("vsk"), static_frames=frames, marker_map=dict(marker_map),
                    disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, emg=emg,
-                   emg_mvc=data.get("emg_mvc"), **lengths, **widths)
+                   emg_mvc=data.get("emg_mvc"), **lengths, **widths,
+                   notes=tuple(filled.values()))
 
 
 def load_subject(path: str | Path) -> Subject:
@@ -229,11 +238,38 @@ def _checked_measurements(vsk: VskSubject, given: Subject | None) -> list[str]:
         if given is not None and getattr(given, key) is not None:
             continue
         for parameter in names:
-            value = vsk.value(parameter)
-            if value is not None:
-                number(value, where=parameter, path=vsk.source, low=low, high=high, low_open=True, expected=expected)
+            if (value := _checked_value(vsk, parameter)) is not None:
                 used.append(f"{parameter} {value:g}")
     return used
+
+
+def _checked_value(vsk: VskSubject, parameter: str) -> float | None:
+    """The .vsk's ``parameter`` (one of :data:`VSK_MEASUREMENTS`), checked to be in its range; None when absent."""
+    _, _, low, high, expected = next(row for row in VSK_MEASUREMENTS if parameter in row[0])
+    value = vsk.value(parameter)
+    if value is not None:
+        number(value, where=parameter, path=vsk.source, low=low, high=high, low_open=True, expected=expected)
+    return value
+
+
+def vsk_keys(vsk: VskSubject, name: str) -> tuple[dict[str, Any], dict[str, str]]:
+    """The subject.yaml keys the .vsk ``name`` gives, as subject.yaml would spell them, and a note for each:
+    ``stature_m`` from Height (mm → m, checked as :data:`VSK_MEASUREMENTS`), ``marker_set`` plug_in_gait and
+    ``hip_joint_centre`` davis when its model is Plug-in Gait, and ``sex`` male (a .vsk records none: assumed).
+    (Bodymass is a measurement: ``mass_kg`` left out is the .vsk's, :func:`with_measurements`.)"""
+    keys, notes = {}, {}
+    if (height := vsk.value("Height")) is not None:
+        _checked_value(vsk, "Height")
+        keys["stature_m"] = height / 1000.0
+        notes["stature_m"] = f"{name}'s Height: stature_m {height / 1000.0:g} (subject.yaml gives none)"
+    if _is_plug_in_gait(vsk.model):
+        for key, value in (("marker_set", "plug_in_gait"), ("hip_joint_centre", "davis")):
+            keys[key] = value
+            notes[key] = f"{name}'s model {shown(vsk.model)}: {key} {value} (subject.yaml gives none)"
+    keys["sex"] = "male"
+    notes["sex"] = (f"{name} records no sex: male assumed (de Leva's male segment tables; subject.yaml gives "
+                    "none, `sex:` there says otherwise)")
+    return keys, notes
 
 
 def subject_from_vsk(vsk: VskSubject, name: str) -> Subject:

@@ -36,7 +36,7 @@ from gaitcli.run.cluster import Task, completed
 from gaitcli.run.cluster import workers as cluster_workers
 from gaitcli.run.config import PipelineConfig, to_yaml
 from gaitcli.run.pipeline import needed_stages, trial_stages
-from gaitcli.run.trial import is_walk, open_trial, output_root, session_walks
+from gaitcli.run.trial import holds_subject, is_walk, open_trial, output_root, session_walks, subject_vsk
 
 BATCH_SUMMARY = "batch_summary.csv"
 #: folders never searched for trials: outputs, and hidden or cache folders
@@ -98,23 +98,42 @@ class BatchResult:
 
 
 def find_trials(lab_dir: str | Path) -> list[Path]:
-    """Every trial at or below ``lab_dir``: each folder holding a ``subject.yaml`` (a trial folder), or each walk
-    of such a folder that is a session (:func:`gaitcli.run.trial.session_walks`); sorted. Outputs and hidden
-    folders are not searched. A folder whose subject.yaml cannot be read counts as one trial (running it
-    gives the reason)."""
+    """Every trial at or below ``lab_dir``: each folder holding a ``subject.yaml`` or C3D files beside a ``.vsk``
+    (a trial folder, :func:`gaitcli.run.trial.holds_subject`), or each walk of such a folder that is a session
+    (:func:`gaitcli.run.trial.session_walks`); sorted. Outputs and hidden folders are not searched. A folder
+    whose subject cannot be read counts as one trial (running it gives the reason). None found is an
+    :class:`InputError`: a batch that runs nothing says why."""
     lab_dir = Path(lab_dir)
-    if not lab_dir.is_dir():
-        raise InputError(lab_dir, None, "lab folder not found (expected a folder of trial folders)")
     found = []
+    for folder in subject_folders(lab_dir):
+        try:
+            walks = session_walks(folder)
+        except GaitError:
+            walks = None
+        found += walks if walks else [folder]
+    if not found:
+        raise InputError(lab_dir, None, "no trial or session folder in it (expected folders holding a subject.yaml, "
+                                        "or C3D files beside the lab's Vicon .vsk)")
+    return sorted(found)
+
+
+def subject_folders(lab_dir: Path) -> list[Path]:
+    """The folders at or below ``lab_dir`` that hold a subject (:func:`gaitcli.run.trial.holds_subject`), in
+    search order; outputs and hidden folders are not searched."""
+    if not Path(lab_dir).is_dir():
+        raise InputError(lab_dir, None, "lab folder not found (expected a folder of trial folders)")
+    folders = []
     for root, dirs, files in os.walk(lab_dir):
         dirs[:] = sorted(d for d in dirs if d not in NOT_SEARCHED and not d.startswith("."))
-        if "subject.yaml" in files:
-            try:
-                walks = session_walks(Path(root))
-            except GaitError:
-                walks = None
-            found += walks if walks else [Path(root)]
-    return sorted(found)
+        if holds_subject(files):
+            folders.append(Path(root))
+    return folders
+
+
+def vsk_subjects(lab_dir: Path) -> list[tuple[Path, Path]]:
+    """(folder, its .vsk) for each folder below ``lab_dir`` whose subject is its Vicon subject file alone (no
+    subject.yaml): what the console names before a batch or session runs."""
+    return [(folder, vsk) for folder in subject_folders(lab_dir) if (vsk := subject_vsk(folder)) is not None]
 
 
 def stages_of(cfg: PipelineConfig) -> tuple[str, ...]:

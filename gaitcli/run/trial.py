@@ -24,7 +24,8 @@ from pathlib import Path
 
 from gaitcli.errors import InputError, shown
 from gaitcli.io.vsk import read_vsk
-from gaitcli.kinematics.subject import Subject, load_subject, subject_from_vsk, with_measurements
+from gaitcli.io.yamlfile import read_yaml
+from gaitcli.kinematics.subject import Subject, load_subject, subject_from_dict, subject_from_vsk, with_measurements
 
 
 @dataclass(frozen=True)
@@ -114,6 +115,22 @@ def _vsk_files(folder: Path) -> list[Path]:
     """The Vicon subject files (``*.vsk``, any case; hidden files not) directly in ``folder``, sorted."""
     return sorted(p for p in folder.iterdir() if p.suffix.lower() == ".vsk" and not p.name.startswith(".")
                   and p.is_file())
+
+
+def holds_subject(names: list[str]) -> bool:
+    """Whether a folder whose file names are ``names`` is a trial or session folder: a ``subject.yaml``, or
+    C3D files beside a Vicon subject file (how Nexus leaves a session)."""
+    shown_names = [n.lower() for n in names if not n.startswith(".")]
+    return "subject.yaml" in names or (any(n.endswith(".vsk") for n in shown_names)
+                                       and any(n.endswith(".c3d") for n in shown_names))
+
+
+def subject_vsk(folder: Path) -> Path | None:
+    """The .vsk a folder's subject comes from when it has no subject.yaml and one .vsk (else None)."""
+    if (folder / "subject.yaml").is_file():
+        return None
+    found = _vsk_files(folder)
+    return found[0] if len(found) == 1 else None
 
 
 def _only_vsk(folder: Path, has_yaml: bool) -> Path | None:
@@ -217,11 +234,13 @@ def _subject(folder: Path) -> tuple[Subject, Path, Path | None]:
         raise InputError(folder, None, "trial folder not found")
     subject_path = folder / "subject.yaml"
     if subject_path.is_file():
-        subject = load_subject(subject_path)
-        vsk_path = _named_file(folder, subject.vsk, "vsk") or _only_vsk(folder, True)
-        if vsk_path is not None:
-            name = subject.vsk or vsk_path.name
-            subject = with_measurements(subject, read_vsk(vsk_path), name)
+        data = read_yaml(subject_path)
+        named = data.get("vsk") if isinstance(data, dict) else None
+        vsk_path = _named_file(folder, named, "vsk") or _only_vsk(folder, True)
+        if vsk_path is None:
+            return subject_from_dict(data, subject_path), subject_path, None
+        vsk, name = read_vsk(vsk_path), named or vsk_path.name
+        subject = with_measurements(subject_from_dict(data, subject_path, vsk, name), vsk, name)
         return subject, subject_path, vsk_path
     vsk_path = _only_vsk(folder, False)
     if vsk_path is None:
