@@ -554,10 +554,41 @@ def inverse_dynamics_stage(trial: Trial, calibration: StaticCalibration, cfg: Id
                       angles=cfg.angles, moment_convention=cfg.moments)
 
 
+#: the share of a walk's frames with the right ASIS left of the left one (model y) that means swapped sides
+SWAPPED_SIDES_SHARE = 0.9
+#: m: how far the pelvis must travel along model +x for the walking direction to say where right is (not on
+#: a treadmill, whose direction the markers do not give)
+WALKED_M = 0.5
+
+
+def check_sides(markers: Markers, path: Path | None) -> None:
+    """Refuse a walk over ground whose right ASIS lies left of the left one (model +y is left of the walking
+    direction) in most frames where both are seen: its right and left labels are swapped, or the subject walks
+    backwards. Either mirrors every segment frame: hip flexion near 180°, the knee hyperextended, the ankle
+    near −190°."""
+    if "ASISr" not in markers or "ASISl" not in markers:
+        return
+    right, left = markers.get("ASISr"), markers.get("ASISl")
+    forward = ((right + left) / 2)[:, 0]
+    seen = forward[np.isfinite(forward)]
+    if seen.size < 2 or seen[-1] - seen[0] < WALKED_M:
+        return
+    across = right[:, 1] - left[:, 1]
+    across = across[np.isfinite(across)]
+    share = float(np.mean(across > 0)) if across.size else 0.0
+    if share > SWAPPED_SIDES_SHARE:
+        raise InputError(path, None, f"the right ASIS marker lies left of the left one in {100 * share:.0f} % of "
+                                     "the frames, seen along the walk: the right and left labels are swapped, or "
+                                     "the subject walks backwards (expected the right markers on the right; every "
+                                     "angle would come out mirrored)")
+
+
 def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: IdynConfig, *,
              subject_path: Path | None = None, static_path: Path | None = None,
              trial_path: Path | None = None) -> IdynResult:
-    """The whole idyn stage: body mass, static calibration (once), then :func:`inverse_dynamics_stage`."""
+    """The whole idyn stage: body mass, static calibration (once), then :func:`inverse_dynamics_stage`; a walk
+    with its sides swapped is refused first (:func:`check_sides`)."""
+    check_sides(trial.markers, trial_path)
     mass, source, estimate = body_mass(trial, subject, cfg, static=static, source=subject_path)
     markers, frames, how = reference_frames(trial, static, subject, subject_path=subject_path)
     where = static_path if static is not None else trial_path
