@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitcli.core.events import SIDES, Events
+from gaitcli.core.numerics import frame_ranges
 from gaitcli.core.recording import Markers
 
 
@@ -88,11 +89,30 @@ class Trial:
         return dataclasses.replace(self, history=self.history + (line,), **changes)
 
 
+#: s: a stance's frames this close before its plate's first loaded frame, or after its last, are the plate's
+#: (the foot landing or leaving with less than the plate's threshold: a lab's events often come a frame or
+#: two before the plate's onset)
+EVENT_SLACK_S = 0.02
+
+
 def load_known_frames(events: Events, time_s: np.ndarray, loaded: np.ndarray, side: str) -> np.ndarray:
-    """Frames in which a foot's load is known: in swing, or loaded (on a plate) during its stance.
+    """Frames in which a foot's load is known: in swing, or loaded (on a plate) during its stance, or within
+    :data:`EVENT_SLACK_S` of a loaded run at either end of a stance (below the plate's threshold there).
 
     Stance runs from each heel strike to the next toe off (or the trial's end), and
     from the start to the first toe off when the trial begins in stance.
     """
-    return ~events.stance_mask(side, time_s) | np.asarray(loaded, dtype=bool)
+    stance = events.stance_mask(side, time_s)
+    known = ~stance | np.asarray(loaded, dtype=bool)
+    for start, end in frame_ranges(np.flatnonzero(stance)):
+        on = np.flatnonzero(known[start:end + 1]) + start
+        if on.size == 0:
+            continue
+        near_start = time_s[start:on[0]] >= time_s[on[0]] - EVENT_SLACK_S
+        if near_start.all():  # the whole start of the stance, up to its plate's onset
+            known[start:on[0]] = True
+        near_end = time_s[on[-1] + 1:end + 1] <= time_s[on[-1]] + EVENT_SLACK_S
+        if near_end.all():
+            known[on[-1] + 1:end + 1] = True
+    return known
 

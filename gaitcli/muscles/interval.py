@@ -21,13 +21,15 @@ def analysis_interval(events: Events, time_s: np.ndarray, load_known: np.ndarray
     """``(start_s, end_s, periodic)`` for ``side``.
 
     ``cycle``: the first stride (heel strike to heel strike) throughout which the
-    foot's load is known — its stance on a plate — analysed as periodic (4.3.5).
+    foot's load is known — its stance on a plate — analysed as periodic (4.3.5). The
+    closing heel strike is the next stride's: the foot lands there with no load yet,
+    wherever it lands.
     ``swing``: the first swing phase (toe off to heel strike), where the foot carries
     no load, analysed with extra nodes before and after (4.3.6).
     """
     if phase == "cycle":
         for st in strides(events):
-            inside = (time_s >= st.start_s) & (time_s <= st.end_s)
+            inside = (time_s >= st.start_s) & (time_s < st.end_s)
             if st.side == side and load_known[inside].all():
                 return st.start_s, st.end_s, True
         raise InputError(source, f"{side} side", "no stride whose stance was recorded on a force plate "
