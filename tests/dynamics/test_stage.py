@@ -58,6 +58,7 @@ from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINTS, M
 from gaitcli.kinematics.subject import Subject
 from gaitcli.signal.stage import FilterConfig, filter_trial
 from gaitcli.synth import simulate_trial
+from gaitcli.synth.devices import with_knee_alignment_device
 from tests.signal.conftest import make_walk
 from tests.signal.test_stage import _recording as walk_recording
 
@@ -596,22 +597,6 @@ def _wands_misplaced(markers, centres):
     return dataclasses.replace(markers, positions_m=pos)
 
 
-def _with_knee_alignment_device(static, centres, arm_m=0.08):
-    """The static with a knee alignment device in place of each knee marker: hub where KNE was, KAX 80 mm along
-    the true knee axis (laterally: KJC → KNE), KD1 and KD2 on the two arms orthogonal to it; no KNE."""
-    pos, labels = static.positions_m, list(static.labels)
-    columns = {lab: pos[:, i] for i, lab in enumerate(labels) if lab not in ("RKNE", "LKNE")}
-    for s, lab in (("r", "R"), ("l", "L")):
-        hub = pos[:, labels.index(f"{lab}KNE")]
-        axis = (hub - centres[f"KJC{s}"]) / np.linalg.norm(hub - centres[f"KJC{s}"], axis=-1, keepdims=True)
-        b = np.cross(axis, [0.0, 0.0, 1.0])
-        b /= np.linalg.norm(b, axis=-1, keepdims=True)
-        b = np.cos(0.6) * b + np.sin(0.6) * np.cross(axis, b)
-        for name, direction in (("KAX", axis), ("KD1", b), ("KD2", np.cross(axis, b))):
-            columns[f"{lab}{name}"] = hub + arm_m * direction
-    return Markers(tuple(columns), np.stack(list(columns.values()), axis=1), static.rate_hz, static.first_frame)
-
-
 def test_a_knee_alignment_device_makes_the_wands_placement_irrelevant():
     """``gait synth --marker-set plug_in_gait`` without noise (Davis hips, wands in the planes of the true knee and
     ankle axes), its static with a knee alignment device (no knee marker) built on the true knee axis. The device
@@ -638,10 +623,10 @@ def test_a_knee_alignment_device_makes_the_wands_placement_irrelevant():
             return run_idyn(filtered, Recording(preset.apply(static), [], subject_metadata=trial.metadata),
                             subject, IdynConfig())
 
-    kad_static = _with_knee_alignment_device(trial.static, static_centres)
+    kad_static = with_knee_alignment_device(trial.static, static_centres)
     placed = idyn(trial.markers, kad_static)
     turned = idyn(_wands_misplaced(trial.markers, walk_centres),
-                  _with_knee_alignment_device(_wands_misplaced(trial.static, static_centres), static_centres))
+                  with_knee_alignment_device(_wands_misplaced(trial.static, static_centres), static_centres))
     for result in (placed, turned):
         assert result.angle_convention == "plug_in_gait"
         np.testing.assert_allclose(result.calibration.static_landmarks_m["LEFr"],

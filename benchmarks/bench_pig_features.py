@@ -1,0 +1,197 @@
+"""Sagittal joint moments of Plug-in Gait sessions with a real lab's extra features, against the truth and
+against Vicon (issue 52, item 2: hip and knee moments 0.37–0.77 of Vicon's in two real sessions).
+
+Run from the repository root: ``python benchmarks/bench_pig_features.py [--shared PATH]``. Prints; asserts
+nothing.
+
+1. Synthetic (``simulate_trial(marker_set="plug_in_gait")``: 1 mm noise, 10 mm skin artefact, the real filter at
+   its defaults): the static as it is; with a knee alignment device instead of the knee markers
+   (``synth/devices.py``); with medial knee and ankle markers (the lateral ones mirrored through the true joint
+   centres, walk and static); noise-free markers without the filter (``cutoff_hz: 0``: the method's own error;
+   the difference is the filter's and the noise's share). Per side and
+   joint: RMS against the truth (N·m/kg, where the foot's load is known) and the slope of the least-squares
+   line of gaitcli's against the truth.
+2. ``../shared/data/pig`` (Vicon's own moments in the C3D) rewritten with: medial knee and ankle markers
+   (the lateral ones mirrored through Vicon's own FEO/TIO), thigh and shank clusters (three markers each, rigid in
+   Vicon's femur and tibia frames FEO/FEA/FEL/FEP, TIO/…), a sacral marker in place of the PSIS markers, and a
+   knee alignment device in the static; each through ``gait idyn`` (``bench_pig.run_session``). Per joint: r,
+   slope and RMS against Vicon over the frames where both have the foot's load. Vicon processed this session
+   without a device (Test.vsk: thigh and shank rotations 0), so the device's row is not like for like: its
+   shank rotation offsets (the tibial wand against the device's knee axis) turn the shank's frame, and the knee
+   moment's components with it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+import warnings
+from pathlib import Path
+
+import ezc3d
+import numpy as np
+from bench_pig import MOMENTS, ROOT, read_csv, run_session, vicon_points
+
+from gaitcli.core.recording import Markers, Recording
+from gaitcli.dynamics.stage import IdynConfig, run_idyn
+from gaitcli.kinematics.conventions import PIG_MOMENTS, moments_to_clinical, moments_to_plug_in_gait
+from gaitcli.kinematics.forward import forward_kinematics
+from gaitcli.kinematics.markerset import marker_set
+from gaitcli.kinematics.model import JOINTS, MOMENTS as MODEL_MOMENTS
+from gaitcli.kinematics.subject import Subject
+from gaitcli.signal.stage import FilterConfig, filter_trial
+from gaitcli.synth import simulate_trial
+from gaitcli.synth.devices import with_knee_alignment_device
+
+MASS_KG, STATURE_M = 75.0, 1.78
+SAGITTAL = [(j, s) for s in "rl" for j in ("hip", "knee", "ankle")]
+#: point slots of ../shared/data/pig that gaitcli does not read (arms, Vicon's pelvis points): the added markers'
+SLOTS = ("LUPA", "LELB", "LFRM", "LWRA", "LWRB", "LFIN", "RUPA", "RELB", "RFRM", "RWRA", "RWRB", "RFIN",
+         "PELO", "PELA", "PELL", "PELP", "LFOO", "LFOA", "LFOL", "LFOP", "RFOO", "RFOA", "RFOL", "RFOP")
+
+
+def fit(got: np.ndarray, want: np.ndarray) -> tuple[float, float, float]:
+    """(r, slope of got against want, RMS) over the finite samples."""
+    seen = np.isfinite(got) & np.isfinite(want)
+    got, want = got[seen], want[seen]
+    return (float(np.corrcoef(got, want)[0, 1]), float(np.polyfit(want, got, 1)[0]),
+            float(np.sqrt(np.mean((got - want) ** 2))))
+
+
+def with_medial_markers(markers: Markers, centres: dict[str, np.ndarray]) -> Markers:
+    """``markers`` with RKNM/LKNM and RMED/LMED: the knee and ankle markers mirrored through the joint centres."""
+    columns = {lab: markers.positions_m[:, i] for i, lab in enumerate(markers.labels)}
+    for side, prefix in (("r", "R"), ("l", "L")):
+        columns[f"{prefix}KNM"] = 2 * centres[f"KJC{side}"] - columns[f"{prefix}KNE"]
+        columns[f"{prefix}MED"] = 2 * centres[f"AJC{side}"] - columns[f"{prefix}ANK"]
+    return Markers(tuple(columns), np.stack(list(columns.values()), axis=1), markers.rate_hz, markers.first_frame)
+
+
+def synthetic() -> None:
+    trial = simulate_trial(seed=2, marker_set="plug_in_gait")
+    exact = simulate_trial(seed=2, marker_set="plug_in_gait", noise_mm=0.0, artefact_mm=0.0)
+    preset = marker_set("plug_in_gait")
+    subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
+                      hip_joint_centre="davis")
+    states = forward_kinematics(trial.q, trial.calibration.body)
+    walk_centres = {f"{c}{s}": states.joint_centre_m[:, JOINTS.index(f"{j}_{s}")]
+                    for s in "rl" for c, j in (("KJC", "knee"), ("AJC", "ankle"))}
+    static_centres = trial.calibration.joint_centres_m
+    truth = moments_to_clinical(trial.joint_moments_Nm) / MASS_KG
+    variants = {
+        "as recorded": (trial, trial.markers, trial.static, FilterConfig()),
+        "knee alignment device": (trial, trial.markers, with_knee_alignment_device(trial.static, static_centres),
+                                  FilterConfig()),
+        "medial markers": (trial, with_medial_markers(trial.markers, walk_centres),
+                           with_medial_markers(trial.static, static_centres), FilterConfig()),
+        "noise-free, not filtered": (exact, exact.markers, exact.static, FilterConfig(cutoff_hz=0.0)),
+    }
+    print("Synthetic Plug-in Gait walk: sagittal moments against the truth (RMS N·m/kg, slope)")
+    print(f"{'variant':28s} " + " ".join(f"{j + '_' + s:>15s}" for j, s in SAGITTAL))
+    for name, (source, walk, static, cfg) in variants.items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            filtered = filter_trial(Recording(preset.apply(walk), source.plates, subject_metadata=source.metadata),
+                                    cfg).trial
+            result = run_idyn(filtered, Recording(preset.apply(static), [], subject_metadata=source.metadata),
+                              subject, IdynConfig())
+        shown = moments_to_plug_in_gait(result.joint_moments_anatomical_Nm) / MASS_KG
+        cells = []
+        for joint, side in SAGITTAL:
+            sense = "plantarflexor" if joint == "ankle" else "extensor"
+            got = -shown[:, PIG_MOMENTS.index(f"{joint}_{side}_{sense}_moment")]
+            want = truth[:, MODEL_MOMENTS.index(f"{joint}_{side}_flexion_moment")]
+            known = result.foot_measured[side]
+            _, slope, rms = fit(got[known], want[known])
+            cells.append(f"{rms:6.3f} {slope:5.2f}  ")
+        print(f"{name:28s} " + " ".join(f"{c:>15s}" for c in cells))
+
+
+def rewritten(shared: Path, out: Path, features: set[str]) -> Path:
+    """``shared``'s session with ``features`` (module docstring) in ``out``."""
+    out.mkdir(parents=True)
+    for name in ("Static_trial.c3d", "Movement_trial.c3d"):
+        c = ezc3d.c3d(str(shared / name))
+        labels = list(c["parameters"]["POINT"]["LABELS"]["value"])
+        points, residuals = c["data"]["points"], c["data"]["meta_points"]["residuals"]
+
+        def at(label):
+            return points[:3, labels.index(label), :]
+
+        def unit(v):
+            return v / np.linalg.norm(v, axis=0, keepdims=True)
+
+        added = {}
+        for side in "RL":
+            if "medial" in features:
+                added[f"{side}KNM"] = 2 * at(f"{side}FEO") - at(f"{side}KNE")
+                added[f"{side}MED"] = 2 * at(f"{side}TIO") - at(f"{side}ANK")
+            if "clusters" in features:
+                for segment, frame in (("TH", "FE"), ("SH", "TI")):
+                    origin = at(f"{side}{frame}O")
+                    anterior, lateral, proximal = (unit(at(f"{side}{frame}{a}") - origin) for a in "ALP")
+                    first = origin + 180 * proximal + 70 * lateral  # mm
+                    for k, p in enumerate((first, first + 50 * anterior, first + 60 * proximal)):
+                        added[f"{side}{segment}{k + 1}"] = p
+        if "sacral" in features:
+            added["SACR"] = (at("RPSI") + at("LPSI")) / 2
+            for label in ("RPSI", "LPSI"):
+                labels[labels.index(label)] = "X" + label
+        if "kad" in features and name.startswith("Static"):
+            rate = float(c["parameters"]["POINT"]["RATE"]["value"][0])
+            static = Markers(tuple(labels), points[:3].transpose(2, 1, 0) / 1000.0, rate)
+            device = with_knee_alignment_device(static, {f"KJC{s.lower()}": at(f"{s}FEO").T / 1000.0 for s in "RL"})
+            for label in ("RKAX", "RKD1", "RKD2", "LKAX", "LKD1", "LKD2"):
+                added[label] = device.get(label).T * 1000.0
+            for label in ("RKNE", "LKNE"):
+                labels[labels.index(label)] = "X" + label
+        for slot, (label, p) in zip(SLOTS, added.items(), strict=False):
+            k = labels.index(slot)
+            labels[k] = label
+            points[:3, k, :] = p
+            residuals[0, k, :] = np.where(np.isfinite(p).all(axis=0), 0.5, -1.0)
+        c["parameters"]["POINT"]["LABELS"]["value"] = labels
+        c["data"]["points"], c["data"]["meta_points"]["residuals"] = points, residuals
+        c.write(str(out / name))
+    shutil.copy(shared / "Test.vsk", out / "Test.vsk")
+    return out
+
+
+def shared_session(shared: Path) -> None:
+    vicon = vicon_points(shared / "Movement_trial.c3d")
+    stance = {s: np.nan_to_num(vicon[f"{s.upper()}GroundReactionForce"][:, 2]) > 0.5 for s in "rl"}
+    rows = [(f"{j}_{s}_{'plantarflexor' if j == 'ankle' else 'extensor'}_moment_per_kg", label, c, s)
+            for name, label, c, s in MOMENTS for j, side in SAGITTAL
+            if name == f"{j}_{side}_{'plantarflexor' if j == 'ankle' else 'extensor'}_moment_per_kg" and side == s]
+    print("\n../shared/data/pig rewritten: sagittal moments against Vicon's (r, slope, RMS N·m/kg)")
+    print(f"{'features':28s} " + " ".join(f"{name.split('_moment')[0]:>25s}" for name, *_ in rows))
+    root = Path(tempfile.mkdtemp(prefix="bench_pig_features_"))
+    try:
+        for features in ((), ("medial",), ("clusters",), ("sacral",), ("kad",), ("medial", "clusters", "sacral")):
+            folder = shared if not features else rewritten(shared, root / "_".join(features), set(features))
+            moments = read_csv(run_session(folder, root / ("run_" + ("_".join(features) or "as_recorded")),
+                                           with_subject_yaml=True) / "joint_moments.csv")
+            cells = []
+            for name, label, c, s in rows:
+                got = np.where(stance[s], moments[name], np.nan)
+                r, slope, rms = fit(got, vicon[label][:, c] / 1000.0)
+                cells.append(f"{r:5.3f} {slope:5.2f} {rms:6.3f}")
+            print(f"{'+'.join(features) or 'as recorded':28s} " + " ".join(f"{c:>25s}" for c in cells))
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--shared", type=Path, default=ROOT.parent / "shared" / "data" / "pig")
+    args = parser.parse_args()
+    synthetic()
+    if (args.shared / "Movement_trial.c3d").exists():
+        shared_session(args.shared)
+    else:
+        print(f"\n(no Plug-in Gait session at {args.shared}: the shared part is left out)")
+
+
+if __name__ == "__main__":
+    main()
