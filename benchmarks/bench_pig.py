@@ -106,8 +106,8 @@ def pycgm_angles(shared: Path) -> dict[str, np.ndarray] | None:
         for joint in ("hip", "knee", "ankle"):
             j = a[:, PYCGM_ANGLES[f"{joint}_{s}"]]
             frontal = "inversion" if joint == "ankle" else "adduction"
-            out.update({f"{joint}_{s}_flexion": j[:, 0], f"{joint}_{s}_{frontal}": (-1 if joint == "ankle" else 1)
-                        * j[:, 1], f"{joint}_{s}_rotation": j[:, 2]})
+            out.update({f"{joint}_{s}_flexion": j[:, 0], f"{joint}_{s}_{frontal}": j[:, 1],
+                        f"{joint}_{s}_rotation": j[:, 2]})
         out[f"foot_{s}_progression"] = -a[:, PYCGM_ANGLES[f"foot_{s}"], 2]
     return out
 
@@ -147,8 +147,8 @@ def main() -> None:
     print(f"session: {'subject.yaml + Test.vsk' if args.session == 'yaml' else 'Test.vsk alone'}")
     header = f"{'variable (gaitcli vs Vicon)':34s} {'r':>6s} {'RMS':>8s} {'offset':>8s} {'frames':>6s}"
     print("Angles (deg), every frame\n" + header + ("   | vs pyCGM: r, RMS, offset" if pycgm else ""))
-    for name, label, c in ANGLES:  # Vicon's AnkleAngles Y turns about the toe → heel axis: −inversion
-        line = row(name, kin[name], (-1.0 if name.endswith("inversion") else 1.0) * vicon[label][:, c])
+    for name, label, c in ANGLES:  # the ankle inversion is Vicon's AnkleAngles Y as written (kinematics.conventions)
+        line = row(name, kin[name], vicon[label][:, c])
         if pycgm and name in pycgm:
             line += "   |" + row("", kin[name], pycgm[name])[34:-7]
         print(line)

@@ -103,7 +103,7 @@ def export_opensim(out_root: Path) -> list[Path]:
 
 def c3d_points(idyn: IdynTables) -> tuple[dict[str, np.ndarray], dict[str, str]]:
     """Vicon's Plug-in Gait points (frames, 3) and their descriptions, in Vicon's components and signs: angles
-    (deg; AnkleAngles Y about the foot's toe → heel axis, the left pelvis mirrored), moments (N·mm/kg) and the
+    (deg; AnkleAngles Y the tables' ankle inversion, the left pelvis mirrored), moments (N·mm/kg) and the
     total power in Z (W/kg); the 27 coordinates' angles where idyn ran with ``angles: posture``."""
     points, descriptions = {}, {}
     anatomical = "pelvis_tilt" in idyn.angles.columns
@@ -119,10 +119,9 @@ def c3d_points(idyn: IdynTables) -> tuple[dict[str, np.ndarray], dict[str, str]]
             points[f"{prefix}FootProgressAngles"] = np.column_stack([zero, zero, column[f"foot_{s}_progression"]])
             descriptions[f"{prefix}FootProgressAngles"] = "gaitcli foot progression (deg) in Z; X, Y not computed"
         for j, (joint, name) in enumerate(C3D_JOINTS):
+            # the tables' ankle inversion is already Plug-in Gait's AnkleAngles Y (kinematics.conventions)
             second = "inversion" if anatomical and joint == "ankle" else "adduction"
             angles = [column[f"{joint}_{s}_{a}"] for a in ("flexion", second, "rotation")]
-            if second == "inversion":
-                angles[1] = -angles[1]
             k = 1 + j + (3 if s == "l" else 0)  # the joint's index in JOINTS
             points[f"{prefix}{name}Angles"] = np.column_stack(angles)
             points[f"{prefix}{name}Moment"] = 1000.0 * moments[:, 3 * k:3 * k + 3] / idyn.body_mass_kg

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
 from gaitcli.kinematics.model import JOINTS
 
 #: sign per joint and axis (flexion about y, adduction about x, rotation about z): clinical = sign · model
@@ -43,14 +44,26 @@ def coordinates_to_clinical(q: np.ndarray) -> np.ndarray:
 
 
 ANATOMICAL_CONVENTION = ("anatomical (Cardan y-x-z between anatomical frames): hip/knee flexion, ankle dorsiflexion, "
-                         "adduction, ankle inversion and internal rotation positive on both sides; pelvis against "
-                         "the direction of progression as Plug-in Gait's right side (anterior tilt, right side up, "
-                         "right side forward positive); foot progression internal positive")
+                         "adduction and internal rotation positive on both sides; ankle inversion as Plug-in Gait's "
+                         "AnkleAngles Y (Vicon Nexus's sign: the turn about the foot's toe-to-heel axis); pelvis "
+                         "against the direction of progression as Plug-in Gait's right side (anterior tilt, right "
+                         "side up, right side forward positive); foot progression internal positive")
+#: the sign that takes :func:`gaitcli.kinematics.anatomical.anatomical_angles`' ankle inversion (rad, the sole
+#: turned medially positive) to the tables' (Plug-in Gait's AnkleAngles Y, which Vicon Nexus calls inversion and
+#: reports as the turn about the foot's toe → heel axis: checked on Vicon's own outputs by benchmarks/bench_pig.py)
+PIG_ANKLE_INVERSION_SIGN = -1.0
+#: the columns of the anatomical angles that :func:`anatomical_to_degrees` turns to Plug-in Gait's sign
+PIG_SIGNED_ANGLES = ("ankle_r_inversion", "ankle_l_inversion")
 
 
 def anatomical_to_degrees(angles_rad: np.ndarray) -> np.ndarray:
-    """Anatomical angles (:func:`gaitcli.kinematics.anatomical.anatomical_angles`, rad, clinical senses) → deg."""
-    return np.degrees(np.asarray(angles_rad, dtype=float))
+    """Anatomical angles (..., 23) (:func:`gaitcli.kinematics.anatomical.anatomical_angles`, rad, clinical senses)
+    → degrees for people (:data:`ANATOMICAL_CONVENTION`): the ankle inversion in Plug-in Gait's sign
+    (:data:`PIG_ANKLE_INVERSION_SIGN`), as Vicon Nexus, its C3D outputs and Plug-in Gait bands report it."""
+    out = np.degrees(np.asarray(angles_rad, dtype=float))
+    for name in PIG_SIGNED_ANGLES:
+        out[..., ANATOMICAL_ANGLES.index(name)] *= PIG_ANKLE_INVERSION_SIGN
+    return out
 
 
 def moments_to_clinical(moments: np.ndarray) -> np.ndarray:

@@ -52,7 +52,7 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
     anatomical_angles.csv (deg, the columns of idyn's kinematics.csv: the body's true anatomical angles by the
     definitions of its marker set, :mod:`gaitcli.synth.anatomy`)."""
     from gaitcli.io.outputs import write_table
-    from gaitcli.kinematics.conventions import coordinates_to_clinical, moments_to_clinical
+    from gaitcli.kinematics.conventions import anatomical_to_degrees, coordinates_to_clinical, moments_to_clinical
 
     time_s = trial.markers.time_s
     kin = coordinates_to_clinical(trial.q)
@@ -73,7 +73,7 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
                                      "on_plate": [int(e[4]) for e in ev]})
     write_table(out / "plates.csv", {"plate": [p.name for p in trial.plates], "foot": trial.plate_feet})
     if trial.anatomical_angles_rad is not None:
-        angles = np.degrees(trial.anatomical_angles_rad)
+        angles = anatomical_to_degrees(trial.anatomical_angles_rad)  # kinematics.csv's signs (Plug-in Gait's ankle)
         write_table(out / "anatomical_angles.csv",
                     {"time_s": time_s, **{c: angles[:, k] for k, c in enumerate(ANATOMICAL_ANGLES)}})
 

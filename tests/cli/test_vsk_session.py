@@ -152,9 +152,8 @@ def test_the_session_agrees_with_vicons_own_outputs(session, shared_pig_dir):
         pairs = [(f"pelvis_{a}", vicon[f"{S}PelvisAngles"][:, c]) for c, a in enumerate(("tilt", "obliquity",
                                                                                           "rotation")) if s == "r"]
         for J, joint in (("Hip", "hip"), ("Knee", "knee"), ("Ankle", "ankle")):
-            frontal = "inversion" if joint == "ankle" else "adduction"
-            sign = (1, -1 if joint == "ankle" else 1, 1)  # Vicon's AnkleAngles Y: about the toe → heel axis
-            pairs += [(f"{joint}_{s}_{a}", sign[c] * vicon[f"{S}{J}Angles"][:, c])
+            frontal = "inversion" if joint == "ankle" else "adduction"  # AnkleAngles Y as Vicon writes it
+            pairs += [(f"{joint}_{s}_{a}", vicon[f"{S}{J}Angles"][:, c])
                       for c, a in enumerate(("flexion", frontal, "rotation"))]
         pairs.append((f"foot_{s}_progression", vicon[f"{S}FootProgressAngles"][:, 2]))
         for name, theirs in pairs:

@@ -20,7 +20,8 @@ def test_subject_yaml_names_the_condition_in_a_comment(tmp_path):
 
 def test_a_plug_in_gait_subject_has_davis_hips_and_its_true_anatomical_angles(tmp_path):
     """subject.yaml of a Plug-in Gait trial names Davis's hip centres (the subject is built on them);
-    truth/anatomical_angles.csv has the columns of idyn's kinematics.csv, in degrees."""
+    truth/anatomical_angles.csv has the columns of idyn's kinematics.csv, in degrees and its signs (the ankle
+    inversion as Plug-in Gait's AnkleAngles Y: the negative of the sole turned medially)."""
     import numpy as np
     import pandas as pd
 
@@ -31,5 +32,8 @@ def test_a_plug_in_gait_subject_has_davis_hips_and_its_true_anatomical_angles(tm
     assert (data["marker_set"], data["hip_joint_centre"]) == ("plug_in_gait", "davis")
     table = pd.read_csv(tmp_path / "truth" / "anatomical_angles.csv")
     assert list(table.columns) == ["time_s", *ANATOMICAL_ANGLES]
-    np.testing.assert_allclose(table[list(ANATOMICAL_ANGLES)].to_numpy(), np.degrees(trial.anatomical_angles_rad),
+    expected = np.degrees(trial.anatomical_angles_rad)
+    for side in "rl":
+        expected[:, ANATOMICAL_ANGLES.index(f"ankle_{side}_inversion")] *= -1.0
+    np.testing.assert_allclose(table[list(ANATOMICAL_ANGLES)].to_numpy(), expected,
                                rtol=5e-6, atol=1e-9)  # 6 significant digits
