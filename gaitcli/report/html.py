@@ -19,6 +19,7 @@ import base64
 import csv
 import html
 import json
+import math
 import tempfile
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -134,7 +135,15 @@ def _records(folder: Path, summary: dict, key: str, numbers: tuple[str, ...]) ->
 
 
 def _number(value, digits: int) -> str:
-    return "—" if value is None else f"{float(value):.{digits}f}"
+    """A number for people with ``digits`` decimals; "—" for none or NaN (never the text "nan")."""
+    return "—" if value is None or not math.isfinite(float(value)) else f"{float(value):.{digits}f}"
+
+
+def _mean_sd(mean, sd, digits: int) -> str:
+    """"mean ± SD" for people; the mean alone where the SD is missing or NaN (one walk), "—" without a mean."""
+    if _number(mean, digits) == "—" or _number(sd, digits) == "—":
+        return _number(mean, digits)
+    return f"{_number(mean, digits)} ± {_number(sd, digits)}"
 
 
 def _rows(path: Path, columns: tuple[str, ...], numbers: tuple[str, ...] = ()) -> list[dict]:
@@ -432,7 +441,7 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
     for key, label, unit, digits in FEATURES:
         values = dict(zip(walks.walk, walks[key])) if key in walks else {}
         rows.append([f"{label} ({unit})", *[_number(values.get(w), digits) for w in names],
-                     f"{_number(values.get('mean'), digits)} ± {_number(values.get('sd'), digits)}",
+                     _mean_sd(values.get("mean"), values.get("sd"), digits),
                      _number(NORMAL_FEATURES.get(key), digits)])
     parts += ["<h2>Temporal-spatial parameters (Table 3.1)</h2>",
               _table(("", *names, "session mean ± SD", "normal (3.3.3)"), rows),

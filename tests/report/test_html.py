@@ -221,3 +221,27 @@ def test_a_session_page_lists_each_walks_muscles(tmp_path, monkeypatch):
                {"converged": False, "metabolic_cost_J": 41.96, "cost_of_transport_J_per_m": None})
     body = report_html.session_body(root, None, tmp_path / "work", {})
     assert ["Walking 01", "EID, left leg, swing", "no", "42.0", "—"] in cells(body)
+
+
+@pytest.mark.parametrize("speeds", [(1.234,), (1.1, 1.3)])
+def test_a_session_of_one_walk_shows_its_mean_alone(tmp_path, monkeypatch, speeds):
+    """walks.csv's SD is NaN for one walk: the session's cell is the mean alone, never "± nan"; with two walks
+    it is their mean ± SD (ddof 1: 1.20 ± 0.14 for 1.1 and 1.3 m/s)."""
+    import numpy as np
+
+    from gaitcli.report import session_plots
+
+    monkeypatch.setattr(session_plots, "session_figures", lambda *a, **k: [])
+    root = tmp_path / "S" / "gait_out"
+    (root / "session").mkdir(parents=True)
+    sd = f"{np.std(speeds, ddof=1):.6f}" if len(speeds) > 1 else "NaN"
+    walks = "".join(f"Walking {k:02d},{v}\n" for k, v in enumerate(speeds, 1))
+    (root / "session" / "walks.csv").write_text(f"walk,speed_m_s\n{walks}mean,{np.mean(speeds)}\nsd,{sd}\n")
+    (root / "session" / "strides.csv").write_text("walk,side,start_s,period_s,stance_pct,speed_m_s,stride_length_m,"
+                                                  "status,reason\nWalking 01,r,0.5,1.1,60,1.2,1.3,used,\n")
+    write_json(root / "session" / "summary.json", {"walks": len(speeds)})
+    body = report_html.session_body(root, None, tmp_path / "work", {})
+    row = next(c for c in cells(body) if c and c[0] == "walking speed (m/s)")
+    expected = "1.23" if len(speeds) == 1 else "1.20 ± 0.14"
+    assert row[1 + len(speeds)] == expected
+    assert not re.search(r"\bnan\b", body, re.IGNORECASE)
