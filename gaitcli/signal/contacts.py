@@ -24,7 +24,9 @@ from the first marker frame; frames are 0-based indices into the marker arrays.
    whether the heel marker was over the plate at the onset and the toe marker at the
    offset, so that a foot landing half off a plate does not give a late heel strike.
 3. :func:`plate_owner` tells which foot loads each plate in each frame, for
-   :func:`~gaitcli.signal.forceplates.combine_loads`.
+   :func:`~gaitcli.signal.forceplates.combine_loads`; :func:`partly_off` finds a foot standing partly off its
+   plates, :func:`other_foot_over` the other foot resting over a loaded plate low enough to touch it,
+   :func:`not_wholly_on` the stances Nexus's Plug-in Gait would leave without force.
 """
 
 from __future__ import annotations
@@ -38,7 +40,8 @@ from gaitcli.core.numerics import true_runs
 from gaitcli.errors import InputError, shown
 from gaitcli.signal.forceplates import PlateLoad
 
-__all__ = ["Contact", "plate_contacts", "assign_contacts", "plate_owner"]
+__all__ = ["Contact", "plate_contacts", "assign_contacts", "plate_owner", "partly_off", "other_foot_over",
+           "not_wholly_on", "outline_depth"]
 
 
 @dataclass(frozen=True)
@@ -325,17 +328,90 @@ def partly_off(owner: np.ndarray, loads: list[PlateLoad], foot_points: dict, sta
     return out
 
 
+#: a foot marker over a plate can touch it within this height above its height standing on a plate, m: below the
+#: 12-32 mm by which the swinging foot's markers pass over a loaded plate in the real walks of docs/plates_real.md
+TOUCH_MARGIN_M = 0.01
+#: a foot marker moving slower than this horizontally rests on what is under it (docs/plates_real.md's survey), m/s
+RESTING_SPEED_M_S = 0.6
+
+
+def other_foot_over(owner: np.ndarray, loads: list[PlateLoad], foot_points: dict, *, rate_hz: float,
+                    margin_m: float = TOUCH_MARGIN_M,
+                    max_speed_m_s: float = RESTING_SPEED_M_S) -> dict[str, np.ndarray]:
+    """side → (n_plates, n) frames in which that foot rests over a loaded plate the other foot owns, low enough to
+    touch it: one of its markers (``foot_points[side]``, a list of (n, 3) arrays at ``rate_hz``, m) inside the
+    plate's outline, at most ``margin_m`` above that marker's standing height (its lowest height above the plates
+    its foot owns, over the frames it owns them; for a foot that owns none, its lowest height above the lowest
+    plate) and moving slower than ``max_speed_m_s`` horizontally. The plate may then carry part of both feet's
+    loads; a light load hardly moves the COP, so :func:`assign_contacts` cannot see it. A swing passing over is
+    not counted: its markers pass 2-4 mm above their standing height in the synthetic walk (whose plates carry
+    one foot) and 12-32 mm in the real walks, at 1-4 m/s."""
+    n = owner.shape[1]
+    tops = [None if load.corners_m is None else float(np.mean(np.asarray(load.corners_m)[:, 2])) for load in loads]
+    lowest = min((t for t in tops if t is not None), default=0.0)
+    out = {}
+    for side, points in foot_points.items():
+        other = "l" if side == "r" else "r"
+        over = np.zeros((len(loads), n), bool)
+        for p in points:
+            p = np.asarray(p, dtype=float)
+            heights = [p[owner[k] == side, 2] - tops[k] for k in range(len(loads)) if tops[k] is not None]
+            heights = np.concatenate(heights) if heights else np.empty(0)
+            heights = heights[np.isfinite(heights)]
+            standing = heights.min() if heights.size else np.nanmin(p[:, 2], initial=np.inf) - lowest
+            speed = np.linalg.norm(np.gradient(p[:, :2], axis=0), axis=1) * rate_hz if n > 1 else np.zeros(n)
+            for k, load in enumerate(loads):
+                if tops[k] is None or not np.isfinite(standing):
+                    continue
+                with np.errstate(invalid="ignore"):
+                    low = (p[:, 2] - tops[k] <= standing + margin_m) & (speed <= max_speed_m_s)
+                over[k] |= (owner[k] == other) & load.loaded & low & _inside_each(p[:, :2], load.corners_m, 0.0) \
+                    & np.all(np.isfinite(p), axis=1)
+        out[side] = over
+    return out
+
+
+def not_wholly_on(owner: np.ndarray, loads: list[PlateLoad], foot_points: dict, stance: dict, *,
+                  radius_m: float) -> dict[str, np.ndarray]:
+    """side → (n_plates, n) frames of that foot's ``stance`` in which it owns the plate but does not lie wholly on
+    it: one of its markers (``foot_points[side]``: heel, toe, ankle, (n, 3) arrays, m), a ball of ``radius_m``
+    (half the marker diameter), is not wholly inside the plate's outline. Nexus's Plug-in Gait gives a foot a
+    plate only where it lies wholly on it (a toe over a step's edge included); gaitcli keeps such loads
+    where :func:`partly_off` finds no marker on the ground off the plate."""
+    n = owner.shape[1]
+    out = {}
+    for side, points in foot_points.items():
+        outside = np.zeros((len(loads), n), bool)
+        for k, load in enumerate(loads):
+            if load.corners_m is None:
+                continue
+            mine = (owner[k] == side) & stance[side]
+            for p in points:
+                p = np.asarray(p, dtype=float)
+                seen = np.all(np.isfinite(p), axis=1)
+                outside[k] |= mine & seen & ~_inside_each(p[:, :2], load.corners_m, -radius_m)
+        out[side] = outside
+    return out
+
+
 def _inside_each(points: np.ndarray, corners: np.ndarray, tolerance_m: float) -> np.ndarray:
     """Whether each 2-D point (n, 2) lies inside the convex outline ``corners`` (4, 2+) widened by
     ``tolerance_m``; rows with NaN count as inside (the plate is trusted)."""
     points = np.atleast_2d(np.asarray(points, dtype=float))
+    with np.errstate(invalid="ignore"):
+        return (outline_depth(points, corners) >= -tolerance_m) | ~np.all(np.isfinite(points), axis=1)
+
+
+def outline_depth(points: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """How far each 2-D point (n, 2+) lies inside the convex outline ``corners`` (4, 2+), m: its distance to the
+    nearest edge, negative outside (NaN for NaN points)."""
+    points = np.atleast_2d(np.asarray(points, dtype=float))[:, :2]
     c = np.asarray(corners, dtype=float)[:, :2]
     edges = np.roll(c, -1, axis=0) - c
     area2 = np.sum(c[:, 0] * np.roll(c[:, 1], -1) - np.roll(c[:, 0], -1) * c[:, 1])
     cross = edges[None, :, 0] * (points[:, None, 1] - c[None, :, 1]) - edges[None, :, 1] * (points[:, None, 0]
                                                                                              - c[None, :, 0])
-    signed = np.sign(area2) * cross / np.linalg.norm(edges, axis=1)
-    return np.all(signed >= -tolerance_m, axis=1) | ~np.all(np.isfinite(points), axis=1)
+    return np.min(np.sign(area2) * cross / np.linalg.norm(edges, axis=1), axis=1)
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -50,7 +50,8 @@ from gaitcli.signal.butterworth import lowpass
 #: filter spreads each contact's edges over a few frames in which the load is small but real
 LOADED_FRACTION = 1e-3
 
-__all__ = ["PlateLoad", "centre_of_pressure", "plate_load", "combine_loads", "resample_to_frames"]
+__all__ = ["PlateLoad", "centre_of_pressure", "plate_load", "combine_loads", "resample_to_frames",
+           "resting_offsets"]
 
 
 @dataclass
@@ -191,6 +192,25 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
         raw_vertical_force_N=force[:, 2].copy(),
         raw_rate_hz=float(plate.rate_hz),
     )
+
+
+def resting_offsets(vertical_force_N, /, *, quiet, rate_hz: float, limit_N: float,
+                    min_s: float = 0.1) -> list[tuple[int, int, float, float]]:
+    """Runs of frames in which a plate reads a load with no foot near it: an offset or drift of its zero.
+
+    ``vertical_force_N`` (n,): the plate's vertical force at the ``rate_hz`` frames, low-pass filtered (its
+    noise, 5-17 N SD on real plates, averaged out); ``quiet`` (n,): the frames with no foot near the plate.
+    Returns (first frame, last frame, lowest N, highest N) of each run of quiet frames at least ``min_s`` long
+    whose |force| is at least ``limit_N``.
+    """
+    fz = np.asarray(vertical_force_N, dtype=float)
+    with np.errstate(invalid="ignore"):
+        off = np.asarray(quiet, bool) & (np.abs(fz) >= limit_N)
+    out = []
+    for start, stop in zip(*true_runs(off)):
+        if stop - start >= min_s * rate_hz:
+            out.append((int(start), int(stop - 1), float(np.min(fz[start:stop])), float(np.max(fz[start:stop]))))
+    return out
 
 
 def _runs_touching(positive: np.ndarray, touched: np.ndarray) -> np.ndarray:

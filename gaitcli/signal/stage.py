@@ -21,15 +21,28 @@ from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.validate import parameter
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.signal.butterworth import design_frequency_hz, lowpass
-from gaitcli.signal.contacts import partly_off, plate_owner, shared_frames
+from gaitcli.signal.contacts import (
+    not_wholly_on,
+    other_foot_over,
+    outline_depth,
+    partly_off,
+    plate_owner,
+    shared_frames,
+)
 from gaitcli.signal.events import Contact, EventDetection, detect_events, kinematic_events
-from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load
+from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load, resample_to_frames, resting_offsets
 from gaitcli.signal.gaps import Gap, fill_gaps
 
 #: foot landmarks used for events and plate-to-foot assignment: heel, toe (first choice, fallback)
 HEEL = {"r": ("CAr",), "l": ("CAl",)}
 TOE = {"r": ("FMr", "VMr", "MT2r"), "l": ("FMl", "VMl", "MT2l")}
+ANKLE = {"r": ("LMr",), "l": ("LMl",)}
 PELVIS = ("ASISr", "ASISl", "PSISr", "PSISl")
+#: the marker diameter where the file's PROCESSING:MarkerDiameter does not give one, m (Vicon's 14 mm markers)
+DEFAULT_MARKER_DIAMETER_M = 0.014
+#: a foot is near a plate (for its resting reading) with a marker over its outline widened by this, m, and at
+#: most NEAR_HEIGHT_M above or below its top
+NEAR_M, NEAR_HEIGHT_M = 0.1, 0.3
 EVENT_CHOICES = ("auto", "file", "detect")
 
 
@@ -202,6 +215,83 @@ def without_partial_feet(owner: np.ndarray, plates: list[PlateLoad], markers: Ma
     return owner
 
 
+def foot_markers(markers: Markers) -> dict[str, list[np.ndarray]]:
+    """side → the foot's heel, toe and ankle markers present, (n, 3) m each (sides without any left out)."""
+    out = {side: [markers.get(n) for n in HEEL[side] + TOE[side] + ANKLE[side] if n in markers] for side in SIDES}
+    return {side: points for side, points in out.items() if points}
+
+
+def without_other_foot(owner: np.ndarray, plates: list[PlateLoad],
+                       markers: Markers) -> tuple[np.ndarray, np.ndarray]:
+    """``owner`` with no plate given in the frames in which a foot rests over a loaded plate the other foot owns, low
+    enough to touch it (:func:`~gaitcli.signal.contacts.other_foot_over`), and those frames (n,), in which both
+    feet's loads are unknown; warned."""
+    n = owner.shape[1]
+    if not plates:
+        return owner, np.zeros(n, bool)
+    over = other_foot_over(owner, plates, foot_markers(markers), rate_hz=markers.rate_hz)
+    owner, both = owner.copy(), np.zeros(n, bool)
+    for side, frames in over.items():
+        for k in np.flatnonzero(frames.any(axis=1)):
+            other = "l" if side == "r" else "r"
+            warnings.warn(f"{plates[k].name}: the {SIDE_NAMES[side]} foot rests over it, low enough to touch it, "
+                          f"while it carries the {SIDE_NAMES[other]} foot's load in frames "
+                          f"{frame_spans(np.flatnonzero(frames[k]), markers.first_frame)}: it may carry part of both "
+                          "feet's loads, so both are unknown there", GaitWarning, stacklevel=3)
+            both |= frames[k]
+    owner[:, both] = ""
+    return owner, both
+
+
+def warn_not_wholly_on(owner: np.ndarray, plates: list[PlateLoad], markers: Markers, events: Events,
+                       diameter_m: float) -> None:
+    """Warn the stances in which gaitcli gives a foot a plate's load while the foot does not lie wholly on the plate
+    (:func:`~gaitcli.signal.contacts.not_wholly_on`): Nexus's Plug-in Gait leaves such a stance without force."""
+    points = foot_markers(markers)
+    stance = {side: events.stance_mask(side, markers.time_s) for side in SIDES}
+    for side, frames in not_wholly_on(owner, plates, points, stance, radius_m=diameter_m / 2).items():
+        for k in np.flatnonzero(frames.any(axis=1)):
+            mine = frames[k]
+            beyond = max(float(np.nanmax(diameter_m / 2 - outline_depth(p[mine], plates[k].corners_m), initial=0.0))
+                         for p in points[side])
+            warnings.warn(f"{plates[k].name}: the {SIDE_NAMES[side]} foot does not lie wholly on it in frames "
+                          f"{frame_spans(np.flatnonzero(mine), markers.first_frame)} (a marker's edge up to "
+                          f"{1000 * beyond:.0f} mm beyond its outline), where gaitcli gives it the plate's load: "
+                          "Nexus's Plug-in Gait, which gives a foot a plate only while it lies wholly on it, would "
+                          "leave this stance without force", GaitWarning, stacklevel=3)
+
+
+def warn_resting_offsets(recording: Recording, plates: list[PlateLoad], markers: Markers, cfg: FilterConfig) -> None:
+    """Warn a plate that reads at least half the contact threshold for 0.1 s or longer while no foot is near it
+    (a marker over its outline widened by :data:`NEAR_M`, within :data:`NEAR_HEIGHT_M` of its top): an offset or a
+    drift of its zero, which the loads of the feet on it carry too."""
+    n, rate = markers.n_frames, markers.rate_hz
+    feet = foot_markers(markers)
+    if len(feet) < 2:  # without both feet's markers no frame is known to be free of feet
+        return
+    points = [p for side_points in feet.values() for p in side_points]
+    for raw, load in zip(recording.plates, plates):
+        if load.corners_m is None:
+            continue
+        fz = np.nan_to_num(np.asarray(raw.force_N, float)[:, 2])
+        if cfg.force_cutoff_hz:
+            fz = lowpass(fz, rate_hz=raw.rate_hz, cutoff_hz=cfg.force_cutoff_hz)
+        fz = resample_to_frames(fz, source_rate_hz=raw.rate_hz, rate_hz=rate)[:n]
+        top = float(np.mean(load.corners_m[:, 2]))
+        near = np.zeros(fz.size, bool)
+        for p in points:
+            p = p[:fz.size]
+            with np.errstate(invalid="ignore"):
+                near |= (np.abs(p[:, 2] - top) <= NEAR_HEIGHT_M) & (outline_depth(p, load.corners_m) >= -NEAR_M)
+        runs = resting_offsets(fz, quiet=~near, rate_hz=rate, limit_N=cfg.force_threshold_N / 2)
+        if runs:
+            low, high = min(r[2] for r in runs), max(r[3] for r in runs)
+            spans = ", ".join(f"{a + markers.first_frame}–{b + markers.first_frame}" for a, b, _, _ in runs)
+            warnings.warn(f"{load.name}: reads {low:.0f} to {high:.0f} N with no foot near it in frames {spans}: an "
+                          "offset or drift of its zero, which the load of a foot on it carries too", GaitWarning,
+                          stacklevel=3)
+
+
 def separated_plates(recording: Recording, plates: list[PlateLoad], contacts: list[Contact], events: Events,
                      cfg: FilterConfig) -> list[PlateLoad]:
     """The plates as the feet are given them: a plate both feet stood on is filtered again with its double support
@@ -279,6 +369,11 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
     # a plate two feet stood on is split at the (calibrated) events of the foot stepping on and the one stepping off
     owner = plate_owner(detection.contacts, plates, events) if plates else detection.owner
     owner = without_partial_feet(owner, plates, markers, events)
+    owner, both_unknown = without_other_foot(owner, plates, markers)
+    diameter = float(recording.subject_metadata.get("PROCESSING:MarkerDiameter",
+                                                    1000 * DEFAULT_MARKER_DIAMETER_M)) / 1000
+    warn_not_wholly_on(owner, plates, markers, events, diameter)
+    warn_resting_offsets(recording, plates, markers, cfg)
     detection = dataclasses.replace(detection, events=events, owner=owner)
     for c in detection.contacts:
         if c.shared:
@@ -306,7 +401,7 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                f"{cfg.force_threshold_N:g} N; events from "
                + ("the trial file's EVENT group" if from_file else "plates and foot markers"))
     feet_loads = foot_loads(per_foot, detection.events, markers.time_s)
-    unknown = np.zeros(n, bool)
+    unknown = both_unknown.copy()
     for plate in plates:
         bad = ~np.isfinite(plate.force_N).all(axis=1)
         if bad.any():

@@ -8,7 +8,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcli.signal.contacts import Contact, assign_contacts, plate_contacts, plate_owner
+from gaitcli.signal.contacts import (
+    Contact,
+    assign_contacts,
+    not_wholly_on,
+    other_foot_over,
+    plate_contacts,
+    plate_owner,
+)
 from gaitcli.signal.forceplates import PlateLoad
 from tests.signal.conftest import CENTRED_PLATE, EVENT_THRESHOLD_N, walk_loads
 
@@ -109,3 +116,44 @@ def test_a_one_foot_contact_stays_that_foots_in_real_like_data(walk_factory):
     feet, loads = _real_like(walk)
     (contact,) = assign_contacts(plate_contacts(loads, threshold_N=EVENT_THRESHOLD_N), loads, *feet["r"], *feet["l"])
     assert (contact.side, contact.flag) == ("r", "")
+
+
+def _square_plate(n, loaded, top_m=0.0):
+    """A 0.4 m × 0.6 m plate (x 0–0.4, y 0–0.6) at height ``top_m``, loaded in the ``loaded`` frames."""
+    corners = np.array([[0.0, 0.0, top_m], [0.4, 0.0, top_m], [0.4, 0.6, top_m], [0.0, 0.6, top_m]])
+    return PlateLoad("FP1", np.zeros((n, 3)), np.full((n, 3), np.nan), np.full(n, np.nan), loaded, 100.0,
+                     corners_m=corners)
+
+
+def test_a_foot_resting_low_over_the_other_foots_plate_is_found_and_a_swing_passing_over_is_not():
+    # 100 Hz. The right toe marker stands on the plate's near end (x = 0.05 m) 30 mm up while the right foot owns the
+    # plate (frames 0-39: its standing height), stays there 32 mm up (2 mm above standing: low enough to touch)
+    # while the left foot owns the loaded plate (40-59), swings over it at 2 m/s 3 mm above standing (60-79), then
+    # rests over it 50 mm up (20 mm above standing: too high, 80-99). Frame 59's speed (central difference) is
+    # already the swing's 1 m/s, so the resting frames are 40-58.
+    n = 100
+    owner = np.full((1, n), "l")
+    owner[0, :40] = "r"
+    toe = np.tile([0.05, 0.3, 0.03], (n, 1))
+    toe[40:60, 2] = 0.032
+    toe[60:80, 0] = 0.05 + 0.02 * np.arange(1, 21)  # 2 cm per frame at 100 Hz
+    toe[60:80, 2] = 0.033
+    toe[80:] = [0.3, 0.3, 0.05]
+    over = other_foot_over(owner, [_square_plate(n, np.ones(n, bool))], {"r": [toe]}, rate_hz=100.0)
+    assert np.array_equal(np.flatnonzero(over["r"][0]), np.arange(40, 59))
+    # unloaded, the plate measures no one: no concern
+    unloaded = other_foot_over(owner, [_square_plate(n, np.zeros(n, bool))], {"r": [toe]}, rate_hz=100.0)
+    assert not unloaded["r"].any()
+
+
+def test_a_foot_whose_marker_ball_crosses_the_plates_edge_does_not_lie_wholly_on_it():
+    # a 14 mm marker (7 mm radius) 5 mm inside the plate's edge sticks 2 mm out of it; 10 mm inside it lies wholly on
+    n = 4
+    owner = np.full((1, n), "r")
+    heel = np.tile([0.2, 0.3, 0.05], (n, 1))
+    toe = np.tile([0.2, 0.3, 0.03], (n, 1))
+    toe[:2, 0] = 0.4 - 0.005
+    toe[2:, 0] = 0.4 - 0.010
+    stance = {"r": np.array([True, False, True, True])}
+    out = not_wholly_on(owner, [_square_plate(n, np.ones(n, bool))], {"r": [heel, toe]}, stance, radius_m=0.007)
+    assert out["r"][0].tolist() == [True, False, False, False]  # frame 1 is swing

@@ -9,7 +9,14 @@ from gaitcli.core.recording import ForcePlate
 from gaitcli.errors import InputError
 from gaitcli.signal.butterworth import lowpass
 from gaitcli.signal.events import detect_events
-from gaitcli.signal.forceplates import PlateLoad, centre_of_pressure, combine_loads, plate_load, resample_to_frames
+from gaitcli.signal.forceplates import (
+    PlateLoad,
+    centre_of_pressure,
+    combine_loads,
+    plate_load,
+    resample_to_frames,
+    resting_offsets,
+)
 
 ANALOG_HZ = 1000.0
 MARKER_HZ = 100.0
@@ -223,3 +230,12 @@ def test_bad_inputs_are_input_errors():
         combine_loads([load], np.full((2, load.n_frames), "r"))
     assert info.value.field == "owner"
     assert isinstance(load, PlateLoad)
+
+
+def test_a_plate_reading_a_load_with_no_foot_near_is_an_offset_run():
+    # 100 Hz: 20 N of offset in frames 0-49 (no foot near), a foot's 700 N in 50-89 (near), 20 N again in 90-94
+    # (5 frames: shorter than 0.1 s) and 6 N (below the 10 N limit) in 95-99
+    fz = np.r_[np.full(50, 20.0), np.full(40, 700.0), np.full(5, 20.0), np.full(5, 6.0)]
+    quiet = np.r_[np.ones(50, bool), np.zeros(40, bool), np.ones(10, bool)]
+    assert resting_offsets(fz, quiet=quiet, rate_hz=100.0, limit_N=10.0) == [(0, 49, 20.0, 20.0)]
+    assert resting_offsets(-fz, quiet=quiet, rate_hz=100.0, limit_N=10.0) == [(0, 49, -20.0, -20.0)]
