@@ -124,6 +124,9 @@ def check_output_file(target: str | Path) -> None:
     in its folder, as far as can be told (:func:`check_output_folder`)."""
     target = Path(os.path.abspath(target))
     _check_length(target)
+    if target.exists() and not target.is_file():
+        raise InputError(target, None, "is a folder or other non-file (expected a file gait writes there: move "
+                                       "it aside)")
     check_output_folder(target.parent)
 
 

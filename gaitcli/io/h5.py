@@ -33,7 +33,7 @@ import h5py
 import numpy as np
 
 from gaitcli import __version__
-from gaitcli.errors import SHOWN_CHARACTERS, InputError
+from gaitcli.errors import SHOWN_CHARACTERS, InputError, shown
 from gaitcli.io.atomic import atomic_path
 
 #: field-name suffix → unit (longest match first); fields without one are dimensionless ("1")
@@ -100,6 +100,10 @@ def checked(dataset: h5py.Dataset) -> h5py.Dataset:
     :data:`H5_MAX_BYTES`; else an :class:`InputError` naming the file and the dataset, before any reading."""
     if not isinstance(dataset, h5py.Dataset):  # a damaged or foreign file: a group where a dataset belongs
         raise InputError(dataset.file.filename, dataset.name.lstrip("/"), "a group (expected a dataset)")
+    if dataset.external or dataset.is_virtual:  # reading would open other files (a FIFO blocks for ever)
+        raise InputError(dataset.file.filename, dataset.name.lstrip("/"),
+                         f"{'external storage' if dataset.external else 'a virtual dataset'}: its data lie in other "
+                         "files (expected a dataset stored in the file itself)")
     size = int(np.prod(dataset.shape, dtype=object)) * dataset.dtype.itemsize if dataset.shape else 0
     if size > H5_MAX_BYTES:
         raise InputError(dataset.file.filename, dataset.name.lstrip("/"),
@@ -255,10 +259,37 @@ def open_h5(path: str | Path, what: str = "gaitcli"):
         raise InputError(path, None, f"not a readable HDF5 file ({_first_line(exc)}; expected {what}'s)") from None
     try:
         with h5:
+            _refuse_outside_links(h5, path)
             yield h5
     except (KeyError, ValueError, TypeError, IndexError, OSError, RuntimeError) as exc:  # RuntimeError: link loops
         raise InputError(path, None, f"not an HDF5 file of {what} ({type(exc).__name__}: {_first_line(exc)})") \
             from None
+
+
+#: the most links an HDF5 file gaitcli reads may hold (its own files hold a few hundred)
+H5_MAX_LINKS = 100_000
+
+
+def _refuse_outside_links(h5: h5py.File, path) -> None:
+    """An InputError for a link that leaves the file (an external link), before anything is read through it;
+    also for more than :data:`H5_MAX_LINKS` links."""
+    seen = 0
+
+    def visit(name: str, link):  # a value other than None stops the visit (raising inside h5py's lock cannot)
+        nonlocal seen
+        seen += 1
+        if isinstance(link, h5py.ExternalLink):
+            return name, link.filename
+        return (None, None) if seen > H5_MAX_LINKS else None
+
+    stopped = h5.visititems_links(visit)
+    if stopped is None:
+        return
+    name, filename = stopped
+    if name is None:
+        raise InputError(path, None, f"more than {H5_MAX_LINKS:,} links (expected gaitcli's own HDF5 file)")
+    raise InputError(path, name, f"a link to {shown(filename)} outside the file (expected gaitcli's own HDF5 "
+                                 "file, which holds its data itself)")
 
 
 def _first_line(exc: BaseException) -> str:

@@ -55,6 +55,9 @@ def curve_from_mapping(mapping, path, monotone_range_rad: tuple[float, float]) -
         value = mapping.get(key)
         if value is None:
             raise InputError(path, key, f"missing (expected a number: a coefficient of the {law.law} law)")
+        if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 1e300:
+            raise InputError(path, key, f"got a {len(str(abs(value)))}-digit integer (expected a finite number "
+                                        "of a float's range)")
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
             raise InputError(path, key, f"got {shown(value)} (expected a finite number)")
         values.append(float(value))

@@ -23,7 +23,7 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.errors import InputError
-from gaitcli.signal.bands import Band, floor_of, read_band
+from gaitcli.signal.bands import Band, check_band_size, floor_of, read_band
 from gaitcli.signal.cycles import CYCLE_PCT
 
 if TYPE_CHECKING:  # annotations only: importing the idyn stage would slow the start of every prediction process
@@ -166,6 +166,7 @@ def read_reference(path: str | Path) -> Band:
         raise InputError(path, None, "reference file not found")
     import pandas as pd
 
+    check_band_size(path)
     try:
         header = set(pd.read_csv(path, nrows=0).columns)
     except (ValueError, UnicodeDecodeError):

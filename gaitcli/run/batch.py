@@ -30,7 +30,7 @@ from pathlib import Path
 
 from gaitcli.core.registry import stage_names
 from gaitcli.errors import GaitError, InputError
-from gaitcli.io.atomic import atomic_path, remove_stale
+from gaitcli.io.atomic import atomic_path, check_output_file, remove_stale
 from gaitcli.io.outputs import plain_text, spreadsheet_text
 from gaitcli.run.cluster import Task, completed
 from gaitcli.run.cluster import workers as cluster_workers
@@ -334,6 +334,7 @@ def run_batch(lab_dir: str | Path, cfg: PipelineConfig, *, workers: int | None =
     started = time.perf_counter()
     lab_dir = Path(lab_dir).resolve()  # the workers may run in other folders
     summary_path = Path(summary_path) if summary_path is not None else lab_dir / BATCH_SUMMARY
+    check_output_file(summary_path)  # before any trial runs
     rows, todo = plan(lab_dir, cfg, force=force, summary_path=summary_path)
     dashboard = None
     if on_rows is not None and rows:

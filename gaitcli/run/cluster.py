@@ -206,6 +206,9 @@ def _remote(scheduler: str) -> Iterator[Workers]:
                                                "'gaitcli[dist]')") from None
     try:
         client = Client(scheduler, timeout="10s")
+    except ValueError as exc:  # distributed's own message names the schemes it knows
+        raise InputError(None, "--scheduler", f"got {scheduler!r}: {exc} (expected an address such as "
+                                               "tcp://HOST:8786)") from None
     except (OSError, TimeoutError) as exc:
         raise InputError(None, "--scheduler", f"cannot reach the Dask scheduler at {scheduler} ({exc})") from None
     executor = client.get_executor(pure=False)

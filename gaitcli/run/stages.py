@@ -250,9 +250,14 @@ def read_init(path: Path):
     from gaitcli.io.h5 import read_field
 
     try:
-        return np.asarray(read_field(path, PredictResult, "design", what="gait predict"), float)
+        design = np.asarray(read_field(path, PredictResult, "design", what="gait predict"), float)
+        if design.ndim != 1 or not np.isfinite(design).all():
+            bad = int(np.size(design) - np.isfinite(design).sum())
+            raise InputError(path, "--init", f"result/design holds {bad} values that are not finite numbers "
+                                             "(expected the solution of an earlier gait predict)")
+        return design
     except InputError as exc:  # not HDF5, no design, a link loop
-        if exc.field is not None:  # a design gaitcli will not read (too large): as io.h5 names it
+        if exc.field is not None:  # a design gaitcli will not read (too large, not finite): as said
             raise
     except (ValueError, TypeError):  # text where the design's numbers belong
         pass

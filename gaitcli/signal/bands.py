@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gaitcli.errors import InputError
+from gaitcli.errors import InputError, shown
 from gaitcli.signal.cycles import CYCLE_PCT
 
 #: a gait_cycle.csv column a band pools over both legs: ``<joint>_<side>_<sense>`` (deg),
@@ -33,6 +33,8 @@ PELVIS_COLUMNS = ("pelvis_tilt", "pelvis_obliquity", "pelvis_rotation")
 #: SD floors by the variable's unit suffix
 SD_FLOOR = {"_deg": 3.0, "_moment_per_kg": 0.1, "_W_per_kg": 0.2, "_N_per_kg": 0.3}
 BAND_FILE = Path(__file__).resolve().parent / "data" / "normal_band.csv"
+#: the largest band or reference table read (a 101-row table of a hundred variables is about 200 kB)
+BAND_MAX_BYTES = 20_000_000
 #: a gait reference table's right-leg columns → band variables
 REFERENCE_COLUMNS = {"hip_r_flexion_deg": "hip_flexion_deg", "knee_r_flexion_deg": "knee_flexion_deg",
                      "ankle_r_dorsiflexion_deg": "ankle_flexion_deg", "grf_x_r_N_per_kg": "grf_x_N_per_kg",
@@ -136,6 +138,14 @@ def band_from_gait_cycles(paths, *, source: str = "", sd_floor: bool = False) ->
     return Band(mean, sd, source, strides)
 
 
+def check_band_size(path: Path) -> None:
+    """Refuse a band or reference file larger than :data:`BAND_MAX_BYTES` before any of it is read."""
+    size = Path(path).stat().st_size
+    if size > BAND_MAX_BYTES:
+        raise InputError(path, None, f"{size:,} bytes (expected a band or reference CSV of at most "
+                                     f"{BAND_MAX_BYTES:,} bytes: 101 rows of means and SDs)")
+
+
 def read_band(path: str | Path, *, side_free: bool = True) -> Band:
     """A band file, or a ``gait reference`` table; one-line errors. ``side_free``: of a reference table only
     its right-leg sagittal angles and forces, under the band's side-free names (a figure's band); else every
@@ -145,10 +155,17 @@ def read_band(path: str | Path, *, side_free: bool = True) -> Band:
     path = Path(path)
     if not path.is_file():
         raise InputError(path, "--reference", "file not found (expected a band or reference CSV)")
+    check_band_size(path)
     try:
         table = pd.read_csv(path)
     except (ValueError, UnicodeDecodeError):
         raise InputError(path, None, "not a CSV table (expected cycle_pct and <variable>_mean, _sd)") from None
+    for column in table.columns:
+        if not pd.api.types.is_numeric_dtype(table[column]):  # a cell that is not a number
+            cells = pd.to_numeric(table[column], errors="coerce")
+            row = int(np.flatnonzero(cells.isna() & table[column].notna())[0]) + 2
+            raise InputError(path, f"line {row}: {column}", f"got {shown(str(table[column].iloc[row - 2]))} "
+                                                           "(expected a number)")
     if "cycle_pct" not in table:
         raise InputError(path, "cycle_pct", "missing column (expected cycle_pct and <variable>_mean, _sd)")
     pct = table["cycle_pct"].to_numpy(float)

@@ -88,6 +88,67 @@ def _out_below_a_file(case: Path) -> None:
     (case / "results.txt").write_text("the user's own file\n")
 
 
+def _init_stored_elsewhere(how: str) -> Callable[[Path], None]:
+    """x.h5 whose result/design lies outside it: external storage in a FIFO (reading it would block for ever), a
+    virtual dataset, or an external link (issue 53, item 7)."""
+    def build(case: Path) -> None:
+        with h5py.File(case / "src.h5", "w") as h5:
+            h5["d"] = np.zeros(69)
+        with h5py.File(case / "x.h5", "w") as h5:
+            if how == "fifo":
+                os.mkfifo(case / "fifo")
+                h5.create_dataset("result/design", shape=(69,), dtype="f8", external=[("fifo", 0, 69 * 8)])
+            elif how == "virtual":
+                layout = h5py.VirtualLayout(shape=(69,), dtype="f8")
+                layout[:] = h5py.VirtualSource("src.h5", "d", shape=(69,))
+                h5.create_virtual_dataset("result/design", layout)
+            else:
+                h5["result/design"] = h5py.ExternalLink("src.h5", "d")
+    return build
+
+
+def _damaged_reference(case: Path) -> None:
+    """The shipped free-speed reference with 'abc' before the first data row's second cell."""
+    from gaitcli.predict.speed_reference import group_file
+
+    lines = group_file("free").read_text().splitlines()
+    row = next(i for i, line in enumerate(lines) if line[:1].isdigit())
+    cells = lines[row].split(",")
+    cells[1] = "abc" + cells[1]
+    lines[row] = ",".join(cells)
+    (case / "ref.csv").write_text("\n".join(lines) + "\n")
+
+
+def _sparse(relative: str, size: int) -> Callable[[Path], None]:
+    """A file of ``size`` NUL bytes (sparse: nothing written to the disk)."""
+    def build(case: Path) -> None:
+        path = case / relative
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "wb") as f:
+            f.truncate(size)
+    return build
+
+
+def _both(*builds) -> Callable[[Path], None]:
+    def build(case: Path) -> None:
+        for b in builds:
+            b(case)
+    return build
+
+
+def _lab_with_summary_folder(case: Path) -> None:
+    _trial()(case)
+    (case / "lab").mkdir()
+    shutil.move(case / "trial", case / "lab" / "t1")
+    (case / "lab" / "batch_summary.csv").mkdir()
+
+
+def _lab(case: Path) -> None:
+    _trial()(case)
+    (case / "lab").mkdir()
+    shutil.move(case / "trial", case / "lab" / "t1")
+
+
 BATCH_HEADER = "trial,stage,status,exit_code,reason,wall_time_s,input_key\n"
 STUDY_HEADER = "case,speed_m_s,weights,condition,objective,cost_of_transport_J_per_m,deviation,converged\n"
 FILTER = ("filter", "trial")
@@ -155,16 +216,49 @@ CASES = {
                              ("predict", "--init", "x.h5", "--nodes", "6"), "x.h5", ("--init",)),
     "init_damaged": Case(_files({"x.h5": b"\x89HDF\r\n\x1a\n" + bytes(100)}), ("predict", "--init", "x.h5"), "x.h5",
                          ("--init",)),
+    # issue 53, items 7–13
+    "init_external_fifo": Case(_init_stored_elsewhere("fifo"), ("predict", "--init", "x.h5", "--nodes", "6"), "x.h5",
+                               ("result/design", "external storage")),
+    "init_virtual_dataset": Case(_init_stored_elsewhere("virtual"), ("predict", "--init", "x.h5", "--nodes", "6"),
+                                 "x.h5", ("result/design", "virtual dataset")),
+    "init_external_link": Case(_init_stored_elsewhere("link"), ("predict", "--init", "x.h5", "--nodes", "6"), "x.h5",
+                               ("result/design", "outside the file")),
+    "init_nan_design": Case(_files({"x.h5": _h5(result__design=np.full(69, np.nan))}),
+                            ("predict", "--init", "x.h5", "--nodes", "6"), "x.h5", ("--init", "not finite")),
+    "prosthesis_400_digits": Case(_files({"p.yaml": f"a_p: {DIGITS_400}\nb_p: 1\nc0: 1\na_n: 1\nb_n: 1\n"}),
+                                  ("predict", "--prosthesis", "p.yaml", "--nodes", "6"), "p.yaml",
+                                  ("a_p", "400-digit integer")),
+    "reference_text_cell": Case(_damaged_reference, ("predict", "--reference", "ref.csv", "--nodes", "6"), "ref.csv",
+                                ("line 2", "'abc", "expected a number")),
+    "reference_3_gib": Case(_sparse("ref.csv", 3 << 30), ("predict", "--reference", "ref.csv", "--nodes", "6"),
+                            "ref.csv", ("3,221,225,472 bytes",)),
+    "study_reference_3_gib": Case(_both(_files({"s.yaml": "name: s\nspeeds_m_s: [1.2]\nweights: [a]\n"
+                                                          "conditions: [normal]\nreferences: {1.2: ref.csv}\n"}),
+                                        _sparse("ref.csv", 3 << 30)),
+                                  ("predict", "--study", "s.yaml", "--nodes", "6"), "ref.csv", ("bytes",)),
+    "batch_scheduler_nonsense": Case(_lab, ("batch", "lab", "--scheduler", "nonsense://x"), "--scheduler",
+                                     ("nonsense://x", "tcp://")),
+    "batch_summary_a_folder": Case(_lab_with_summary_folder, ("batch", "lab", "--no-plots"), "batch_summary.csv",
+                                   ("is a folder",)),
 }
 
 
 def _snapshot(folder: Path) -> dict[str, str]:
-    """:func:`snapshot`, with symbolic links as where they point (a loop cannot be read)."""
+    """:func:`snapshot`, with symbolic links as where they point (a loop cannot be read), FIFOs and files over
+    16 MiB by what they are."""
     out = {}
     for path in sorted(folder.rglob("*")):
         rel = path.relative_to(folder).as_posix()
-        out[rel] = (f"-> {os.readlink(path)}" if path.is_symlink() else "<dir>" if path.is_dir()
-                    else hashlib.sha256(path.read_bytes()).hexdigest())
+        if path.is_symlink():
+            out[rel] = f"-> {os.readlink(path)}"
+        elif path.is_dir():
+            out[rel] = "<dir>"
+        elif not path.is_file():  # a FIFO: reading it would block
+            out[rel] = "<special>"
+        elif path.stat().st_size > 1 << 24:  # a sparse giant: its size and time, not 3 GiB of reading
+            out[rel] = f"<{path.stat().st_size} bytes, {path.stat().st_mtime_ns}>"
+        else:
+            out[rel] = hashlib.sha256(path.read_bytes()).hexdigest()
     return out
 
 
