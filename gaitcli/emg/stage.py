@@ -158,6 +158,18 @@ def _usable(raw: np.ndarray, labels, source) -> list[int]:
     return keep
 
 
+def _check_unique(labels, found: dict[str, str], source) -> None:
+    """An InputError where two analog channels carry the label of one EMG channel ``found`` uses (only the first
+    would be read, silently)."""
+    labels = [str(label).strip() for label in labels]
+    for label, muscle in found.items():
+        numbers = [k + 1 for k, other in enumerate(labels) if other == label]
+        if len(numbers) > 1:
+            raise InputError(source, "ANALOG:LABELS", f"channels {' and '.join(map(str, numbers))} are both labelled "
+                                                      f"{label!r} ({muscle}; expected one channel per label: rename "
+                                                      "one in the lab's software)")
+
+
 def _check_rate(analogs: Analogs, labels, source) -> None:
     if analogs.rate_hz < MIN_RATE_HZ:
         raise InputError(source, "ANALOG:RATE", f"EMG channels {', '.join(labels)} sampled at "
@@ -229,6 +241,7 @@ def run_emg(analogs: Analogs | None, events: Events, mapping: dict[str, str] | N
         raise InputError(source, "emg", f"no analog channel is named as a muscle's EMG (its channels: "
                                         f"{', '.join(analogs.labels)}; expected an emg: map in subject.yaml, "
                                         "channel label: muscle_side)")
+    _check_unique(analogs.labels, found, source)
     _check_rate(analogs, list(found), source)
     normalisation = cfg.normalise if cfg.normalise != "auto" else "mvc" if mvc is not None else "peak"
     if normalisation == "mvc" and mvc is None:

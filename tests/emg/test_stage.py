@@ -123,6 +123,16 @@ def test_bad_emg_input_is_an_input_error_naming_the_channel(case):
         run_emg(analogs, gait_events(), None, cfg, **kwargs)
 
 
+@pytest.mark.parametrize("mapping", [None, {"R TA": "tibialis_anterior_r"}])
+def test_two_channels_of_one_label_are_refused_naming_both(mapping):
+    """Two analog channels labelled "R TA" (issue 53, item 3): before, the second was silently never read."""
+    analogs = channels(labels=("R TA", "R TA"))
+    with pytest.raises(InputError) as info:
+        run_emg(analogs, gait_events(), mapping, EmgConfig(), source="trial.c3d")
+    assert (str(info.value.path), info.value.field) == ("trial.c3d", "ANALOG:LABELS")
+    assert "channels 1 and 2 are both labelled 'R TA'" in str(info.value)
+
+
 def test_an_empty_channel_is_left_out_and_a_clipping_one_is_kept_both_with_a_warning():
     analogs = channels()
     analogs.values[:, 1] = np.nan
