@@ -14,10 +14,12 @@ import os
 import re
 import shutil
 import tempfile
+import time
+import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from gaitcli.errors import InputError
+from gaitcli.errors import GaitWarning, InputError
 
 
 def _prefix(target: Path) -> str:
@@ -164,9 +166,6 @@ def atomic_path(target: str | Path):
             tmp.unlink()
 
 
-#: what gait writes into a folder it replaces whole: tables, HDF5 records, summaries and figures
-TOOL_SUFFIXES = (".csv", ".h5", ".json", ".png", ".gif")
-
 #: the files gait wrote into a folder with the SHA-256 of each (JSON: POSIX path relative to the folder → hex
 #: digest), written with the folder by :func:`atomic_folder`; hidden, so that ``gait compare`` and the regression
 #: baselines pass it by
@@ -218,26 +217,39 @@ def read_manifest(folder: Path) -> dict[str, str | None] | None:
 def check_replaceable(target: str | Path) -> None:
     """Raise :class:`InputError` naming the first file below the folder ``target`` that gait did not write:
     one not in the folder's manifest (:data:`MANIFEST`) or changed since (its SHA-256 differs: the user saved
-    their own file under gait's name), or, in a folder without a manifest (written by an older gaitcli), one
-    of another suffix than :data:`TOOL_SUFFIXES`; and any link. Replacing the folder whole would delete it."""
+    their own file under gait's name); and any link. Replacing the folder whole would delete it. A folder
+    without a readable manifest (an older gaitcli's, or one whose manifest was deleted) is never deleted:
+    :func:`atomic_folder` keeps it whole beside the new one, so nothing in it is refused."""
     target = Path(target)
     if not target.is_dir() or target.is_symlink():
         return
     written = read_manifest(target)
+    if written is None:
+        return
     for top, folders, files in os.walk(target):
         folders.sort()
         for name in sorted(files) + [f for f in folders if Path(top, f).is_symlink()]:
             path = Path(top, name)
             rel = path.relative_to(target).as_posix()
             ours = (name.startswith(".") and name.endswith(".part")) or rel == MANIFEST  # a leftover, the list
-            ours = ours or (path.suffix.lower() in TOOL_SUFFIXES if written is None else rel in written)
+            ours = ours or rel in written
             if path.is_symlink() or not ours:
                 raise InputError(path, None, "is not an output of gait, and the run would replace its folder "
                                              "(expected only gait's outputs there: move the file, or choose "
                                              "another -o)")
-            if written is not None and written.get(rel) is not None and _digest(path) != written[rel]:
+            if written.get(rel) is not None and _digest(path) != written[rel]:
                 raise InputError(path, None, "was changed since gait wrote it, and the run would replace its "
                                              "folder (move the file, or choose another -o)")
+
+
+def _kept_name(target: Path) -> Path:
+    """A free sibling name for a previous folder kept whole: ``<name>.kept-<YYYYmmddTHHMMSS>[-k]``."""
+    stamp = time.strftime("%Y%m%dT%H%M%S")
+    kept, k = target.with_name(f"{target.name}.kept-{stamp}"), 1
+    while kept.exists():
+        k += 1
+        kept = target.with_name(f"{target.name}.kept-{stamp}-{k}")
+    return kept
 
 
 @contextmanager
@@ -246,14 +258,16 @@ def atomic_folder(target: str | Path):
 
     A file (not a folder) at ``target``, or a file in it that gait did not write (:func:`check_replaceable`),
     is the user's: an InputError, and nothing is moved. The files written go into the folder's manifest
-    (:data:`MANIFEST`) with their digests, so that the next run replaces only those, unchanged. Leftovers of killed
-    runs are removed first (:func:`remove_stale`).
+    (:data:`MANIFEST`) with their digests, so that the next run replaces only those, unchanged. A previous
+    folder without a readable manifest, which gait cannot prove it wrote, is kept whole beside the new one as
+    ``<name>.kept-<time>`` (warned). Leftovers of killed runs are removed first (:func:`remove_stale`).
     """
     target = Path(target)
     make_parent(target)
     if target.exists() and not target.is_dir():
         raise InputError(target, None, "is a file (expected the output folder; move or rename the file)")
     check_replaceable(target)
+    unproven = target.is_dir() and not target.is_symlink() and read_manifest(target) is None and any(target.iterdir())
     remove_stale(target)
     with write_errors(target):
         tmp = Path(tempfile.mkdtemp(prefix=_prefix(target), suffix=".part", dir=target.parent))
@@ -270,7 +284,13 @@ def atomic_folder(target: str | Path):
                 old = target.with_name(f".{target.name}.old-{tmp.name}")
                 target.rename(old)
             tmp.rename(target)
-        if old is not None:
+        if old is not None and unproven:
+            kept = _kept_name(target)
+            old.rename(kept)
+            warnings.warn(f"{target}: held files without gait's list of its own ({MANIFEST}): kept whole as "
+                          f"{kept.name} beside the new outputs (delete it when it holds nothing of yours)",
+                          GaitWarning, stacklevel=3)
+        elif old is not None:
             shutil.rmtree(old, ignore_errors=True)
     finally:
         if tmp.exists():

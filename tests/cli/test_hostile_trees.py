@@ -19,7 +19,7 @@ import pytest
 from gaitcli.resources import sample_trial
 from gaitcli.run.batch import BatchRow, read_summary, write_summary
 
-from .conftest import Result, build_once, gait_many, snapshot
+from .conftest import Result, build_once, gait, gait_many, snapshot
 
 SAMPLE = sample_trial("normal")
 SECRET = "top secret: root:x:0:0\n"
@@ -58,7 +58,7 @@ def _build(root: Path) -> dict:
     (root / "far" / "out" / "filter" / "plots" / "old.png").write_bytes(b"png")
     jobs["far_marker"] = (("filter", "--no-plots", "trial", "-o", "out"), root / "far")
 
-    # a file of the user's in the stage folder -o would replace
+    # a file of the user's in the stage folder -o would replace, which has no manifest: kept whole beside it
     _trial(root / "users_file" / "trial")
     (root / "users_file" / "out" / "filter").mkdir(parents=True)
     (root / "users_file" / "out" / "filter" / "notes.txt").write_text("my notes\n")
@@ -121,8 +121,7 @@ def outcomes(tmp_path_factory):
     return root, record
 
 
-REFUSED = {"users_file": ("notes.txt", "not an output of gait"),
-           "users_csv": ("my.csv", "not an output of gait"),
+REFUSED = {"users_csv": ("my.csv", "not an output of gait"),
            "long_export": ("t.c3d", "too long"),
            "link_trial.c3d": ("trial.c3d", "outside the trial folder"),
            "link_static.c3d": ("static.c3d", "outside the trial folder"),
@@ -159,6 +158,15 @@ def test_an_impossible_marker_sample_is_a_gap_and_only_gaits_own_files_are_repla
     assert "filter/.gait_files" in left and "filter/markers_filtered.csv" in left  # the next run's list
 
 
+def test_a_stage_folder_without_a_manifest_is_kept_whole_with_the_users_file(outcomes):
+    root, record = outcomes
+    result = record["results"]["users_file"]
+    assert result.returncode == 0, result.describe()
+    (kept,) = (root / "users_file" / "out").glob("filter.kept-*")
+    assert (kept / "notes.txt").read_text() == "my notes\n"
+    assert (root / "users_file" / "out" / "filter" / ".gait_files").is_file()
+
+
 def test_formula_folder_names_are_escaped_in_batch_summary_and_read_back(outcomes, tmp_path):
     root, record = outcomes
     lab = root / "formulas" / "lab"
@@ -171,3 +179,22 @@ def test_formula_folder_names_are_escaped_in_batch_summary_and_read_back(outcome
     page = (lab / "report.html").read_text()
     assert "<td>=HYPERLINK(&quot;http://x&quot;)</td>" in page and "<td>&#x27;quoted</td>" in page
     assert "<td>-+1 bad</td>" in page
+
+
+def test_a_folder_whose_manifest_was_deleted_is_kept_whole(tmp_path):
+    """Issue 53, item 4: `gait filter` into an output folder whose .gait_files was deleted, holding the user's
+    my_analysis.csv: before, exit 0 and the file deleted (gait's suffixes were taken as gait's). Now the folder
+    is kept whole beside the new outputs, and the console says where."""
+    _trial(tmp_path / "trial")
+    first = gait("filter", "--no-plots", "trial", cwd=tmp_path)
+    assert first.returncode == 0, first.describe()
+    out = tmp_path / "trial" / "gait_out" / "filter"
+    (out / ".gait_files").unlink()
+    (out / "my_analysis.csv").write_text("mine\n")
+    before = {p.relative_to(out).as_posix(): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    again = gait("filter", "--no-plots", "trial", cwd=tmp_path)
+    assert again.returncode == 0, again.describe()
+    (kept,) = out.parent.glob("filter.kept-*")
+    assert {p.relative_to(kept).as_posix(): p.read_bytes() for p in kept.rglob("*") if p.is_file()} == before
+    assert f"kept whole as {kept.name}" in again.stderr
+    assert (out / ".gait_files").is_file() and not (out / "my_analysis.csv").exists()

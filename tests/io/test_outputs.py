@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from gaitcli import __version__
-from gaitcli.errors import InputError
+from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import MANIFEST, check_output_folder, check_replaceable
 from gaitcli.io.h5 import Dataset, provenance, write_h5
 from gaitcli.io.outputs import stage_folder, write_json, write_table
@@ -33,6 +33,7 @@ def _old_outputs(target: Path) -> dict[str, bytes]:
     (target / "summary.json").write_text('{"frames": 10}\n')
     (target / "only_in_old.csv").write_text("time_s\n0\n")
     (target / "plots" / "grf.png").write_bytes(b"old png")
+    (target / MANIFEST).write_text(json.dumps(["summary.json", "only_in_old.csv", "plots/grf.png"]))  # gait's
     return _tree(target)
 
 
@@ -159,7 +160,8 @@ def test_a_file_at_the_output_folder_is_refused_and_kept(tmp_path):
 def test_a_run_replaces_only_the_files_its_manifest_names(tmp_path):
     """A folder gait wrote lists its files with their digests (``.gait_files``); any other file, even with one
     of gait's suffixes, or one of its files changed since, is the user's: refused before anything moves. A folder
-    without a manifest keeps the suffix rule."""
+    without a manifest is kept whole beside the new one (before issue 53 gait's suffixes were taken as gait's:
+    the user's my.csv deleted)."""
     target = tmp_path / "out" / "filter"
     with stage_folder(target) as tmp:
         write_json(tmp / "summary.json", {"frames": 20})
@@ -184,13 +186,17 @@ def test_a_run_replaces_only_the_files_its_manifest_names(tmp_path):
     (target / MANIFEST).write_text('["plots/grf.png", "summary.json", "my.csv"]')  # names only: no digests
     (target / "summary.json").write_text("{}")
     check_replaceable(target)
-    (target / MANIFEST).unlink()  # as an older gaitcli left it: gait's suffixes are taken as gait's
-    check_replaceable(target)
-    (target / MANIFEST).write_text("not json")  # a damaged manifest is not gait's: the suffix rule again
-    check_replaceable(target)
+    (target / MANIFEST).write_text("not json")  # a damaged manifest is not gait's
     (target / "notes.txt").write_text("mine\n")
-    with pytest.raises(InputError, match=r"notes\.txt: is not an output of gait"):
-        check_replaceable(target)
+    check_replaceable(target)  # nothing refused: the folder is kept whole (below)
+    (target / MANIFEST).unlink()  # as an older gaitcli left it, or the user deleted it (issue 53, item 4)
+    before = _tree(target)
+    with pytest.warns(GaitWarning, match=r"held files without gait's list of its own \(\.gait_files\): kept whole"):
+        with stage_folder(target) as tmp:
+            write_json(tmp / "summary.json", {"frames": 21})
+    (kept,) = tmp_path.joinpath("out").glob("filter.kept-*")
+    assert _tree(kept) == before  # my.csv, notes.txt and the rest, unchanged
+    assert sorted(p.name for p in target.iterdir()) == [MANIFEST, "summary.json"]
 
 
 def test_outputs_get_the_usual_permissions(tmp_path):
