@@ -684,10 +684,9 @@ def _compare(console: Console, refs, band, out: Path) -> None:
         console.info(f"compare: reading {source.name}")
         conditions.append(read_condition(source, cfg, workers=os.cpu_count() or 1))
     comparison = compare_conditions(conditions)
-    folder = write_comparison(out.resolve(), comparison)
-    page = write_compare_report(folder, band)
+    folder = write_comparison(out.resolve(), comparison, page=lambda tmp: write_compare_report(tmp, band))
     console.info(f"compare: {len(conditions)} conditions, {len(comparison.spans)} spans where one differs from "
-                 f"{sources[0].name}; wrote {page.path}")
+                 f"{sources[0].name}; wrote {folder / 'report.html'}")
 
 
 #: the options of the gait group itself, taken anywhere on the command line (``gait idyn TRIAL --json``)

@@ -143,8 +143,10 @@ def cycle_table(conditions: list[Condition]) -> pd.DataFrame:
     return pd.concat(blocks, ignore_index=True)
 
 
-def write_comparison(out: Path, comparison: ConditionComparison) -> Path:
-    """``OUT/compare/`` whole (module docstring); replaces an earlier comparison there."""
+def write_comparison(out: Path, comparison: ConditionComparison, page=None) -> Path:
+    """``OUT/compare/`` whole (module docstring); replaces an earlier comparison there. ``page(folder)``, where
+    given, writes the comparison's page into the folder before it is complete (its tables are there): the page
+    is part of the folder, listed in its manifest, and an interrupt leaves the earlier comparison whole."""
     target = out / "compare"
     check_replaceable(target)
     conditions = pd.DataFrame([{"condition": c.name, **c.features,
@@ -160,4 +162,6 @@ def write_comparison(out: Path, comparison: ConditionComparison) -> Path:
                     "over each side's variables (Sidak)",
             "variables_tested": comparison.tested, "spans": int(len(comparison.spans)),
             "warnings": {c.name: list(c.warnings) for c in comparison.conditions}})
+        if page is not None:
+            page(tmp)
     return target

@@ -54,6 +54,17 @@ def test_the_page_has_every_block(compared):
     assert page.count("<img") == 4
 
 
+def test_the_page_is_part_of_the_comparison_and_a_rerun_replaces_both(compared):
+    """Issue 53, item 5: report.html is in compare/'s list of gait's files (before, it was written after the
+    folder was complete, unlisted, and every rerun stopped: "is not an output of gait"); a rerun replaces it."""
+    out, done = compared
+    listed = json.loads((out / "compare" / ".gait_files").read_text())
+    assert "report.html" in listed and f"wrote {out / 'compare' / 'report.html'}" in done.stderr
+    again = gait("report", "normative", "knee_orthosis", "--compare", "-o", "out", cwd=out.parent)
+    assert again.returncode == 0, again.describe()
+    assert (out / "compare" / "report.html").is_file()
+
+
 @pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (.ci/run installs it)")
 def test_the_page_loads_offline(compared, tmp_path):
     out, _ = compared
