@@ -59,3 +59,22 @@ def test_conditions_must_be_found_and_named_apart(tmp_path):
     found = condition_sources([tmp_path / "a" / "walk", "ski_boot"], tmp_path / "out")
     assert [(s.name, s.root) for s in found] == [("walk", None),
                                                  ("ski_boot", tmp_path / "out" / "ski_boot" / "gait_out")]
+
+
+def test_an_interrupt_while_the_page_is_drawn_leaves_the_earlier_comparison_whole(tmp_path):
+    """Issue 53, item 6: SIGINT while compare/report.html is drawn. Before, the tables were already in place and
+    the page missing; now the page is drawn inside the folder before it is complete: all or nothing."""
+    from gaitcli.run.conditions import write_comparison
+
+    comparison = compare_conditions([condition("normal", 1), condition("orthosis", 7, bump="knee_r_flexion")])
+    write_comparison(tmp_path, comparison, page=lambda folder: (folder / "report.html").write_text("first"))
+    before = {p.name: p.read_bytes() for p in (tmp_path / "compare").iterdir()}
+
+    def interrupted(folder):
+        (folder / "report.html").write_text("half a page")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        write_comparison(tmp_path, compare_conditions([condition("a", 2), condition("b", 3)]), page=interrupted)
+    assert {p.name: p.read_bytes() for p in (tmp_path / "compare").iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["compare"]  # no half-written folder left
