@@ -9,6 +9,7 @@ one line.
 
 from __future__ import annotations
 
+import math
 import os
 import struct
 import warnings
@@ -78,6 +79,7 @@ def check_file(path: Path) -> int | None:
     first, last = struct.unpack("<2H", head[6:10])
     data_start, frame_bytes = data_layout(head, processor)
     check_ceiling(path, head, records, processor)
+    check_rates(path, head, records, processor)
     if data_start < param_block * 512:
         raise InputError(path, "header", f"not a C3D file: data block {data_start // 512 + 1} is not after the "
                                          "parameters")
@@ -113,22 +115,68 @@ def check_ceiling(path: Path, head: bytes, records: dict, processor: int) -> Non
                                        f"({C3D_MAX_NUMBERS}; split the trial)")
 
 
+def _floats(raw: bytes, processor: int) -> list[float]:
+    """4-byte floats of the file's processor: Intel IEEE, or DEC F-float (IEEE with its 16-bit words swapped,
+    four times as large)."""
+    raw = raw[:len(raw) // 4 * 4]
+    if processor == 2:
+        raw = b"".join(raw[k + 2:k + 4] + raw[k:k + 2] for k in range(0, len(raw), 4))
+        return [v / 4 for (v,) in struct.iter_unpack("<f", raw)]
+    return [v for (v,) in struct.iter_unpack("<f", raw)]
+
+
+def parameter_numbers(path: Path, records: dict, processor: int, group: str, name: str,
+                      count: int = 2) -> list[float]:
+    """The first ``count`` values of the numeric parameter GROUP:NAME read from the file's bytes ([] when absent or
+    not a 16-bit integer or a float; 16-bit words as unsigned)."""
+    record = records.get((group, name))
+    if record is None or record.kind not in (2, 4):
+        return []
+    count = max(1, min(count, record.dims[0] if record.dims else 1))
+    with open(path, "rb") as f:
+        f.seek(record.data_offset)
+        raw = f.read(4 * count)
+    if record.kind == 2:
+        return [float(w) for (w,) in struct.iter_unpack("<H", raw[:2 * count])]
+    return _floats(raw[:4 * count], processor)
+
+
+def check_rates(path: Path, head: bytes, records: dict, processor: int) -> None:
+    """Refuse parameters that disagree with the header that lays out the data section: POINT:RATE against the
+    header's frame rate, ANALOG:RATE against its analog samples per frame at that rate, POINT:SCALE against its
+    scale. Read either way, such a file gives markers and plates from the wrong bytes (issue 53, item 1)."""
+    n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
+    scale, rate = _floats(head[12:16], processor)[0], _floats(head[20:24], processor)[0]
+
+    def refuse(field: str, got: float, expected: str):
+        raise InputError(path, field, f"got {got:g} ({expected}; the parameters or the header are damaged)")
+
+    if not (math.isfinite(rate) and rate > 0):
+        raise InputError(path, "header", f"frame rate {rate:g} Hz (expected a positive rate; the header is damaged)")
+    point_rate = parameter_numbers(path, records, processor, "POINT", "RATE", 1)
+    if point_rate and not math.isclose(point_rate[0], rate, rel_tol=1e-3):
+        refuse("POINT:RATE", point_rate[0], f"expected the header's {rate:g} Hz")
+    point_scale = parameter_numbers(path, records, processor, "POINT", "SCALE", 1)
+    if n_points and point_scale and not math.isclose(point_scale[0], scale, rel_tol=1e-5):
+        refuse("POINT:SCALE", point_scale[0], f"expected the header's {scale:g}")
+    used = parameter_numbers(path, records, processor, "ANALOG", "USED", 1)
+    analog_rate = parameter_numbers(path, records, processor, "ANALOG", "RATE", 1)
+    if analog_per_frame and used and used[0] > 0 and analog_rate:
+        per_channel = analog_per_frame / used[0]
+        if per_channel != int(per_channel):
+            refuse("ANALOG:USED", used[0], f"expected a divisor of the header's {analog_per_frame} analog samples "
+                                           "per frame")
+        expected = per_channel * rate
+        if not math.isclose(analog_rate[0], expected, rel_tol=1e-4):
+            refuse("ANALOG:RATE", analog_rate[0], f"expected {expected:g} Hz: the header's {int(per_channel)} samples "
+                                                  f"per frame at {rate:g} Hz")
+
+
 def long_frame_counts(path: Path, records: dict, processor: int) -> list[int]:
     """The frame counts a long trial's parameters announce (see :mod:`.long`), read from the file's bytes."""
     def values(group, name):
-        record = records.get((group, name))
-        if record is None or record.kind not in (2, 4):
-            return []
-        count = max(1, min(2, record.dims[0] if record.dims else 1))
-        with open(path, "rb") as f:
-            f.seek(record.data_offset)
-            raw = f.read(4 * count)
-        if record.kind == 2:
-            return [w for (w,) in struct.iter_unpack("<H", raw[:2 * count])]
-        if processor == 2:  # DEC F-float: IEEE with its 16-bit words swapped, four times as large
-            raw = b"".join(raw[k + 2:k + 4] + raw[k:k + 2] for k in range(0, len(raw), 4))
-            return [int(v / 4) for (v,) in struct.iter_unpack("<f", raw[:4 * count]) if v == v and abs(v) < 2**40]
-        return [int(v) for (v,) in struct.iter_unpack("<f", raw[:4 * count]) if v == v and abs(v) < 2**40]
+        return [int(v) for v in parameter_numbers(path, records, processor, group, name)
+                if v == v and abs(v) < 2**40]
 
     counts = []
     start, end = values("TRIAL", "ACTUAL_START_FIELD"), values("TRIAL", "ACTUAL_END_FIELD")
