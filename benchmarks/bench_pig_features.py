@@ -38,7 +38,8 @@ from gaitcli.dynamics.stage import IdynConfig, run_idyn
 from gaitcli.kinematics.conventions import PIG_MOMENTS, moments_to_clinical, moments_to_plug_in_gait
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.markerset import marker_set
-from gaitcli.kinematics.model import JOINTS, MOMENTS as MODEL_MOMENTS
+from gaitcli.kinematics.model import JOINTS
+from gaitcli.kinematics.model import MOMENTS as MODEL_MOMENTS
 from gaitcli.kinematics.subject import Subject
 from gaitcli.signal.stage import FilterConfig, filter_trial
 from gaitcli.synth import simulate_trial
@@ -116,7 +117,7 @@ def rewritten(shared: Path, out: Path, features: set[str]) -> Path:
         labels = list(c["parameters"]["POINT"]["LABELS"]["value"])
         points, residuals = c["data"]["points"], c["data"]["meta_points"]["residuals"]
 
-        def at(label):
+        def at(label, points=points, labels=labels):
             return points[:3, labels.index(label), :]
 
         def unit(v):

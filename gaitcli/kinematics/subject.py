@@ -234,7 +234,7 @@ def _checked_measurements(vsk: VskSubject, given: Subject | None) -> list[str]:
     """The measurements of :data:`VSK_MEASUREMENTS` the stages will use (those ``given``, subject.yaml's subject,
     does not give), checked to be in range; each as "NAME value" for the notes."""
     used = []
-    for names, key, low, high, expected in VSK_MEASUREMENTS:
+    for names, key, *_ in VSK_MEASUREMENTS:
         if given is not None and getattr(given, key) is not None:
             continue
         for parameter in names:

@@ -28,14 +28,97 @@ class Stride:
 
 
 def strides(events: Events) -> list[Stride]:
-    """Every complete stride of both sides, in time order."""
+    """Every complete stride of both sides, in time order; not a gap between heel strikes longer than a walking
+    stride (:data:`WALKING_PERIOD_S`: the foot's strikes in between were not recorded)."""
     out = []
     for side in ("r", "l"):
         strikes, offs = events.times(side, "heel_strike"), events.times(side, "toe_off")
         for a, b in zip(strikes[:-1], strikes[1:]):
+            if b - a > WALKING_PERIOD_S[1]:
+                continue
             inside = offs[(offs > a) & (offs < b)]
             out.append(Stride(side, float(a), float(b), float(inside[0]) if inside.size else np.nan))
     return sorted(out, key=lambda s: s.start_s)
+
+
+#: a walking stride: its period (s) and its stance (% of the period) within these (outside, the events cannot
+#: describe walking: a lab's damaged or random EVENT group)
+WALKING_PERIOD_S = (0.5, 3.0)
+WALKING_STANCE_PCT = (40.0, 80.0)
+
+
+#: where the other foot strikes in a walking stride (% of it): the feet alternate
+OTHER_STRIKE_PCT = (25.0, 75.0)
+
+
+def walking_events(events: Events) -> tuple[Events, list[tuple[str, float, float, str]]]:
+    """``events`` without those that cannot describe walking, and what was set aside: (side, start s, end s,
+    reason) per stride (:func:`_walking_pass`, repeated until nothing more goes: a stride its removals form is
+    checked too)."""
+    set_aside = []
+    while True:
+        kept, more = _walking_pass(events)
+        set_aside += more
+        if len(kept) == len(events):
+            return kept, sorted(set_aside, key=lambda item: item[1])
+        events = kept
+
+
+def _walking_pass(events: Events) -> tuple[Events, list[tuple[str, float, float, str]]]:
+    """One pass of :func:`walking_events`. Per foot, in time order: a heel strike less than
+    :data:`WALKING_PERIOD_S`'s shortest period after the one kept before it goes. Then per stride between kept
+    heel strikes: longer than the longest period, it is no stride (:func:`strides`); where the other foot strikes
+    more than once in it, or once outside :data:`OTHER_STRIKE_PCT` of it (none: its strike was not recorded), the
+    stride's first heel strike and its toe offs go; of two or more toe offs only the one whose stance lies within
+    :data:`WALKING_STANCE_PCT` stays (none where several or none do); a single one whose stance lies outside goes
+    (the stride's stance then unknown)."""
+    keep = np.ones(len(events.time_s), bool)
+    set_aside = []
+    low, high = WALKING_PERIOD_S
+    kept = {}
+    for side in ("r", "l"):
+        strikes = np.flatnonzero(events.mask(side, "heel_strike"))
+        kept[side] = []
+        for k in strikes[np.argsort(events.time_s[strikes], kind="stable")]:
+            t = events.time_s[k]
+            if kept[side] and t - events.time_s[kept[side][-1]] < low:
+                keep[k] = False
+                set_aside.append((side, float(events.time_s[kept[side][-1]]), float(t),
+                                  f"a heel strike {t - events.time_s[kept[side][-1]]:.3g} s after the one before "
+                                  f"(expected a stride of {low:g}–{high:g} s)"))
+            else:
+                kept[side].append(k)
+    for side, other in (("r", "l"), ("l", "r")):
+        offs = np.flatnonzero(events.mask(side, "toe_off"))
+        other_strikes = events.time_s[kept[other]]
+        for a, b in zip(kept[side][:-1], kept[side][1:]):
+            start, end = events.time_s[a], events.time_s[b]
+            if not keep[a] or end - start > high:
+                if end - start > high:
+                    set_aside.append((side, float(start), float(end), f"period {end - start:.3g} s (expected "
+                                                                        f"{low:g}–{high:g} s)"))
+                continue
+            inside = offs[(events.time_s[offs] > start) & (events.time_s[offs] < end)]
+            crossing = 100 * (other_strikes[(other_strikes > start) & (other_strikes < end)] - start) / (end - start)
+            if crossing.size > 1 or (crossing.size == 1 and not OTHER_STRIKE_PCT[0] <= crossing[0]
+                                     <= OTHER_STRIKE_PCT[1]):
+                keep[[a, *inside]] = False
+                said = f"at {crossing[0]:.0f} %" if crossing.size == 1 else f"{crossing.size} times"
+                set_aside.append((side, float(start), float(end), f"the other foot strikes {said} in it (expected "
+                                  f"once, at {OTHER_STRIKE_PCT[0]:g}–{OTHER_STRIKE_PCT[1]:g} %)"))
+            elif inside.size:
+                stance = 100 * (events.time_s[inside] - start) / (end - start)
+                walking = (stance >= WALKING_STANCE_PCT[0]) & (stance <= WALKING_STANCE_PCT[1])
+                if inside.size > 1:  # one of them a walking stance: that one stays
+                    keep[inside] = walking if np.count_nonzero(walking) == 1 else False
+                    set_aside.append((side, float(start), float(end), f"{inside.size} toe offs of one foot in it"
+                                      + (f" (the one at {stance[walking][0]:.0f} % kept)"
+                                         if np.count_nonzero(walking) == 1 else "")))
+                elif not walking[0]:
+                    keep[inside] = False
+                    set_aside.append((side, float(start), float(end), f"stance {stance[0]:.0f} % (expected "
+                                      f"{WALKING_STANCE_PCT[0]:g}–{WALKING_STANCE_PCT[1]:g} %)"))
+    return events.select(keep), set_aside
 
 
 def normalise(values: np.ndarray, time_s: np.ndarray, stride: Stride) -> np.ndarray:

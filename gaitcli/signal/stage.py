@@ -29,6 +29,7 @@ from gaitcli.signal.contacts import (
     plate_owner,
     shared_frames,
 )
+from gaitcli.signal.cycles import strides, walking_events
 from gaitcli.signal.events import Contact, EventDetection, detect_events, kinematic_events
 from gaitcli.signal.forceplates import PlateLoad, combine_loads, plate_load, resample_to_frames, resting_offsets
 from gaitcli.signal.gaps import Gap, fill_gaps
@@ -326,6 +327,33 @@ def use_file_events(recording: Recording, cfg: FilterConfig, path=None) -> bool:
     return cfg.events != "detect" and len(recording.events) > 0
 
 
+#: how many set-aside strides a message names (the rest counted)
+STRIDES_NAMED = 2
+
+
+def checked_walking_events(events: Events, first_frame: int, rate_hz: float, path, from_file: bool) -> Events:
+    """``events`` without the strides that cannot be walking (:func:`~gaitcli.signal.cycles.walking_events`),
+    warned with their reasons; an InputError where fewer strides can be walking than cannot."""
+    kept, set_aside = walking_events(events)
+    if not set_aside:
+        return events
+    source = "the trial file's EVENT group" if from_file else "the detected events"
+    def frame(t: float) -> int:
+        return int(round(t * rate_hz)) + first_frame
+
+    named = "; ".join(f"{SIDE_NAMES[side]} {frame(a)}–{frame(b)}: {why}"
+                      for side, a, b, why in set_aside[:STRIDES_NAMED])
+    more = f" and {len(set_aside) - STRIDES_NAMED} more" if len(set_aside) > STRIDES_NAMED else ""
+    usable = [st for st in strides(kept) if np.isfinite(st.toe_off_s)]
+    if len(usable) < len(set_aside):  # a few strides of random events can look like walking by chance
+        raise InputError(path, "EVENT" if from_file else "events",
+                         f"{len(set_aside)} strides cannot be walking, {len(usable)} can (frames {named}{more}; "
+                         "expected heel strike, toe off and heel strike of each foot in order, a stance of 40–80 %)")
+    warnings.warn(f"{len(set_aside)} strides of {source} set aside, their events unused: they cannot be walking "
+                  f"(frames {named}{more})", GaitWarning, stacklevel=3)
+    return kept
+
+
 def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> FilterResult:
     """Run the filter stage on a recording whose labels are model landmarks where mapped.
 
@@ -366,6 +394,7 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                                   duplicate_s=0.35)  # one foot cannot strike twice within 0.35 s
     events = recording.events if from_file else \
         calibrate_kinematic_events(detection.events, feet, pelvis_centre(markers), rate)
+    events = checked_walking_events(events, markers.first_frame, rate, path, from_file)
     # a plate two feet stood on is split at the (calibrated) events of the foot stepping on and the one stepping off
     owner = plate_owner(detection.contacts, plates, events) if plates else detection.owner
     owner = without_partial_feet(owner, plates, markers, events)

@@ -143,6 +143,22 @@ def _lab_with_summary_folder(case: Path) -> None:
     (case / "lab" / "batch_summary.csv").mkdir()
 
 
+def _random_events(case: Path) -> None:
+    """The sample walk with 255 random Foot Strike / Foot Off events in its EVENT group (issue 53, item 2)."""
+    import ezc3d
+
+    _trial()(case)
+    path = case / "trial" / "trial.c3d"
+    c = ezc3d.c3d(str(path))
+    rng = np.random.default_rng(0)
+    rate = float(c["parameters"]["POINT"]["RATE"]["value"][0])
+    first, last = c["header"]["points"]["first_frame"], c["header"]["points"]["last_frame"]
+    for t in np.sort(rng.uniform(first / rate, (last + 1) / rate, 255)):
+        c.add_event([0, float(t)], context=str(rng.choice(["Right", "Left"])),
+                    label=str(rng.choice(["Foot Strike", "Foot Off"])))
+    c.write(str(path))
+
+
 def _lab(case: Path) -> None:
     _trial()(case)
     (case / "lab").mkdir()
@@ -236,6 +252,7 @@ CASES = {
                                                           "conditions: [normal]\nreferences: {1.2: ref.csv}\n"}),
                                         _sparse("ref.csv", 3 << 30)),
                                   ("predict", "--study", "s.yaml", "--nodes", "6"), "ref.csv", ("bytes",)),
+    "random_events": Case(_random_events, FILTER, "trial.c3d", ("EVENT", "strides cannot be walking")),
     "batch_scheduler_nonsense": Case(_lab, ("batch", "lab", "--scheduler", "nonsense://x"), "--scheduler",
                                      ("nonsense://x", "tcp://")),
     "batch_summary_a_folder": Case(_lab_with_summary_folder, ("batch", "lab", "--no-plots"), "batch_summary.csv",

@@ -40,14 +40,20 @@ def test_the_sample_as_shipped_passes():
     ("POINT", "RATE", 37.0, "POINT:RATE: got 37 (expected the header's 100 Hz"),
     ("ANALOG", "RATE", 0.0, "ANALOG:RATE: got 0 (expected 1000 Hz: the header's 10 samples per frame at 100 Hz"),
     ("ANALOG", "RATE", 1001.0, "ANALOG:RATE: got 1001 (expected 1000 Hz"),
-    ("POINT", "SCALE", 0.1, "POINT:SCALE: got 0.1 (expected the header's -1"),
-    ("POINT", "SCALE", -0.1, "POINT:SCALE: got -0.1 (expected the header's -1"),
+    ("POINT", "SCALE", 0.1, "POINT:SCALE: got 0.1 (expected a negative scale: the header stores the data as "
+                            "floats"),
 ])
 def test_a_parameter_against_its_header_is_exit_2_naming_it(tmp_path, group, name, value, expected):
     path = patched(tmp_path, group, name, value)
     with pytest.raises(InputError) as info:
         check_file(path)
     assert info.value.field == f"{group}:{name}" and expected in str(info.value)
+
+
+def test_a_float_files_scale_of_another_size_reads_the_same_markers(tmp_path):
+    """A float file's POINT:SCALE only says "floats" by its sign (the C3D library does not use its size, and
+    writes −1 in the header whatever the parameter holds): −0.01 against the header's −1 passes."""
+    check_file(patched(tmp_path, "POINT", "SCALE", -0.01))
 
 
 def test_real_files_of_many_labs_pass(shared_c3d_dir, shared_pig_dir):

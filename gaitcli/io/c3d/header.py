@@ -143,8 +143,8 @@ def parameter_numbers(path: Path, records: dict, processor: int, group: str, nam
 
 def check_rates(path: Path, head: bytes, records: dict, processor: int) -> None:
     """Refuse parameters that disagree with the header that lays out the data section: POINT:RATE against the
-    header's frame rate, ANALOG:RATE against its analog samples per frame at that rate, POINT:SCALE against its
-    scale. Read either way, such a file gives markers and plates from the wrong bytes (issue 53, item 1)."""
+    header's frame rate, ANALOG:RATE against its analog samples per frame at that rate, POINT:SCALE's sign
+    against its storage (floats or integers) and, for integers, its size against the header's scale. Read either way, such a file gives markers and plates from the wrong bytes (issue 53, item 1)."""
     n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
     scale, rate = _floats(head[12:16], processor)[0], _floats(head[20:24], processor)[0]
 
@@ -157,8 +157,14 @@ def check_rates(path: Path, head: bytes, records: dict, processor: int) -> None:
     if point_rate and not math.isclose(point_rate[0], rate, rel_tol=1e-3):
         refuse("POINT:RATE", point_rate[0], f"expected the header's {rate:g} Hz")
     point_scale = parameter_numbers(path, records, processor, "POINT", "SCALE", 1)
-    if n_points and point_scale and not math.isclose(point_scale[0], scale, rel_tol=1e-5):
-        refuse("POINT:SCALE", point_scale[0], f"expected the header's {scale:g}")
+    if n_points and point_scale:
+        # its sign says how the data are stored (negative: floats, its size unused; positive: integers times it)
+        if (point_scale[0] < 0) != (scale < 0):
+            refuse("POINT:SCALE", point_scale[0], f"expected {'a negative' if scale < 0 else 'a positive'} scale: "
+                                                   f"the header stores the data as "
+                                                   f"{'floats' if scale < 0 else 'integers'} ({scale:g})")
+        if scale > 0 and not math.isclose(point_scale[0], scale, rel_tol=1e-5):
+            refuse("POINT:SCALE", point_scale[0], f"expected the header's {scale:g}")
     used = parameter_numbers(path, records, processor, "ANALOG", "USED", 1)
     analog_rate = parameter_numbers(path, records, processor, "ANALOG", "RATE", 1)
     if analog_per_frame and used and used[0] > 0 and analog_rate:
