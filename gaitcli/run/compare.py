@@ -69,6 +69,7 @@ from __future__ import annotations
 import fnmatch
 import json
 import math
+import os
 import re
 from collections.abc import Iterable, Mapping
 from contextlib import closing
@@ -350,12 +351,19 @@ def tree_files(root: str | Path) -> list[str]:
     """The relative paths (POSIX, sorted) of every CSV and ``summary.json`` under ``root``, hidden ones left out."""
     root = Path(root)
     out = []
-    for path in root.rglob("*"):
-        rel = path.relative_to(root)
-        if any(p.startswith(".") or p == "__pycache__" for p in rel.parts):
-            continue
-        if (path.suffix.lower() == ".csv" or path.name == "summary.json") and path.is_file():
-            out.append(rel.as_posix())
+
+    def unreadable(exc: OSError):  # a folder that cannot be listed is no folder without files
+        raise InputError(exc.filename, None, f"cannot be read ({exc.strerror}; expected a readable output "
+                                             "folder)") from None
+
+    for top, folders, files in os.walk(root, onerror=unreadable):
+        here = Path(top).relative_to(root)
+        folders[:] = [f for f in folders if not (f.startswith(".") or f == "__pycache__")]
+        for name in files:
+            if name.startswith("."):
+                continue
+            if (Path(name).suffix.lower() == ".csv" or name == "summary.json") and Path(top, name).is_file():
+                out.append((here / name).as_posix())
     return sorted(out)
 
 

@@ -57,6 +57,10 @@ WEIGHT_SETS = {k: weight_pair(v) for k, v in {"a": "1,1", "b": "4/3,2/3", "c": "
 SHARED = ("nodes", "strength_scale", "starts", "max_iterations", "time_limit_s")
 #: a study file's keys
 KEYS = ("name", "speeds_m_s", "weights", "conditions", "foot_mass_kg", "references", *SHARED)
+#: the most values a study's list may hold (Table 5.3's grid: 3 speeds, 4 weight sets, 5 conditions)
+MAX_GRID_VALUES = 100
+#: the most cases a study may hold (speeds × weight sets × conditions)
+MAX_CASES = 1000
 #: the foot_mass condition's added mass per foot, kg (5.3.2)
 FOOT_MASS_KG = 2.0
 #: study.csv's columns after the case's labels
@@ -96,7 +100,17 @@ class StudySpec:
             value = data.get(key)
             if not isinstance(value, list) or not value:
                 raise InputError(path, key, f"got {shown(value)} (expected a non-empty list)")
+            if len(value) > MAX_GRID_VALUES:
+                raise InputError(path, key, f"{len(value):,} values (expected at most {MAX_GRID_VALUES} per list)")
             return value
+
+        def distinct(key, values):
+            seen = {}
+            for v in values:
+                if v in seen:
+                    raise InputError(path, key, f"{shown(v)} is given twice (expected each value once)")
+                seen[v] = None
+            return values
 
         def weight_set(v):
             if isinstance(v, str) and v in WEIGHT_SETS:
@@ -105,15 +119,22 @@ class StudySpec:
             label = next((k for k, w in WEIGHT_SETS.items() if w == pair), None)
             return label or (v if isinstance(v, str) else ",".join(f"{w:g}" for w in pair)), pair
 
-        conditions = tuple(one_of(str(v), CONDITIONS, where="conditions", path=path) for v in listed("conditions"))
+        conditions = distinct("conditions", tuple(one_of(str(v), CONDITIONS, where="conditions", path=path)
+                                                  for v in listed("conditions")))
         if "optimal" in conditions and not set(COMMERCIAL_FEET) <= set(conditions):
             raise InputError(path, "conditions", f"optimal needs {', '.join(COMMERCIAL_FEET)} as well (its warm "
                                                  "starts, 5.3.3)")
         foot_mass = data.get("foot_mass_kg", FOOT_MASS_KG)
-        speeds = tuple(check_parameter(_field("speed_m_s"), v, where="speeds_m_s", path=path)
-                       for v in listed("speeds_m_s"))
+        speeds = distinct("speeds_m_s", tuple(check_parameter(_field("speed_m_s"), v, where="speeds_m_s", path=path)
+                                              for v in listed("speeds_m_s")))
+        weights = tuple(weight_set(v) for v in listed("weights"))
+        distinct("weights", tuple(pair for _, pair in weights))
+        cases = len(speeds) * len(weights) * len(conditions)
+        if cases > MAX_CASES:
+            raise InputError(path, "study", f"{len(speeds)} speeds × {len(weights)} weight sets × {len(conditions)} "
+                                            f"conditions = {cases:,} cases (expected at most {MAX_CASES:,})")
         return cls(name=str(data.get("name", "study")), speeds_m_s=speeds, references=_references(data, speeds, path),
-                   weights=tuple(weight_set(v) for v in listed("weights")), conditions=conditions,
+                   weights=weights, conditions=conditions,
                    foot_mass_kg=check_parameter(_field("foot_mass_kg"), foot_mass, where="foot_mass_kg", path=path),
                    base=replace_checked(PredictConfig(), {k: data[k] for k in SHARED if k in data}, section=None,
                                         path=path))

@@ -252,6 +252,14 @@ CASES = {
                                                           "conditions: [normal]\nreferences: {1.2: ref.csv}\n"}),
                                         _sparse("ref.csv", 3 << 30)),
                                   ("predict", "--study", "s.yaml", "--nodes", "6"), "ref.csv", ("bytes",)),
+    "study_5000_speeds": Case(_files({"s.yaml": "name: s\nspeeds_m_s: [" + ", ".join(["1.2"] * 5000) + "]\n"
+                                                "weights: [a]\nconditions: [normal]\n"}),
+                              ("predict", "--study", "s.yaml", "--nodes", "6"), "s.yaml",
+                              ("speeds_m_s", "5,000 values", "at most 100")),
+    "study_speed_twice": Case(_files({"s.yaml": "name: s\nspeeds_m_s: [1.2, 1.3, 1.2]\nweights: [a]\n"
+                                                "conditions: [normal]\n"}),
+                              ("predict", "--study", "s.yaml", "--nodes", "6"), "s.yaml",
+                              ("speeds_m_s", "1.2 is given twice")),
     "random_events": Case(_random_events, FILTER, "trial.c3d", ("EVENT", "strides cannot be walking")),
     "batch_scheduler_nonsense": Case(_lab, ("batch", "lab", "--scheduler", "nonsense://x"), "--scheduler",
                                      ("nonsense://x", "tcp://")),
@@ -366,6 +374,24 @@ def test_an_unreadable_compare_input_is_exit_2_naming_it(tmp_path, monkeypatch, 
     _refuse_reading(monkeypatch, tmp_path / which)
     result = _gait_here(monkeypatch, capsys, tmp_path, "compare", "a", "b")
     _one_line_exit_2(result, which, ("cannot be read",))
+
+
+def test_an_unreadable_compare_folder_is_exit_2_naming_it(tmp_path, monkeypatch, capsys):
+    """Issue 53, item 14: b/idyn cannot be listed (mode 000 for another user, simulated: root lists anything).
+    Before, exit 1 "differ", its files taken as "only in a"."""
+    for side in "ab":
+        (tmp_path / side / "idyn").mkdir(parents=True)
+        (tmp_path / side / "idyn" / "summary.json").write_text('{"a": 1}')
+    refused, real_scandir = os.path.realpath(tmp_path / "b" / "idyn"), os.scandir
+
+    def scandir(path="."):
+        if os.path.realpath(path) == refused:
+            raise PermissionError(errno.EACCES, "Permission denied", str(path))
+        return real_scandir(path)
+
+    monkeypatch.setattr(os, "scandir", scandir)
+    result = _gait_here(monkeypatch, capsys, tmp_path, "compare", "a", "b")
+    _one_line_exit_2(result, "b/idyn", ("cannot be read", "Permission denied"))
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads a file of mode 000; simulated above")
