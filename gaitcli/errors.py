@@ -30,6 +30,21 @@ def _shown_path(path: Path) -> str:
     return text if len(text) <= SHOWN_PATH else text[:SHOWN_PATH // 2 - 1] + "…" + text[-SHOWN_PATH // 2:]
 
 
+#: the longest message an InputError prints (its middle cut; the "(expected …)" at its end kept)
+SHOWN_MESSAGE = 600
+_CONTROL = {c: f"\\x{c:02x}" for c in [*range(32), 127]} | {10: "\\n", 13: "\\r", 9: "\\t"}
+
+
+def one_line(text: str) -> str:
+    """``text`` with control characters (a newline in a folder name, an escape) written as escapes, and cut in
+    the middle to :data:`SHOWN_MESSAGE` characters: a message is always one readable line."""
+    text = text.translate(_CONTROL)
+    if len(text) <= SHOWN_MESSAGE:
+        return text
+    tail = SHOWN_MESSAGE // 3
+    return text[:SHOWN_MESSAGE - tail - 1] + "…" + text[-tail:]
+
+
 class GaitError(Exception):
     """Base class of gaitcli's own errors; ``exit_code`` is what the CLI returns."""
 
@@ -52,7 +67,7 @@ class InputError(GaitError):
         self.field = field
         self.problem = problem
         parts = [_shown_path(p) if p is self.path else p for p in (self.path, field) if p]
-        super().__init__(": ".join(parts + [problem]))
+        super().__init__(one_line(": ".join(parts + [problem])))
 
 
 class NotConvergedError(GaitError):

@@ -74,6 +74,16 @@ def sided_muscle(value, where: str, path=None) -> str:
     return text
 
 
+#: how many labels a message lists (the rest counted)
+LABELS_LISTED = 8
+
+
+def _listed(labels: list[str]) -> str:
+    """The first :data:`LABELS_LISTED` labels, comma-separated, and how many more."""
+    more = len(labels) - LABELS_LISTED
+    return ", ".join(labels[:LABELS_LISTED]) + (f" and {more} more" if more > 0 else "")
+
+
 def channel_map(labels, mapping: dict | None = None, *, where: str = "emg", source=None) -> dict[str, str]:
     """``{channel label: sided muscle}`` of a trial's analog ``labels``: ``mapping`` as given (every label in it
     must be in the trial: an InputError naming those missing, ``source`` the file), else every label a preset
@@ -84,9 +94,9 @@ def channel_map(labels, mapping: dict | None = None, *, where: str = "emg", sour
                for label, muscle in mapping.items()}
         missing = [label for label in out if label not in labels]
         if missing:
-            said = f"channels {', '.join(missing)} are" if len(missing) > 1 else f"channel {missing[0]} is"
+            said = f"channels {_listed(missing)} are" if len(missing) > 1 else f"channel {missing[0]} is"
             raise InputError(source, where, f"{said} not in the trial (its analog channels: "
-                                            f"{', '.join(labels) or 'none'})")
+                                            f"{_listed(labels) or 'none'})")
     else:
         out = {label: muscle for label in labels if (muscle := muscle_of(label))}
     seen: dict[str, str] = {}

@@ -170,6 +170,17 @@ def _check_unique(labels, found: dict[str, str], source) -> None:
                                                       "one in the lab's software)")
 
 
+def _check_cutoffs(cfg: EmgConfig, rate_hz: float, source) -> None:
+    """The band and the envelope's cutoff below the EMG channels' Nyquist frequency, each named as the pipeline
+    YAML and the command line set it."""
+    for key, option, value in (("envelope_cutoff_hz", "--envelope-cutoff", cfg.envelope_cutoff_hz),
+                               ("band_high_hz", None, cfg.band_high_hz), ("band_low_hz", None, cfg.band_low_hz)):
+        if not value < rate_hz / 2:
+            raise InputError(source, f"emg.{key}" + (f" ({option})" if option else ""),
+                             f"got {value:g} Hz (expected below the Nyquist frequency {rate_hz / 2:g} Hz of the EMG "
+                             f"channels' {rate_hz:g} Hz)")
+
+
 def _check_rate(analogs: Analogs, labels, source) -> None:
     if analogs.rate_hz < MIN_RATE_HZ:
         raise InputError(source, "ANALOG:RATE", f"EMG channels {', '.join(labels)} sampled at "
@@ -243,6 +254,7 @@ def run_emg(analogs: Analogs | None, events: Events, mapping: dict[str, str] | N
                                         "channel label: muscle_side)")
     _check_unique(analogs.labels, found, source)
     _check_rate(analogs, list(found), source)
+    _check_cutoffs(cfg, analogs.rate_hz, source)
     normalisation = cfg.normalise if cfg.normalise != "auto" else "mvc" if mvc is not None else "peak"
     if normalisation == "mvc" and mvc is None:
         raise InputError(map_source, "emg_mvc", "not given (expected the MVC trial's file name, for "

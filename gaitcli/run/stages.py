@@ -257,8 +257,10 @@ def read_init(path: Path):
                                              "(expected the solution of an earlier gait predict)")
         return design
     except InputError as exc:  # not HDF5, no design, a link loop
-        if exc.field is not None:  # a design gaitcli will not read (too large, not finite): as said
-            raise
+        if exc.field is not None:  # a design gaitcli will not read (too large, not finite, elsewhere): as said
+            if exc.field.startswith("--init"):
+                raise
+            raise InputError(path, f"--init: {exc.field}", exc.problem) from None
     except (ValueError, TypeError):  # text where the design's numbers belong
         pass
     if not Path(path).exists():

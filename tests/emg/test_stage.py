@@ -133,6 +133,23 @@ def test_two_channels_of_one_label_are_refused_naming_both(mapping):
     assert "channels 1 and 2 are both labelled 'R TA'" in str(info.value)
 
 
+def test_an_envelope_cutoff_above_nyquist_names_its_option():
+    """Issue 53, item 16: before, "cutoff_hz: got 100000.0 Hz", neither the file nor the option named."""
+    with pytest.raises(InputError) as info:
+        run_emg(channels(), gait_events(), None, EmgConfig(envelope_cutoff_hz=100000.0), source="trial.c3d")
+    assert info.value.field == "emg.envelope_cutoff_hz (--envelope-cutoff)"
+    assert f"got 100000 Hz (expected below the Nyquist frequency {RATE_HZ / 2:g} Hz" in str(info.value)
+
+
+def test_a_map_of_2000_absent_channels_lists_a_few():
+    """Issue 53, item 16: before, one line of 16 219 characters."""
+    mapping = {f"CH{k}": "soleus_r" for k in range(2000)}
+    with pytest.raises(InputError) as info:
+        run_emg(channels(), gait_events(), mapping, EmgConfig(), map_source="subject.yaml")
+    assert "channels CH0, CH1, CH2, CH3, CH4, CH5, CH6, CH7 and 1992 more are not in the trial" in str(info.value)
+    assert len(str(info.value)) < 300
+
+
 def test_an_empty_channel_is_left_out_and_a_clipping_one_is_kept_both_with_a_warning():
     analogs = channels()
     analogs.values[:, 1] = np.nan
