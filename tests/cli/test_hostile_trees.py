@@ -198,3 +198,24 @@ def test_a_folder_whose_manifest_was_deleted_is_kept_whole(tmp_path):
     assert {p.relative_to(kept).as_posix(): p.read_bytes() for p in kept.rglob("*") if p.is_file()} == before
     assert f"kept whole as {kept.name}" in again.stderr
     assert (out / ".gait_files").is_file() and not (out / "my_analysis.csv").exists()
+
+
+def test_a_plate_scale_off_is_warned_by_the_mass_check(tmp_path):
+    """ANALOG:GEN_SCALE doubled in the bytes of the sample's C3D (issue 53, item 1): every plate reads twice its
+    force and nothing in the file says so; the idyn stage's check of subject.yaml's mass against the plates'
+    stride estimate warns, with both values."""
+    import struct
+
+    from gaitcli.io.c3d.header import check_parameters
+
+    folder = _trial(tmp_path / "trial")
+    path = folder / "trial.c3d"
+    data = bytearray(path.read_bytes())
+    record = check_parameters(path, (data[0] - 1) * 512, data[(data[0] - 1) * 512 + 2], len(data))[
+        ("ANALOG", "GEN_SCALE")]
+    value = struct.unpack("<f", data[record.data_offset:record.data_offset + 4])[0]
+    data[record.data_offset:record.data_offset + 4] = struct.pack("<f", 2 * value)
+    path.write_bytes(bytes(data))
+    done = gait("idyn", "--no-plots", "trial", cwd=tmp_path)
+    assert done.returncode == 0, done.describe()
+    assert "body mass 75.0 kg (subject.yaml) differs from the force plates' stride estimate 150" in done.stderr

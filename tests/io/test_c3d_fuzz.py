@@ -75,3 +75,90 @@ def test_mutated_lab_file(tmp_path, chunk, monkeypatch):
     outcomes = _read_mutated(SHARED_C3D / "Eb015pi.c3d", tmp_path, seed=10, count=MUTATIONS["lab"], chunk=chunk,
                              monkeypatch=monkeypatch)
     assert sum(outcomes.values()) == len(range(chunk, MUTATIONS["lab"], CHUNKS))
+
+
+# --- parameters that change what the data mean (issue 53, item 1) ------------------------------------------
+#: (group, name) of the sample's parameters that say how its data are read, and the values a damaged file holds
+#: (ANALOG:GEN_SCALE scales every plate's force alike: nothing in the file tells, and the idyn stage's mass check
+#: warns of it, test_a_plate_scale_off_is_warned_by_the_mass_check)
+MEANING = {("POINT", "RATE"): 4, ("ANALOG", "RATE"): 4, ("POINT", "SCALE"): 4, ("POINT", "FRAMES"): 2,
+           ("POINT", "USED"): 2, ("ANALOG", "USED"): 2, ("POINT", "UNITS"): -1}
+PARAMETER_MUTATIONS = 48
+
+
+def _parameter_mutations(source: Path, seed: int, count: int) -> list[tuple[tuple[str, str], bytes]]:
+    """(parameter, its new bytes), seeded: a number scaled, negated, zeroed, made odd or NaN; a unit renamed."""
+    import struct
+
+    from gaitcli.io.c3d.header import check_parameters
+
+    data = source.read_bytes()
+    records = check_parameters(source, (data[0] - 1) * 512, data[(data[0] - 1) * 512 + 2], len(data))
+    rng = np.random.default_rng(seed)
+    keys = sorted(MEANING)
+    out = []
+    for _ in range(count):
+        key = keys[int(rng.integers(len(keys)))]
+        record = records[key]
+        raw = data[record.data_offset:record.data_offset + max(2, abs(record.kind))]
+        if record.kind == 4:
+            value = struct.unpack("<f", raw[:4])[0]
+            new = float(rng.choice([0.0, -value, value * 10, value / 10, value + 1, value * 1.37, float("nan")]))
+            out.append((key, struct.pack("<f", new)))
+        elif record.kind == 2:
+            value = struct.unpack("<H", raw[:2])[0]
+            new = int(rng.choice([0, value + 1, max(value - 1, 0), value * 2, 65535]))
+            out.append((key, struct.pack("<H", new)))
+        else:
+            out.append((key, str(rng.choice(["m ", "cm", "in", "  ", "MM"])).encode()))
+    return out
+
+
+def _mutated_parameter(source: Path, tmp_path: Path, key, new: bytes) -> Path:
+    from gaitcli.io.c3d.header import check_parameters
+
+    data = bytearray(source.read_bytes())
+    record = check_parameters(source, (data[0] - 1) * 512, data[(data[0] - 1) * 512 + 2], len(data))[key]
+    data[record.data_offset:record.data_offset + len(new)] = new
+    path = tmp_path / "mutated.c3d"
+    path.write_bytes(bytes(data))
+    return path
+
+
+def _same(a: Recording, b: Recording) -> bool:
+    if a.markers.positions_m.shape != b.markers.positions_m.shape or len(a.plates) != len(b.plates):
+        return False
+    same = np.allclose(a.markers.positions_m, b.markers.positions_m, equal_nan=True, atol=1e-9)
+    for p, q in zip(a.plates, b.plates):
+        same &= p.rate_hz == q.rate_hz and np.allclose(p.force_N, q.force_N, equal_nan=True, atol=1e-9)
+    return bool(same and a.markers.rate_hz == b.markers.rate_hz)
+
+
+@pytest.mark.parametrize("chunk", range(CHUNKS))
+def test_a_parameter_that_changes_the_datas_meaning_is_refused_or_warned(tmp_path, chunk):
+    """Seeded mutations of the parameters that say how the data read (rates, scales, frame and point counts,
+    units): each read ends in an InputError naming the file, or in the same markers and plates as the unmutated
+    file's, or in a warning that says what was assumed. Before issue 53 an analog rate of 0 read as 0 plates
+    and 3022 filled gaps without a word."""
+    import warnings as w
+
+    from gaitcli.errors import GaitWarning
+
+    source = sample_trial("normal") / "trial.c3d"
+    with w.catch_warnings():
+        w.simplefilter("ignore")
+        base = read_c3d(source)
+    silent = []
+    for key, new in _parameter_mutations(source, seed=53, count=PARAMETER_MUTATIONS)[chunk::CHUNKS]:
+        path = _mutated_parameter(source, tmp_path, key, new)
+        with w.catch_warnings(record=True) as caught:
+            w.simplefilter("always")
+            try:
+                recording = read_c3d(path)
+            except InputError as exc:
+                assert str(path) in str(exc) and "\n" not in str(exc), str(exc)
+                continue
+        warned = [c for c in caught if issubclass(c.category, GaitWarning)]
+        if not _same(recording, base) and not warned:
+            silent.append((key, new))
+    assert not silent, f"read as other data without a warning: {silent}"

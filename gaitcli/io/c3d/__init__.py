@@ -33,7 +33,7 @@ from gaitcli.io.axes import apply_rotation, infer_lab_to_model
 from gaitcli.io.c3d.events import read_events
 from gaitcli.io.c3d.header import C3D_MAX_NUMBERS, check_file, one_line, param, strings, warn
 from gaitcli.io.c3d.long import HEADER_FRAMES, chunk_files, planned_frames
-from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, point_length_m, read_markers
+from gaitcli.io.c3d.markers import MODEL_OUTPUT_GROUPS, check_body_size, point_length_m, read_markers
 from gaitcli.io.c3d.plates import PLATFORM_SAMPLES, plate_axes, plates_from, platform_outputs
 
 __all__ = ["read_c3d", "read_c3d_here", "MODEL_OUTPUT_GROUPS", "plate_axes"]
@@ -185,6 +185,7 @@ def read_c3d_here(path, *, to_model_axes: bool = True, header_frames=_UNCHECKED)
     length_m = point_length_m(path, params, points, notes)
     markers = read_markers(path, {"parameters": params, "header": {"points": header},
                                   "data": {"points": points, "meta_points": {"residuals": residuals}}}, length_m, notes)
+    check_body_size(path, params, markers.positions_m)
     del points, residuals
     plates = plates_from(path, params, platforms, frame_rate_hz=float(header["frame_rate"]),
                          n_frames=markers.n_frames, length_m=length_m, markers=markers, notes=notes)

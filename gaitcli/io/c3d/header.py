@@ -142,7 +142,8 @@ def parameter_numbers(path: Path, records: dict, processor: int, group: str, nam
 
 
 def check_rates(path: Path, head: bytes, records: dict, processor: int) -> None:
-    """Refuse parameters that disagree with the header that lays out the data section: POINT:RATE against the
+    """Refuse parameters that disagree with the header that lays out the data section: POINT:USED against its
+    points per frame, POINT:RATE against the
     header's frame rate, ANALOG:RATE against its analog samples per frame at that rate, POINT:SCALE's sign
     against its storage (floats or integers) and, for integers, its size against the header's scale. Read either way, such a file gives markers and plates from the wrong bytes (issue 53, item 1)."""
     n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
@@ -153,6 +154,9 @@ def check_rates(path: Path, head: bytes, records: dict, processor: int) -> None:
 
     if not (math.isfinite(rate) and rate > 0):
         raise InputError(path, "header", f"frame rate {rate:g} Hz (expected a positive rate; the header is damaged)")
+    point_used = parameter_numbers(path, records, processor, "POINT", "USED", 1)
+    if point_used and int(point_used[0]) != n_points:
+        refuse("POINT:USED", point_used[0], f"expected the header's {n_points} points per frame")
     point_rate = parameter_numbers(path, records, processor, "POINT", "RATE", 1)
     if point_rate and not math.isclose(point_rate[0], rate, rel_tol=1e-3):
         refuse("POINT:RATE", point_rate[0], f"expected the header's {rate:g} Hz")

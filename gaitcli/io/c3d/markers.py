@@ -57,6 +57,34 @@ def point_length_m(path: Path, params, points: np.ndarray, notes: list[str]) -> 
     return length_m
 
 
+#: m: the median distance of a frame's markers from their median point, for one body (0.3–0.6 m for an adult)
+BODY_SPREAD_M = (0.02, 3.0)
+
+
+def check_body_size(path: Path, params, positions_m: np.ndarray) -> None:
+    """Refuse markers whose size says POINT:UNITS is wrong (a file in mm labelled m: a body 500 m wide): the
+    median over frames of each frame's median marker distance from its median point, against
+    :data:`BODY_SPREAD_M`. Only where at least 4 markers are seen in 10 frames (a wand or a lab's fixed markers
+    far away do not move the median)."""
+    seen = np.isfinite(positions_m).all(axis=2)
+    frames = np.flatnonzero(seen.sum(axis=1) >= 4)
+    if frames.size < 10:
+        return
+    step = max(1, frames.size // 200)  # a sample of the frames is enough
+    spreads = []
+    for k in frames[::step]:
+        p = positions_m[k][seen[k]]
+        spreads.append(np.median(np.linalg.norm(p - np.median(p, axis=0), axis=1)))
+    spread = float(np.median(spreads))
+    low, high = BODY_SPREAD_M
+    if not low <= spread <= high:
+        units = param(params, "POINT", "UNITS", [])
+        unit = str(units[0]).strip() if len(units) else ""
+        raise InputError(path, "POINT:UNITS", f"got {unit!r}: the markers lie a median {spread:.3g} m from their "
+                                              f"centre (expected a body's {low:g}–{high:g} m; the units or the data "
+                                              "are damaged)")
+
+
 # --------------------------------------------------------------------- markers
 
 
