@@ -65,6 +65,31 @@ def test_the_page_is_part_of_the_comparison_and_a_rerun_replaces_both(compared):
     assert (out / "compare" / "report.html").is_file()
 
 
+def test_sigint_while_comparing_leaves_the_earlier_comparison_whole(compared):
+    """Issue 53, item 6: SIGINT sent to a real `gait report … --compare` when it starts reading its second
+    condition (a console line, no timing): exit 130, OUT/compare exactly as the earlier run left it (before: its
+    tables replaced and no report.html), no temporary folder left."""
+    import signal
+    import subprocess
+    import sys
+
+    from .conftest import ENV, snapshot
+
+    out, _ = compared
+    before = snapshot(out / "compare")
+    process = subprocess.Popen([sys.executable, "-m", "gaitcli", "report", "normative", "knee_orthosis", "--compare",
+                                "-o", "out"], cwd=out.parent, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    for line in process.stderr:
+        if line.startswith("compare: reading knee_orthosis"):
+            process.send_signal(signal.SIGINT)
+            break
+    _, rest = process.communicate(timeout=120)
+    assert process.returncode == 130 and rest.strip().splitlines()[-1] == "gait: interrupted", rest
+    assert snapshot(out / "compare") == before
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".compare")]
+
+
 @pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (.ci/run installs it)")
 def test_the_page_loads_offline(compared, tmp_path):
     out, _ = compared
