@@ -31,7 +31,7 @@ from gaitcli.io.atomic import atomic_path
 from gaitcli.io.h5 import file_attrs
 from gaitcli.io.outputs import plain_text
 from gaitcli.predict.checks import failed_checks
-from gaitcli.signal.bands import Band
+from gaitcli.signal.bands import Band, speed_outside_band
 from gaitcli.signal.profile import GPS_VARIABLES
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
@@ -189,6 +189,22 @@ def _muscle_variant(folder: str) -> str:
     return folder.upper().replace("_L", ", left leg").replace("_SWING", ", swing").replace("_CB", ", Σ(F/Fmax)³")
 
 
+#: leg length (floor to greater trochanter) per stature, for a trial's dimensionless speed (Winter's segment
+#: proportions, 0.530 H); a stature of :data:`DEFAULT_STATURE_M` where the trial folder gives none
+LEG_PER_STATURE = 0.530
+DEFAULT_STATURE_M = 1.70
+
+
+def _stature_m(trial_folder: Path | None) -> float:
+    """The subject's stature from the trial's subject.yaml, else :data:`DEFAULT_STATURE_M`."""
+    try:
+        from gaitcli.kinematics.subject import load_subject
+
+        return load_subject(trial_folder / "subject.yaml").stature_m
+    except (InputError, TypeError):
+        return DEFAULT_STATURE_M
+
+
 def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
     """The sections of a trial output root's page (``root``: the folder holding filter/, idyn/, ...)."""
     from gaitcli.report.plots import filter_figures, idyn_figures, muscle_figures
@@ -209,6 +225,11 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
             ("feature", "this trial", "normal walking (3.3.3: 26 subjects, Heidelberg)", "unit"), rows))
         figures = idyn_figures(root / "idyn" / "idyn.h5", work / "idyn", title=name, band=band)
         band_text = f"the grey band is the normal mean ± 1 SD ({band.source})" if band else "no normal band given"
+        speed = idyn.get("speed_m_s")
+        unlike = (speed_outside_band(float(speed), LEG_PER_STATURE * _stature_m(trial_folder))
+                  if band and isinstance(speed, (int, float)) and speed > 0 else None)
+        if unlike:  # in the captions (escaped there) and as a line of its own
+            band_text += f". Warning: {unlike}"
         captions = {
             "cycle.png": f"Sagittal hip, knee and ankle angles (deg), joint moments (N·m/kg, internal; signs as the "
                          f"axis labels and joint_moments.csv say: by default Plug-in Gait's, extensor and "
@@ -221,8 +242,9 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
                              "reactions leave unexplained (3.22); grey where a foot on the ground stood off the "
                              "plates (the residuals are meaningless there). Lines: heel strike (solid), toe off "
                              "(dashed)."}
-        parts.append("<h2>Joint angles and moments</h2>" + "".join(_figure(p, captions[p.name]) for p in figures
-                                                                     if p.name != "residuals.png"))
+        parts.append("<h2>Joint angles and moments</h2>"
+                     + (f"<p><strong>Warning:</strong> {html.escape(unlike)}.</p>" if unlike else "")
+                     + "".join(_figure(p, captions[p.name]) for p in figures if p.name != "residuals.png"))
         parts.append("<h2>Pelvis residuals</h2>" + "".join(_figure(p, captions[p.name]) for p in figures
                                                            if p.name == "residuals.png"))
     if (root / "filter" / "filter.h5").is_file():
@@ -468,6 +490,8 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
                   f" left {_number(profile.get('gps_left_deg'), 1)}°) against the band "
                   f"{html.escape(str(profile.get('band', '')))}: the RMS difference from the normal mean over the "
                   "cycle, per variable (GVS) and over the variables (Baker et al. 2009).</p>",
+                  *([f"<p><strong>Warning:</strong> {html.escape(str(profile['warning']))}.</p>"]
+                    if profile.get("warning") else []),
                   _table(("variable (GVS, deg)", "right", "left"), rows)]
     muscles = [[walk, _muscle_variant(path.parent.name), "yes" if summary.get("converged") else "no",
                 _number(summary.get("metabolic_cost_J"), 1), _number(summary.get("cost_of_transport_J_per_m"), 1)]

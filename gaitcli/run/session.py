@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,13 +15,13 @@ import pandas as pd
 
 from gaitcli.core.events import Events
 from gaitcli.core.registry import stage
-from gaitcli.errors import InputError
+from gaitcli.errors import GaitWarning, InputError
 from gaitcli.io.atomic import check_output_folder, check_replaceable
 from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.run.batch import BATCH_SUMMARY, BatchResult, run_batch, stages_of
 from gaitcli.run.config import PipelineConfig
 from gaitcli.run.trial import SESSION_OUTPUT, output_root, session_walks
-from gaitcli.signal.bands import BAND_FILE, default_band
+from gaitcli.signal.bands import BAND_ANGLE_CONVENTION, BAND_FILE, default_band
 from gaitcli.signal.cycles import Step, steps
 from gaitcli.signal.profile import gait_profile
 from gaitcli.signal.session import SessionStrides, Walk, pool
@@ -80,26 +81,36 @@ def _steps(markers_csv: Path, events: Events) -> list[Step]:
     return steps(events, positions, table.time_s.to_numpy(float))
 
 
-def session_profile(pooled: SessionStrides) -> dict:
+def session_profile(pooled: SessionStrides, angle_conventions: tuple[str, ...] = ()) -> dict:
     """The Gait Profile Score of the session's mean curves against the package's normal band
-    (:mod:`gaitcli.signal.profile`)."""
+    (:mod:`gaitcli.signal.profile`); ``angle_conventions`` the walks' angle frames (idyn's ``angle_frames``):
+    where one is not the band's, a ``warning`` says the score compares two conventions."""
     means = {side: {c[:-len("_mean")]: block[c].to_numpy() for c in block.columns if c.endswith("_mean")}
              for side, block in pooled.cycle.groupby("side")}
     try:
         profile = gait_profile(means, default_band())
     except ValueError:  # no kinematic variable in common (a pipeline without angles)
         return {}
-    return {**profile.as_dict(), "band": str(BAND_FILE.name)}
+    out = {**profile.as_dict(), "band": str(BAND_FILE.name), "band_angle_convention": BAND_ANGLE_CONVENTION,
+           "angle_conventions": sorted(set(angle_conventions))}
+    other = sorted(set(angle_conventions) - {BAND_ANGLE_CONVENTION})
+    if other:
+        out["warning"] = (f"the walks' angles are in {', '.join(other)} frames, the band's in Plug-in Gait's: the "
+                          "score mixes two conventions (pelvis tilt alone differs by about 12°); set marker_set: "
+                          "plug_in_gait for Plug-in Gait's frames")
+    return out
 
 
-def write_session(folder: Path, pooled: SessionStrides) -> Path:
-    """``gait_out/session/`` whole (replacing the previous one)."""
+def write_session(folder: Path, pooled: SessionStrides, profile: dict | None = None) -> Path:
+    """``gait_out/session/`` whole (replacing the previous one); ``profile`` its Gait Profile Score
+    (:func:`session_profile`, the default's without the walks' conventions)."""
     target = folder / "gait_out" / SESSION_OUTPUT
     check_replaceable(target)
     with stage_folder(target) as tmp:
         for name, table in (("strides.csv", pooled.strides), ("cycle.csv", pooled.cycle), ("walks.csv", pooled.walks)):
             write_table(tmp / name, {c: table[c].to_numpy() for c in table.columns})
-        write_json(tmp / "summary.json", {**pooled.summary(), "gait_profile": session_profile(pooled)})
+        write_json(tmp / "summary.json", {**pooled.summary(), "gait_profile": session_profile(pooled)
+                                          if profile is None else profile})
     return target
 
 
@@ -122,5 +133,9 @@ def run_session(folder: str | Path, cfg: PipelineConfig, **batch) -> SessionRun:
         read = [w for w in read if w is not None]
         if read:
             pooled = pool(read)
-            write_session(folder, pooled)
+            conventions = tuple(str(w.features.get("angle_frames")) for w in read if w.features.get("angle_frames"))
+            profile = session_profile(pooled, conventions)
+            write_session(folder, pooled, profile)
+            if profile.get("warning"):
+                warnings.warn(f"session: gait profile score: {profile['warning']}", GaitWarning, stacklevel=2)
     return SessionRun(folder, walks, result, pooled)

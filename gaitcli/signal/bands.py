@@ -193,6 +193,23 @@ def read_band(path: str | Path, *, side_free: bool = True) -> Band:
 
 #: the package band's caption
 BAND_SOURCE = "Schwartz et al. 2008, 83 typically developing children, free speed"
+#: the frames the package band's angles were measured in (Plug-in Gait's: ``IdynResult.angle_convention``'s names)
+BAND_ANGLE_CONVENTION = "plug_in_gait"
+#: the band's walking speed, dimensionless (v / √(g·leg length)): Schwartz et al.'s free group, mean and SD
+#: (``gaitcli/predict/data/schwartz2008_groups.csv``); a trial beyond 4 SD of it walks otherwise than the band
+BAND_SPEED_DIMENSIONLESS = (0.429, 0.026)
+
+
+def speed_outside_band(speed_m_s: float, leg_length_m: float, gravity_m_s2: float = 9.81) -> str | None:
+    """Why a trial at ``speed_m_s`` is not walking as the package band's subjects walked (None when it is):
+    its dimensionless speed beyond 4 SD of :data:`BAND_SPEED_DIMENSIONLESS`."""
+    mean, sd = BAND_SPEED_DIMENSIONLESS
+    v = speed_m_s / np.sqrt(gravity_m_s2 * leg_length_m)
+    if abs(v - mean) <= 4 * sd:
+        return None
+    return (f"this trial's speed, {speed_m_s:.2f} m/s ({v:.2f} in leg lengths, Hof's v̂), lies far "
+            f"{'below' if v < mean else 'above'} the band's free walking ({mean:.3f} ± {sd:.3f}): compare its "
+            "curves with the band with care")
 
 
 def default_band() -> Band:

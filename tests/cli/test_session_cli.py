@@ -53,6 +53,9 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
     assert summary["walks"] == 2 and abs(summary["table_3_1_mean"]["speed_m_s"] - walks.loc["mean", "speed_m_s"]) < 1e-5
     profile = summary["gait_profile"]  # against the package's band (tests/signal/test_profile.py: known answers)
     assert 0 < profile["gps_right_deg"] < 20 and set(profile["gvs_deg"]["right"]) >= {"knee_r_flexion"}
+    # the synthetic subject's angles are ISB's, the band's Plug-in Gait's: said (issue 52, item 6)
+    assert (profile["angle_conventions"], profile["band_angle_convention"]) == (["isb"], "plug_in_gait")
+    assert "gait profile score: the walks' angles are in isb frames, the band's in Plug-in Gait's" in run.stderr
 
     report = gait("report", "S", cwd=tmp_path)
     assert report.returncode == 0, report.describe()
@@ -61,6 +64,7 @@ def test_a_session_runs_every_walk_and_pools_its_strides(tmp_path):
                     "Kinematics and kinetics", "Walks"):
         assert f"<h2>{heading}</h2>" in page, heading
     assert "No stage gave a warning." in page and 'href="Walking 02/report.html"' in page
+    assert "<strong>Warning:</strong> the walks&#x27; angles are in isb frames" in page
     images = re.findall(r'<img src="data:image/png;base64,([^"]*)"', page)
     assert len(images) == 2
     for data in images:

@@ -49,3 +49,15 @@ def test_a_wave_of_known_rms_and_a_band_without_pelvis():
     assert len(profile.gvs) == 6 and profile.gps == pytest.approx(expected)  # the pelvis: not in the band
     with pytest.raises(ValueError):
         gait_profile({"r": {"knee_r_flexion": np.full(101, np.nan)}}, band)
+
+
+def test_a_trial_far_slower_than_the_bands_walking_is_said():
+    """Issue 52, item 6: the shared stair descent (0.49 m/s, stature 1.679 m) was plotted against the free-walking
+    band unflagged. v̂ = v / √(g·L), L = 0.53 × stature: 0.49 / √(9.81 · 0.890) = 0.166, beyond 4 SD of the band's
+    0.429 ± 0.026; the synthetic subject's 1.30 m/s at 1.78 m (v̂ 0.427) is within."""
+    from gaitcli.signal.bands import speed_outside_band
+
+    said = speed_outside_band(0.49, 0.530 * 1.679)
+    assert said is not None and "0.49 m/s (0.17 in leg lengths" in said and "far below" in said
+    assert speed_outside_band(1.30, 0.530 * 1.78) is None
+    assert "far above" in speed_outside_band(2.4, 0.530 * 1.78)
