@@ -1,5 +1,5 @@
 """Sagittal joint moments of Plug-in Gait sessions with a real lab's extra features, against the truth and
-against Vicon (issue 52, item 2: hip and knee moments 0.37–0.77 of Vicon's in two real sessions).
+against Vicon (hip and knee moments were 0.37–0.77 of Vicon's in two real sessions the project does not hold).
 
 Run from the repository root: ``python benchmarks/bench_pig_features.py [--shared PATH]``. Prints; asserts
 nothing.

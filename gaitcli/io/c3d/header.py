@@ -145,7 +145,8 @@ def check_rates(path: Path, head: bytes, records: dict, processor: int) -> None:
     """Refuse parameters that disagree with the header that lays out the data section: POINT:USED against its
     points per frame, POINT:RATE against the
     header's frame rate, ANALOG:RATE against its analog samples per frame at that rate, POINT:SCALE's sign
-    against its storage (floats or integers) and, for integers, its size against the header's scale. Read either way, such a file gives markers and plates from the wrong bytes (issue 53, item 1)."""
+    against its storage (floats or integers) and, for integers, its size against the header's scale. Read
+    either way, such a file gives markers and plates from the wrong bytes."""
     n_points, analog_per_frame = struct.unpack("<2H", head[2:6])
     scale, rate = _floats(head[12:16], processor)[0], _floats(head[20:24], processor)[0]
 
