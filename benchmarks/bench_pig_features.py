@@ -36,9 +36,7 @@ from bench_pig import MOMENTS, ROOT, read_csv, run_session, vicon_points
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.dynamics.stage import IdynConfig, run_idyn
 from gaitcli.kinematics.conventions import PIG_MOMENTS, moments_to_clinical, moments_to_plug_in_gait
-from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.markerset import marker_set
-from gaitcli.kinematics.model import JOINTS
 from gaitcli.kinematics.model import MOMENTS as MODEL_MOMENTS
 from gaitcli.kinematics.subject import Subject
 from gaitcli.signal.stage import FilterConfig, filter_trial
@@ -75,9 +73,7 @@ def synthetic() -> None:
     preset = marker_set("plug_in_gait")
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
                       hip_joint_centre="davis")
-    states = forward_kinematics(trial.q, trial.calibration.body)
-    walk_centres = {f"{c}{s}": states.joint_centre_m[:, JOINTS.index(f"{j}_{s}")]
-                    for s in "rl" for c, j in (("KJC", "knee"), ("AJC", "ankle"))}
+    walk_centres = trial.joint_centres_m()
     static_centres = trial.calibration.joint_centres_m
     truth = moments_to_clinical(trial.joint_moments_Nm) / MASS_KG
     variants = {

@@ -65,6 +65,15 @@ class SyntheticTrial:
     anatomical_angles_rad: np.ndarray | None = None  # (frames, 23) true anatomical angles (synth.anatomy)
     angle_convention: str = "isb"  # "plug_in_gait" or "isb": the definition of the anatomical frames
 
+    def joint_centres_m(self) -> dict[str, np.ndarray]:
+        """The true hip, knee and ankle centres over the walk, (frames, 3) m in model axes: ``HJCr`` … ``AJCl``."""
+        from gaitcli.kinematics.forward import forward_kinematics
+        from gaitcli.kinematics.model import JOINTS
+
+        states = forward_kinematics(self.q, self.calibration.body)
+        return {f"{c}{s}": states.joint_centre_m[:, JOINTS.index(f"{j}_{s}")]
+                for s in "rl" for c, j in (("HJC", "hip"), ("KJC", "knee"), ("AJC", "ankle"))}
+
 
 def white_noise(rng, rms_mm, shape):
     """White marker noise (m) of RMS 3-D error ``rms_mm``: σ = rms/√3 per axis."""

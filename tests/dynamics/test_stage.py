@@ -54,7 +54,7 @@ from gaitcli.kinematics.calibration import calibrate
 from gaitcli.kinematics.conventions import moments_to_clinical
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.markerset import marker_set, with_fixed_points
-from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, JOINTS, MOMENTS
+from gaitcli.kinematics.model import BODIES, COORDINATES, JOINT_CHILD, MOMENTS
 from gaitcli.kinematics.subject import Subject
 from gaitcli.signal.stage import FilterConfig, filter_trial
 from gaitcli.synth import simulate_trial
@@ -610,9 +610,7 @@ def test_a_knee_alignment_device_makes_the_wands_placement_irrelevant():
     preset = marker_set("plug_in_gait")
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
                       hip_joint_centre="davis")
-    states = forward_kinematics(trial.q, trial.calibration.body)
-    walk_centres = {f"{c}{s}": states.joint_centre_m[:, JOINTS.index(f"{j}_{s}")]
-                    for s in "rl" for c, j in (("HJC", "hip"), ("KJC", "knee"))}
+    walk_centres = trial.joint_centres_m()
     static_centres = trial.calibration.joint_centres_m
 
     def idyn(markers, static):
