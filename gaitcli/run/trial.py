@@ -120,9 +120,9 @@ def _vsk_files(folder: Path) -> list[Path]:
 def holds_subject(names: list[str]) -> bool:
     """Whether a folder whose file names are ``names`` is a trial or session folder: a ``subject.yaml``, or
     C3D files beside a Vicon subject file (how Nexus leaves a session)."""
-    shown_names = [n.lower() for n in names if not n.startswith(".")]
-    return "subject.yaml" in names or (any(n.endswith(".vsk") for n in shown_names)
-                                       and any(n.endswith(".c3d") for n in shown_names))
+    visible = [n.lower() for n in names if not n.startswith(".")]
+    return "subject.yaml" in names or (any(n.endswith(".vsk") for n in visible)
+                                       and any(n.endswith(".c3d") for n in visible))
 
 
 def subject_vsk(folder: Path) -> Path | None:

@@ -159,6 +159,41 @@ def _random_events(case: Path) -> None:
     c.write(str(path))
 
 
+def _analog_rate_zero(case: Path) -> None:
+    """The sample walk with ANALOG:RATE 0 in its parameter section's bytes (issue 53, item 1: before, exit 0 with
+    no plates and 3022 gaps filled)."""
+    import struct
+
+    from gaitcli.io.c3d.header import check_parameters
+
+    _trial()(case)
+    path = case / "trial" / "trial.c3d"
+    data = bytearray(path.read_bytes())
+    record = check_parameters(path, (data[0] - 1) * 512, data[(data[0] - 1) * 512 + 2], len(data))[("ANALOG", "RATE")]
+    data[record.data_offset:record.data_offset + 4] = struct.pack("<f", 0.0)
+    path.write_bytes(bytes(data))
+
+
+def _emg_label_twice(case: Path) -> None:
+    """A synthetic walk with EMG whose second channel carries the first one's label (issue 53, item 3: before,
+    one of them silently never read)."""
+    import ezc3d
+
+    from gaitcli.synth import write_trial
+
+    write_trial(case / "trial", strides=1, emg=True)
+    path = case / "trial" / "trial.c3d"
+    c = ezc3d.c3d(str(path))
+    labels = list(c["parameters"]["ANALOG"]["LABELS"]["value"])
+    emg = [k for k, label in enumerate(labels) if label.strip() == "R TA"]
+    labels[emg[0] + 1] = labels[emg[0]]
+    c["parameters"]["ANALOG"]["LABELS"]["value"] = labels
+    c.write(str(path))
+    subject = case / "trial" / "subject.yaml"  # the map without the channel renamed
+    subject.write_text("".join(line for line in subject.read_text().splitlines(keepends=True)
+                               if not line.strip().startswith("R SOL:")))
+
+
 def _lab(case: Path) -> None:
     _trial()(case)
     (case / "lab").mkdir()
@@ -261,6 +296,8 @@ CASES = {
                               ("predict", "--study", "s.yaml", "--nodes", "6"), "s.yaml",
                               ("speeds_m_s", "1.2 is given twice")),
     "folder_with_a_newline": Case(lambda case: None, ("filter", "no\nsuch"), "no\\nsuch", ("trial folder not found",)),
+    "c3d_analog_rate_0": Case(_analog_rate_zero, FILTER, "trial.c3d", ("ANALOG:RATE", "got 0", "expected 1000 Hz")),
+    "emg_label_twice": Case(_emg_label_twice, ("emg", "trial"), "trial.c3d", ("ANALOG:LABELS", "both labelled 'R TA'")),
     "random_events": Case(_random_events, FILTER, "trial.c3d", ("EVENT", "strides cannot be walking")),
     "batch_scheduler_nonsense": Case(_lab, ("batch", "lab", "--scheduler", "nonsense://x"), "--scheduler",
                                      ("nonsense://x", "tcp://")),
