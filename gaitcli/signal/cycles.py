@@ -66,7 +66,8 @@ def walking_events(events: Events) -> tuple[Events, list[tuple[str, float, float
 
 def _walking_pass(events: Events) -> tuple[Events, list[tuple[str, float, float, str]]]:
     """One pass of :func:`walking_events`. Per foot, in time order: a heel strike less than
-    :data:`WALKING_PERIOD_S`'s shortest period after the one kept before it goes. Then per stride between kept
+    :data:`WALKING_PERIOD_S`'s shortest period after the one kept before it goes, and the first of two toe offs
+    with no heel strike between outside the foot's strides. Then per stride between kept
     heel strikes: longer than the longest period, it is no stride (:func:`strides`); where the other foot strikes
     more than once in it, or once outside :data:`OTHER_STRIKE_PCT` of it (none: its strike was not recorded), the
     stride's first heel strike and its toe offs go; of two or more toe offs only the one whose stance lies within
@@ -88,8 +89,18 @@ def _walking_pass(events: Events) -> tuple[Events, list[tuple[str, float, float,
                                   f"(expected a stride of {low:g}–{high:g} s)"))
             else:
                 kept[side].append(k)
-    for side, other in (("r", "l"), ("l", "r")):
+    for side in ("r", "l"):  # a foot leaves the ground once between two landings (inside a stride: below)
         offs = np.flatnonzero(events.mask(side, "toe_off"))
+        offs = offs[np.argsort(events.time_s[offs], kind="stable")]
+        strikes = events.time_s[kept[side]]
+        for a, b in zip(offs[:-1], offs[1:]):
+            inside_a_stride = strikes.size and strikes[0] < events.time_s[a] < strikes[-1]
+            if not inside_a_stride and not np.any((strikes > events.time_s[a]) & (strikes < events.time_s[b])):
+                keep[a] = False
+                set_aside.append((side, float(events.time_s[a]), float(events.time_s[b]),
+                                  "two toe offs with no heel strike between"))
+    for side, other in (("r", "l"), ("l", "r")):
+        offs = np.flatnonzero(events.mask(side, "toe_off") & keep)
         other_strikes = events.time_s[kept[other]]
         for a, b in zip(kept[side][:-1], kept[side][1:]):
             start, end = events.time_s[a], events.time_s[b]

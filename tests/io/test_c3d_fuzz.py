@@ -162,3 +162,80 @@ def test_a_parameter_that_changes_the_datas_meaning_is_refused_or_warned(tmp_pat
         if not _same(recording, base) and not warned:
             silent.append((key, new))
     assert not silent, f"read as other data without a warning: {silent}"
+
+
+# --- the EVENT group damaged (issue 53, item 2) ----------------------------------------------------------
+EVENT_MUTATIONS = 16
+KINDS = {"heel_strike": "Foot Strike", "toe_off": "Foot Off"}
+
+
+def _with_events(source: Path, target: Path, rows) -> Path:
+    """``source`` with ``rows`` (time s from the first frame, side, kind) as its EVENT group (ezc3d's add_event)."""
+    import ezc3d
+
+    c = ezc3d.c3d(str(source))
+    start = c["header"]["points"]["first_frame"] / float(c["parameters"]["POINT"]["RATE"]["value"][0])
+    for t, side, kind in rows:
+        c.add_event([0, float(start + t)], context="Right" if side == "r" else "Left", label=KINDS[kind])
+    c.write(str(target))
+    return target
+
+
+def _event_mutations(rows: list, seed: int, count: int) -> list[list]:
+    """Seeded damage to the lab's events: one moved by 0.25–0.6 s, its side swapped, its kind swapped, doubled
+    0.1 s on, or a run of 5–40 events at random times added."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        damaged = list(rows)
+        k = int(rng.integers(len(damaged)))
+        t, side, kind = damaged[k]
+        how = int(rng.integers(5))
+        if how == 0:
+            damaged[k] = (max(0.0, t + float(rng.choice([-1, 1]) * rng.uniform(0.25, 0.6))), side, kind)
+        elif how == 1:
+            damaged[k] = (t, "l" if side == "r" else "r", kind)
+        elif how == 2:
+            damaged[k] = (t, side, "toe_off" if kind == "heel_strike" else "heel_strike")
+        elif how == 3:
+            damaged.append((t + 0.1, side, kind))
+        else:
+            damaged += [(float(rng.uniform(0, 4.2)), str(rng.choice(["r", "l"])), str(rng.choice(list(KINDS))))
+                        for _ in range(int(rng.integers(5, 41)))]
+        out.append(damaged)
+    return out
+
+
+@pytest.mark.parametrize("chunk", range(CHUNKS))
+def test_damaged_events_are_refused_or_set_aside_with_a_warning(tmp_path, chunk):
+    """The sample walk with its true events as the lab's EVENT group, then seeded damage (above): the filter
+    stage either refuses the file (one line) or uses the true events, or warns of the strides it set aside. A
+    damaged EVENT group never walks silently into the strides."""
+    import warnings as w
+
+    import pandas as pd
+
+    from gaitcli.errors import GaitWarning
+    from gaitcli.signal.stage import FilterConfig, filter_trial
+
+    source = sample_trial("normal") / "trial.c3d"
+    truth = pd.read_csv(sample_trial("normal") / "truth" / "events.csv")
+    rows = [(float(t), str(s), str(k)) for t, s, k in zip(truth.time_s, truth.side, truth.event)]
+    with w.catch_warnings():
+        w.simplefilter("ignore")
+        base = filter_trial(read_c3d(_with_events(source, tmp_path / "base.c3d", rows)), FilterConfig()).trial.events
+    silent = []
+    for damaged in _event_mutations(rows, seed=54, count=EVENT_MUTATIONS)[chunk::CHUNKS]:
+        path = _with_events(source, tmp_path / "damaged.c3d", damaged)
+        with w.catch_warnings(record=True) as caught:
+            w.simplefilter("always")
+            try:
+                events = filter_trial(read_c3d(path), FilterConfig(), path=path).trial.events
+            except InputError as exc:
+                assert str(path) in str(exc) and "\n" not in str(exc), str(exc)
+                continue
+        same = len(events) == len(base) and np.allclose(events.time_s, base.time_s, atol=1e-3) and \
+            list(events.side) == list(base.side) and list(events.kind) == list(base.kind)
+        if not same and not any(issubclass(c.category, GaitWarning) for c in caught):
+            silent.append(sorted(set(damaged) - set(rows)))
+    assert not silent, f"damaged events used without a warning: {silent}"
