@@ -333,11 +333,13 @@ STRIDES_NAMED = 2
 
 def checked_walking_events(events: Events, first_frame: int, rate_hz: float, path, from_file: bool) -> Events:
     """``events`` without the strides that cannot be walking (:func:`~gaitcli.signal.cycles.walking_events`),
-    warned with their reasons; an InputError where fewer strides can be walking than cannot."""
+    warned with their reasons; an InputError where fewer strides of the file's own events can be walking than
+    cannot (a damaged EVENT group; detected events are only warned)."""
     kept, set_aside = walking_events(events)
     if not set_aside:
         return events
     source = "the trial file's EVENT group" if from_file else "the detected events"
+
     def frame(t: float) -> int:
         return int(round(t * rate_hz)) + first_frame
 
@@ -345,8 +347,8 @@ def checked_walking_events(events: Events, first_frame: int, rate_hz: float, pat
                       for side, a, b, why in set_aside[:STRIDES_NAMED])
     more = f" and {len(set_aside) - STRIDES_NAMED} more" if len(set_aside) > STRIDES_NAMED else ""
     usable = [st for st in strides(kept) if np.isfinite(st.toe_off_s)]
-    if len(usable) < len(set_aside):  # a few strides of random events can look like walking by chance
-        raise InputError(path, "EVENT" if from_file else "events",
+    if from_file and len(usable) < len(set_aside):  # a few strides of random events can look like walking
+        raise InputError(path, "EVENT",
                          f"{len(set_aside)} strides cannot be walking, {len(usable)} can (frames {named}{more}; "
                          "expected heel strike, toe off and heel strike of each foot in order, a stance of 40–80 %)")
     warnings.warn(f"{len(set_aside)} strides of {source} set aside, their events unused: they cannot be walking "
