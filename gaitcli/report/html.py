@@ -31,7 +31,7 @@ from gaitcli.io.atomic import atomic_path
 from gaitcli.io.h5 import file_attrs
 from gaitcli.io.outputs import plain_text
 from gaitcli.predict.checks import failed_checks
-from gaitcli.signal.bands import Band, speed_outside_band
+from gaitcli.signal.bands import BAND_SOURCE, Band, speed_outside_band
 from gaitcli.signal.profile import GPS_VARIABLES
 
 #: 3.3.3: self-selected normal walking measured in the Orthopaedic University Clinic Heidelberg (26 subjects,
@@ -226,8 +226,8 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
         figures = idyn_figures(root / "idyn" / "idyn.h5", work / "idyn", title=name, band=band)
         band_text = f"the grey band is the normal mean ± 1 SD ({band.source})" if band else "no normal band given"
         speed = idyn.get("speed_m_s")
-        unlike = (speed_outside_band(float(speed), LEG_PER_STATURE * _stature_m(trial_folder))
-                  if band and isinstance(speed, (int, float)) and speed > 0 else None)
+        unlike = (speed_outside_band(float(speed), LEG_PER_STATURE * _stature_m(trial_folder))  # the package band's
+                  if band and band.source == BAND_SOURCE and isinstance(speed, (int, float)) and speed > 0 else None)
         if unlike:  # in the captions (escaped there) and as a line of its own
             band_text += f". Warning: {unlike}"
         captions = {

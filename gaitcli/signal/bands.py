@@ -202,7 +202,7 @@ BAND_SPEED_DIMENSIONLESS = (0.429, 0.026)
 
 def speed_outside_band(speed_m_s: float, leg_length_m: float, gravity_m_s2: float = 9.81) -> str | None:
     """Why a trial at ``speed_m_s`` is not walking as the package band's subjects walked (None when it is):
-    its dimensionless speed beyond 4 SD of :data:`BAND_SPEED_DIMENSIONLESS`."""
+    its dimensionless speed beyond 4 SD of :data:`BAND_SPEED_DIMENSIONLESS` (for :func:`default_band` only)."""
     mean, sd = BAND_SPEED_DIMENSIONLESS
     v = speed_m_s / np.sqrt(gravity_m_s2 * leg_length_m)
     if abs(v - mean) <= 4 * sd:
