@@ -74,7 +74,7 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     send.close()
     try:
         wall_s = (READ_WALL_FACTOR if resource is not None else 1.0) * cpu_s
-        if not receive.poll(wall_s):
+        if not receive.poll(wall_s) and not _still_computing(child.pid, receive, wall_s):
             raise InputError(path, None, f"cannot read C3D: reading it took longer than {wall_s:.0f} s "
                                          "(a damaged parameter section?)")
         try:
@@ -102,6 +102,29 @@ def read_c3d(path, *, to_model_axes: bool = True) -> Recording:
     for message, category in caught:
         warnings.warn(message, category, stacklevel=2)
     return recording
+
+
+def _processor_s(pid: int) -> float | None:
+    """The processor time (s) process ``pid`` has used, from /proc (None where there is none)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime, in ticks
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _still_computing(pid: int, receive, wall_s: float) -> bool:
+    """After the wall-time limit: wait on while the child keeps computing (a busy machine gives it less than a
+    core; its processor-time limit ends it), at most READ_WALL_FACTOR times longer; False as soon as a second
+    passes without its processor time growing (a hang), or without /proc to tell. True when it answered."""
+    for _ in range(int(READ_WALL_FACTOR * wall_s)):
+        before = _processor_s(pid)
+        if receive.poll(1.0):
+            return True
+        after = _processor_s(pid)
+        if before is None or after is None or after - before < 0.01:
+            return False
+    return False
 
 
 def _child_read(path: Path, to_model_axes: bool, header_frames, send, receive, memory_bytes: int, cpu_s: float,
