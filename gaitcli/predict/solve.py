@@ -150,6 +150,13 @@ class NlpCache:
         """∇J, the Jacobian of g and the Hessian of the Lagrangian of ``nlp`` (empty before its first solver)."""
         return dict(self._entry(nlp.key, lambda: nlp).derivatives)
 
+    def constraint_values(self, nlp: NLP, w: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """g(w, p) of ``nlp`` by the derivative functions its solvers use (built here once if not yet)."""
+        entry = self._entry(nlp.key, lambda: nlp)
+        if not entry.derivatives:
+            entry.derivatives.update(nlp.derivatives())
+        return np.asarray(entry.derivatives["jac_g"](w, p)[0]).ravel()
+
     def solver(self, nlp: NLP, opts: dict) -> tuple[ca.Function, IterationReport]:
         """IPOPT for ``nlp`` with the options ``opts``, compiled once per problem and option set.
         Returns (solver, its iteration callback)."""
@@ -223,9 +230,8 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
     """
     s = settings or PredictSettings()
     transcriber = transcriber or nlp.transcriber
-    solver, callback = (cache or NlpCache()).solver(nlp, {**ipopt_options(s, warm=multipliers is not None),
-                                                          **(options or {})})
-    callback.start(report, deadline)
+    cache = cache or NlpCache()
+    opts = {**ipopt_options(s, warm=multipliers is not None), **(options or {})}
     outside = ipopt.OutsideBounds()
     if w0 is None:
         x, outside = checked_design(transcriber, nlp.layout, x0)
@@ -237,11 +243,31 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
     lbw, ubw = nlp.bounds(None if optimal_device else (device or transcriber.muscles.prosthesis))
     lam_g0, lam_x0 = multipliers if multipliers is not None else (None, None)
     p = nlp.parameter_values(s, anchor, PROJECTION_WEIGHT)
+    if multipliers is None and "ipopt.bound_push" not in opts and _feasible(cache.constraint_values(nlp, start, p),
+                                                                           nlp):
+        opts.update(FEASIBLE_START_OPTIONS)
+    solver, callback = cache.solver(nlp, opts)
+    callback.start(report, deadline)
     out = ipopt.solve(solver, start, lbw, ubw, nlp.lbg, nlp.ubg, p, lam_g0=lam_g0, lam_x0=lam_x0, blocks=nlp.blocks)
     status = out.status
     if status == "User_Requested_Stop" and deadline is not None and time.perf_counter() > deadline:
         status = TIME_LIMIT_STATUS
     return dataclasses.replace(out, status=status, outside=outside.merged(out.outside))
+
+
+#: IPOPT's push of a start off its bounds when the start already satisfies every constraint (a solution of
+#: this problem, as the default prediction's shipped walk is): IPOPT's default 1e-2 moves the many variables on
+#: a bound so far that it needs 100 iterations back to where it started, 60 with 1e-3 (benchmarks/README.md)
+FEASIBLE_START_OPTIONS = {"ipopt.bound_push": 1e-3, "ipopt.bound_frac": 1e-3}
+#: the largest constraint violation of a start that counts as feasible (scaled constraints)
+FEASIBLE_START_TOLERANCE = 1e-6
+
+
+def _feasible(g: np.ndarray, nlp: NLP) -> bool:
+    """Whether the constraint values ``g`` lie within ``nlp``'s bounds to :data:`FEASIBLE_START_TOLERANCE`."""
+    lbg, ubg = np.broadcast_to(nlp.lbg, g.shape), np.broadcast_to(nlp.ubg, g.shape)
+    violation = np.maximum(lbg - g, 0) + np.maximum(g - ubg, 0)
+    return bool(g.size) and float(np.max(violation)) < FEASIBLE_START_TOLERANCE
 
 
 def moved_windows(nlp: NLP, lam_g: np.ndarray, threshold: float = 1e-8) -> dict | None:
