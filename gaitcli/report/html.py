@@ -170,15 +170,22 @@ def _rows(path: Path, columns: tuple[str, ...], numbers: tuple[str, ...] = ()) -
     return rows
 
 
-def _subject(trial_folder: Path | None) -> str:
-    """The subject line from the trial's subject.yaml, when the output root sits in its trial folder."""
+def _trial_subject(trial_folder: Path | None):
+    """The trial's subject.yaml, read, when the output root sits in its trial folder (None without one)."""
     if trial_folder is None or not (trial_folder / "subject.yaml").is_file():
-        return ""
+        return None
     try:
         from gaitcli.kinematics.subject import load_subject
 
-        s = load_subject(trial_folder / "subject.yaml")
+        return load_subject(trial_folder / "subject.yaml")
     except InputError:
+        return None
+
+
+def _subject(trial_folder: Path | None, s=None) -> str:
+    """The subject line from the trial's subject.yaml (``s``, where already read)."""
+    s = s if s is not None else _trial_subject(trial_folder)
+    if s is None:
         return ""
     mass = "mass from the trial" if s.mass_kg is None else f"{s.mass_kg:g} kg"
     return f"{s.sex}, {mass}, {s.stature_m:g} m" + (f", marker set {s.marker_set}" if s.marker_set else "")
@@ -195,22 +202,14 @@ LEG_PER_STATURE = 0.530
 DEFAULT_STATURE_M = 1.70
 
 
-def _stature_m(trial_folder: Path | None) -> float:
-    """The subject's stature from the trial's subject.yaml, else :data:`DEFAULT_STATURE_M`."""
-    try:
-        from gaitcli.kinematics.subject import load_subject
-
-        return load_subject(trial_folder / "subject.yaml").stature_m
-    except (InputError, TypeError):
-        return DEFAULT_STATURE_M
-
-
 def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
     """The sections of a trial output root's page (``root``: the folder holding filter/, idyn/, ...)."""
     from gaitcli.report.plots import filter_figures, idyn_figures, muscle_figures
 
     trial_folder = root.parent if root.name == "gait_out" else None
-    subject = _subject(trial_folder)
+    read = _trial_subject(trial_folder)
+    subject = _subject(trial_folder, read)
+    stature_m = read.stature_m if read is not None else DEFAULT_STATURE_M
     idyn = _summary(root / "idyn", ("mass_kg", *(key for key, *_ in FEATURES)))
     if not subject and idyn.get("mass_kg"):
         subject = f"body mass {float(idyn['mass_kg']):.1f} kg"
@@ -226,7 +225,7 @@ def trial_body(root: Path, name: str, band: Band | None, work: Path) -> str:
         figures = idyn_figures(root / "idyn" / "idyn.h5", work / "idyn", title=name, band=band)
         band_text = f"the grey band is the normal mean ± 1 SD ({band.source})" if band else "no normal band given"
         speed = idyn.get("speed_m_s")
-        unlike = (speed_outside_band(float(speed), LEG_PER_STATURE * _stature_m(trial_folder))  # the package band's
+        unlike = (speed_outside_band(float(speed), LEG_PER_STATURE * stature_m)  # the package band's
                   if band and band.source == BAND_SOURCE and isinstance(speed, (int, float)) and speed > 0 else None)
         if unlike:  # in the captions (escaped there) and as a line of its own
             band_text += f". Warning: {unlike}"
