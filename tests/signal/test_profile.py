@@ -61,3 +61,14 @@ def test_a_trial_far_slower_than_the_bands_walking_is_said():
     assert said is not None and "0.49 m/s (0.17 in leg lengths" in said and "far below" in said
     assert speed_outside_band(1.30, 0.530 * 1.78) is None
     assert "far above" in speed_outside_band(2.4, 0.530 * 1.78)
+
+
+def test_the_bands_speed_is_the_free_groups_in_the_shipped_table():
+    """signal/ may not read predict/'s data: the band's speed is written down in bands.py; it must be the free
+    group's of gaitcli/predict/data/schwartz2008_groups.csv (the workbook's)."""
+    from gaitcli.predict.speed_reference import SpeedGroups
+    from gaitcli.signal.bands import BAND_SPEED_DIMENSIONLESS
+
+    groups = SpeedGroups.read()
+    k = groups.names.index("free")
+    assert BAND_SPEED_DIMENSIONLESS == pytest.approx((groups.mean["speed"][k], groups.sd["speed"][k]), abs=5e-4)
