@@ -61,6 +61,7 @@ from gaitcli.predict.splines import is_casadi
 from gaitcli.predict.variables import (
     REACTION_SCALE_N,
     Variables,
+    spline_positions,
 )
 
 CONTACT_POINTS = ("heel_r", "mtp_r", "heel_l", "mtp_l")
@@ -147,10 +148,9 @@ def windows_rows(v: Variables, segments: dict, reach: int) -> Rows:
     extrapolated (a quartic's ÿ one segment beyond its node is off by 12·Δp4·τ²/Δt²); a solution pressing on a
     window's edge is solved again with that window moved on (``solve.solve_windowed``)."""
     rows = Rows()
-    for key, count, scale in (("cycle", v.n_i, 1.0), ("half", v.half, 2.0)):
-        if key in segments:
-            k0 = np.asarray(segments[key], float)
-            rows.add(scale * v.fractions[:count] * v.intervals[key] - ca.DM(k0), -float(reach), reach + 1.0)
+    positions = spline_positions(v.layout, v.fractions)
+    for key in sorted(segments):
+        rows.add(positions[key] - ca.DM(np.asarray(segments[key], float)), -float(reach), reach + 1.0)
     return rows
 
 
@@ -160,7 +160,7 @@ def nodal_rows(v: Variables) -> Rows:
     rows = Rows()
     blocks_low, blocks_high = (v.layout.unpack(bound) for bound in box_bounds(v.layout))
     for b in v.splines:
-        columns = v.columns if b.name == "stretch" else list(range(b.variables.shape[1]))
+        columns, _ = v.family_columns(b)
         nodal = ca.mtimes(ca.DM(b.spline.nodal_from_bspline), b.variables[:, columns])
         rows.add(nodal, blocks_low[b.design_block][:, columns].ravel(order="F"),
                  blocks_high[b.design_block][:, columns].ravel(order="F"))

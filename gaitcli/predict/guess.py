@@ -104,7 +104,7 @@ def initial_guess(transcriber: Transcriber, reference: Band, settings: PredictSe
     pct = 100 * np.arange(n) / n
     mean = np.column_stack([np.interp(pct, CYCLE_PCT, reference.mean[v]) for v in VARIABLES])
     rad = np.radians
-    hip_flex_r, knee_r, dorsi_r, hip_flex_l, knee_l, dorsi_l = (mean[:, VARIABLES.index(v)] for v in VARIABLES[:6])
+    hip_flex_r, knee_r, dorsi_r = (mean[:, VARIABLES.index(v)] for v in VARIABLES[:3])
     leg = p.leg_length_m
     right = [-rad(hip_flex_r), rad(knee_r), -rad(dorsi_r)]
     half = GUESS_STEP_M / s.speed_m_s  # s: half a cycle
@@ -115,7 +115,11 @@ def initial_guess(transcriber: Transcriber, reference: Band, settings: PredictSe
         return layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
                             "right_stretch": np.full((n, 8), GUESS_STRETCH), "durations": phases,
                             "steps": [GUESS_STEP_M]})
-    coordinates = np.column_stack([np.zeros(n), np.full(n, GUESS_HIP_HEIGHT * leg), np.zeros(n), *right,
-                                   -rad(hip_flex_l), rad(knee_l), -rad(dorsi_l)])
-    return layout.pack({"coordinates": coordinates, "tendon_stretch": np.full((n, 16), GUESS_STRETCH),
+    n_t = layout.blocks["trunk"][1]
+    trunk = np.column_stack([np.zeros(n_t), np.full(n_t, GUESS_HIP_HEIGHT * leg), np.zeros(n_t)])
+    left_pct = (pct + 50.0) % 100.0  # the left leg's nodes lie half a cycle after the right's (layout.py)
+    left = [np.interp(left_pct, CYCLE_PCT, reference.mean[v]) for v in VARIABLES[3:6]]
+    return layout.pack({"trunk": trunk, "right_leg": np.column_stack(right),
+                        "left_leg": np.column_stack([-rad(left[0]), rad(left[1]), -rad(left[2])]),
+                        "right_stretch": np.full((n, 8), GUESS_STRETCH), "left_stretch": np.full((n, 8), GUESS_STRETCH),
                         "durations": np.tile(phases, 2), "steps": [GUESS_STEP_M, GUESS_STEP_M]})

@@ -1,13 +1,24 @@
 """The design vector χ of the predictive gait (Diss. 5.24) and its symmetric variant (5.3.1).
 
-Full model (``symmetric=False``), N = nn − 1 intervals, signal-major blocks:
+Full model (``symmetric=False``), N = nn − 1 intervals, N_t = 2·N_h (below) for hip and HAT, signal-major
+blocks:
 
-    coordinates   N × 9    nodal values of y1 (periodic part) … y9      (quartic splines)
-    tendon_stretch N × 16  nodal values of the 16 muscles' normalised tendon stretch ŝ (cubic splines;
-                           F = F_max·ŝ², l_se = l_slack·(1 + ε0·ŝ): docs/prediction.md)
+    trunk         N_t × 3  y1 (periodic part), y2, y3: values at the midpoints of N_t intervals over T
+                           (quartic; :func:`~gaitcli.predict.splines.quartic_midpoints`)
+    right_leg     N × 3    y4 … y6 nodal values (quartic)
+    left_leg      N × 3    y7 … y9 nodal values on the left leg's nodes, half a cycle after the right's
+    right_stretch N × 8    the right muscles' normalised tendon stretch ŝ (cubic; F = F_max·ŝ²,
+                           l_se = l_slack·(1 + ε0·ŝ): docs/prediction.md), nodal values
+    left_stretch  N × 8    the left muscles', on the left leg's nodes
     durations     8        T_1 … T_8, s
     steps         2        L_r, L_l, m
-    size = 25·N + 10                                                     (435 at nn = 18)
+    size = 22·N + 3·N_t + 10                                             (438 at nn = 18)
+
+The dissertation puts every signal on the same nn nodes (5.10–5.23). Here each leg has its nn nodes, the
+left's starting half a cycle after the right's, and hip and HAT have N_t = 2·N_h intervals: the grid on which
+the symmetric model's gait (below) is exactly a point (:func:`full_from_symmetric`), so that the full model
+starts from it feasible. N_t is even, where nodal values do not determine a periodic quartic: the trunk's
+design values are its values at the intervals' midpoints.
 
 Symmetric model (5.3.1, docs/prediction.md): the left leg is the right leg half a
 cycle later, and hip and HAT repeat every half cycle:
@@ -37,7 +48,7 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.predict.grid import MAX_POINT_SPACING_S, PHASE_LENGTH_POINTS
-from gaitcli.predict.splines import cubic, evaluation_matrix, is_casadi, quartic
+from gaitcli.predict.splines import PeriodicSpline, cubic, evaluation_matrix, is_casadi, quartic, quartic_midpoints
 
 #: box bounds of the nodal values (5.44 prints none: ranges wide enough for walking), per coordinate y1 … y9
 COORDINATE_RANGES = ((-0.5, 0.5), (0.5, 1.3), (-0.6, 0.6), (-1.2, 1.0), (0.0, 1.7), (-0.8, 0.8),
@@ -51,6 +62,11 @@ def half_cycle_intervals(intervals: int) -> int:
     """The odd number of intervals of a half-period spline nearest above ``intervals``/2."""
     half = -(-intervals // 2)
     return half if half % 2 else half + 1
+
+
+def full_trunk_spline(nodes: int) -> PeriodicSpline:
+    """The full model's hip and HAT spline: quartic on 2·N_h intervals over T, designed by its midpoint values."""
+    return quartic_midpoints(2 * half_cycle_intervals(nodes - 1))
 
 
 @dataclass(frozen=True)
@@ -71,8 +87,9 @@ class DesignLayout:
             shapes = {"trunk": (half_cycle_intervals(n), 3), "right_leg": (n, (coordinates - 3) // 2),
                       "right_stretch": (n, muscles // 2), "durations": (4, 1), "steps": (1, 1)}
         else:
-            shapes = {"coordinates": (n, coordinates), "tendon_stretch": (n, muscles), "durations": (8, 1),
-                      "steps": (2, 1)}
+            leg, side = (coordinates - 3) // 2, muscles // 2
+            shapes = {"trunk": (2 * half_cycle_intervals(n), 3), "right_leg": (n, leg), "left_leg": (n, leg),
+                      "right_stretch": (n, side), "left_stretch": (n, side), "durations": (8, 1), "steps": (2, 1)}
         blocks, start = {}, 0
         for name, (rows, cols) in shapes.items():
             blocks[name] = (start, rows, cols)
@@ -111,8 +128,8 @@ def box_bounds(layout: DesignLayout, present: np.ndarray | None = None) -> tuple
     """Bounds on χ of ``layout`` (full or symmetric); the tendon stretch of muscles not ``present`` (16,) is 0."""
     present = np.ones(16, bool) if present is None else np.asarray(present, bool)
     stretch = tuple(STRETCH_RANGE if keep else (0.0, 0.0) for keep in present)
-    ranges = {"coordinates": COORDINATE_RANGES, "trunk": COORDINATE_RANGES[:3], "right_leg": COORDINATE_RANGES[3:6],
-              "tendon_stretch": stretch, "right_stretch": stretch[:8],
+    ranges = {"trunk": COORDINATE_RANGES[:3], "right_leg": COORDINATE_RANGES[3:6], "left_leg": COORDINATE_RANGES[6:9],
+              "right_stretch": stretch[:8], "left_stretch": stretch[8:],
               "durations": (DURATION_RANGE_S,), "steps": (STEP_RANGE_M,)}
     low, high = np.empty(layout.size), np.empty(layout.size)
     for name, (start, rows, cols) in layout.blocks.items():
@@ -140,21 +157,18 @@ def _fitted(spline, target, nodal, shift: float, scale: float, derivatives, frac
 
 
 def full_from_symmetric(nodes: int, x) -> np.ndarray:
-    """The full model's χ nearest the gait a symmetric χ ``x`` describes: the right leg's nodal values as they
-    are; the left leg's (= the right leg's splines half a cycle on) and hip and HAT's (T/2-periodic splines)
-    fitted in least squares to value, first and second derivative at 20 points per interval; durations
-    T_1…4 twice, L_l = L_r. Not exact: with N = nn − 1 odd (nn must be even) half a cycle is not a whole
-    number of intervals, so the full splines cannot repeat the right leg's half a cycle later."""
+    """The full model's χ of the gait a symmetric χ ``x`` describes, exactly: the legs' and muscles' nodal values
+    as they are, the left's on its own nodes half a cycle on; hip and HAT's T/2-periodic spline (N_h intervals)
+    as the spline of 2·N_h intervals over T it is, by its midpoint values; T_1…4 twice, L_l = L_r."""
     symmetric, full = DesignLayout.build(nodes, symmetric=True), DesignLayout.build(nodes, symmetric=False)
     blocks = symmetric.unpack(np.asarray(x, float))
-    leg, forces = quartic(nodes), cubic(nodes)
-    s = np.linspace(0.0, 1.0, 20 * (nodes - 1), endpoint=False)
-    trunk = _fitted(leg, quartic(half_cycle_intervals(nodes - 1) + 1), blocks["trunk"], 0.0, 2.0, (0, 1, 2), s)
-    left_leg = _fitted(leg, leg, blocks["right_leg"], 0.5, 1.0, (0, 1, 2), s)
-    left_stretch = _fitted(forces, forces, blocks["right_stretch"], 0.5, 1.0, (0, 1), s)
+    half = quartic(half_cycle_intervals(nodes - 1) + 1)
+    trunk = full_trunk_spline(nodes)
+    coefficients = np.vstack([half.bspline_of(blocks["trunk"])] * 2)  # the same knots, T/2 apart
     durations, steps = blocks["durations"].ravel(), blocks["steps"].ravel()
-    return full.pack({"coordinates": np.column_stack([trunk, blocks["right_leg"], left_leg]),
-                      "tendon_stretch": np.column_stack([blocks["right_stretch"], left_stretch]),
+    return full.pack({"trunk": trunk.nodal_from_bspline @ coefficients,
+                      "right_leg": blocks["right_leg"], "left_leg": blocks["right_leg"],
+                      "right_stretch": blocks["right_stretch"], "left_stretch": blocks["right_stretch"],
                       "durations": np.tile(durations, 2), "steps": [steps[0], steps[0]]})
 
 

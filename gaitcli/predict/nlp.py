@@ -37,7 +37,6 @@ from gaitcli.predict.objective import cost_weights, deviation_function, proximit
 from gaitcli.predict.pointwise import Placement, derivatives
 from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
-from gaitcli.predict.splines import segment_of
 from gaitcli.predict.variables import (
     DURATION_SCALE_S,
     LIFTED_SCALE,
@@ -45,6 +44,7 @@ from gaitcli.predict.variables import (
     Variables,
     half_spline,
     spline_functions,
+    spline_positions,
 )
 from gaitcli.signal.bands import Band
 
@@ -215,15 +215,15 @@ class NLP:
 
 
 def instant_segments(transcriber: Transcriber, layout: DesignLayout, x: np.ndarray) -> dict:
-    """The spline segment of each instant of χ ``x``: "cycle" (I,) for the T-periodic splines and, in the
-    symmetric model, "half" (I/2,) for the T/2-periodic trunk splines."""
+    """The spline segment of each instant of χ ``x`` on each segment list (``variables.spline_positions``):
+    "cycle" (I,) for the T-periodic splines; the symmetric model's "half" (I/2,) for its T/2-periodic trunk;
+    the full model's "trunk" and "left" (I,)."""
     durations = layout.phase_durations(x)
     fractions = instant_times(transcriber.grid, durations) / durations.sum()
-    out = {"cycle": segment_of(transcriber.quartic, fractions)}
-    if layout.symmetric:
-        half = transcriber.grid.instants // 2
-        out["half"] = segment_of(half_spline(layout), 2 * fractions[:half])
-    return out
+    intervals = {"cycle": layout.nodes - 1, "left": layout.nodes - 1, "half": half_spline(layout).intervals,
+                 "trunk": 2 * half_spline(layout).intervals}
+    return {key: np.clip(np.floor(position), 0, intervals[key] - 1).astype(int)
+            for key, position in spline_positions(layout, fractions).items()}
 
 
 def nlp_key(transcriber: Transcriber, reference: Band, settings: PredictSettings, *, symmetric: bool,

@@ -37,7 +37,7 @@ from gaitcli.predict.grid import (
     instant_times,
     point_times,
 )
-from gaitcli.predict.layout import DesignLayout
+from gaitcli.predict.layout import DesignLayout, full_trunk_spline
 from gaitcli.predict.model import WalkingModel
 from gaitcli.predict.muscles import WalkerMuscles
 from gaitcli.predict.splines import cubic, evaluate, hip_x, is_casadi, quartic
@@ -105,18 +105,8 @@ class Transcriber:
 
     def instant_values(self, x) -> tuple:
         """y, ẏ, ÿ (I × 9; hip x with its drift) and the tendon stretch ŝ (I × 16) at the I instants of χ."""
-        symbolic = is_casadi(x)
-        blocks = self.layout.unpack(x)
-        coordinates = blocks["coordinates"]
         durations, _, _, period, stride = self.design(x)
-        times = instant_times(self.grid, durations)
-        rows = []
-        for r in range(3):
-            parts = [hip_x(self.quartic, coordinates[:, 0], period, stride, times, r),
-                     evaluate(self.quartic, coordinates[:, 1:], period, times, r)]
-            rows.append(ca.horzcat(*parts) if symbolic else np.column_stack([np.ravel(parts[0]), parts[1]]))
-        stretch = evaluate(self.cubic, blocks["tendon_stretch"], period, times, 0)
-        return (*rows, stretch)
+        return splines_at(self.layout, self.layout.unpack(x), period, stride, instant_times(self.grid, durations))
 
     def __call__(self, x) -> Transcription:
         """The transcription of χ (numpy or CasADi; the full model's layout)."""
@@ -208,25 +198,33 @@ def gait_at(layout: DesignLayout, x, times) -> tuple:
     """(durations (8,), L_r, L_l, (y, ẏ, ÿ (n × 9), ŝ (n × 16))) of a numeric χ of either model at ``times``
     (s since t_1): the splines of ``layout`` evaluated there (the symmetric model's left leg the right leg half
     a cycle later, its hip and HAT T/2-periodic) — for :meth:`Transcriber.at` on any grid."""
-    blocks = layout.unpack(np.asarray(x, float))
-    t = np.asarray(times, float).ravel()
-    leg, forces = quartic(layout.nodes), cubic(layout.nodes)
     durations, (steps_r, steps_l) = layout.phase_durations(x), layout.step_lengths(x)
-    period = float(durations.sum())
-    if layout.symmetric:
-        half = quartic(blocks["trunk"].shape[0] + 1)
-        right, trunk = blocks["right_leg"], blocks["trunk"]
-        rows = []
-        for r in range(3):
-            hip = hip_x(half, trunk[:, 0], period / 2, (steps_r + steps_l) / 2, t, r)
-            rows.append(np.column_stack([hip, evaluate(half, trunk[:, 1:], period / 2, t, r),
-                                         evaluate(leg, right, period, t, r),
-                                         evaluate(leg, right, period, t + period / 2, r)]))
-        stretch = np.column_stack([evaluate(forces, blocks["right_stretch"], period, t),
-                                   evaluate(forces, blocks["right_stretch"], period, t + period / 2)])
-    else:
-        coordinates = blocks["coordinates"]
-        rows = [np.column_stack([hip_x(leg, coordinates[:, 0], period, steps_r + steps_l, t, r),
-                                 evaluate(leg, coordinates[:, 1:], period, t, r)]) for r in range(3)]
-        stretch = evaluate(forces, blocks["tendon_stretch"], period, t)
-    return durations, steps_r, steps_l, (*rows, stretch)
+    values = splines_at(layout, layout.unpack(np.asarray(x, float)), float(durations.sum()), steps_r + steps_l,
+                        np.asarray(times, float).ravel())
+    return durations, steps_r, steps_l, values
+
+
+def splines_at(layout: DesignLayout, blocks: dict, period, stride, times) -> tuple:
+    """(y, ẏ, ÿ (n × 9), ŝ (n × 16)) of the χ ``blocks`` of ``layout`` at ``times`` (s since t_1; numpy or CasADi
+    throughout), T = ``period``, ΔS = ``stride``. The left leg's splines are read half a cycle on (symmetric
+    model: the right leg's; full model: its own, on nodes half a cycle after the right's); the symmetric
+    model's hip and HAT over T/2 with half the stride."""
+    leg, forces = quartic(layout.nodes), cubic(layout.nodes)
+    left_times = times + period / 2 if layout.symmetric else times - period / 2
+    left, left_stretch = ((blocks["right_leg"], blocks["right_stretch"]) if layout.symmetric
+                          else (blocks["left_leg"], blocks["left_stretch"]))
+    trunk_spline, trunk_period, trunk_stride = ((quartic(blocks["trunk"].shape[0] + 1), period / 2, stride / 2)
+                                                if layout.symmetric else (full_trunk_spline(layout.nodes), period,
+                                                                          stride))
+    trunk = blocks["trunk"]
+    symbolic = is_casadi(trunk, period, times)
+    stack = ca.horzcat if symbolic else (lambda *c: np.column_stack([np.reshape(a, (len(a), -1)) for a in c]))
+    rows = []
+    for r in range(3):
+        rows.append(stack(hip_x(trunk_spline, trunk[:, 0], trunk_period, trunk_stride, times, r),
+                          evaluate(trunk_spline, trunk[:, 1:], trunk_period, times, r),
+                          evaluate(leg, blocks["right_leg"], period, times, r),
+                          evaluate(leg, left, period, left_times, r)))
+    stretch = stack(evaluate(forces, blocks["right_stretch"], period, times),
+                    evaluate(forces, left_stretch, period, left_times))
+    return (*rows, stretch)

@@ -276,9 +276,7 @@ def moved_windows(nlp: NLP, lam_g: np.ndarray, threshold: float = 1e-8) -> dict 
     without windows)."""
     lam = lam_g[nlp.groups["windows"]]
     moved, start, changed = {}, 0, False
-    for key in ("cycle", "half"):
-        if key not in nlp.segments:
-            continue
+    for key in sorted(nlp.segments):  # windows_rows' order
         k = np.asarray(nlp.segments[key], int)
         step = np.where(lam[start:start + k.size] > threshold, 1, np.where(lam[start:start + k.size] < -threshold,
                                                                               -1, 0))

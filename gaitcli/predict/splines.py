@@ -77,12 +77,15 @@ PHASE_AND_STEP_VARIABLES = 8 + 2
 class PeriodicSpline:
     """The linear map of a periodic spline: coefficients p = matrix · y (normalised variable τ).
 
-    ``matrix`` is ((degree + 1)·N, N), row (d + 1)·k + p giving p_{k,p} of segment k; read-only.
+    ``matrix`` is ((degree + 1)·N, N), row (d + 1)·k + p giving p_{k,p} of segment k; read-only. The design values
+    y are the spline's values at τ = ``sample_offset`` of every interval: 0, the nodal values (5.13); ½, the
+    values at the intervals' midpoints (:func:`quartic_midpoints`).
     """
 
     degree: int
     intervals: int
     matrix: np.ndarray
+    sample_offset: float = 0.0
 
     @property
     def nodes(self) -> int:
@@ -103,8 +106,9 @@ class PeriodicSpline:
 
     @property
     def nodal_from_bspline(self) -> np.ndarray:
-        """(N, N): the nodal values y_k = p_{k,0} (5.13) of B-spline coefficients c (circulant)."""
-        return self.basis[0::self.degree + 1]
+        """(N, N): the design values of B-spline coefficients c (circulant): the nodal values y_k = p_{k,0}
+        (5.13), or the values Σ_p p_{k,p}·τ^p at τ = :attr:`sample_offset`."""
+        return samples_from_bspline(self.degree, self.intervals, self.sample_offset)
 
     def bspline_of(self, values) -> np.ndarray:
         """The B-spline coefficients c (N,) or (N, n) of the spline with nodal values ``values``: the inverse
@@ -160,6 +164,30 @@ def bspline_matrix(degree: int, intervals: int) -> np.ndarray:
             out[width * k:width * (k + 1), (k + shift - i) % intervals] += piece
     out.setflags(write=False)
     return out
+
+
+@cache
+def samples_from_bspline(degree: int, intervals: int, offset: float) -> np.ndarray:
+    """(N, N): the values at τ = ``offset`` of every interval of the periodic B-spline with coefficients c."""
+    basis = bspline_matrix(degree, intervals)
+    out = sum(offset ** p * basis[p::degree + 1] for p in range(degree + 1))
+    out.setflags(write=False)
+    return out
+
+
+@cache
+def _midpoint_matrix(intervals: int) -> np.ndarray:
+    matrix = bspline_matrix(4, intervals) @ np.linalg.inv(samples_from_bspline(4, intervals, 0.5))
+    matrix.setflags(write=False)
+    return matrix
+
+
+def quartic_midpoints(intervals: int) -> PeriodicSpline:
+    """The periodic C3 quartic spline on ``intervals`` uniform intervals designed by its values at the intervals'
+    midpoints: regular for every count, even ones too (where the nodal values of :func:`quartic` are not; the
+    full model's hip and HAT, ``layout.py``)."""
+    integer(intervals, where="intervals", low=3)
+    return PeriodicSpline(4, intervals, _midpoint_matrix(intervals), 0.5)
 
 
 def quartic(nodes: int) -> PeriodicSpline:

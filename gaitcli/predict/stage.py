@@ -37,7 +37,7 @@ from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.prosthesis import CHOICES, COEFFICIENTS, curve_for
 from gaitcli.predict.reference import VARIABLES, reference_curves
 from gaitcli.predict.settings import PredictSettings
-from gaitcli.predict.solve import NlpCache, PredictSolution, WarmStart, project, solve_windowed
+from gaitcli.predict.solve import NlpCache, PredictSolution, WarmStart, solve_windowed
 from gaitcli.signal.bands import Band
 
 #: phases with the right foot on the floor (HSr … TOr) and with both feet down (Fig. 5.3)
@@ -45,10 +45,10 @@ RIGHT_STANCE_PHASES = (1, 2, 3, 4, 5, 6)
 DOUBLE_SUPPORT_PHASES = (1, 2, 5, 6)
 #: how far a constraint group may leave its bounds at a converged solution (IPOPT's tolerance, scaled)
 FEASIBILITY_TOLERANCE = 1e-5
-#: the windows' reach (segments either side of an instant's own) of the full model's solve from its projected
-#: start, near the solution: a sparser KKT matrix to factorise, 0.37 s an iteration against 0.55 s at the
+#: the windows' reach (segments either side of an instant's own) of the full model's solve from the symmetric
+#: solution, near its own: a sparser KKT matrix to factorise, 0.37 s an iteration against 0.55 s at the
 #: default ±3 (nn = 18: 173 iterations in 64 s against 172 in 96 s, to the same J; benchmarks/README.md)
-PROJECTED_WINDOW_REACH = 1
+SOLUTION_WINDOW_REACH = 1
 #: how many times finer than the control points the reported fine-grid costs are evaluated
 FINE_GRID_REFINEMENT = 4
 JOINTS = ("hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l")
@@ -407,27 +407,19 @@ def run_predict(cfg: PredictConfig, *, params: WalkerParameters | None = None, r
     elif cfg.symmetric:
         x0 = default_start(cfg, transcriber, reference, settings, symmetric=True)
     else:
-        # the full model starts from the symmetric model's solution (from the default start): a gait of this
-        # subject and speed, to which the full model's splines are fitted (layout.full_from_symmetric)
+        # the full model starts from the symmetric model's solution (from the default start): on the full
+        # model's grid that gait is exactly a point (layout.full_from_symmetric), feasible, so IPOPT starts there
+        # with the feasible start's push (solve.FEASIBLE_START_OPTIONS) and the narrow windows of a solution
         first = solve_windowed(transcriber, reference, default_start(cfg, transcriber, reference, settings,
                                                                      symmetric=True),
                                settings, symmetric=True, report=report, **solve_options)
         iterations, rounds = first.outcome.iterations, first.rounds
         history += _solve_notes(first, f"symmetric model (the full model's start), {label}")
-        x0 = (full_from_symmetric(cfg.nodes, first.x) if first.outcome.converged
-              else default_start(cfg, transcriber, reference, settings, symmetric=False))
         if first.outcome.converged:
-            # half a cycle is no whole number of the full model's N = nn − 1 (odd) intervals, so the fit misses
-            # the constraints (by 22.6 at nn = 18) and IPOPT crept from there; a feasible start near it does not
-            # (benchmarks/README.md). The default windows: narrower ones made this projection diverge on the
-            # default grid (benchmarks/README.md, "Twenty points")
-            projected = project(transcriber, reference, x0, settings, symmetric=False, report=report,
-                                **solve_options)
-            iterations, rounds = iterations + projected.outcome.iterations, rounds + projected.rounds
-            history += _solve_notes(projected, f"the fit projected onto the full model's constraints, {label}")
-            if projected.outcome.converged:
-                x0 = projected.x
-                settings = replace(settings, window_reach=min(settings.window_reach, PROJECTED_WINDOW_REACH))
+            x0 = full_from_symmetric(cfg.nodes, first.x)
+            settings = replace(settings, window_reach=min(settings.window_reach, SOLUTION_WINDOW_REACH))
+        else:
+            x0 = default_start(cfg, transcriber, reference, settings, symmetric=False)
         if optimal and first.outcome.converged:
             solve_options["device"] = device.with_values("optimal", first.device)
     solved = solve_windowed(transcriber, reference, x0, settings, symmetric=cfg.symmetric, report=report,

@@ -8,13 +8,15 @@ control instants (112 by default), I/2 the first half cycle's; in brackets the s
 grid (:meth:`Variables.blocks` gives each block's place in w):
 
     block  full model       symmetric model   content                                          unit / scale
-    C_t    —                N_h × 3 (27)      the trunk's (hip x periodic part, hip z, HAT)      m, rad / 1
-                                              T/2-periodic quartic B-spline coefficients
-    C_y    N × 9 (153)      N × 3 (51)        the quartic coordinate splines' B-spline           m, rad / 1
-                                              coefficients (y1 periodic part … y9; symmetric:
-                                              the right leg's y4 … y6)
+    C_t    N_t × 3 (54)     N_h × 3 (27)      the trunk's (hip x periodic part, hip z, HAT)      m, rad / 1
+                                              quartic B-spline coefficients (symmetric:
+                                              T/2-periodic; full: N_t = 2·N_h intervals over T)
+    C_y    N × 6 (102)      N × 3 (51)        the legs' quartic B-spline coefficients (y4 … y6;  m, rad / 1
+                                              full: then y7 … y9 on the left leg's knots, half
+                                              a cycle on)
     C_s    N × 16 (272)     N × 8 (136)       the cubic tendon-stretch splines' B-spline         1 / 1
-                                              coefficients ŝ
+                                              coefficients ŝ (full: the right muscles', then
+                                              the left's on the left leg's knots)
     T      8                4                 the phase durations T_1 … (symmetric: T_5…8 =      s / 0.1
                                               T_1…4)
     L      2                1                 the step lengths L_r, L_l (symmetric: L_l = L_r)   m / 1
@@ -27,7 +29,7 @@ grid (:meth:`Variables.blocks` gives each block's place in w):
                                               point in grid order (the phase's reaction names)
     D      6 (prosthetic models only)         the device's coefficients in its law's order:       the law's SCALE
                                               (a_p, b_p, c0, a_n, b_n, d_prosth) of (5.58)–(5.59)
-    w      12 071 (12 077 with D)  6 037 (6 043 with D)
+    w      12 074 (12 080 with D)  6 037 (6 043 with D)
 
 A C block holds the coefficients c_j of periodic uniform B-splines (``splines.bspline_matrix``): the same
 splines as (5.10)–(5.23), each segment's polynomial p_{k,0…d} a fixed linear function of d + 1 neighbouring
@@ -50,7 +52,7 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.predict.grid import instant_times, periodic_steps
-from gaitcli.predict.layout import DesignLayout, box_bounds, half_cycle_intervals
+from gaitcli.predict.layout import DesignLayout, box_bounds, full_trunk_spline, half_cycle_intervals
 from gaitcli.predict.pointwise import PointFunction
 from gaitcli.predict.prosthesis import DEFAULT_LAW
 from gaitcli.predict.splines import PeriodicSpline, local_values, quartic, window_coefficients
@@ -72,19 +74,44 @@ COORDINATE_QUANTITIES = ("y", "yd", "ydd")
 @dataclass
 class SplineBlock:
     """One spline family of w: its B-spline coefficients ``variables`` (N × columns SX, the design variables),
-    spline, the χ block it stands for; ``windows``: which segment list of the NLP places its windows ("cycle",
-    or "half" for the trunk's). ``coefficients`` are the segment coefficients p_{k,p} they make (5.10–5.12;
-    ((d + 1)·N × columns), linear in ``variables``)."""
+    spline, the χ block it stands for; ``windows``: which segment list of the NLP places its windows ("cycle";
+    "half" for the symmetric model's trunk, "trunk" for the full model's, "left" for the full model's left leg
+    and muscles). ``coefficients`` are the segment coefficients p_{k,p} they make (5.10–5.12;
+    ((d + 1)·N × columns), linear in ``variables``). Its values are those of the lifted quantities
+    (``lifted_block``, from column ``lifted_offset``); ``drift``: its first column is hip x (y1).
+    """
 
     name: str
     spline: PeriodicSpline
     variables: ca.SX
     design_block: str
     windows: str = "cycle"
+    lifted_block: str = "Q"
+    lifted_offset: int = 0
+    drift: bool = False
     coefficients: ca.SX = field(init=False)
 
     def __post_init__(self) -> None:
         self.coefficients = ca.mtimes(ca.DM(self.spline.basis), self.variables)
+
+    @property
+    def muscles(self) -> bool:
+        """Whether the family is tendon stretch (else coordinates)."""
+        return self.design_block.endswith("stretch")
+
+
+def spline_positions(layout: DesignLayout, fractions) -> dict:
+    """Where each instant lies on each segment list, in intervals from the spline's start (numpy or CasADi
+    ``fractions`` t/T of the I instants): "cycle" N·s; the symmetric model's "half" (first half cycle's
+    instants) 2·N_h·s; the full model's "trunk" N_t·s and "left" N·(s − ½), one cycle on for the first
+    half's instants (the left leg's splines start half a cycle after the right's)."""
+    n, count = layout.nodes - 1, fractions.shape[0]
+    if layout.symmetric:
+        return {"cycle": fractions * n, "half": 2 * fractions[:count // 2] * half_spline(layout).intervals}
+    first_half = np.arange(count) < count // 2
+    wrap = ca.DM(first_half.astype(float)) if isinstance(fractions, (ca.SX, ca.MX, ca.DM)) else first_half
+    return {"cycle": fractions * n, "trunk": fractions * full_trunk_spline(layout.nodes).intervals,
+            "left": (fractions - 0.5 + wrap) * n}
 
 
 def half_spline(layout: DesignLayout) -> PeriodicSpline:
@@ -125,6 +152,7 @@ class Variables:
         #: proximity term ρ·|head − anchor|² (ρ = 0 but in a projection onto the constraints, ``solve.project``)
         self.parameters = ca.vertcat(ca.SX.sym("p", 3), ca.SX.sym("rho"), ca.SX.sym("anchor", self.head.numel()))
         muscles = transcriber.muscles
+        self.all_present = muscles.present
         self.present = muscles.present[self.muscle_columns]
         self.kept = [k for k in range(8) if self.present[k]]  # of each leg's 8 muscles, those the model has
         self.columns = [k for k in range(self.muscle_columns.stop) if muscles.present[k]]  # of the modelled ones
@@ -146,23 +174,48 @@ class Variables:
         if self.symmetric:
             half = half_spline(self.layout)
             self.intervals = {"cycle": quartic_spline.intervals, "half": half.intervals}
-            self.splines = [SplineBlock("trunk", half, sym("Ct", half.intervals, 3), "trunk", "half"),
+            self.splines = [SplineBlock("trunk", half, sym("Ct", half.intervals, 3), "trunk", "half", "P",
+                                        drift=True),
                             SplineBlock("leg", quartic_spline, sym("Cy", n, 3), "right_leg"),
                             SplineBlock("stretch", cubic_spline, sym("Cs", n, 8), "right_stretch")]
+            self.spline_symbols = [b.variables for b in self.splines]
             self.durations_z, self.steps = sym("T", 4), sym("L", 1)
             self.durations = ca.vertcat(self.durations_z, self.durations_z) * DURATION_SCALE_S
             self.steps_r = self.steps_l = self.steps[0]
             self.lifted_blocks, self.points = SYMMETRIC_LIFTED, list(range(self.grid.points // 2))
             self.dynamics_instants, self.muscle_columns, self.energy_factor = range(self.half), slice(0, 8), 2.0
         else:
-            self.intervals = {"cycle": quartic_spline.intervals}
-            self.splines = [SplineBlock("coordinates", quartic_spline, sym("Cy", n, 9), "coordinates"),
-                            SplineBlock("stretch", cubic_spline, sym("Cs", n, 16), "tendon_stretch")]
+            trunk = full_trunk_spline(self.layout.nodes)
+            self.intervals = {"cycle": quartic_spline.intervals, "trunk": trunk.intervals, "left": n}
+            legs, stretch = sym("Cy", n, 6), sym("Cs", n, 16)
+            self.splines = [SplineBlock("trunk", trunk, sym("Ct", trunk.intervals, 3), "trunk", "trunk", drift=True),
+                            SplineBlock("leg", quartic_spline, legs[:, :3], "right_leg", lifted_offset=3),
+                            SplineBlock("left_leg", quartic_spline, legs[:, 3:], "left_leg", "left", lifted_offset=6),
+                            SplineBlock("stretch", cubic_spline, stretch[:, :8], "right_stretch"),
+                            SplineBlock("left_stretch", cubic_spline, stretch[:, 8:], "left_stretch", "left",
+                                        lifted_offset=8)]
+            self.spline_symbols = [self.splines[0].variables, legs, stretch]
             self.durations_z, self.steps = sym("T", 8), sym("L", 2)
             self.durations = self.durations_z * DURATION_SCALE_S
             self.steps_r, self.steps_l = self.steps[0], self.steps[1]
             self.lifted_blocks, self.points = FULL_LIFTED, list(range(self.grid.points))
             self.dynamics_instants, self.muscle_columns, self.energy_factor = range(self.n_i), slice(0, 16), 1.0
+
+    def family_columns(self, b: SplineBlock) -> tuple[list[int], list[int]]:
+        """The columns of family ``b`` the problem models (a removed muscle's are not) and their columns in its
+        lifted quantities."""
+        if not b.muscles:
+            columns = list(range(b.variables.shape[1]))
+        else:
+            columns = [k for k in range(b.variables.shape[1]) if self.all_present[b.lifted_offset + k]]
+        return columns, [b.lifted_offset + k for k in columns]
+
+    def position_offset(self, key: str, instant: int) -> float:
+        """Instant ``instant``'s place on segment list ``key`` (:func:`spline_positions`) less its cycle
+        fraction's multiple (N·s, or 2·N_h·s on the symmetric trunk's): a constant, −N/2 or N/2 on "left"."""
+        if key != "left":
+            return 0.0
+        return self.intervals["left"] * ((1.0 if instant < self.half else 0.0) - 0.5)
 
     def _lift(self) -> None:
         """Q (and P): ``lifted[(block, quantity)]`` the (rows × columns) values, variables × scale."""
@@ -212,7 +265,7 @@ class Variables:
     @property
     def head(self) -> ca.SX:
         """w's spline part: C…, T, L."""
-        return ca.vertcat(*[ca.vec(b.variables) for b in self.splines], self.durations_z, self.steps)
+        return ca.vertcat(*[ca.vec(c) for c in self.spline_symbols], self.durations_z, self.steps)
 
     @property
     def w(self) -> ca.SX:
@@ -222,8 +275,7 @@ class Variables:
 
     def blocks(self) -> dict[str, slice]:
         """Each block of w (module docstring) as a slice of w."""
-        names = {"trunk": "C_t", "leg": "C_y", "coordinates": "C_y", "stretch": "C_s"}
-        sizes = [(names[b.name], b.variables.numel()) for b in self.splines]
+        sizes = [(name, c.numel()) for name, c in zip(("C_t", "C_y", "C_s"), self.spline_symbols)]
         sizes += [("T", self.durations_z.numel()), ("L", self.steps.numel())]
         sizes += [(block, q.numel()) for (block, _, _), q in zip(self.lifted_blocks, self.lifted_symbols)]
         sizes += [("Λ", self.lam.numel())] + ([("D", self.device.numel())] if self.device is not None else [])
@@ -248,8 +300,9 @@ class Variables:
         lbw, ubw = [], []
         for b in self.splines:  # the B-splines' coefficients free: their nodal values are bounded (``nodes`` rows)
             lo, hi = np.full(b.variables.shape, -np.inf), np.full(b.variables.shape, np.inf)
-            if b.name == "stretch":  # a removed muscle's spline is 0
-                lo[:, ~self.present], hi[:, ~self.present] = 0.0, 0.0
+            if b.muscles:  # a removed muscle's spline is 0
+                removed = ~self.all_present[b.lifted_offset:b.lifted_offset + b.variables.shape[1]]
+                lo[:, removed], hi[:, removed] = 0.0, 0.0
             lbw.append(lo.ravel(order="F"))
             ubw.append(hi.ravel(order="F"))
         lbw += [blocks_low["durations"].ravel() / DURATION_SCALE_S, blocks_low["steps"].ravel()]
@@ -275,36 +328,36 @@ def instant_steps(v: Variables) -> tuple[list, list]:
     return [h1[i] for i in range(v.n_i)], [h2[i] for i in range(v.n_i)]
 
 
-#: the spline families' lifted quantities: (block of w, quantities and their time derivatives, hip x drifts)
-SPLINE_QUANTITIES = {"coordinates": ("Q", (("y", 0), ("yd", 1), ("ydd", 2)), True),
-                     "leg": ("Q", (("y", 0), ("yd", 1), ("ydd", 2)), False),
-                     "trunk": ("P", (("y", 0), ("yd", 1), ("ydd", 2)), True),
-                     "stretch": ("Q", (("stretch", 0),), False)}
+#: the lifted quantities of a coordinate family and of a tendon-stretch family, with their time derivatives
+COORDINATE_SPLINE_QUANTITIES = (("y", 0), ("yd", 1), ("ydd", 2))
+STRETCH_SPLINE_QUANTITIES = (("stretch", 0),)
 
 
 def spline_functions(v: Variables, segments: dict, reach: int) -> list[PointFunction]:
     """The lifted y, ẏ, ÿ, ŝ are the splines' values at the instants (5.10–5.12), one point function per spline
-    family: at instant i, (lifted − spline)/scale of its quantities (``SPLINE_QUANTITIES``; hip x with its
-    drift ΔS/T; ŝ of the modelled muscles), the spline read from its window of segments ``segments[key][i]`` ±
-    ``reach`` only (:func:`gaitcli.predict.splines.local_values`), of
+    family: at instant i, (lifted − spline)/scale of its quantities (hip x with its drift ΔS/T; ŝ of the
+    modelled muscles), the spline read from its window of segments ``segments[key][i]`` ± ``reach`` only
+    (:func:`gaitcli.predict.splines.local_values`), of
 
         z = (the window's segment coefficients ((d + 1)·(2·reach + 1) × columns), the lifted values, t_i, T, ΔS,
-             the window's first segment)
+             the window's first segment less the family's offset on its segment list)
 
-    The symmetric model's trunk is T/2-periodic, read over the first half cycle."""
+    The symmetric model's trunk is T/2-periodic, read over the first half cycle; the full model's left leg and
+    muscles on knots half a cycle after the right's (:func:`spline_positions`)."""
     out = []
     for b in v.splines:
-        block, quantities, drifts = SPLINE_QUANTITIES[b.name]
-        columns = v.columns if b.name == "stretch" else list(range(b.variables.shape[1]))
+        quantities = STRETCH_SPLINE_QUANTITIES if b.muscles else COORDINATE_SPLINE_QUANTITIES
+        columns, lifted_columns = v.family_columns(b)
         half = b.windows == "half"
         instants = range(v.half) if half else range(v.n_i)
-        function = _spline_function(b, len(columns), quantities, drifts, 2.0 if half else 1.0, reach)
+        function = _spline_function(b, len(columns), quantities, b.drift, 2.0 if half else 1.0, reach)
         inputs = []
         for i in instants:
             first = int(segments[b.windows][i]) - reach
             window = window_coefficients(b.spline, b.coefficients[:, columns], (first, first + 2 * reach))
-            lifted = [v.lifted[(block, q)][i, columns].T for q, _ in quantities]
-            inputs.append(ca.vertcat(ca.vec(window), *lifted, v.times[i], v.period, v.stride, first))
+            lifted = [v.lifted[(b.lifted_block, q)][i, lifted_columns].T for q, _ in quantities]
+            inputs.append(ca.vertcat(ca.vec(window), *lifted, v.times[i], v.period, v.stride,
+                                     first - v.position_offset(b.windows, i)))
         out.append(PointFunction(f"splines_{b.name}", function, ca.horzcat(*inputs)))
     return out
 

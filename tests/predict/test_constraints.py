@@ -80,8 +80,9 @@ def _group_sizes(transcriber, symmetric, settings):
     from gaitcli.resources import bundled_reference
 
     v = Variables(transcriber, DesignLayout.build(6, symmetric=symmetric))
-    segments = {"cycle": np.arange(v.n_i) * 5 // v.n_i, **({"half": np.arange(v.half) * 3 // v.half} if symmetric
-                                                              else {})}
+    cycle = np.arange(v.n_i) * 5 // v.n_i
+    segments = {"cycle": cycle, **({"half": np.arange(v.half) * 3 // v.half} if symmetric
+                                   else {"left": (cycle + 2) % 5, "trunk": np.arange(v.n_i) * 6 // v.n_i})}
     points = contact_points(v, transcriber.contact)
     functions = point_functions(v, transcriber, read_reference(bundled_reference()), points)
     rows = constraint_rows(v, transcriber, settings, functions, points, segments, 1)
@@ -108,11 +109,11 @@ def test_each_constraint_group_has_its_rows_on_a_tiny_grid(tiny):
                  "clearance": 2 * (2 + 1 + 2 + 3), "speed": 1, "shape": 4 + 1, "hip_bound": 8, "windows": 8 + 4,
                  "monotone": 0}
     assert _group_sizes(tiny, True, bounded) == symmetric
-    full = {"nodes": 5 * 9 + 5 * 16, "splines": 8 * (9 + 9 + 9 + 16), "dynamics": 9 * 8,
+    full = {"nodes": 6 * 3 + 5 * 6 + 5 * 16, "splines": 8 * (9 + 9 + 9 + 16), "dynamics": 9 * 8,
             "paths": 2 * 16 * 8, "activation": 16 * 8, "excitation": 2 * 16 * 8, "reactions": 2 * 2 * (5 + 5 + 3 + 3),
             "moment": 6 * 16, "contact": 2 * 2 * (4 + 5 + 3 + 2), "unilateral": 2 * 2 * (2 + 3 + 2 + 1),
             "mtp": 2 * 2 * 2, "friction": 2 * 2 * 2 * (2 + 2 + 1 + 1), "clearance": 2 * 2 * (2 + 1 + 2 + 3),
-            "speed": 1, "shape": 4 + 2, "hip_bound": 0, "windows": 8, "monotone": 0}
+            "speed": 1, "shape": 4 + 2, "hip_bound": 0, "windows": 3 * 8, "monotone": 0}
     assert _group_sizes(tiny, False, PredictSettings()) == full
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from gaitcli.predict.problem import Transcriber
-from gaitcli.predict.splines import evaluate, hip_x
+from gaitcli.predict.splines import evaluate, hip_x, quartic_midpoints
 
 DURATIONS = [0.05, 0.09, 0.28, 0.16] * 2
 
@@ -20,10 +20,13 @@ def transcriber() -> Transcriber:
 
 def design(transcriber, seed=0):
     rng = np.random.default_rng(seed)
-    n = transcriber.layout.nodes - 1
-    coordinates = np.column_stack([rng.normal(scale=0.01, size=n), 0.9 + 0.01 * rng.normal(size=n)]
-                                  + [0.1 * rng.normal(size=n) for _ in range(7)])
-    return transcriber.layout.pack({"coordinates": coordinates, "tendon_stretch": 0.3 + 0.2 * rng.random((n, 16)),
+    n, n_t = transcriber.layout.nodes - 1, transcriber.layout.blocks["trunk"][1]
+    trunk = np.column_stack([rng.normal(scale=0.01, size=n_t), 0.9 + 0.01 * rng.normal(size=n_t),
+                             0.1 * rng.normal(size=n_t)])
+    legs = [np.column_stack([0.1 * rng.normal(size=n) for _ in range(3)]) for _ in range(2)]
+    stretch = [0.3 + 0.2 * rng.random((n, 8)) for _ in range(2)]
+    return transcriber.layout.pack({"trunk": trunk, "right_leg": legs[0], "left_leg": legs[1],
+                                    "right_stretch": stretch[0], "left_stretch": stretch[1],
                                     "durations": DURATIONS, "steps": [0.65, 0.62]})
 
 
@@ -55,17 +58,21 @@ def test_hip_progresses_by_the_two_steps_per_cycle(transcriber):
 
 def test_points_take_the_splines_at_their_own_times(transcriber):
     # every point, the two at each phase transition and the one closing the cycle at t = T included, carries
-    # the splines evaluated at its own time (hip x with its drift)
+    # the splines evaluated at its own time (hip x with its drift; the left leg's on nodes half a cycle later)
     x = design(transcriber)
     t = transcriber(x)
     blocks = transcriber.layout.unpack(x)
     times, period, stride = t.point_times_s, t.period_s, t.stride_m
+    trunk, leg = quartic_midpoints(blocks["trunk"].shape[0]), transcriber.quartic
     for r, values in enumerate((t.y, t.yd, t.ydd)):
-        hip = hip_x(transcriber.quartic, blocks["coordinates"][:, 0], period, stride, times, r)
-        rest = evaluate(transcriber.quartic, blocks["coordinates"][:, 1:], period, times, r)
-        np.testing.assert_allclose(values, np.column_stack([hip, rest]), rtol=1e-12, atol=1e-9)
-    np.testing.assert_allclose(t.stretch, evaluate(transcriber.cubic, blocks["tendon_stretch"], period, times),
-                               atol=1e-12)
+        hip = hip_x(trunk, blocks["trunk"][:, 0], period, stride, times, r)
+        rest = [evaluate(trunk, blocks["trunk"][:, 1:], period, times, r),
+                evaluate(leg, blocks["right_leg"], period, times, r),
+                evaluate(leg, blocks["left_leg"], period, times - period / 2, r)]
+        np.testing.assert_allclose(values, np.column_stack([hip, *rest]), rtol=1e-12, atol=1e-9)
+    stretch = [evaluate(transcriber.cubic, blocks["right_stretch"], period, times),
+               evaluate(transcriber.cubic, blocks["left_stretch"], period, times - period / 2)]
+    np.testing.assert_allclose(t.stretch, np.column_stack(stretch), atol=1e-12)
 
 
 def test_a_gait_given_by_its_instant_values_transcribes_as_its_design_vector(transcriber):

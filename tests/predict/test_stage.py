@@ -119,7 +119,7 @@ def test_a_warm_start_of_another_layout_is_refused():
 
 
 def test_a_full_model_result_is_written_with_its_layout(tmp_path):
-    """The full model's result through the predict writer (the CLI test runs the symmetric one): its 435
+    """The full model's result through the predict writer (the CLI test runs the symmetric one): its 438
     design values and ``symmetric: false`` in predict.h5 and summary.json, every table with 112 instants."""
     import json
 
@@ -135,7 +135,7 @@ def test_a_full_model_result_is_written_with_its_layout(tmp_path):
     summary = write_predict_outputs(tmp_path, result, {"converged": int(result.converged)})
     assert summary["symmetric"] is False and len(summary["phase_durations_s"]) == 8
     with h5py.File(tmp_path / "predict.h5", "r") as h5:
-        assert np.asarray(h5["result/design"][()]).size == 435
+        assert np.asarray(h5["result/design"][()]).size == 438
     for name in ("motion.csv", "muscles.csv"):
         assert len((tmp_path / name).read_text().splitlines()) == 113  # header + 112 instants
     # trunk lean: forward positive, as the HAT's centre of mass ahead of the hip says
