@@ -33,7 +33,7 @@ from gaitcli.predict.dynamics import (
 from gaitcli.predict.grid import instant_times
 from gaitcli.predict.guess import initial_guess
 from gaitcli.predict.layout import DesignLayout, box_bounds
-from gaitcli.predict.objective import cost_weights, deviation_function, proximity, tracking_extras
+from gaitcli.predict.objective import cost_weights, deviation_function, tracking_extras
 from gaitcli.predict.pointwise import Placement, derivatives
 from gaitcli.predict.problem import Transcriber, gait_at
 from gaitcli.predict.settings import TIME_LIMIT_STATUS, PredictSettings
@@ -92,12 +92,9 @@ class NLP:
         return derivatives(self.w, self.parameters, self.constraints, self.cost, self.rest_cost,
                            self.point_functions, self.placements)
 
-    def parameter_values(self, settings: PredictSettings, anchor: np.ndarray | None = None,
-                         proximity_weight: float = 1.0) -> np.ndarray:
-        """p = (v, w1, w2, ρ, anchor) of ``settings``: ρ = ``proximity_weight`` towards ``anchor`` (w's spline
-        part, :meth:`coefficients_of`), else 0."""
-        target = np.zeros(self.spline_size) if anchor is None else np.asarray(anchor, float).ravel()
-        return np.concatenate([settings.parameter_values(), [0.0 if anchor is None else proximity_weight], target])
+    def parameter_values(self, settings: PredictSettings) -> np.ndarray:
+        """p = (v, w1, w2) of ``settings``: the speed (5.43) and the weights (5.29)."""
+        return settings.parameter_values()
 
     def device_bounds(self, curve=None) -> tuple[np.ndarray, np.ndarray]:
         """Bounds on D: fixed at ``curve``'s coefficients (a device of the problem's law), or the optimal
@@ -273,7 +270,7 @@ def build_nlp(transcriber: Transcriber, reference: Band, settings: PredictSettin
     extras = tracking_extras(v, points, s, transcriber)
     lbw, ubw = v.bounds(transcriber.muscles.present, s.step_m, s.step_range_m)
     g, lbg, ubg, slices, placements = _stacked(rows)
-    rest_cost = functions["deviation"].weight * extras + proximity(v)
+    rest_cost = functions["deviation"].weight * extras
     cost = functions["muscles"].cost + functions["deviation"].cost + rest_cost
     return NLP(w=v.w, cost=cost, constraints=g, lbg=lbg, ubg=ubg, groups=slices, lbw=lbw, ubw=ubw,
                transcriber=transcriber, layout=layout, splines=v.splines, segments=segments, reach=reach,

@@ -111,8 +111,3 @@ def cost_weights(v: Variables) -> tuple:
     """(w1/100, w2) of (5.29): the weights of Et and Jdev in J, with (w1, w2) the NLP's parameters."""
     return v.parameters[1] / 100.0, v.parameters[2]
 
-
-def proximity(v: Variables) -> ca.SX:
-    """ρ·|head − anchor|² with (ρ, anchor) the NLP's parameters 4… (``Variables.parameters``): 0 in a prediction,
-    the distance from a start in its projection onto the constraints (``solve.project``)."""
-    return v.parameters[3] * ca.sumsqr(v.head - v.parameters[4:])

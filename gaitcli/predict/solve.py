@@ -33,11 +33,6 @@ from gaitcli.signal.bands import Band
 #: how many built problems a cache keeps: a study alternates between at most two structures (intact,
 #: prosthetic)
 BUILT_NLPS_KEPT = 3
-#: ρ of a projection's distance term ρ·|head − anchor|²: large, so that the Hessian of the Lagrangian is
-#: ρ·I on the coefficients and each Newton step the least change that meets the linearised constraints. At
-#: ρ = 1 the full model's projection (nn = 18) wandered (the distance rose from 0.07 to 36 before falling to
-#: 0.12) in 125 iterations; at 1e4 it reaches the same point in 55 (60 → 26 s; benchmarks/README.md)
-PROJECTION_WEIGHT = 1e4
 
 
 class IterationReport(ca.Callback):
@@ -188,7 +183,7 @@ def checked_design(transcriber: Transcriber, layout: DesignLayout, x) -> tuple[n
 def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, w0: np.ndarray | None = None,
           multipliers: tuple[np.ndarray, np.ndarray] | None = None, options: dict | None = None, report=None,
           device=None, optimal_device: bool = False, deadline: float | None = None, cache: NlpCache | None = None,
-          transcriber: Transcriber | None = None, anchor: np.ndarray | None = None) -> Outcome:
+          transcriber: Transcriber | None = None) -> Outcome:
     """IPOPT with exact derivatives (Hessian included) on one built problem.
 
     Parameters
@@ -218,9 +213,6 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
     transcriber : Transcriber, optional
         The case's (default the NLP's: a problem serves every transcriber of its key; this one's prosthesis
         starts D).
-    anchor : array, optional
-        w's spline part to stay near: J becomes ρ·|head − anchor|² (ρ = :data:`PROJECTION_WEIGHT`) plus
-        ``settings``' weighted terms (:func:`project`).
 
     Returns
     -------
@@ -242,7 +234,7 @@ def solve(nlp: NLP, x0: np.ndarray, settings: PredictSettings | None = None, *, 
             start = np.concatenate([start[:start.size - nlp.device_size], device.scaled()])
     lbw, ubw = nlp.bounds(None if optimal_device else (device or transcriber.muscles.prosthesis))
     lam_g0, lam_x0 = multipliers if multipliers is not None else (None, None)
-    p = nlp.parameter_values(s, anchor, PROJECTION_WEIGHT)
+    p = nlp.parameter_values(s)
     if multipliers is None and "ipopt.bound_push" not in opts and _feasible(cache.constraint_values(nlp, start, p),
                                                                            nlp):
         opts.update(FEASIBLE_START_OPTIONS)
@@ -319,8 +311,7 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
                    settings: PredictSettings | None = None, *, symmetric: bool = False, rounds: int = 6,
                    options: dict | None = None, report=None, w0: np.ndarray | None = None, device=None,
                    optimal_device: bool = False, deadline: float | None = None,
-                   cache: NlpCache | None = None, warm: WarmStart | None = None,
-                   anchor: np.ndarray | None = None) -> PredictSolution:
+                   cache: NlpCache | None = None, warm: WarmStart | None = None) -> PredictSolution:
     """:func:`solve` with the spline windows placed where the start puts the instants, moved while a solution
     presses on one.
 
@@ -346,8 +337,6 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
     warm : WarmStart, optional
         An earlier solve's variables and multipliers: the first round starts from them (IPOPT's warm start)
         where they fit its problem (:meth:`WarmStart.fits`; else from ``x0`` alone).
-    anchor : array, optional
-        As :func:`solve`.
 
     Returns
     -------
@@ -365,8 +354,7 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
         if k == 1 and warm is not None and warm.fits(nlp):
             w, multipliers = warm.w, (warm.lam_g, warm.lam_x)
         out = solve(nlp, x, settings, w0=w, multipliers=multipliers, options=options, report=report, device=device,
-                    optimal_device=optimal_device, deadline=deadline, cache=cache, transcriber=transcriber,
-                    anchor=anchor)
+                    optimal_device=optimal_device, deadline=deadline, cache=cache, transcriber=transcriber)
         if k == 1:
             outside = outside.merged(out.outside)
         iterations, seconds = iterations + out.iterations, seconds + out.time_s
@@ -381,17 +369,3 @@ def solve_windowed(transcriber: Transcriber, reference: Band, x0: np.ndarray,
     return PredictSolution(outcome=outcome, x=x, device=nlp.device(out.x), nlp=nlp, rounds=k,
                            windows_hold=segments is None)
 
-
-def project(transcriber: Transcriber, reference: Band, x0: np.ndarray, settings: PredictSettings | None = None,
-            *, symmetric: bool = False, **options) -> PredictSolution:
-    """The gait nearest χ ``x0`` that satisfies the constraints: min ρ·|head − head(x0)|² s.t. g (the splines'
-    B-spline coefficients, scaled durations and steps; the weights (5.29) 0), by :func:`solve_windowed` with
-    ``options``. A start that misses the constraints (a fit of another model's solution) becomes a feasible one
-    near it, from which the prediction itself needs no restoration."""
-    s = dataclasses.replace(settings or PredictSettings(), weights=(0.0, 0.0))
-    layout = DesignLayout.build(transcriber.layout.nodes, symmetric=symmetric)
-    x, _ = checked_design(transcriber, layout, x0)
-    cache = options.pop("cache", None) or NlpCache()
-    nlp = cache.nlp(transcriber, reference, s, symmetric=symmetric, segments=instant_segments(transcriber, layout, x))
-    return solve_windowed(transcriber, reference, x0, s, symmetric=symmetric, cache=cache,
-                          anchor=nlp.coefficients_of(x), **options)

@@ -148,9 +148,8 @@ class Variables:
         self.period, self.stride = ca.sum1(self.durations), self.steps_r + self.steps_l
         self.times = instant_times(self.grid, self.durations)
         self.fractions = self.times / self.period
-        #: p = (v, w1, w2, ρ, anchor): the speed (5.43), the weights (5.29), and the weight and target of the
-        #: proximity term ρ·|head − anchor|² (ρ = 0 but in a projection onto the constraints, ``solve.project``)
-        self.parameters = ca.vertcat(ca.SX.sym("p", 3), ca.SX.sym("rho"), ca.SX.sym("anchor", self.head.numel()))
+        #: p = (v, w1, w2): the speed (5.43) and the weights (5.29)
+        self.parameters = ca.SX.sym("p", 3)
         muscles = transcriber.muscles
         self.all_present = muscles.present
         self.present = muscles.present[self.muscle_columns]

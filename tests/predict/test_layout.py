@@ -15,9 +15,10 @@ from gaitcli.predict.splines import cubic, design_vector_size, evaluate_fraction
 
 @pytest.mark.parametrize("nodes,full,symmetric", [(14, 22 * 13 + 6 * 7 + 10, 3 * 13 + 8 * 13 + 3 * 7 + 5),
                                                   (16, 22 * 15 + 6 * 9 + 10, 3 * 15 + 8 * 15 + 3 * 9 + 5),
-                                                  (18, 438, 219), (20, 22 * 19 + 6 * 11 + 10, 3 * 19 + 8 * 19 + 3 * 11 + 5)])
+                                                  (18, 438, 219),
+                                                  (20, 22 * 19 + 6 * 11 + 10, 3 * 19 + 8 * 19 + 3 * 11 + 5)])
 def test_sizes(nodes, full, symmetric):
-    """The full model: (5.24)'s (f + m)·N + 10 with hip and HAT on 2·N_h intervals instead of N (layout.py)."""
+    """The full model: (5.24)'s count with hip and HAT on 2·N_h intervals instead of N (layout.py)."""
     assert DesignLayout.build(nodes, symmetric=False).size == full
     assert full == design_vector_size(nodes) + 3 * (2 * half_cycle_intervals(nodes - 1) - (nodes - 1))
     assert DesignLayout.build(nodes, symmetric=True).size == symmetric  # 219 at nn = 18 (layout.py's table)

@@ -192,21 +192,6 @@ def test_speed_and_weights_are_parameters(built, transcriber, reference):
         assert cost == pytest.approx(weights[0] * et / 100 + weights[1] * jdev, rel=1e-12)
 
 
-def test_a_projection_costs_the_distance_from_its_anchor_and_nothing_else(built, transcriber, reference):
-    # p = (v, w1, w2, ρ, anchor): with an anchor ρ as given (1 by default), and with the weights 0 J is
-    # ρ·|head − anchor|² alone
-    import casadi as ca
-
-    symmetric, nlp = built
-    w0 = nlp.start(initial_guess(transcriber, reference, symmetric=symmetric))
-    anchor = w0[:nlp.spline_size] + np.linspace(-0.01, 0.02, nlp.spline_size)
-    cost = ca.Function("cost", [nlp.w, nlp.parameters], [nlp.cost])
-    zero = PredictSettings(weights=(0.0, 0.0))
-    distance = np.sum((w0[:nlp.spline_size] - anchor) ** 2)
-    assert float(cost(w0, nlp.parameter_values(zero, anchor))) == pytest.approx(distance, rel=1e-12)
-    assert float(cost(w0, nlp.parameter_values(zero, anchor, 1e4))) == pytest.approx(1e4 * distance, rel=1e-12)
-
-
 def test_steady_trunk_and_centre_of_pressure_terms_add_their_integrals(built, transcriber, reference):
     # Jdev with trunk_rate_sd_deg_s and cop_sd_m = the dissertation's Jdev + ∫(ẏ3/σ)² + ∫(c − ĉ)²/σ², the
     # integrands recomputed here from the numeric transcription (λ by the pseudoinverse) and closed periodically
