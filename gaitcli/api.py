@@ -22,9 +22,10 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.core.registry import ProgressCallback, no_progress, stage
+from gaitcli.core.validate import replace_checked
 from gaitcli.errors import InputError, NotConvergedError
 from gaitcli.resources import sample_trial
-from gaitcli.run.config import PipelineConfig, load_pipeline, pipeline_from_dict, with_overrides
+from gaitcli.run.config import PipelineConfig, load_pipeline, pipeline_from_dict
 from gaitcli.run.pipeline import StageOutcome, run_stages, trial_stages
 from gaitcli.run.trial import TrialFolder
 from gaitcli.run.trial import open_trial as _open_trial
@@ -35,6 +36,8 @@ __all__ = [
     "StageOutcome", "InputError", "NotConvergedError",
 ]
 
+#: where an error of a setting given to a function of the API says it was given
+CALLER = "gaitcli.pipeline_config"
 #: the pelvis translations among the 27 coordinates (m; every other coordinate is an angle, deg)
 TRANSLATIONS = ("pelvis_x", "pelvis_y", "pelvis_z")
 
@@ -111,8 +114,11 @@ def pipeline_config(pipeline: str | Path | dict | PipelineConfig | None = None, 
         cfg = load_pipeline(pipeline)
     for section, options in sections.items():
         if section not in cfg.sections:
-            raise InputError("command line", section, f"not a stage (expected one of {', '.join(cfg.sections)})")
-        cfg = with_overrides(cfg, section, **(options or {}))
+            raise InputError(CALLER, section, f"not a stage (expected one of {', '.join(cfg.sections)})")
+        given = {key: value for key, value in (options or {}).items() if value is not None}
+        if given:
+            cfg = cfg.replace_section(section, replace_checked(cfg.section(section), given, section=section,
+                                                               path=CALLER))
     return cfg
 
 
@@ -196,7 +202,8 @@ def predict_gait(trial: str | Path | TrialFolder | None = None, config=None, *, 
         A trial whose subject to predict for, against a reference from its own strides; None: the
         dissertation's subject 1 against the shipped reference of the speed.
     config : str, Path, dict, PipelineConfig or None
-        A configuration whose ``predict`` section to start from (:func:`pipeline_config`).
+        A configuration whose ``predict`` section to start from (:func:`pipeline_config`); the command line
+        passes its flags' configuration here.
     reference, subject, init : str or Path, optional
         ``gait predict``'s ``--reference`` (a ``gait reference`` CSV), ``--subject`` (a subject.yaml) and
         ``--init`` (an earlier ``predict.h5`` to start from).
@@ -262,10 +269,10 @@ def read_outputs(path: str | Path) -> Outputs:
     >>> outputs = gaitcli.read_outputs(trial_folder / "gait_out")
     >>> sorted(outputs.stages)
     ['filter', 'idyn', 'muscles/eid']
-    >>> outputs.idyn.strides[["stride", "side", "period_s"]].head(2)
-       stride side  period_s
-    0       1    r      1.07
-    1       2    l      1.07
+    >>> outputs.idyn.strides[["stride", "side", "period_s", "stance_pct"]].head(2).round(2)
+       stride side  period_s  stance_pct
+    0       1    l      1.07       57.96
+    1       2    r      1.07       57.94
     """
     path = Path(path)
     names = {stage(name).h5_name: name for name in ("filter", "idyn", "emg", "muscles", "predict")}
