@@ -422,6 +422,14 @@ class FilterOutputs:
         Per foot (``foot_r_``, ``foot_l_``): ``force_x_N`` … ``cop_z_m``, ``free_moment_Nm`` and ``load_known``.
     events : pandas.DataFrame
         ``time_s``, ``frame``, ``side``, ``event`` (``heel_strike``, ``toe_off``), ``source``.
+
+    Examples
+    --------
+    >>> filtered = gaitcli.read_outputs(trial_folder).filter
+    >>> filtered.summary["cutoff_hz"], int((filtered.events["event"] == "heel_strike").sum())
+    (6.0, 8)
+    >>> round(filtered.grf["foot_r_force_z_N"].max())  # N: 1.29 times the body weight of 75 kg
+    947
     """
 
     def __init__(self, folder: Path, summary: dict, trial):
@@ -476,6 +484,15 @@ class IdynOutputs:
         (``…_pct_body_weight``); a left stride's pelvis obliquity and rotation negated.
     sagittal : gaitcli.dynamics.sagittal.SagittalExport
         What the muscle stage reads: each leg's sagittal motion and load, the events.
+
+    Examples
+    --------
+    >>> idyn = gaitcli.read_outputs(trial_folder).idyn
+    >>> stride = idyn.cycles[idyn.cycles["stride"] == 4]
+    >>> stride["side"].iloc[0], len(stride), round(stride["knee_r_flexion_deg"].max())
+    ('r', 101, 61)
+    >>> print(round(idyn.moments["ankle_r_plantarflexor_moment_Nm_per_kg"].max(), 1))
+    2.0
     """
 
     def __init__(self, folder: Path, summary: dict, output):
@@ -539,6 +556,14 @@ class MuscleOutputs:
     metabolic_cost_J : float
         One leg over the interval (NaN where the energetics model does not apply, SO's excitations out of
         [0, 1]).
+
+    Examples
+    --------
+    >>> eid = gaitcli.read_outputs(trial_folder).muscles["eid"]
+    >>> eid.converged, round(eid.metabolic_cost_J), eid.forces.shape
+    (True, 215, (50, 9))
+    >>> eid.forces.drop(columns="time_s").max().idxmax()
+    'vasti_force_N'
     """
 
     def __init__(self, folder: Path, summary: dict, result):
@@ -579,6 +604,15 @@ class PredictionOutputs:
     prosthesis : pandas.DataFrame or None
         With prostheses: each ankle's angle and spring, damping and total moments (N·m).
     converged : bool
+
+    Examples
+    --------
+    :func:`predict_gait` returns them in its ``predict``; :func:`read_outputs` reads them from an output
+    folder, here that of ``gait predict --nodes 6 --max-iterations 2 -o pr`` (two IPOPT iterations):
+
+    >>> prediction = gaitcli.read_outputs(prediction_folder).predict
+    >>> prediction.converged, prediction.prosthesis, prediction.muscles.shape[1]
+    (False, None, 66)
     """
 
     def __init__(self, folder: Path, summary: dict, result):
