@@ -72,19 +72,20 @@ class Console:
             click.echo(json.dumps(data, indent=2, default=str))
 
     def run(self, trial, names, cfg, *, out, plots: bool, show: str | None = None, **options) -> None:
-        """Run the stages through the pipeline with a progress display (``options``: files, workers, scheduler
-        of :func:`gaitcli.run.pipeline.run_stages`); unconverged → exit 3."""
-        from gaitcli.progress import ProgressDisplay
-        from gaitcli.run.pipeline import run_stages
+        """Run the stages through :func:`gaitcli.api.run_trial` with a progress display (``options``: its files,
+        workers, scheduler); unconverged → exit 3."""
+        from gaitcli.api import run_trial
 
-        with ProgressDisplay(enabled=not self.quiet) as progress:
-            outcomes = run_stages(trial, names, cfg, out=out, progress=progress, plots=plots, **options)
-        self.outcomes(outcomes)
+        with self.progress() as progress:
+            outputs = run_trial(trial, names, cfg, out=out, progress=progress, plots=plots, **options)
+        self.finish(outputs, show)
+
+    def finish(self, outputs, show: str | None = None) -> None:
+        """Say what the stages of ``outputs`` (:class:`gaitcli.api.Outputs`) wrote, the summary with ``--json``;
+        unconverged → :class:`NotConvergedError` (exit 3)."""
+        self.outcomes(outputs.outcomes)
         self.print_json(show)
-        failed = [o for o in outcomes if not o.converged]
-        if failed:
-            o = failed[0]
-            raise NotConvergedError(f"{o.message}; results written to {o.folder} with converged: false")
+        outputs.check()
 
 
 _SHOWN_WARNINGS: set[str] = set()
@@ -330,8 +331,12 @@ def predict_command(console: Console, trial, out, reference, subject, init, work
             raise NotConvergedError(f"{len(bad)} of {len(rows)} study cases did not converge ({', '.join(bad)}); "
                                     f"marked in {folder / 'study.csv'}")
         return
-    console.run(trial, ["predict"], cfg, out=out, plots=not no_plots, show="predict", files={**files, "init": init},
-                workers=workers, scheduler=scheduler)
+    from gaitcli.api import predict_gait
+
+    with console.progress() as progress:
+        outputs = predict_gait(trial, cfg, reference=reference, subject=subject, init=init, out=out,
+                               plots=not no_plots, progress=progress, workers=workers, scheduler=scheduler)
+    console.finish(outputs, "predict")
 
 
 @gait.command("synth")

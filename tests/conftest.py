@@ -44,6 +44,7 @@ HEAVY_FILES = {
     "tests/cli/test_idyn_cli.py": 9, "tests/io/test_c3d_long.py": 8, "tests/cli/test_session_cli.py": 7,
     "tests/cli/test_compare_conditions_cli.py": 7, "tests/test_cluster.py": 6, "tests/predict/test_stage.py": 6,
     "tests/cli/test_qualisys.py": 6, "tests/cli/test_filter_command.py": 5, "tests/cli/test_vsk_session.py": 5,
+    "tests/test_api.py": 7,
 }
 
 

@@ -14,12 +14,13 @@ PACKAGE = Path(__file__).resolve().parent.parent / "gaitcli"
 #: the stage packages, each allowed to import only the ones before it
 STAGE_ORDER = ("signal", "emg", "kinematics", "dynamics", "muscles", "predict")
 #: the edges: what no stage package may import
-EDGES = ("__main__", "cli", "progress", "run", "report", "synth")
+EDGES = ("__main__", "cli", "api", "progress", "run", "report", "synth")
 #: what every part may import: the package itself ("": ``from gaitcli import __version__``), and below it
 BASE = {"", "__init__", "errors"}
 #: what each top-level part may import (besides itself), from the top of the layers down
 ALLOWED = {
-    "cli": {"progress", "run", "report", "synth", *STAGE_ORDER, "io", "core", "resources"},
+    "cli": {"api", "progress", "run", "report", "synth", *STAGE_ORDER, "io", "core", "resources"},
+    "api": {"run", *STAGE_ORDER, "io", "core", "resources"},  # the Python API: what the command line calls
     "progress": {"core"},  # the command line's progress display
     "run": {"report", *STAGE_ORDER, "io", "core", "resources"},
     "report": {*STAGE_ORDER, "io", "core", "resources"},
@@ -29,7 +30,7 @@ ALLOWED = {
     "core": set(),
     "resources": set(),
     "errors": {""},
-    "__init__": set(),
+    "__init__": {"api"},  # its public names, loaded from api.py on first use
     "__main__": {"cli"},  # the gait command: the thread counts, then the command line
 }
 #: modules of run/ with rules of their own: what each may import (run.X: a module of run/)
@@ -187,3 +188,27 @@ def test_the_checker_sees_imports_inside_functions(tmp_path):
     assert {"gaitcli.report", "gaitcli.report.plots", "gaitcli.run.pipeline", "gaitcli.run.pipeline.run_stage"} <= found
     assert {first_part(m) for m in found} == {"report", "run"}
     assert {run_part(m) for m in found} == {"report", "run.pipeline"}
+
+
+def test_only_the_command_line_and_the_package_import_the_api():
+    # the API is the top of the layers beside the command line: run/ and the stage packages know nothing of it
+    importers = sorted(str(path.relative_to(PACKAGE.parent)) for path in PACKAGE.rglob("*.py")
+                       if path.name != "api.py" and any(first_part(m) == "api" for m in imported_modules(path)))
+    assert importers == ["gaitcli/__init__.py", "gaitcli/cli.py"]
+
+
+def test_no_module_takes_a_public_name_through_the_package():
+    # ``from gaitcli import run_trial`` inside the package would load the API below its place in the layers
+    import gaitcli
+
+    taking = [f"{path.relative_to(PACKAGE.parent)} imports {m}" for path in PACKAGE.rglob("*.py")
+              for m in sorted(imported_modules(path)) if m.split(".", 1)[-1] in gaitcli.__all__
+              and m.count(".") == 1]
+    assert not taking
+
+
+def test_no_public_name_is_shadowed_by_a_module():
+    # importing gaitcli.run.pipeline sets the attribute gaitcli.run: a public function of that name would vanish
+    import gaitcli
+
+    assert not set(gaitcli.__all__) & top_level_parts()

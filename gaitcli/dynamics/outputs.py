@@ -150,6 +150,24 @@ def cycle_columns(result: IdynResult) -> dict:
     return columns
 
 
+#: gait_cycle.csv's columns that say which stride a row is of, before its values
+CYCLE_KEYS = {"cycle_pct": "%", "side": "1", "stride": "1", "start_s": "s"}
+
+
+def cycle_datasets(cycles: dict) -> dict[str, Dataset]:
+    """gait_cycle.csv's table (:func:`cycle_columns`) for ``idyn.h5``'s ``gait_cycle/``: the stride keys
+    (:data:`CYCLE_KEYS`) one dataset each, the values one (rows, columns) dataset whose ``columns`` attribute
+    names them (read back by :func:`gaitcli.io.stage_files.read_idyn_tables`)."""
+    names = [name for name in cycles if name not in CYCLE_KEYS]
+    rows = len(cycles["cycle_pct"])
+    values = np.column_stack([cycles[n] for n in names]) if rows else np.zeros((0, len(names)))
+    data = {f"gait_cycle/{key}": Dataset(np.asarray(cycles[key]), unit) for key, unit in CYCLE_KEYS.items()}
+    data["gait_cycle/values"] = Dataset(values, "deg, N*m/kg, W/kg, % body weight", {
+        "columns": ",".join(names), "convention": "gait_cycle.csv's: the tables' angles (deg), moments (N*m/kg) and "
+                                                  "total powers (W/kg), ground reactions in % of body weight"})
+    return data
+
+
 def rms(values: np.ndarray) -> float:
     """Root mean square of the vector magnitudes over the finite rows (NaN when none)."""
     finite = np.all(np.isfinite(values), axis=1)
@@ -214,12 +232,14 @@ def write_idyn_outputs(folder: Path, result: IdynResult, attrs: dict) -> dict:
     write_table(folder / "joint_powers.csv", power_columns(result))
     write_table(folder / "residuals.csv", residual_columns(result))
     write_table(folder / "sagittal.csv", sagittal_columns(result.sagittal))
-    write_table(folder / "gait_cycle.csv", cycle_columns(result))
+    cycles = cycle_columns(result)
+    write_table(folder / "gait_cycle.csv", cycles)
     p = result.parameters
     angles, angle_names, angle_convention = displayed_angles(result)
     shown_moments, shown_names, shown_convention = displayed_moments(result)
     data = record_datasets("sagittal", result.sagittal)
     data.update(record_datasets("strides", list(result.strides)))
+    data.update(cycle_datasets(cycles))
     data.update({
         "time": Dataset(result.time_s, "s"),
         "coordinates": Dataset(result.q, "m, rad", {"columns": ",".join(COORDINATES),

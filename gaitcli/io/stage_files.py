@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitcli.core.container import Trial
-from gaitcli.io.h5 import ColumnTable, checked, column_table, open_h5, read_record
+from gaitcli.io.h5 import ColumnTable, checked, column_table, open_h5, read_record, strings
 
 
 @dataclass(frozen=True)
@@ -55,6 +55,27 @@ def read_filter_signals(path: str | Path) -> FilterSignals:
 
 
 @dataclass(frozen=True)
+class GaitCycles:
+    """``idyn.h5``'s ``gait_cycle/``: gait_cycle.csv's rows, every stride at 0–100 % of its cycle one block;
+    ``cycle_pct`` (%), ``side`` (``"r"``, ``"l"``), ``stride`` (1, 2, … in time order) and ``start_s`` (s) per
+    row, and ``values`` its columns (angles deg, moments N·m/kg, powers W/kg, ground reactions % body weight)."""
+
+    cycle_pct: np.ndarray
+    side: np.ndarray
+    stride: np.ndarray
+    start_s: np.ndarray
+    values: ColumnTable
+
+
+def read_gait_cycles(group) -> GaitCycles:
+    """The :class:`GaitCycles` of an open ``idyn.h5``'s ``gait_cycle`` group."""
+    side = group["side"]
+    return GaitCycles(checked(group["cycle_pct"])[()], strings(side) if side.dtype.kind == "O" else
+                      checked(side)[()].astype(str), checked(group["stride"])[()].astype(int),
+                      checked(group["start_s"])[()], column_table(group["values"]))
+
+
+@dataclass(frozen=True)
 class IdynTables:
     """``idyn.h5``'s tables for people, over ``time_s`` (frames,).
 
@@ -64,7 +85,7 @@ class IdynTables:
     ``coordinate_moments``: the 21 moments in the coordinates' senses (N·m); ``moment_known`` (frames, 7) where
     the load each joint's moment depends on is known; ``powers``: total joint power per joint (W, generated
     positive; None in files without it); the pelvis residual force (N) and moment (N·m), model axes; the body
-    mass (kg) and the trial folder's name.
+    mass (kg) and the trial folder's name; ``cycles`` gait_cycle.csv's table (None in files older than it).
     """
 
     time_s: np.ndarray
@@ -78,6 +99,7 @@ class IdynTables:
     residual_moment_Nm: np.ndarray
     body_mass_kg: float
     trial: str = ""
+    cycles: GaitCycles | None = None
 
     def known_moments_Nm(self, table: ColumnTable | None = None) -> np.ndarray:
         """``table``'s 21 moments (default: :attr:`moments`) with NaN where their load is unknown."""
@@ -105,4 +127,5 @@ def read_idyn_tables(path: str | Path) -> IdynTables:
             moment_known=checked(h5["joint_moments_known"])[()].astype(bool),
             powers=column_table(h5["joint_powers"], "joints") if "joint_powers" in h5 else None,
             residual_force_N=checked(h5["residuals/force"])[()], residual_moment_Nm=checked(h5["residuals/moment"])[()],
-            body_mass_kg=float(h5["segments/mass"].attrs["body_mass_kg"]), trial=str(h5.attrs.get("trial", "")))
+            body_mass_kg=float(h5["segments/mass"].attrs["body_mass_kg"]), trial=str(h5.attrs.get("trial", "")),
+            cycles=read_gait_cycles(h5["gait_cycle"]) if "gait_cycle" in h5 else None)

@@ -36,6 +36,16 @@ def summary(result: MuscleResult) -> dict:
     return info
 
 
+def muscle_tables(result: MuscleResult) -> dict[str, dict]:
+    """The per-muscle tables by file name (``forces``, ``activations``, ``excitations``, ``metabolics`` with the
+    total), each its columns by name, units in the names (what the CSVs hold)."""
+    metabolics = per_muscle(result, result.metabolic_rate_W, "metabolic_rate_W")
+    metabolics["total_metabolic_rate_W"] = result.metabolic_rate_W.sum(axis=1)
+    return {"forces": per_muscle(result, result.forces_N, "force_N"),
+            "activations": per_muscle(result, result.activations, "activation"),
+            "excitations": per_muscle(result, result.excitations, "excitation"), "metabolics": metabolics}
+
+
 #: the limb's generalized coordinates, the columns of every moment array
 JOINT_COLUMNS = "hip flexion, knee flexion, ankle dorsiflexion"
 
@@ -43,12 +53,8 @@ JOINT_COLUMNS = "hip flexion, knee flexion, ankle dorsiflexion"
 def write_muscle_outputs(folder: Path, result: MuscleResult, attrs: dict) -> dict:
     """Write every table of one method's muscle outputs and ``muscles.h5`` into ``folder``; return the summary."""
     folder = Path(folder)
-    write_table(folder / "forces.csv", per_muscle(result, result.forces_N, "force_N"))
-    write_table(folder / "activations.csv", per_muscle(result, result.activations, "activation"))
-    write_table(folder / "excitations.csv", per_muscle(result, result.excitations, "excitation"))
-    metabolics = per_muscle(result, result.metabolic_rate_W, "metabolic_rate_W")
-    metabolics["total_metabolic_rate_W"] = result.metabolic_rate_W.sum(axis=1)
-    write_table(folder / "metabolics.csv", metabolics)
+    for name, columns in muscle_tables(result).items():
+        write_table(folder / f"{name}.csv", columns)
     if result.emg is not None:
         agreement = result.emg
         write_table(folder / "emg_agreement.csv", {

@@ -16,34 +16,40 @@ ANGLE_COLUMNS = ("hip_r_flexion_deg", "knee_r_flexion_deg", "ankle_r_dorsiflexio
                  "hip_l_flexion_deg", "knee_l_flexion_deg", "ankle_l_dorsiflexion_deg")
 
 
-def write_predict_outputs(folder: Path, result: PredictResult, attrs: dict) -> dict:
-    """Write every table of a prediction and ``predict.h5`` into ``folder``; return the summary."""
-    folder = Path(folder)
+def prediction_tables(result: PredictResult) -> dict[str, dict]:
+    """The prediction's tables by file name (``motion``, ``grf``, ``moments``, ``muscles`` and with a prosthesis
+    ``prosthesis``), each its columns by name, units in the names (what the CSVs hold)."""
     motion = {"time_s": result.time_s, "cycle_pct": result.cycle_pct,
               "hip_x_m": result.coordinates[:, 0], "hip_z_m": result.coordinates[:, 1],
               "trunk_lean_deg": np.degrees(result.coordinates[:, 2])}  # y3 > 0: the HAT's CoM ahead of the hip
     motion.update({name: result.clinical_angles_deg[:, k] for k, name in enumerate(ANGLE_COLUMNS)})
-    write_table(folder / "motion.csv", motion)
     pct = 100 * result.point_time_s / result.period_s
     grf = {"time_s": result.point_time_s, "cycle_pct": pct, "phase": result.point_phase}
     for k, name in enumerate(("right_fx_N", "right_fz_N", "left_fx_N", "left_fz_N")):
         grf[name] = result.grf_N[:, k]
         grf[name.replace("_N", "_N_per_kg")] = result.grf_N[:, k] / result.body_mass_kg
-    write_table(folder / "grf.csv", grf)
     moments = {"time_s": result.point_time_s, "cycle_pct": pct, "phase": result.point_phase}
     for k, joint in enumerate(JOINTS):
         moments[f"{joint}_moment_Nm"] = result.joint_moments_Nm[:, k]
         moments[f"{joint}_muscle_moment_Nm"] = result.muscle_moments_Nm[:, k]
-    write_table(folder / "moments.csv", moments)
     muscles = {"time_s": result.time_s, "cycle_pct": result.cycle_pct}
     for k, name in enumerate(result.muscle_names):
         muscles[f"{name}_force_N"] = result.muscle_forces_N[:, k]
         muscles[f"{name}_activation"] = result.activations[:, k]
         muscles[f"{name}_excitation"] = result.excitations[:, k]
         muscles[f"{name}_metabolic_rate_W"] = result.metabolic_rate_W[:, k]
-    write_table(folder / "muscles.csv", muscles)
+    tables = {"motion": motion, "grf": grf, "moments": moments, "muscles": muscles}
     if result.prosthesis is not None:
-        write_table(folder / "prosthesis.csv", prosthesis_table(result))
+        tables["prosthesis"] = prosthesis_table(result)
+    return tables
+
+
+def write_predict_outputs(folder: Path, result: PredictResult, attrs: dict) -> dict:
+    """Write every table of a prediction (:func:`prediction_tables`) and ``predict.h5`` into ``folder``; return
+    the summary."""
+    folder = Path(folder)
+    for name, columns in prediction_tables(result).items():
+        write_table(folder / f"{name}.csv", columns)
     data = record_datasets("result", result)
     root = dict(attrs)
     root.update({"converged": bool(result.converged), "solver_status": result.status,
