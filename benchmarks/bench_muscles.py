@@ -116,8 +116,8 @@ def eid_scaling(leg, node_counts, hessian: str) -> int:
 
     models = Models.build(leg.limb)
     m = models.muscle.m
-    print(f"EID scaling on {leg.interval_s[0]:.2f}–{leg.interval_s[1]:.2f} s ({'periodic' if leg.periodic else 'not'}"
-          f" periodic), metabolic objective, {hessian} Hessian")
+    print(f"EID scaling on {leg.interval_s[0]:.2f}–{leg.interval_s[1]:.2f} s ({'' if leg.periodic else 'not '}periodic)"
+          f", metabolic objective, {hessian} Hessian")
     header = (f"{'nodes':>5} {'vars':>6} {'jac nnz':>8} {'hess nnz':>9} {'build s':>8} {'iter':>5} {'solve s':>8} "
               f"{'ms/iter':>8} {'J (J)':>9} {'ΔF RMS (N)':>11}  status")
     print(header)
