@@ -7,6 +7,10 @@ from dataclasses import dataclass
 import casadi as ca
 
 from gaitcli.core import ipopt
+from gaitcli.core.validate import one_of
+
+#: IPOPT's Hessians of the Lagrangian (``hessian_approximation``)
+HESSIANS = ("exact", "limited-memory")
 
 
 @dataclass(frozen=True)
@@ -15,25 +19,30 @@ class SolverSettings:
 
     ``tol`` IPOPT's relative convergence tolerance, ``constr_viol_tol`` the
     absolute constraint tolerance (constraints are scaled to O(1)),
-    ``max_iter`` the iteration limit, ``print_level`` 0–12.
+    ``max_iter`` the iteration limit, ``print_level`` 0–12, ``hessian``
+    IPOPT's Hessian of the Lagrangian: ``"exact"`` (CasADi's second
+    derivatives) or ``"limited-memory"`` (L-BFGS; benchmarks/README.md, "EID's
+    growth with its nodes").
     """
 
     tol: float = 1e-8
     constr_viol_tol: float = 1e-8
     max_iter: int = 3000
     print_level: int = 0
+    hessian: str = "exact"
 
 
 def build_solver(name: str, x, f, g, p=None, settings: SolverSettings | None = None, *,
                  may_be_infeasible: bool = False) -> ca.Function:
-    """An IPOPT ``nlpsol`` for min f(x, p) s.t. lbg ≤ g(x, p) ≤ ubg, lbx ≤ x ≤ ubx (exact Hessian).
+    """An IPOPT ``nlpsol`` for min f(x, p) s.t. lbg ≤ g(x, p) ≤ ubg, lbx ≤ x ≤ ubx (``settings.hessian``).
 
     ``may_be_infeasible``: IPOPT's heuristics that detect an infeasible problem sooner (its restoration phase
     entered earlier); on a feasible one they change nothing (benchmarks/README.md, "EID").
     """
     s = settings or SolverSettings()
+    one_of(s.hessian, HESSIANS, where="hessian")
     problem = {"x": x, "f": f, "g": g, **({"p": p} if p is not None else {})}
     opts = ipopt.options(tol=s.tol, max_iter=s.max_iter, print_level=s.print_level,
-                         **{"ipopt.constr_viol_tol": s.constr_viol_tol, "ipopt.hessian_approximation": "exact",
+                         **{"ipopt.constr_viol_tol": s.constr_viol_tol, "ipopt.hessian_approximation": s.hessian,
                             **({"ipopt.expect_infeasible_problem": "yes"} if may_be_infeasible else {})})
     return ipopt.build_solver(name, problem, opts)
