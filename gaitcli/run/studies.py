@@ -43,7 +43,6 @@ from gaitcli.io.outputs import stage_folder, write_json, write_table
 from gaitcli.predict.guess import SHIPPED_WALK, SPEED_WALKS
 from gaitcli.predict.prosthesis import COMMERCIAL_FEET
 from gaitcli.predict.reference import read_reference
-from gaitcli.predict.solve import WarmStart
 from gaitcli.predict.stage import PredictConfig, PredictResult, run_predict, weight_pair
 from gaitcli.predict.starts import agreeing, predict_optimal, solve_start, start_seeds
 from gaitcli.run.cluster import Task, Workers, completed, map_in_order, workers
@@ -310,21 +309,12 @@ def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[Predi
                                cache=cache), 1
     # the first start that converged (a foot after the first: that foot's solution, else the normal one)
     starts = [solved[name] for name in case.starts_from]
-    chosen = next((r for r in starts if r.converged), starts[0]) if starts else None  # None: the default
-    init = chosen.design if chosen is not None else None
-    warm = warm_start_of(chosen) if chosen is not None and not os.environ.get("GAIT_COLD") else None
+    init = next((r for r in starts if r.converged), starts[0]).design if starts else None  # None: the default
     if case.cfg.starts > 1:  # start 0 from the chain's solution, the others from perturbed guesses, one by one
         with workers(1) as here:
             agreed, best = agreeing(run_starts(case.cfg, here, params=params, reference=reference, init=init))
         return best, agreed
-    return run_predict(case.cfg, params=params, reference=reference, init=init, warm=warm, cache=cache), 1
-
-
-def warm_start_of(result: PredictResult) -> WarmStart | None:
-    """The variables and multipliers ``result`` was solved with (None where it holds none)."""
-    arrays = [np.asarray(a, float) for a in (result.nlp_variables, result.constraint_multipliers,
-                                             result.bound_multipliers)]
-    return WarmStart(*arrays) if all(a.size for a in arrays) else None
+    return run_predict(case.cfg, params=params, reference=reference, init=init, cache=cache), 1
 
 
 def run_case(case: StudyCase, root: str, params, reference, subject: str, pipeline: PipelineConfig, inputs: dict,
