@@ -23,6 +23,7 @@ from gaitcli.dynamics.opensim import (
 )
 from gaitcli.kinematics.forward import forward_kinematics
 from gaitcli.kinematics.model import BODIES
+from tests.opensim_runner import require_opensim, run_opensim
 
 from .synthetic_model import random_parameters, random_wrenches, sine_motion
 
@@ -147,39 +148,53 @@ def test_the_generalized_forces_are_the_inverse_dynamics_rows():
     np.testing.assert_allclose(model_coordinates(opensim_coordinates(q)), q, rtol=1e-14, atol=1e-15)
 
 
+#: OpenSim's model of work/model.osim at the motion of work/motion.npz (OpenSim's coordinates, speeds and
+#: accelerations, rad and m): every body's origin in ground and the InverseDynamicsSolver's generalized forces,
+#: both in OPENSIM_COORDINATES' order
+SOLVER = """
+model = opensim.Model(str(work / "model.osim"))
+state = model.initSystem()
+coordinates = [model.getCoordinateSet().get(name) for name in arguments["names"]]
+mobility = []  # each coordinate's place among the state's speeds
+for c in coordinates:
+    for other in coordinates:
+        other.setSpeedValue(state, 1.0 if other is c else 0.0)
+    mobility.append(int(np.argmax([state.getU().get(i) for i in range(state.getNU())])))
+q, qd, qdd = np.load(work / "motion.npz")["motion"]
+solver = opensim.InverseDynamicsSolver(model)
+origins = np.zeros((q.shape[0], len(arguments["bodies"]), 3))
+forces = np.zeros(q.shape)
+for i in range(q.shape[0]):
+    udot = opensim.Vector(state.getNU(), 0.0)
+    for k, c in enumerate(coordinates):
+        c.setValue(state, q[i, k], False)
+        c.setSpeedValue(state, qd[i, k])
+        udot.set(mobility[k], qdd[i, k])
+    model.assemble(state)
+    model.realizeAcceleration(state)
+    for b, body in enumerate(arguments["bodies"]):
+        p = model.getBodySet().get(body).getTransformInGround(state).p()
+        origins[i, b] = [p.get(0), p.get(1), p.get(2)]
+    solved = solver.solve(state, udot)
+    forces[i] = [solved.get(m) for m in mobility]
+np.savez(work / "out.npz", origins=origins, forces=forces)
+"""
+
+
 def test_opensims_model_of_the_document_has_the_models_poses_and_inverse_dynamics(tmp_path):
     """OpenSim's InverseDynamicsSolver on an analytic motion (q, q̇, q̈ exact) under gravity: gaitcli's
-    generalized forces to 1e-9 N·m."""
-    opensim = pytest.importorskip("opensim")
+    generalized forces to 1e-9 N·m (N), its body origins to 1e-12 m."""
+    require_opensim()
     rng = np.random.default_rng(6)
     params = random_parameters(rng)
     (tmp_path / "model.osim").write_text(osim_model(params, name="synthetic", gravity_m_s2=9.81))
-    model = opensim.Model(str(tmp_path / "model.osim"))
-    state = model.initSystem()
-    coordinates = [model.getCoordinateSet().get(c.name) for c in OPENSIM_COORDINATES]
-    mobility = []  # each coordinate's place among the state's speeds
-    for c in coordinates:
-        for other in coordinates:
-            other.setSpeedValue(state, 1.0 if other is c else 0.0)
-        mobility.append(int(np.argmax([state.getU().get(i) for i in range(state.getNU())])))
     t = np.linspace(0.0, 1.0, 3)
     q, qd, qdd = sine_motion(rng, t)
-    ours = opensim_generalized_forces(inverse_dynamics(q, qd, qdd, params, (), gravity_m_s2=9.81).generalized_forces)
-    solver = opensim.InverseDynamicsSolver(model)
-    for i in range(t.size):
-        udot = opensim.Vector(state.getNU(), 0.0)
-        for k, (c, spec) in enumerate(zip(coordinates, OPENSIM_COORDINATES)):
-            c.setValue(state, spec.sign * q[i, k], False)
-            c.setSpeedValue(state, spec.sign * qd[i, k])
-            udot.set(mobility[k], spec.sign * qdd[i, k])
-        model.assemble(state)
-        model.realizeAcceleration(state)
-        states = forward_kinematics(q[i], params)
-        for b, body in enumerate(BODIES):
-            X = model.getBodySet().get(OPENSIM_BODIES[body]).getTransformInGround(state)
-            origin = np.array([X.p().get(k) for k in range(3)])
-            np.testing.assert_allclose(origin, TO_OPENSIM @ states.com_m[0, b], atol=1e-12)
-        theirs = solver.solve(state, udot)
-        for k, spec in enumerate(OPENSIM_COORDINATES):
-            label = f"{spec.name}_{'moment' if spec.rotational else 'force'}"
-            assert theirs.get(mobility[k]) == pytest.approx(ours[label][i], abs=1e-9)
+    sign = np.array([c.sign for c in OPENSIM_COORDINATES])
+    np.savez(tmp_path / "motion.npz", motion=np.stack([sign * q, sign * qd, sign * qdd]))
+    saved = run_opensim(SOLVER, tmp_path, names=[c.name for c in OPENSIM_COORDINATES],
+                        bodies=[OPENSIM_BODIES[b] for b in BODIES])
+    states = forward_kinematics(q, params)
+    np.testing.assert_allclose(saved["origins"], states.com_m @ TO_OPENSIM.T, atol=1e-12)
+    ours = inverse_dynamics(q, qd, qdd, params, (), gravity_m_s2=9.81).generalized_forces
+    np.testing.assert_allclose(saved["forces"], sign * ours, rtol=0, atol=1e-9)
