@@ -228,7 +228,7 @@ def _run_exporting(console: Console, trial, names, cfg, *, out, plots: bool, exp
     any stage runs: a name too long stops it with nothing written."""
     if exports:
         from gaitcli.io.atomic import check_output_file
-        from gaitcli.io.exports import export_targets
+        from gaitcli.run.exports import export_targets
         from gaitcli.run.pipeline import TrialRun
 
         run = TrialRun(trial, out, cfg)
@@ -236,10 +236,13 @@ def _run_exporting(console: Console, trial, names, cfg, *, out, plots: bool, exp
             check_output_file(path)
     console.run(trial, names, cfg, out=out, plots=plots, show=show, **options)
     if exports:
-        from gaitcli.io.exports import export_trial
+        from gaitcli.run.exports import export_trial
 
-        for path in export_trial(run.out_root, set(exports), trial_c3d=run.trial.trial_path):
+        written, notes = export_trial(run.out_root, set(exports), trial_c3d=run.trial.trial_path)
+        for path in written:
             console.info(f"idyn: exported {path}")
+        for note in notes:
+            console.info(f"idyn: {note}")
 
 
 @gait.command("emg")
@@ -660,7 +663,7 @@ def report_command(console: Console, out_dirs, reference, exports, compare, out)
     for page in pages:
         console.info(f"report: wrote {page.path}")
     if exports:
-        from gaitcli.io.exports import export_trial
+        from gaitcli.run.exports import export_trial
         from gaitcli.run.trial import open_trial
 
         kind, root = find_report(Path(out_dir).resolve())
@@ -670,8 +673,11 @@ def report_command(console: Console, out_dirs, reference, exports, compare, out)
                 continue
             trial_file = open_trial(output.parent).trial_path if output.name == "gait_out" else None
             formats = set(exports) if trial_file is not None else set(exports) - {"c3d"}
-            for path in export_trial(output, formats, trial_c3d=trial_file):
+            written, notes = export_trial(output, formats, trial_c3d=trial_file)
+            for path in written:
                 console.info(f"report: exported {path}")
+            for note in notes:
+                console.info(f"report: {note}")
 
 
 def _compare(console: Console, refs, band, out: Path) -> None:

@@ -52,7 +52,8 @@ class Trial:
     processing step, in order (written into every HDF5 file's attributes).
     ``lab_to_model`` (3, 3): the rotation from the lab's axes, ``v_model = R @ v_lab``
     (a standing trial read later is turned the same way). ``subject_metadata``: what the
-    trial file records about the subject (:class:`~gaitcli.core.recording.Recording`).
+    trial file records about the subject (:class:`~gaitcli.core.recording.Recording`). ``marker_labels``: the
+    lab label of each marker the marker set renamed {landmark: lab label} (the exports write the lab's labels).
     """
 
     markers: Markers
@@ -62,6 +63,7 @@ class Trial:
     source: str = ""
     lab_to_model: np.ndarray | None = None
     subject_metadata: dict[str, float] = dataclasses.field(default_factory=dict)
+    marker_labels: dict[str, str] = dataclasses.field(default_factory=dict)
 
     @property
     def time_s(self) -> np.ndarray:

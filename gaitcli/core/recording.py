@@ -94,7 +94,8 @@ class Recording:
     ``subject_metadata``: numbers the file itself records about the subject, by their C3D
     parameter (``{"PROCESSING:Bodymass": 73.4}``), in the file's units. ``events``: the gait events the file
     records (C3D EVENT group; source ``file``), seconds from the first marker frame; empty where it has none.
-    ``analogs``: its analog channels that are no force plate's (None where it has none).
+    ``analogs``: its analog channels that are no force plate's (None where it has none). ``marker_labels``: the
+    lab label each marker renamed by the subject's marker set was read under {landmark: lab label}.
     """
 
     markers: Markers
@@ -105,3 +106,4 @@ class Recording:
     subject_metadata: dict[str, float] = field(default_factory=dict)
     events: Events = field(default_factory=Events)
     analogs: Analogs | None = None
+    marker_labels: dict[str, str] = field(default_factory=dict)

@@ -1,14 +1,14 @@
-"""Exports of a trial's idyn results for other tools (``gait idyn --export``, ``gait report --export``).
+"""Exports of a trial's idyn results for other tools: the model-free files (``gaitcli.run.exports`` assembles them
+with the model's own, ``dynamics/opensim.py``).
 
-``opensim`` writes into ``gait_out/export/opensim/``: ``markers.trc`` (the filtered markers, mm), ``coordinates.mot``
-(the 27 coordinates over time in the tables' clinical signs: angles in degrees, pelvis translations in m),
-``grf.mot`` (each foot's ground reaction in the column layout OpenSim's ExternalLoads read:
-``r_ground_force_vx…vz``, ``r_ground_force_px…pz``, ``r_ground_torque_x…z``, and ``l_``), ``joint_moments.sto``
-(the 21 joint moments, N·m, NaN where the foot's load is unknown) and ``external_loads.xml`` (the ExternalLoads
-set-up that applies grf.mot to ``calcn_r`` and ``calcn_l``). OpenSim's axes are y up: a model-axes vector (x
-forward, y left, z up) becomes (x, z, −y), so x stays forward and z points to the right. The free moment is
-about the vertical (OpenSim's y). Where a foot's load is unknown (a stance off the plates) its force is what the
-plates gave it (zero) and its point the origin: OpenSim cannot know either.
+For ``opensim`` (``gait_out/export/opensim/``): ``markers.trc`` (:func:`write_lab_markers`: the filtered markers,
+mm, under the lab's own labels, without unlabelled and virtual points), ``grf.mot`` (:func:`write_ground_reactions`:
+each foot's ground reaction in the column layout OpenSim's ExternalLoads read: ``r_ground_force_vx…vz``,
+``r_ground_force_px…pz``, ``r_ground_torque_x…z``, and ``l_``) and ``external_loads.xml`` (the ExternalLoads set-up
+that applies grf.mot to ``calcn_r`` and ``calcn_l``). OpenSim's axes are y up: a model-axes vector (x forward, y
+left, z up) becomes (x, z, −y), so x stays forward and z points to the right. The free moment is about the
+vertical (OpenSim's y). Where a foot's load is unknown (a stance off the plates) its force is what the plates gave
+it (zero) and its point the origin: OpenSim cannot know either.
 
 ``c3d`` writes ``gait_out/export/<trial>.c3d``: a copy of the trial's C3D with Vicon's Plug-in Gait points added
 per side — ``RPelvisAngles``, ``RHipAngles``, ``RKneeAngles``, ``RAnkleAngles``, ``RFootProgressAngles`` (deg),
@@ -24,6 +24,7 @@ group holds the gait events the filter used (the file's own or detected), as Vic
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -35,9 +36,6 @@ from gaitcli.io.h5 import read_result
 from gaitcli.io.opensim import write_motion, write_trc
 from gaitcli.io.stage_files import IdynTables, read_idyn_tables
 
-FORMATS = ("opensim", "c3d")
-#: the files of ``export/opensim/``
-OPENSIM_FILES = ("markers.trc", "coordinates.mot", "grf.mot", "joint_moments.sto", "external_loads.xml")
 #: model axes (x forward, y left, z up) → OpenSim's (x forward, y up, z right)
 TO_OPENSIM = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 C3D_JOINTS = (("hip", "Hip"), ("knee", "Knee"), ("ankle", "Ankle"))
@@ -62,24 +60,61 @@ EXTERNAL_FORCE = """      <ExternalForce name="{side}_foot">
       </ExternalForce>"""
 
 
-def _trial(out_root: Path) -> Trial:
+def filtered_trial(out_root: Path) -> Trial:
+    """The filtered trial of an output root (``filter/filter.h5``)."""
     return read_result(out_root / "filter" / "filter.h5", Trial, "trial", what="gait filter")
 
 
-def export_opensim(out_root: Path) -> list[Path]:
-    """``export/opensim/`` from ``out_root``'s filter and idyn outputs (module docstring)."""
-    trial = _trial(out_root)
-    idyn = read_idyn_tables(out_root / "idyn" / "idyn.h5")
-    folder = out_root / "export" / "opensim"
-    folder.mkdir(parents=True, exist_ok=True)
+#: Vicon's virtual points, which Plug-in Gait computes and a C3D stores beside the markers: each segment's origin,
+#: anterior, lateral and proximal points (PELO, LFEA, RTOP, HEDL, …), joint centres and the centre of mass
+VIRTUAL_POINT = re.compile(r"^(?:(?:PEL|HED|TRX|[LR](?:FE|TI|FO|TO|CL|HU|RA|HN))[OALP]|[LR]?[HKAESW]JC|"
+                           r"CentreOfMass(?:Floor)?)$")
+
+
+def marker_kind(label: str) -> str:
+    """``unlabelled`` (Vicon's ``*115``: a trajectory nobody named), ``virtual`` (:data:`VIRTUAL_POINT`) or
+    ``marker``."""
+    if label.startswith("*"):
+        return "unlabelled"
+    return "virtual" if VIRTUAL_POINT.match(label) else "marker"
+
+
+def lab_markers(trial: Trial) -> tuple[list[str], list[int], dict[str, list[str]]]:
+    """The lab's labels of the trial's markers (as in the file: the marker set's renaming undone), the column of
+    each in ``trial.markers``, and the labels left out by kind (``unlabelled``, ``virtual``). A lab marker that
+    carries two landmarks (one SACR for both PSIS) is written once."""
+    labels, columns, left_out = [], [], {"unlabelled": [], "virtual": []}
+    for k, name in enumerate(trial.markers.labels):
+        label = trial.marker_labels.get(name, name)
+        kind = marker_kind(label)
+        if kind != "marker":
+            left_out[kind].append(label)
+        elif label not in labels:
+            labels.append(label)
+            columns.append(k)
+    return labels, columns, left_out
+
+
+def write_lab_markers(path: Path, trial: Trial) -> tuple[Path, str | None]:
+    """``markers.trc`` (:func:`lab_markers`, mm, OpenSim's axes) and one line naming what was left out (None when
+    nothing was)."""
     markers = trial.markers
-    written = [write_trc(folder / "markers.trc", markers.labels, 1000.0 * markers.positions_m @ TO_OPENSIM.T,
-                         markers.rate_hz, first_frame=markers.first_frame)]
-    time = idyn.time_s
-    written.append(write_motion(folder / "coordinates.mot", {"time": time, **dict(zip(idyn.coordinates.columns,
-                                                                                      idyn.coordinates.values.T))},
-                                in_degrees=True, name="coordinates"))
-    grf = {"time": time}
+    labels, columns, left_out = lab_markers(trial)
+    positions_mm = 1000.0 * markers.positions_m[:, columns] @ TO_OPENSIM.T
+    written = write_trc(path, labels, positions_mm, markers.rate_hz, first_frame=markers.first_frame)
+    parts = [f"{len(v)} {kind} ({_shortened(v)})" for kind, v in left_out.items() if v]
+    return written, (f"{path.name}: {len(labels)} markers under the lab's labels; left out " + " and ".join(parts)
+                     + " points") if parts else None
+
+
+def _shortened(labels: list[str], shown: int = 4) -> str:
+    return ", ".join(labels[:shown]) + (", …" if len(labels) > shown else "")
+
+
+def write_ground_reactions(path: Path, trial: Trial, time_s: np.ndarray) -> Path:
+    """``grf.mot``: each foot's force (N), point (m) and free moment (N·m) in OpenSim's axes and ExternalLoads'
+    column names (module docstring)."""
+    grf = {"time": time_s}
     for s in ("r", "l"):
         foot = trial.feet[s]
         force = np.nan_to_num(foot.force_N) @ TO_OPENSIM.T
@@ -92,13 +127,14 @@ def export_opensim(out_root: Path) -> list[Path]:
             grf[f"{s}_ground_force_p{a}"] = point[:, k]
         for k, a in enumerate("xyz"):
             grf[f"{s}_ground_torque_{a}"] = torque[:, k]
-    written.append(write_motion(folder / "grf.mot", grf, in_degrees=False, name="grf"))
-    moments = idyn.known_moments_Nm(idyn.coordinate_moments)
-    written.append(write_motion(folder / "joint_moments.sto", {"time": time, **dict(zip(
-        idyn.coordinate_moments.columns, moments.T))}, in_degrees=False, name="joint_moments"))
-    with atomic_path(folder / "external_loads.xml") as tmp:
+    return write_motion(path, grf, in_degrees=False, name="grf")
+
+
+def write_external_loads(path: Path) -> Path:
+    """``external_loads.xml``: grf.mot's two feet applied to ``calcn_r`` and ``calcn_l``."""
+    with atomic_path(path) as tmp:
         tmp.write_text(EXTERNAL_LOADS.format(forces="\n".join(EXTERNAL_FORCE.format(side=s) for s in ("r", "l"))))
-    return written + [folder / "external_loads.xml"]
+    return path
 
 
 def c3d_points(idyn: IdynTables) -> tuple[dict[str, np.ndarray], dict[str, str]]:
@@ -141,7 +177,7 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
     if trial_c3d.suffix.lower() != ".c3d":
         raise InputError(trial_c3d, "--export", "c3d needs a C3D trial (this trial is a CSV)")
     idyn = read_idyn_tables(out_root / "idyn" / "idyn.h5")
-    events = _trial(out_root).events
+    events = filtered_trial(out_root).events
     points, descriptions = c3d_points(idyn)
     labels = list(points)
     target = out_root / "export" / f"{idyn.trial or trial_c3d.stem}.c3d"
@@ -153,26 +189,3 @@ def export_c3d(out_root: Path, trial_c3d: Path) -> list[Path]:
                   "GAITCLI:CONVENTION": idyn.moments.convention}
     return [add_points(trial_c3d, target, points, descriptions=descriptions, parameters=parameters,
                        events=events, merged=("POINT:ANGLES", "POINT:MOMENTS", "POINT:POWERS"))]
-
-
-def export_targets(out_root: Path, formats, *, trial_name: str) -> list[Path]:
-    """The files the exports ``formats`` of the trial (its folder's name) will write below ``out_root``: for
-    checking their names before any stage runs (:func:`gaitcli.io.atomic.check_output_file`)."""
-    targets = []
-    if "opensim" in formats:
-        targets += [out_root / "export" / "opensim" / name for name in OPENSIM_FILES]
-    if "c3d" in formats:
-        targets.append(out_root / "export" / f"{trial_name}.c3d")
-    return targets
-
-
-def export_trial(out_root: Path, formats, *, trial_c3d: Path | None = None) -> list[Path]:
-    """Every export in ``formats`` (``opensim``, ``c3d``) of a trial output root."""
-    written = []
-    if "opensim" in formats:
-        written += export_opensim(out_root)
-    if "c3d" in formats:
-        if trial_c3d is None:
-            raise InputError(out_root, "--export", "c3d needs the trial's C3D file")
-        written += export_c3d(out_root, trial_c3d)
-    return written

@@ -10,6 +10,7 @@ figures, exports and the reference read the files through it, so a damaged or fo
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -129,3 +130,46 @@ def read_idyn_tables(path: str | Path) -> IdynTables:
             residual_force_N=checked(h5["residuals/force"])[()], residual_moment_Nm=checked(h5["residuals/moment"])[()],
             body_mass_kg=float(h5["segments/mass"].attrs["body_mass_kg"]), trial=str(h5.attrs.get("trial", "")),
             cycles=read_gait_cycles(h5["gait_cycle"]) if "gait_cycle" in h5 else None)
+
+
+@dataclass(frozen=True)
+class IdynModel:
+    """What ``idyn.h5`` holds of the model itself, for exporting it: the 27 coordinates ``q`` (frames, 27; m and
+    rad, the model's signs, 3.1), the joint moments (frames, 7, 3; proximal on distal, global axes, N·m), the
+    pelvis residual force (N) and moment about the pelvis CoM (N·m), global; where each joint's load is known
+    (frames, 7) and where every contact's is (frames,); the segments' masses (8,) kg, inertias (8, 3, 3) kg·m²
+    about their CoMs in their axes, joint centres in the parent's and the child's frame (7, 3) m; gravity (m/s²)."""
+
+    time_s: np.ndarray
+    q: np.ndarray
+    joint_moments_global_Nm: np.ndarray
+    residual_force_N: np.ndarray
+    residual_moment_Nm: np.ndarray
+    moment_known: np.ndarray
+    all_contacts_measured: np.ndarray
+    mass_kg: np.ndarray
+    inertia_kgm2: np.ndarray
+    joint_in_parent_m: np.ndarray
+    joint_in_child_m: np.ndarray
+    gravity_m_s2: float
+    trial: str = ""
+
+
+def read_idyn_model(path: str | Path) -> IdynModel:
+    """The :class:`IdynModel` of an ``idyn.h5`` (gravity: the run's configuration, 9.81 m/s² where it is not
+    recorded)."""
+    with open_h5(path, "gait idyn") as h5:
+        try:
+            gravity = float(json.loads(h5.attrs.get("stage_key", "{}"))["config"]["idyn"]["gravity_m_s2"])
+        except (KeyError, TypeError, ValueError):
+            gravity = 9.81
+        return IdynModel(
+            time_s=checked(h5["time"])[()], q=checked(h5["coordinates"])[()],
+            joint_moments_global_Nm=checked(h5["joint_moments_global"])[()],
+            residual_force_N=checked(h5["residuals/force"])[()], residual_moment_Nm=checked(h5["residuals/moment"])[()],
+            moment_known=checked(h5["joint_moments_known"])[()].astype(bool),
+            all_contacts_measured=checked(h5["residuals/all_contacts_measured"])[()].astype(bool),
+            mass_kg=checked(h5["segments/mass"])[()], inertia_kgm2=checked(h5["segments/inertia"])[()],
+            joint_in_parent_m=checked(h5["segments/joint_in_parent"])[()],
+            joint_in_child_m=checked(h5["segments/joint_in_child"])[()], gravity_m_s2=gravity,
+            trial=str(h5.attrs.get("trial", "")))

@@ -183,6 +183,12 @@ class MarkerSet:
         return (f"marker missing from the static trial: {label} (marker_set {self.name}: the "
                 f"{describe_landmark(landmark)}, {landmark}; needed for {purpose})")
 
+    def lab_labels(self, labels) -> dict[str, str]:
+        """{landmark: the lab label of ``labels`` that :meth:`apply` renames to it}."""
+        chosen = {landmark: next((lab for lab in candidates if lab in labels), None)
+                  for landmark, candidates in self.landmarks.items()}
+        return {landmark: lab for landmark, lab in chosen.items() if lab is not None}
+
     def apply(self, markers: Markers, *, source: str | Path | None = None,
               explicit: Mapping[str, str] | None = None) -> Markers:
         """Rename the file's lab labels to model landmarks (one column per landmark found; a lab label that
@@ -195,11 +201,7 @@ class MarkerSet:
             raise InputError(source, "marker_map",
                              f"labels not in the marker file: {', '.join(missing)} "
                              f"(the file has: {', '.join(markers.labels)})")
-        chosen = {}
-        for landmark, candidates in self.landmarks.items():
-            label = next((lab for lab in candidates if lab in markers.labels), None)
-            if label is not None:
-                chosen[landmark] = label
+        chosen = self.lab_labels(markers.labels)
         used = set(chosen.values())
         kept = [lab for lab in markers.labels if lab not in used]
         new_labels = tuple(chosen) + tuple(kept)

@@ -39,7 +39,7 @@ from gaitcli.run.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.run.trial import TrialFolder, open_trial, sha256
 
 #: bump when a stage's output files change, so that older outputs count as stale
-OUTPUT_FORMAT = 3
+OUTPUT_FORMAT = 3  # 3: idyn.h5's gait_cycle table; filter.h5's trial records the lab's marker labels
 
 
 @dataclass(frozen=True)
@@ -69,6 +69,7 @@ def load_recording(trial: TrialFolder) -> Recording:
         recording = read_c3d(trial.trial_path)
     else:
         recording = read_csv_trial(trial.trial_path, trial.forces_path)
+    recording.marker_labels = trial.subject.markers.lab_labels(recording.markers.labels)
     recording.markers = trial.subject.markers.apply(recording.markers, source=trial.subject_path,
                                                     explicit=trial.subject.marker_map)
     recording.notes.extend(trial.subject.notes)

@@ -446,7 +446,8 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                   events=detection.events, history=history,
                   source="" if recording.source is None else str(recording.source),
                   lab_to_model=np.asarray(recording.lab_to_model, float),
-                  subject_metadata=dict(recording.subject_metadata))
+                  subject_metadata=dict(recording.subject_metadata),
+                  marker_labels=dict(recording.marker_labels))
     return FilterResult(trial=trial, recording=recording, gaps=gaps, plates=plates,
                         plates_analog=plates_analog, plate_loads_per_foot=per_foot, plate_owner=detection.owner,
                         contacts=detection.contacts, design_cutoff_hz=design,

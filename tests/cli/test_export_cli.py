@@ -15,6 +15,7 @@ from gaitcli.io.opensim import read_motion, read_trc
 from gaitcli.kinematics.model import JOINTS, MOMENTS
 
 from .conftest import copy_sample, gait
+from .opensim_tools import largest_differences, opensim_trc_labels
 
 
 @pytest.fixture(scope="module")
@@ -30,6 +31,7 @@ def test_the_opensim_files_read_back_to_idyns_tables(exported):
     out = exported / "gait_out"
     folder = out / "export" / "opensim"
     _, labels, _, markers = read_trc(folder / "markers.trc")
+    assert sorted(labels) == sorted(read_c3d(exported / "trial.c3d").markers.labels)  # the lab's own
     filtered = pd.read_csv(out / "filter" / "markers_filtered.csv")
     lab = labels[0]
     # the CSV: 6 significant digits
@@ -38,20 +40,40 @@ def test_the_opensim_files_read_back_to_idyns_tables(exported):
     np.testing.assert_allclose(markers[:, 0, 2], -1000 * filtered[f"{lab}_y_m"], atol=0.01)  # z right
     header, motion = read_motion(folder / "coordinates.mot")
     assert header["inDegrees"] == "yes" and header["nColumns"] == "28"
-    kinematics = pd.read_csv(out / "idyn" / "coordinates.csv")  # OpenSim's coordinates: the model's 27
-    for name in ("hip_r_flexion", "knee_l_flexion", "pelvis_x"):  # deg; m
-        np.testing.assert_allclose(motion[name], kinematics[name], rtol=1e-5, atol=1e-6)
+    clinical = pd.read_csv(out / "idyn" / "coordinates.csv")  # the 27 coordinates, clinical signs
+    for name, theirs, sign in (("hip_r_flexion", "hip_flexion_r", 1), ("knee_l_flexion", "knee_angle_l", 1),
+                               ("ankle_l_flexion", "ankle_angle_l", 1), ("hip_l_adduction", "hip_adduction_l", 1),
+                               ("ankle_r_adduction", "subtalar_angle_r", 1), ("pelvis_z", "pelvis_ty", 1),
+                               ("pelvis_y", "pelvis_tz", -1), ("pelvis_rot_y", "pelvis_tilt", -1),
+                               ("lumbar_flexion", "lumbar_extension", -1)):  # deg; m
+        np.testing.assert_allclose(motion[theirs], sign * clinical[name], rtol=1e-5, atol=1e-6)
     header, moments = read_motion(folder / "joint_moments.sto")
-    with h5py.File(out / "idyn" / "idyn.h5", "r") as h5:  # the model's generalized forces' convention
-        knee = h5["joint_moments_clinical"][:, MOMENTS.index("knee_r_flexion_moment")]
+    with h5py.File(out / "idyn" / "idyn.h5", "r") as h5:  # the rotation axis is the shank's own z: Q = τ_z
+        knee = h5["joint_moments_clinical"][:, MOMENTS.index("knee_r_rotation_moment")]
         knee[~h5["joint_moments_known"][:, JOINTS.index("knee_r")].astype(bool)] = np.nan
-    assert header["inDegrees"] == "no"
-    np.testing.assert_allclose(moments["knee_r_flexion_moment"], knee, rtol=1e-5, atol=1e-6, equal_nan=True)
+    assert header["inDegrees"] == "no" and header["nColumns"] == "28"
+    np.testing.assert_allclose(moments["knee_rotation_r_moment"], knee, rtol=1e-5, atol=1e-6, equal_nan=True)
     _, grf = read_motion(folder / "grf.mot")
     filter_grf = pd.read_csv(out / "filter" / "grf.csv")
     np.testing.assert_allclose(grf["r_ground_force_vy"], filter_grf["foot_r_force_z_N"].fillna(0), atol=1e-3)
     xml = (folder / "external_loads.xml").read_text()
     assert "<applied_to_body>calcn_r</applied_to_body>" in xml and "<force_identifier>l_ground_force_v<" in xml
+    assert '<Body name="calcn_r">' in (folder / "model.osim").read_text()
+
+
+def test_opensims_inverse_dynamics_on_the_export_gives_gaitclis_moments(exported, tmp_path):
+    """OpenSim's InverseDynamicsTool on model.osim + coordinates.mot + external_loads.xml: gaitcli's generalized
+    forces of the same motion to 1e-3 N·m (and N), every frame, all 27 coordinates (tests/cli/opensim_tools.py)."""
+    differences = largest_differences(exported / "gait_out", tmp_path)
+    assert len(differences) == 27
+    assert max(differences.values()) < 1e-3, differences
+
+
+def test_opensim_reads_the_trc_under_the_labs_labels(exported, tmp_path):
+    folder = exported / "gait_out" / "export" / "opensim"
+    labels, rows = opensim_trc_labels(folder / "markers.trc", tmp_path)
+    assert sorted(labels) == sorted(read_c3d(exported / "trial.c3d").markers.labels)
+    assert rows == len(read_motion(folder / "coordinates.mot")[1]["time"])
 
 
 def test_the_c3d_copy_carries_angles_and_moments_and_the_markers_as_they_were(exported):

@@ -22,8 +22,10 @@ import pytest
 
 from gaitcli.io.opensim import read_motion, read_trc
 from tests.conftest import REPO
+from tests.opensim_runner import opensim_installed
 
 from .conftest import EXPORTS, Result, build_once, gait
+from .opensim_tools import largest_differences, opensim_trc_labels
 
 pytestmark = pytest.mark.shared
 VICON = [f"{side}{name}" for side in "RL" for name in ("PelvisAngles", "FootProgressAngles", "HipAngles",
@@ -112,3 +114,42 @@ def test_the_stair_sessions_own_vicon_points_are_replaced_and_said(exported, sha
     start = c["header"]["points"]["first_frame"] / point["RATE"]["value"][0]
     times = np.asarray(group["TIMES"]["value"])
     np.testing.assert_allclose(60 * times[0] + times[1] - start, events.time_s, atol=1e-5)
+
+
+#: the stair session's C3D points that are no marker: Vicon's unlabelled trajectories and Plug-in Gait's virtual
+#: points (segment origins and axes, joint centres, the centre of mass), as its POINT:LABELS list them
+STAIR_UNLABELLED = tuple(f"*{k}" for k in range(115, 157))
+STAIR_VIRTUAL = (tuple(f"{seg}{p}" for seg in ("PEL", "HED", "TRX") for p in "OALP")
+                 + tuple(f"{s}{seg}{p}" for s in "LR" for seg in ("FE", "TI", "FO", "TO", "CL", "HU", "RA", "HN")
+                         for p in "OALP") + ("CentreOfMass", "CentreOfMassFloor"))
+
+
+def test_the_stair_sessions_trc_keeps_the_labs_markers_under_their_labels_and_says_what_it_left_out(exported,
+                                                                                                  tmp_path):
+    folder, run = exported["pig"]
+    assert run.returncode == 0, run.describe()
+    c3d = ezc3d.c3d(str(folder / "trial.c3d"))
+    point = c3d["parameters"]["POINT"]
+    outputs = {lab for group in ("ANGLES", "FORCES", "MOMENTS", "POWERS") for lab in point[group]["value"]}
+    labels = [lab for lab in _labels(c3d) if lab not in outputs]
+    assert set(STAIR_UNLABELLED) | set(STAIR_VIRTUAL) <= set(labels)
+    markers = [lab for lab in labels if lab not in STAIR_UNLABELLED + STAIR_VIRTUAL]
+    _, written, _, positions = read_trc(folder / "gait_out" / "export" / "opensim" / "markers.trc")
+    assert sorted(written) == sorted(markers) and {"RASI", "RKNE", "RTOE", "LBHD"} <= set(written)
+    (said,) = [line for line in run.stdout.splitlines() + run.stderr_lines if "left out" in line]
+    assert f"{len(markers)} markers under the lab's labels" in said
+    assert f"left out {len(STAIR_UNLABELLED)} unlabelled (*115" in said and f"{len(STAIR_VIRTUAL)} virtual" in said
+    raw = c3d["data"]["points"][:3, labels.index("RASI")]  # mm, lab axes; the .trc's filtered, in OpenSim's
+    filtered = positions[:, written.index("RASI")]
+    assert np.nanmax(np.abs(np.linalg.norm(filtered, axis=1) - np.linalg.norm(raw.T, axis=1))) < 5.0
+    if opensim_installed():
+        trc = folder / "gait_out" / "export" / "opensim" / "markers.trc"
+        assert opensim_trc_labels(trc, tmp_path)[0] == list(written)
+
+
+def test_opensims_inverse_dynamics_on_the_stair_sessions_export_gives_gaitclis_moments(exported, tmp_path):
+    """As tests/cli/test_export_cli.py's on the synthetic walk: all 27 generalized forces to 1e-3 N·m (and N)."""
+    folder, run = exported["pig"]
+    assert run.returncode == 0, run.describe()
+    differences = largest_differences(folder / "gait_out", tmp_path)
+    assert max(differences.values()) < 1e-3, differences
