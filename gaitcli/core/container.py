@@ -53,6 +53,8 @@ class Trial:
     ``lab_to_model`` (3, 3): the rotation from the lab's axes, ``v_model = R @ v_lab``
     (a standing trial read later is turned the same way). ``subject_metadata``: what the
     trial file records about the subject (:class:`~gaitcli.core.recording.Recording`).
+    ``filter_edge_frames``: the frames at each end of a filtered marker run whose accelerations the zero-lag
+    filter's start-up corrupts (:func:`~gaitcli.signal.butterworth.edge_frames`; 0: not filtered).
     """
 
     markers: Markers
@@ -62,6 +64,7 @@ class Trial:
     source: str = ""
     lab_to_model: np.ndarray | None = None
     subject_metadata: dict[str, float] = dataclasses.field(default_factory=dict)
+    filter_edge_frames: int = 0
 
     @property
     def time_s(self) -> np.ndarray:
