@@ -7,10 +7,11 @@ nothing.
 1. Synthetic (``simulate_trial(marker_set="plug_in_gait")``: 1 mm noise, 10 mm skin artefact, the real filter at
    its defaults): the static as it is; with a knee alignment device instead of the knee markers
    (``synth/devices.py``); with medial knee and ankle markers (the lateral ones mirrored through the true joint
-   centres, walk and static); noise-free markers without the filter (``cutoff_hz: 0``: the method's own error;
-   the difference is the filter's and the noise's share). Per side and
-   joint: RMS against the truth (N·m/kg, where the foot's load is known) and the slope of the least-squares
-   line of gaitcli's against the truth.
+   centres, walk and static), and with thigh and shank clusters too; over three plates (``plates=3``), and with
+   the device, medial markers and three plates together; noise-free, filtered, with only the plates filtered,
+   and with nothing filtered (the method's own error; the differences are the filter's and the noise's share).
+   Per side and joint: RMS against the truth (N·m/kg, where the moment is known: the foot's load known,
+   outside the filter's edge frames) and the slope of the least-squares line of gaitcli's against the truth.
 2. ``../shared/data/pig`` (Vicon's own moments in the C3D) rewritten with: medial knee and ankle markers
    (the lateral ones mirrored through Vicon's own FEO/TIO), thigh and shank clusters (three markers each, rigid in
    Vicon's femur and tibia frames FEO/FEA/FEL/FEP, TIO/…), a sacral marker in place of the PSIS markers, and a
