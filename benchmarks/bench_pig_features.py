@@ -7,10 +7,11 @@ nothing.
 1. Synthetic (``simulate_trial(marker_set="plug_in_gait")``: 1 mm noise, 10 mm skin artefact, the real filter at
    its defaults): the static as it is; with a knee alignment device instead of the knee markers
    (``synth/devices.py``); with medial knee and ankle markers (the lateral ones mirrored through the true joint
-   centres, walk and static); noise-free markers without the filter (``cutoff_hz: 0``: the method's own error;
-   the difference is the filter's and the noise's share). Per side and
-   joint: RMS against the truth (N·m/kg, where the foot's load is known) and the slope of the least-squares
-   line of gaitcli's against the truth.
+   centres, walk and static), and with thigh and shank clusters too; over three plates (``plates=3``), and with
+   the device, medial markers and three plates together; noise-free, filtered, with only the plates filtered,
+   and with nothing filtered (the method's own error; the differences are the filter's and the noise's share).
+   Per side and joint: RMS against the truth (N·m/kg, where the moment is known: the foot's load known,
+   outside the filter's edge frames) and the slope of the least-squares line of gaitcli's against the truth.
 2. ``../shared/data/pig`` (Vicon's own moments in the C3D) rewritten with: medial knee and ankle markers
    (the lateral ones mirrored through Vicon's own FEO/TIO), thigh and shank clusters (three markers each, rigid in
    Vicon's femur and tibia frames FEO/FEA/FEL/FEP, TIO/…), a sacral marker in place of the PSIS markers, and a
@@ -37,6 +38,7 @@ from gaitcli.core.recording import Markers, Recording
 from gaitcli.dynamics.stage import IdynConfig, run_idyn
 from gaitcli.kinematics.conventions import PIG_MOMENTS, moments_to_clinical, moments_to_plug_in_gait
 from gaitcli.kinematics.markerset import marker_set
+from gaitcli.kinematics.model import JOINTS
 from gaitcli.kinematics.model import MOMENTS as MODEL_MOMENTS
 from gaitcli.kinematics.subject import Subject
 from gaitcli.signal.stage import FilterConfig, filter_trial
@@ -67,26 +69,61 @@ def with_medial_markers(markers: Markers, centres: dict[str, np.ndarray]) -> Mar
     return Markers(tuple(columns), np.stack(list(columns.values()), axis=1), markers.rate_hz, markers.first_frame)
 
 
+def with_clusters(markers: Markers, centres: dict[str, np.ndarray], rng: np.random.Generator) -> Markers:
+    """``markers`` with thigh and shank clusters (RTH1–3, RSH1–3, …): three markers each, rigid in a frame of the
+    true joint centres and the knee marker's direction, 1 mm noise. Plug-in Gait tracks by its wands and
+    ignores them, as Nexus does: they test that their presence changes nothing."""
+    columns = {lab: markers.positions_m[:, i] for i, lab in enumerate(markers.labels)}
+
+    def unit(v):
+        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+    for side, prefix in (("r", "R"), ("l", "L")):
+        for segment, top, bottom in (("TH", "HJC", "KJC"), ("SH", "KJC", "AJC")):
+            proximal = unit(centres[f"{top}{side}"] - centres[f"{bottom}{side}"])
+            knee = columns[f"{prefix}KNE"] - centres[f"KJC{side}"]
+            lateral = unit(knee - np.sum(knee * proximal, axis=-1, keepdims=True) * proximal)
+            anterior = np.cross(proximal, lateral) * (1 if side == "r" else -1)
+            first = (centres[f"{top}{side}"] + centres[f"{bottom}{side}"]) / 2 + 0.07 * lateral
+            for k, p in enumerate((first, first + 0.05 * anterior, first + 0.06 * proximal)):
+                columns[f"{prefix}{segment}{k + 1}"] = p + rng.normal(0.0, 0.001 / np.sqrt(3), p.shape)
+    return Markers(tuple(columns), np.stack(list(columns.values()), axis=1), markers.rate_hz, markers.first_frame)
+
+
 def synthetic() -> None:
+    """The synthetic variants against the truth, per joint and side over the frames whose moments are known (the
+    foot's load known, outside the filter's edge frames: ``IdynResult.moment_known``)."""
     trial = simulate_trial(seed=2, marker_set="plug_in_gait")
+    three = simulate_trial(seed=2, marker_set="plug_in_gait", plates=3)
     exact = simulate_trial(seed=2, marker_set="plug_in_gait", noise_mm=0.0, artefact_mm=0.0)
     preset = marker_set("plug_in_gait")
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
                       hip_joint_centre="davis")
     walk_centres = trial.joint_centres_m()
     static_centres = trial.calibration.joint_centres_m
-    truth = moments_to_clinical(trial.joint_moments_Nm) / MASS_KG
+    medial = with_medial_markers(trial.markers, walk_centres)
+    medial_static = with_medial_markers(trial.static, static_centres)
+    rng = np.random.default_rng(7)
     variants = {
         "as recorded": (trial, trial.markers, trial.static, FilterConfig()),
         "knee alignment device": (trial, trial.markers, with_knee_alignment_device(trial.static, static_centres),
                                   FilterConfig()),
-        "medial markers": (trial, with_medial_markers(trial.markers, walk_centres),
-                           with_medial_markers(trial.static, static_centres), FilterConfig()),
-        "noise-free, not filtered": (exact, exact.markers, exact.static, FilterConfig(cutoff_hz=0.0)),
+        "medial markers": (trial, medial, medial_static, FilterConfig()),
+        "medial markers + clusters": (trial, with_clusters(medial, walk_centres, rng),
+                                      with_clusters(medial_static, static_centres, rng), FilterConfig()),
+        "three plates": (three, three.markers, three.static, FilterConfig()),
+        "KAD + medial + 3 plates": (three, with_medial_markers(three.markers, three.joint_centres_m()),
+                                    with_knee_alignment_device(with_medial_markers(three.static, static_centres),
+                                                               static_centres), FilterConfig()),
+        "noise-free, filtered": (exact, exact.markers, exact.static, FilterConfig()),
+        "noise-free, plates filtered": (exact, exact.markers, exact.static, FilterConfig(cutoff_hz=0.0)),
+        "noise-free, not filtered": (exact, exact.markers, exact.static,
+                                     FilterConfig(cutoff_hz=0.0, force_cutoff_hz=0.0)),
     }
     print("Synthetic Plug-in Gait walk: sagittal moments against the truth (RMS N·m/kg, slope)")
     print(f"{'variant':28s} " + " ".join(f"{j + '_' + s:>15s}" for j, s in SAGITTAL))
     for name, (source, walk, static, cfg) in variants.items():
+        truth = moments_to_clinical(source.joint_moments_Nm) / MASS_KG
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             filtered = filter_trial(Recording(preset.apply(walk), source.plates, subject_metadata=source.metadata),
@@ -99,7 +136,7 @@ def synthetic() -> None:
             sense = "plantarflexor" if joint == "ankle" else "extensor"
             got = -shown[:, PIG_MOMENTS.index(f"{joint}_{side}_{sense}_moment")]
             want = truth[:, MODEL_MOMENTS.index(f"{joint}_{side}_flexion_moment")]
-            known = result.foot_measured[side]
+            known = result.moment_known[:, JOINTS.index(f"{joint}_{side}")]
             _, slope, rms = fit(got[known], want[known])
             cells.append(f"{rms:6.3f} {slope:5.2f}  ")
         print(f"{name:28s} " + " ".join(f"{c:>15s}" for c in cells))

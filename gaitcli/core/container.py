@@ -54,6 +54,8 @@ class Trial:
     (a standing trial read later is turned the same way). ``subject_metadata``: what the
     trial file records about the subject (:class:`~gaitcli.core.recording.Recording`). ``marker_labels``: the
     lab label of each marker the marker set renamed {landmark: lab label} (the exports write the lab's labels).
+    ``filter_edge_frames``: the frames at each end of a filtered marker run whose accelerations the zero-lag
+    filter's start-up corrupts (:func:`~gaitcli.signal.butterworth.edge_frames`; 0: not filtered).
     """
 
     markers: Markers
@@ -64,6 +66,7 @@ class Trial:
     lab_to_model: np.ndarray | None = None
     subject_metadata: dict[str, float] = dataclasses.field(default_factory=dict)
     marker_labels: dict[str, str] = dataclasses.field(default_factory=dict)
+    filter_edge_frames: int = 0
 
     @property
     def time_s(self) -> np.ndarray:

@@ -197,6 +197,8 @@ def summary(result: IdynResult) -> dict:
         "mass_kg": result.mass_kg,
         "mass_source": result.mass_source,
         "moment_frames": result.frames,
+        # the frames at each end of a tracked run whose moments are left unknown (the filter's start-up)
+        "filter_edge_frames": int(result.trial.filter_edge_frames),
         "segment_rms_marker_error_mm": {b: float(np.nanmean(result.segment_rms_m[:, i]) * 1000)
                                         if np.isfinite(result.segment_rms_m[:, i]).any() else None
                                         for i, b in enumerate(BODIES)},

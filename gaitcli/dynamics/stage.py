@@ -18,7 +18,7 @@ import numpy as np
 
 from gaitcli.core.container import Trial
 from gaitcli.core.events import SIDE_NAMES, SIDES, Events
-from gaitcli.core.numerics import frame_spans
+from gaitcli.core.numerics import frame_spans, true_runs
 from gaitcli.core.physics import GRAVITY_M_S2
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.validate import parameter
@@ -149,18 +149,34 @@ class IdynResult:
     def moment_known(self) -> np.ndarray:
         """(n, 7) whether each joint's moment is meaningful: a leg's joints where its foot's load is known (a
         joint's moment depends only on the bodies distal to it and their loads); the lumbar joint always (the
-        HAT carries no measured load; ``hat_tracked`` says whether its motion was measured)."""
+        HAT carries no measured load; ``hat_tracked`` says whether its motion was measured); no joint within
+        the filter's edge frames of a tracked run's ends (:func:`settled_frames`)."""
         known = np.ones((self.q.shape[0], len(JOINTS)), bool)
         for k, joint in enumerate(JOINTS):
             if joint != "lumbar":
                 known[:, k] = self.foot_measured[joint[-1]]
-        return known
+        return known & settled_frames(self.q, self.trial.filter_edge_frames)[:, None]
 
     @property
     def hat_tracked(self) -> bool:
         """Whether the HAT had markers of its own (else it is locked to the pelvis, and the lumbar moment and
         the pelvis residuals are those of a HAT that moves with the pelvis)."""
         return "hat" not in self.calibration.locked
+
+
+def settled_frames(q: np.ndarray, edge_frames: int) -> np.ndarray:
+    """(n,) frames farther than ``edge_frames`` from either end of every run in which a coordinate of ``q``
+    (n, 27) is finite: the zero-lag filter's start-up reverses the accelerations at a run's ends
+    (:func:`~gaitcli.signal.butterworth.edge_frames`; up to 0.45 N·m/kg RMS on a synthetic walk's hip moment
+    in its first frame, docs/decisions.md)."""
+    settled = np.ones(q.shape[0], bool)
+    if edge_frames <= 0:
+        return settled
+    for column in np.isfinite(q).T:
+        for start, stop in zip(*true_runs(column)):
+            settled[start:min(start + edge_frames, stop)] = False
+            settled[max(stop - edge_frames, start):stop] = False
+    return settled
 
 
 def joint_centre_gaps(states, poses, params: BodyParameters) -> np.ndarray:

@@ -39,7 +39,7 @@ from gaitcli.run.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.run.trial import TrialFolder, open_trial, sha256
 
 #: bump when a stage's output files change, so that older outputs count as stale
-OUTPUT_FORMAT = 3  # 3: idyn.h5's gait_cycle table; filter.h5's trial records the lab's marker labels
+OUTPUT_FORMAT = 3  # 3: idyn.h5's gait_cycle table; filter.h5's lab marker labels and filter edge frames
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from gaitcli.core.numerics import frame_spans
 from gaitcli.core.recording import Markers, Recording
 from gaitcli.core.validate import parameter
 from gaitcli.errors import GaitWarning, InputError
-from gaitcli.signal.butterworth import design_frequency_hz, lowpass
+from gaitcli.signal.butterworth import design_frequency_hz, design_sos, edge_frames, lowpass
 from gaitcli.signal.contacts import (
     not_wholly_on,
     other_foot_over,
@@ -447,7 +447,9 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> Filte
                   source="" if recording.source is None else str(recording.source),
                   lab_to_model=np.asarray(recording.lab_to_model, float),
                   subject_metadata=dict(recording.subject_metadata),
-                  marker_labels=dict(recording.marker_labels))
+                  marker_labels=dict(recording.marker_labels),
+                  filter_edge_frames=edge_frames(design_sos(cfg.cutoff_hz, rate, order=cfg.order)) if cfg.cutoff_hz
+                  else 0)
     return FilterResult(trial=trial, recording=recording, gaps=gaps, plates=plates,
                         plates_analog=plates_analog, plate_loads_per_foot=per_foot, plate_owner=detection.owner,
                         contacts=detection.contacts, design_cutoff_hz=design,

@@ -293,7 +293,7 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
                    artefact_mm: float = 10.0, strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78,
                    sex: str = "male", plate_noise_N: float = 1.0, period_s: float | None = None,
                    shared_plate: bool = False, marker_set: str = "dissertation",
-                   gait: str = "normative") -> SyntheticTrial:
+                   gait: str = "normative", plates: int = 2) -> SyntheticTrial:
     """Make a synthetic walking trial with known truth (nothing written).
 
     Two plates measure one right and one left stance in the middle of the walk. The stride
@@ -324,6 +324,9 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     marker_set : str
         :data:`SYNTH_MARKER_SETS`: the labels of that preset, without the Table A.6 markers it lacks
         and with its thigh and shank clusters.
+    plates : int
+        How many consecutive stances in the middle of the walk a plate each measures: 2 (one right, one
+        left) or 3 (as a lab with three plates in a row); 2 with ``shared_plate``.
     gait : str
         :data:`SYNTH_GAITS`: ``normative``, the normative curves re-timed over the stance foot
         (:mod:`~gaitcli.synth.gait`), or ``predicted``, the shipped muscle-driven prediction
@@ -335,6 +338,8 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     one_of(condition, CONDITIONS, where="--condition")
     one_of(marker_set, SYNTH_MARKER_SETS, where="--marker-set")
     one_of(gait, SYNTH_GAITS, where="--gait")
+    if plates not in (2, 3) or (shared_plate and plates != 2):
+        raise InputError(None, "plates", f"got {plates} (expected 2 or 3 plates; 2 with one shared plate)")
     if noise_mm < 0 or artefact_mm < 0:
         raise InputError(None, "--noise-mm", "expected noise and artefact amplitudes ≥ 0 mm")
     cond = CONDITIONS[condition]
@@ -380,7 +385,7 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     contacts = stance_contacts(design.stance, i)
     complete = sorted([c for c in contacts if c[1] > 0 and c[2] < j.size], key=lambda c: c[1])
     middle = len(complete) // 2 - 1
-    chosen = complete[middle:middle + 2]  # one right and one left stance in the middle of the walk
+    chosen = complete[middle:middle + plates]  # consecutive stances in the middle of the walk
     if shared_plate:
         plates = [plate_recording("plate1", [(feet[side], a, b) for side, a, b in chosen], rng, plate_noise_N)]
     else:

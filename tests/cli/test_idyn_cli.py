@@ -42,7 +42,7 @@ from gaitcli.io.c3d import read_c3d
 from gaitcli.io.c3d_write import write_c3d
 from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
 from gaitcli.kinematics.conventions import PIG_MOMENTS
-from gaitcli.kinematics.model import BODIES, COORDINATES, MOMENTS, RESIDUALS
+from gaitcli.kinematics.model import BODIES, COORDINATES, JOINTS, MOMENTS, RESIDUALS
 
 from .conftest import SAMPLES, Result, build_once, copy_sample, gait, gait_many
 
@@ -130,6 +130,8 @@ def coordinate_moments(folder: Path) -> pd.DataFrame:
     legs = pd.read_csv(folder / "joint_moments.csv")
     table["right_foot_load_known"] = legs["right_foot_load_known"]
     table["left_foot_load_known"] = legs["left_foot_load_known"]
+    for side in ("r", "l"):  # the load known, outside the filter's edge frames
+        table[f"leg_{side}_moment_known"] = known[:, JOINTS.index(f"hip_{side}")]
     return table
 
 
@@ -223,8 +225,13 @@ def test_noisy_sample_trial_moments_within_tolerance(runs):
     moments = coordinate_moments(out_dir(root, "normal"))
     truth = pd.read_csv(root / "normal" / "truth" / "joint_moments.csv")
     bound = {"hip": 0.1, "knee": 0.1, "ankle": 0.1}
+    edge = json.loads((out_dir(root, "normal") / "summary.json").read_text())["filter_edge_frames"]
+    assert edge == 5  # 6 Hz at 100 Hz: signal/butterworth.edge_frames
     for side, column in (("r", "right_foot_load_known"), ("l", "left_foot_load_known")):
-        known = moments[column].to_numpy() == 1
+        known = moments[f"leg_{side}_moment_known"].to_numpy()
+        inside = np.zeros(known.size, bool)
+        inside[edge:-edge] = True
+        np.testing.assert_array_equal(known, (moments[column].to_numpy() == 1) & inside)
         for joint in ("hip", "knee", "ankle"):
             name = f"{joint}_{side}_flexion_moment"
             error = (moments[name] - truth[name]).to_numpy()[known] / SAMPLE_MASS_KG["normal"]
@@ -358,10 +365,16 @@ def test_missing_thigh_markers_give_nan_frames_and_a_warning(runs):
     assert kin[thigh].to_numpy()[gap].size and np.isnan(kin[thigh].to_numpy()[gap]).all()
     assert np.isfinite(kin[list(COORDINATES)].to_numpy()[~gap]).all()
     assert np.isnan(moments[list(MOMENTS)].to_numpy()[gap]).all()
+    edge = json.loads((folder / "summary.json").read_text())["filter_edge_frames"]
+    ends = np.zeros(len(kin), dtype=bool)  # the filter's edge frames at the trial's ends
+    ends[:edge] = ends[-edge:] = True
+    beside = np.zeros(len(kin), dtype=bool)  # and at the ends of the right thigh's tracked runs, beside the gap
+    beside[GAP[0] - 1 - edge:GAP[0] - 1] = beside[GAP[1]:GAP[1] + edge] = True
+    assert np.isnan(moments[list(MOMENTS)].to_numpy()[ends | beside]).all()
     for side, column in (("r", "right_foot_load_known"), ("l", "left_foot_load_known")):
         leg = [m for m in MOMENTS if m.split("_")[1] == side]  # NaN elsewhere only where the foot's load is unknown
         known = moments[column].to_numpy() == 1
-        assert np.isfinite(moments[leg].to_numpy()[~gap & known]).all()
+        assert np.isfinite(moments[leg].to_numpy()[~gap & ~ends & ~beside & known]).all()
     # frames outside the gap agree with the complete sample trial's
     complete = pd.read_csv(out_dir(root, "normal") / "coordinates.csv")
     away = ~gap
