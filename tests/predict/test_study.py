@@ -225,3 +225,57 @@ def test_each_speed_of_a_study_tracks_its_own_reference_and_stride(tmp_path):
     # a run's own reference (--reference, a trial's strides) is every speed's, the stride in the box
     _, given = studies.tracked_cases(cases, PredictionInputs(params, own), {})
     assert all(reference is own for reference in given.values())
+
+
+def test_an_unconverged_case_starts_again_from_its_nearest_converged_neighbour():
+    # the prosthesis grid, every case converged but 1.33 m/s a) SACH and Seattle and b) SACH; Seattle a) from
+    # Seattle b) (the next weight set at its speed), SACH a) from SACH c) (b) did not converge either), b) SACH
+    # from SACH c) (as near as a), which is later); with no converged SACH at 1.33 m/s, from 1.00 m/s a)
+    cases = [c for chain in studies.study_cases(spec_of("prostheses")) for c in chain]
+    failed = {"v1.33_a_sach", "v1.33_a_seattle", "v1.33_b_sach"}
+    results = {c.name: Solved(1.0, c.name not in failed) for c in cases}
+    by_name = {c.name: c for c in cases}
+    again = {name: studies.retry_start(by_name[name], cases, results) for name in sorted(failed)}
+    assert again == {"v1.33_a_sach": "v1.33_c_sach", "v1.33_a_seattle": "v1.33_b_seattle",
+                     "v1.33_b_sach": "v1.33_c_sach"}
+    assert all(studies.retry_start(c, cases, results) is None for c in cases if c.name not in failed)
+    for name in ("v1.33_c_sach", "v1.33_d_sach"):
+        results[name] = Solved(1.0, False)
+    assert studies.retry_start(by_name["v1.33_a_sach"], cases, results) == "v1.00_a_sach"
+    results["v1.33_a_optimal"] = Solved(1.0, False)  # the optimal device starts from the feet, not again
+    assert studies.retry_start(by_name["v1.33_a_optimal"], cases, results) is None
+
+
+@pytest.mark.parametrize("converges", [True, False])
+def test_a_case_started_again_replaces_the_first_try_only_where_it_converges(monkeypatch, tmp_path, converges):
+    cases = {c.name: c for chain in studies.study_cases(spec_of("prostheses")) for c in chain}
+    case, neighbour = cases["v1.33_a_sach"], "v1.33_b_sach"
+    first_try = (Solved(39.4, False), "first key", {"wall_time_s": 150.0})
+    started = (Solved(14.7, True), "neighbour key", {})
+    solved, written = [], []
+
+    def fake_solve(again, solutions, params, reference):
+        solved.append((again.starts_from, solutions[neighbour]))
+        return Solved(18.9, converges), 1
+
+    monkeypatch.setattr(studies, "_solve_case", fake_solve)
+    monkeypatch.setattr(studies, "write_case", lambda folder, result, attrs, extra: written.append((folder, extra)))
+    monkeypatch.setattr(studies, "provenance", lambda *a: {})
+    monkeypatch.setattr(studies, "case_row", lambda c, r, **k: {"case": c.name, "objective": r.objective, **k})
+    reference = read_reference(bundled_reference())
+    out = studies.retry_case(case, str(tmp_path), None, reference, "subject", studies.PipelineConfig(), {}, False,
+                             first_try, neighbour, started)
+    assert solved == [((neighbour,), started[0])]
+    if not converges:
+        assert out is first_try and written == []
+        return
+    result, key, row = out
+    assert result.objective == 18.9 and key != "first key" and row["started_again_from"] == neighbour
+    (folder, extra), = written
+    assert folder == tmp_path / case.name and extra["replaces_key"] == "first key" and extra["case_key"] == key
+    # a rerun asks for the first try's key: the folder answers with the retried result
+    (tmp_path / case.name).mkdir()
+    (tmp_path / case.name / "summary.json").write_text(f'{{"case_key": "{key}", "replaces_key": "first key"}}')
+    monkeypatch.setattr(studies, "read_result", lambda path, kind: ("read", path.parent.name))
+    assert studies.stored_case(tmp_path / case.name, "first key") == ("read", case.name)
+    assert studies.stored_case(tmp_path / case.name, "another key") is None
