@@ -448,7 +448,7 @@ def run_study(trial: Path | None, study_path: Path, cfg: PipelineConfig, *, out:
                 progress(Progress("study", "cases", len(done), len(cases)))
             # an unconverged case solved again from a neighbour's solution its chain did not have (retry_start)
             results = {name: d[0] for name, d in done.items()}
-            again = {case.name: start for case in cases if (start := retry_start(case, cases, results))}
+            again = {case.name: name for case in cases if (name := retry_start(case, cases, results))}
             retries = {case.name: Task(retry_case, (case, str(root), start.params, tracked[case.name],
                                                     repr(start.params), cfg, inputs, force, done[case.name],
                                                     again[case.name], done[again[case.name]]))

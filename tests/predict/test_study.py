@@ -279,3 +279,30 @@ def test_a_case_started_again_replaces_the_first_try_only_where_it_converges(mon
     monkeypatch.setattr(studies, "read_result", lambda path, kind: ("read", path.parent.name))
     assert studies.stored_case(tmp_path / case.name, "first key") == ("read", case.name)
     assert studies.stored_case(tmp_path / case.name, "another key") is None
+
+
+def test_a_study_starts_an_unconverged_case_again_and_lists_it(monkeypatch, tmp_path):
+    # weights a) then b) at one speed: a) does not converge from the default start, b) from a)'s end does; a) is
+    # then solved again from b)'s solution, which converges, and study.csv says where it started again
+    (tmp_path / "two.yaml").write_text("name: two\nspeeds_m_s: [1.1275]\nweights: [a, b]\nconditions: [normal]\n"
+                                       "nodes: 6\n")
+    calls = []
+
+    def fake_solve(case, solutions, params, reference):
+        calls.append((case.name, tuple(solutions)))
+        return Solved(5.0, case.weight_set == "b" or bool(solutions and "b" in next(iter(solutions)))), 1
+
+    monkeypatch.setattr(studies, "_solve_case", fake_solve)
+    monkeypatch.setattr(studies, "write_case", lambda folder, result, attrs, extra: None)
+    monkeypatch.setattr(studies, "provenance", lambda *a: {})
+    monkeypatch.setattr(studies, "case_row", lambda c, r, **k: {"case": c.name, "converged": r.converged,
+                                                                  "wall_time_s": 1.0})
+    import gaitcli.report.study_plots as plots
+    monkeypatch.setattr(plots, "study_figures", lambda *a, **k: None)
+    rows, folder = studies.run_study(None, tmp_path / "two.yaml", studies.PipelineConfig(), out=tmp_path / "out",
+                                     workers_count=1)
+    assert calls == [("v1.13_a_normal", ()), ("v1.13_b_normal", ("v1.13_a_normal",)),
+                     ("v1.13_a_normal", ("v1.13_b_normal",))]
+    assert [(r["case"], r["converged"], r["started_again_from"]) for r in rows] == \
+        [("v1.13_a_normal", True, "v1.13_b_normal"), ("v1.13_b_normal", True, "")]
+    assert "started_again_from" in (folder / "study.csv").read_text().splitlines()[0]
