@@ -345,29 +345,74 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     """
     sex = normalise_sex(sex)
     one_of(hip_method, HIP_METHODS, where="hip_joint_centre", path=source)
-    P = static_landmarks(static, frames)
-    if hip_method == "from_file":
-        for name in ("HJCr", "HJCl"):
-            if name not in P:
-                label = marker_set.label_of(name) if marker_set is not None else None
-                raise InputError(source, label or name, "hip_joint_centre is from_file but the static trial has no "
-                                                        "such point (expected the lab's virtual hip joint centre)")
-    else:  # the lab's hip centres are left out of the model and of the clusters
-        P = {k: v for k, v in P.items() if k not in ("HJCr", "HJCl")}
-    _check_required(P, source, marker_set, widths)
-    measured = P
-    # The reference frames are parallel to the axes the subject faces in the static (3.3.3 takes a subject
-    # facing +x): the static is turned about the vertical until the pelvis faces +x, and turned back below.
-    _, pelvis_axes = jcm.pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
-    heading = float(np.arctan2(pelvis_axes[1, 0], pelvis_axes[0, 0]))
-    facing = rot_z(heading)
-    P = {k: facing.T @ v for k, v in P.items()}
-    notes: list[str] = []
+    measured = _reference_landmarks(static, frames, hip_method, marker_set, source)
+    _check_required(measured, source, marker_set, widths)
+    heading, facing = _facing_rotation(measured)
+    P = {k: facing.T @ v for k, v in measured.items()}
     jc = jcm.joint_centres(P, hip_method="bell1990" if hip_method == "from_file" else hip_method,
                            ankle_method=ankle_method, sex=sex, leg_length=leg_length_m, widths=widths, source=source)
     chord, toe = chord_and_toe_sides(P, widths, marker_set)
-    for name in VIRTUAL_JOINT_CENTRES:
-        notes.append(f"{name}: {'virtual marker from the lab file' if name in P else 'estimated'}")
+    notes = _joint_centre_notes(P, chord, hip_method, ankle_method)
+    segs = _measured_segments(jc, mass_kg, stature_m, sex, thigh_length_m=thigh_length_m,
+                              shank_length_m=shank_length_m, foot_length_m=foot_length_m,
+                              shoulder_width_m=shoulder_width_m)
+    notes.insert(0, f"de Leva (1996) {sex} table; body mass {float(mass_kg):.2f} kg, stature {float(stature_m):.3f} m")
+    lumbar = (jc["HJCr"] + jc["HJCl"]) / 2 + segs["pelvis"].length_m * np.array([0.0, 0.0, 1.0])  # OMPH (3.2.1)
+    rotation, origin, anatomical, from_landmarks = _segment_frames(P, jc, chord, toe, lumbar)
+    for b, ok in from_landmarks.items():
+        if not ok:
+            notes.append(f"{b}: anatomical frame incomplete (landmarks missing), global axes used instead")
+    notes.append(f"the subject faces {np.degrees(heading):.1f}° from +x in the reference posture: the segments' "
+                 "reference frames are parallel to the axes it faces there")
+    body, body_segs, com = _body_parameters(segs, rotation, origin, lumbar, jc, disturbances, notes)
+
+    extra = dict(extra_tracking_markers or {})
+    for b in extra:
+        one_of(b, BODIES, where="extra_tracking_markers", path=source)
+    landmarks_in_body, tracking, chained, locked = _tracking_clusters(P, jc, com, extra, untracked, marker_set,
+                                                                      source, notes)
+    return StaticCalibration(
+        body=body, landmarks_in_body_m=landmarks_in_body, tracking_landmarks=tracking, locked=tuple(locked),
+        reference_to_anatomical=np.array([anatomical[b] for b in BODIES]),
+        anatomical_from_landmarks=tuple(from_landmarks[b] for b in BODIES),
+        joint_centres_m={k: facing @ v for k, v in {"lumbar": lumbar, **jc}.items()}, com_m=com @ facing.T,
+        segments=body_segs, static_rotation=facing,
+        static_landmarks_m={k: v for k, v in measured.items()
+                            if k in LANDMARKS or any(k in e for e in extra.values())},
+        notes=notes, chained=chained)
+
+
+def _reference_landmarks(static: Markers, frames, hip_method: str, marker_set: MarkerSet | None,
+                         source) -> dict[str, np.ndarray]:
+    """The averaged reference-posture landmarks (m, the static's axes): the lab's virtual hip centres kept only for
+    ``hip_method: from_file`` (and required then), otherwise left out of the model and of the clusters."""
+    P = static_landmarks(static, frames)
+    if hip_method != "from_file":
+        return {k: v for k, v in P.items() if k not in ("HJCr", "HJCl")}
+    for name in ("HJCr", "HJCl"):
+        if name not in P:
+            label = marker_set.label_of(name) if marker_set is not None else None
+            raise InputError(source, label or name, "hip_joint_centre is from_file but the static trial has no "
+                                                    "such point (expected the lab's virtual hip joint centre)")
+    return P
+
+
+def _facing_rotation(P: Mapping[str, np.ndarray]) -> tuple[float, np.ndarray]:
+    """The heading (rad, about the vertical from +x) the pelvis faces in the reference posture, and ``rot_z`` of it.
+
+    The reference frames are parallel to the axes the subject faces in the static (3.3.3 takes a subject facing
+    +x): the static is turned by the transpose until the pelvis faces +x, and its results turned back by it.
+    """
+    _, pelvis_axes = jcm.pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
+    heading = float(np.arctan2(pelvis_axes[1, 0], pelvis_axes[0, 0]))
+    return heading, rot_z(heading)
+
+
+def _joint_centre_notes(P: Mapping[str, np.ndarray], chord: tuple, hip_method: str, ankle_method: str) -> list[str]:
+    """One note per way a joint centre was placed: the lab's virtual points or estimated, the hip regression, the
+    chord method, the malleoli."""
+    notes = [f"{name}: {'virtual marker from the lab file' if name in P else 'estimated'}"
+             for name in VIRTUAL_JOINT_CENTRES]
     notes.append("hip joint centres: " + {"from_file": "the lab's virtual points (from_file)",
                                           "harrington": "Harrington et al. (2007) regression",
                                           "hara": "Hara et al. (2016) regression",
@@ -376,58 +421,81 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
     notes += [f"{name}: Plug-in Gait's chord method (no medial marker)" for name in chord]
     if not all(f"AJC{s}" in P or f"AJC{s}" in chord for s in "rl"):
         notes.append(f"ankle joint centres from the malleoli ({ankle_method})")
+    return notes
 
+
+def _measured_segments(jc: Mapping[str, np.ndarray], mass_kg: float, stature_m: float, sex: str, *,
+                       thigh_length_m, shank_length_m, foot_length_m, shoulder_width_m) -> dict[str, SegmentInertia]:
+    """de Leva's segments (3.2.2) with the thigh (HJC–KJC) and shank (KJC–AJC) lengths measured per side (m)
+    between the static's joint centres where not given."""
     measured_thigh = tuple(float(np.linalg.norm(jc[f"HJC{s}"] - jc[f"KJC{s}"])) for s in "rl")
     measured_shank = tuple(float(np.linalg.norm(jc[f"KJC{s}"] - jc[f"AJC{s}"])) for s in "rl")
-    segs = segment_parameters(mass_kg, stature_m, sex,
+    return segment_parameters(mass_kg, stature_m, sex,
                               thigh_length_m=measured_thigh if thigh_length_m is None else thigh_length_m,
                               shank_length_m=measured_shank if shank_length_m is None else shank_length_m,
                               foot_length_m=foot_length_m, shoulder_width_m=shoulder_width_m)
-    notes.insert(0, f"de Leva (1996) {sex} table; body mass {float(mass_kg):.2f} kg, stature {float(stature_m):.3f} m")
 
-    # segment axes -> reference (= global static) axes, and the global position of each de Leva origin
-    ez = np.array([0.0, 0.0, 1.0])
-    midh = (jc["HJCr"] + jc["HJCl"]) / 2
-    omph = midh + segs["pelvis"].length_m * ez  # lumbosacral joint (3.2.1)
+
+def _segment_frames(P: Mapping[str, np.ndarray], jc: Mapping[str, np.ndarray], chord: tuple, toe: tuple,
+                    lumbar: np.ndarray) -> tuple[dict, dict, dict, dict]:
+    """Each body's de Leva axes in the reference (global static) axes, the global position of its de Leva origin
+    (m), its anatomical frame (3.3.3) and whether landmarks gave that frame (rather than global axes).
+
+    Pelvis and HAT keep the global axes with their origin at the lumbar joint ``lumbar`` (OMPH, 3.2.1); a leg
+    segment's axes are its anatomical frame, origin at its proximal joint centre (the foot's at CA).
+    """
     rotation = {"pelvis": np.eye(3), "hat": np.eye(3)}
-    origin = {"pelvis": omph, "hat": omph}
+    origin = {"pelvis": lumbar, "hat": lumbar}
     anatomical = {}
     from_landmarks = {}
     _, anatomical["pelvis"] = jcm.pelvis_frame(P["ASISr"], P["ASISl"], P["PSISr"], P["PSISl"])
     from_landmarks["pelvis"] = True
     for s in "rl":
-        # without a medial marker the chord's or the lab's joint centre stands in for it: the frame's y lies in the
-        # plane of the lateral marker and the segment's axis
-        epicondyles = (P.get(f"LEF{s}"), P[f"MEF{s}"] if f"MEF{s}" in P
-                       else jc[f"KJC{s}"] if f"KJC{s}" in chord or f"KJC{s}" in P else None)
-        malleoli = (P.get(f"LM{s}"), P[f"MM{s}"] if f"MM{s}" in P
-                    else jc[f"AJC{s}"] if f"AJC{s}" in chord or f"AJC{s}" in P else None)
-        rotation[f"thigh_{s}"] = jcm.thigh_frame(jc[f"HJC{s}"], jc[f"KJC{s}"], *epicondyles, side=s)
-        rotation[f"shank_{s}"] = jcm.shank_frame(jc[f"KJC{s}"], jc[f"AJC{s}"], *malleoli, side=s)
-        rotation[f"foot_{s}"] = (jcm.toe_foot_frame(P[f"CA{s}"], P[f"MT2{s}"], rotation[f"shank_{s}"]) if s in toe
-                                 else jcm.foot_frame(P[f"CA{s}"], P[f"VM{s}"], P[f"FM{s}"], side=s))
+        leg_rotation, leg_from_landmarks = _leg_frames(P, jc, chord, toe, s)
+        rotation.update(leg_rotation)
+        from_landmarks.update(leg_from_landmarks)
         origin.update({f"thigh_{s}": jc[f"HJC{s}"], f"shank_{s}": jc[f"KJC{s}"], f"foot_{s}": P[f"CA{s}"]})
-        from_landmarks.update({f"thigh_{s}": all(e is not None for e in epicondyles),
-                               f"shank_{s}": all(m is not None for m in malleoli), f"foot_{s}": True})
-        for b in (f"thigh_{s}", f"shank_{s}", f"foot_{s}"):
-            anatomical[b] = rotation[b]
+        anatomical.update(leg_rotation)
     trunk = ("C7", "ST", "ACr", "ACl")
     from_landmarks["hat"] = all(t in P for t in trunk)
-    anatomical["hat"] = jcm.trunk_frame(omph, *(P[t] for t in trunk)) if from_landmarks["hat"] else np.eye(3)
-    for b, ok in from_landmarks.items():
-        if not ok:
-            notes.append(f"{b}: anatomical frame incomplete (landmarks missing), global axes used instead")
+    anatomical["hat"] = jcm.trunk_frame(lumbar, *(P[t] for t in trunk)) if from_landmarks["hat"] else np.eye(3)
+    return rotation, origin, anatomical, from_landmarks
 
-    notes.append(f"the subject faces {np.degrees(heading):.1f}° from +x in the reference posture: the segments' "
-                 "reference frames are parallel to the axes it faces there")
 
+def _leg_frames(P: Mapping[str, np.ndarray], jc: Mapping[str, np.ndarray], chord: tuple, toe: tuple,
+                s: str) -> tuple[dict[str, np.ndarray], dict[str, bool]]:
+    """The anatomical frames (3, 3) of side ``s``'s thigh, shank and foot in the reference posture, and whether both
+    epicondyles (malleoli) were markers.
+
+    Without a medial marker the chord's or the lab's joint centre stands in for it: the frame's y lies in the plane
+    of the lateral marker and the segment's axis. A foot with CA and MT2 alone takes its y from the shank's.
+    """
+    epicondyles = (P.get(f"LEF{s}"), P[f"MEF{s}"] if f"MEF{s}" in P
+                   else jc[f"KJC{s}"] if f"KJC{s}" in chord or f"KJC{s}" in P else None)
+    malleoli = (P.get(f"LM{s}"), P[f"MM{s}"] if f"MM{s}" in P
+                else jc[f"AJC{s}"] if f"AJC{s}" in chord or f"AJC{s}" in P else None)
+    thigh = jcm.thigh_frame(jc[f"HJC{s}"], jc[f"KJC{s}"], *epicondyles, side=s)
+    shank = jcm.shank_frame(jc[f"KJC{s}"], jc[f"AJC{s}"], *malleoli, side=s)
+    foot = (jcm.toe_foot_frame(P[f"CA{s}"], P[f"MT2{s}"], shank) if s in toe
+            else jcm.foot_frame(P[f"CA{s}"], P[f"VM{s}"], P[f"FM{s}"], side=s))
+    return ({f"thigh_{s}": thigh, f"shank_{s}": shank, f"foot_{s}": foot},
+            {f"thigh_{s}": all(e is not None for e in epicondyles),
+             f"shank_{s}": all(m is not None for m in malleoli), f"foot_{s}": True})
+
+
+def _body_parameters(segs: Mapping[str, SegmentInertia], rotation: Mapping[str, np.ndarray],
+                     origin: Mapping[str, np.ndarray], lumbar: np.ndarray, jc: Mapping[str, np.ndarray],
+                     disturbances, notes: list[str]) -> tuple[BodyParameters, dict[str, SegmentInertia], np.ndarray]:
+    """The model's bodies: de Leva's segments rotated into body axes plus the disturbances (Tables A.2–A.3), their
+    global CoMs (8, 3) m, and each joint from its parent's and child's CoM (m). Appends to ``notes``, which the
+    returned :class:`BodyParameters` shares."""
     body_segs = {b: rotate_segment(segs[b], rotation[b]) for b in BODIES}
     items = resolve_disturbances(disturbances, body_segs)
     body_segs = apply_disturbances(body_segs, items)
     notes += [f"disturbance {d.name or 'custom'} on {d.segment}: {d.mass_kg:.3f} kg" for d in items]
 
     com = np.array([origin[b] + body_segs[b].com_m for b in BODIES])
-    joint_pos = {"lumbar": omph}
+    joint_pos = {"lumbar": lumbar}
     joint_pos.update({f"hip_{s}": jc[f"HJC{s}"] for s in "rl"})
     joint_pos.update({f"knee_{s}": jc[f"KJC{s}"] for s in "rl"})
     joint_pos.update({f"ankle_{s}": jc[f"AJC{s}"] for s in "rl"})
@@ -440,10 +508,15 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
                           inertia_kgm2=np.array([body_segs[b].inertia_kgm2 for b in BODIES]),
                           joint_in_parent_m=joint_in_parent, joint_in_child_m=joint_in_child,
                           segment_length_m=lengths, notes=notes)
+    return body, body_segs, com
 
-    extra = dict(extra_tracking_markers or {})
-    for b in extra:
-        one_of(b, BODIES, where="extra_tracking_markers", path=source)
+
+def _tracking_clusters(P: Mapping[str, np.ndarray], jc: Mapping[str, np.ndarray], com: np.ndarray,
+                       extra: Mapping[str, Sequence[str]], untracked: Sequence[str], marker_set: MarkerSet | None,
+                       source, notes: list[str]) -> tuple[dict, dict, dict, list]:
+    """Every body's reference cluster ``r^i_OMj`` (3.2): its landmarks relative to its CoM (m), the landmarks it is
+    tracked by, the proximal joint centre chained in where it has two markers, and the bodies locked to their
+    parent for fewer; appends to ``notes`` and warns for each locked body."""
     landmarks_in_body: dict[str, dict[str, np.ndarray]] = {}
     tracking: dict[str, tuple[str, ...]] = {}
     chained: dict[str, str] = {}
@@ -461,26 +534,24 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
         if len(names) >= MIN_MARKERS:
             tracking[b] = tuple(names)
             continue
-        if marker_set is not None and b not in ("pelvis", "hat"):
-            raise InputError(source, *_locked_leg_message(b, names, P, marker_set))
-        if b == "pelvis":
-            raise InputError(source, "pelvis", f"fewer than {MIN_MARKERS} pelvis markers in the static trial "
-                                               f"(found {', '.join(names) or 'none'} of "
-                                               f"{', '.join(SEGMENT_MARKERS[b])})")
+        _check_lockable(b, names, P, marker_set, source)
         tracking[b] = ()
         locked.append(b)
         parent = BODIES[JOINT_PARENT[JOINT_CHILD.index(i)]]
         message = (f"{b}: fewer than {MIN_MARKERS} tracking markers in the static trial (found "
                    f"{', '.join(names) or 'none'}); locked to {parent}")
         notes.append(message)
-        warnings.warn(message, GaitWarning, stacklevel=2)
+        warnings.warn(message, GaitWarning, stacklevel=3)  # at calibrate's caller
+    return landmarks_in_body, tracking, chained, locked
 
-    return StaticCalibration(
-        body=body, landmarks_in_body_m=landmarks_in_body, tracking_landmarks=tracking, locked=tuple(locked),
-        reference_to_anatomical=np.array([anatomical[b] for b in BODIES]),
-        anatomical_from_landmarks=tuple(from_landmarks[b] for b in BODIES),
-        joint_centres_m={k: facing @ v for k, v in {"lumbar": omph, **jc}.items()}, com_m=com @ facing.T,
-        segments=body_segs, static_rotation=facing,
-        static_landmarks_m={k: v for k, v in measured.items()
-                            if k in LANDMARKS or any(k in e for e in extra.values())},
-        notes=notes, chained=chained)
+
+def _check_lockable(body: str, names: list[str], P: Mapping[str, np.ndarray], marker_set: MarkerSet | None,
+                    source) -> None:
+    """A body with fewer than ``MIN_MARKERS`` tracking points may be locked to its parent unless it is the pelvis,
+    or a leg segment of a marker set that names the leg markers (then a marker is missing)."""
+    if marker_set is not None and body not in ("pelvis", "hat"):
+        raise InputError(source, *_locked_leg_message(body, names, P, marker_set))
+    if body == "pelvis":
+        raise InputError(source, "pelvis", f"fewer than {MIN_MARKERS} pelvis markers in the static trial "
+                                           f"(found {', '.join(names) or 'none'} of "
+                                           f"{', '.join(SEGMENT_MARKERS[body])})")

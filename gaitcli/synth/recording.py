@@ -18,7 +18,7 @@ from gaitcli.core.recording import ForcePlate, Markers
 from gaitcli.core.validate import one_of
 from gaitcli.errors import InputError
 from gaitcli.kinematics.model import BODIES
-from gaitcli.synth.gait import ANALOG_RATE_HZ, CONDITIONS, GaitDesign, Geometry, balanced_gait
+from gaitcli.synth.gait import ANALOG_RATE_HZ, CONDITIONS, Condition, GaitDesign, Geometry, balanced_gait
 from gaitcli.synth.ground import ground_reactions
 from gaitcli.synth.predicted import predicted_gait, predicted_period_s
 
@@ -335,6 +335,53 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     from gaitcli.kinematics.calibration import calibrate
     from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 
+    cond = trial_condition(condition, marker_set=marker_set, gait=gait, plates=plates, shared_plate=shared_plate,
+                           noise_mm=noise_mm, artefact_mm=artefact_mm, period_s=period_s, stature_m=stature_m)
+    rng = np.random.default_rng(seed)
+    template = {k: v for k, v in standing_template(stature_m).items() if k in MARKER_BODY}
+    joint_centre_options = {}  # how the body's joint centres are placed: the dissertation's (Bell), or Plug-in Gait's
+    if marker_set == "plug_in_gait":
+        template, joint_centre_options = plug_in_gait_body(template)
+    subject = dict(mass_kg=mass_kg, stature_m=stature_m, sex=sex,
+                   disturbances=() if condition == "normal" else (condition,), **joint_centre_options)
+    cal = calibrate(landmarks_to_markers(template, rate_hz=MARKER_RATE_HZ), **subject)
+    params = cal.body
+    if gait == "predicted":
+        design = predicted_gait(cond, params, stature_m=stature_m)
+    else:
+        design = balanced_gait(Geometry.standing(template, cal.joint_centres_m), cond, params)
+    qd_c, qdd_c, feet_c, clip = ground_reactions(design, params)
+
+    i, t_abs, q, feet = tile_cycle(design, feet_c, strides)
+    t = t_abs - t_abs[0]
+    contacts = stance_contacts(design.stance, i)
+    chosen = middle_stances(contacts, i.size, plates)
+    plate_recordings = measuring_plates(chosen, feet, shared_plate, rng, plate_noise_N)
+
+    frames = slice(0, None, ANALOG_SAMPLES_PER_FRAME)
+    qm, qd, qdd, tm = q[frames], qd_c[i][frames], qdd_c[i][frames], t[frames]
+    names, exact, bodies, placed, metadata = placed_markers(qm, cal, template, marker_set, subject)
+    noisy = exact + white_noise(rng, noise_mm, exact.shape) \
+        + skin_artefact(rng, tm, design.period_s, artefact_mm / 1000.0, bodies)
+    static_positions = np.stack([placed[nm] for nm in names])[None] \
+        + white_noise(rng, noise_mm, (int(MARKER_RATE_HZ), len(names), 3))
+    names = lab_labels(names, marker_set)
+    sub_feet = {s: {k: v[frames] for k, v in feet[s].items()} for s in "rl"}
+    convention = "plug_in_gait" if marker_set == "plug_in_gait" else "isb"
+    truth_angles = true_anatomical_angles(qm, cal, template, placed if convention == "plug_in_gait" else None)
+    return SyntheticTrial(markers=Markers(tuple(names), noisy, MARKER_RATE_HZ),
+                          static=Markers(tuple(names), static_positions, MARKER_RATE_HZ), plates=plate_recordings,
+                          q=qm, qd=qd, qdd=qdd, feet=sub_feet,
+                          plate_feet=["".join(c[0] for c in chosen)] if shared_plate else [c[0] for c in chosen],
+                          events=contact_events(contacts, chosen, t), calibration=cal, design=design,
+                          joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip,
+                          metadata=metadata, anatomical_angles_rad=truth_angles, angle_convention=convention)
+
+
+def trial_condition(condition: str, *, marker_set: str, gait: str, plates: int, shared_plate: bool,
+                    noise_mm: float, artefact_mm: float, period_s: float | None, stature_m: float) -> Condition:
+    """The experiment :func:`simulate_trial` walks (3.1.1), its period set by ``period_s`` (s) or by the prediction
+    scaled to ``stature_m`` (m) with ``gait="predicted"``, once every option is checked."""
     one_of(condition, CONDITIONS, where="--condition")
     one_of(marker_set, SYNTH_MARKER_SETS, where="--marker-set")
     one_of(gait, SYNTH_GAITS, where="--gait")
@@ -352,83 +399,84 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
         if not 0.6 <= period_s <= 3.0:
             raise InputError(None, "--period-s", f"got {period_s} s (expected a gait cycle of 0.6–3.0 s)")
         cond = replace(cond, period_s=float(period_s))
-    rng = np.random.default_rng(seed)
-    template = {k: v for k, v in standing_template(stature_m).items() if k in MARKER_BODY}
-    body = {}  # how the body's joint centres are placed: the dissertation's (Bell), or Plug-in Gait's subject
-    if marker_set == "plug_in_gait":
-        template, body = plug_in_gait_body(template)
-    cal = calibrate(landmarks_to_markers(template, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg, stature_m=stature_m,
-                    sex=sex, disturbances=() if condition == "normal" else (condition,), **body)
-    params = cal.body
-    if gait == "predicted":
-        design = predicted_gait(cond, params, stature_m=stature_m)
-    else:
-        design = balanced_gait(Geometry.standing(template, cal.joint_centres_m), cond, params)
-    qd_c, qdd_c, feet_c, clip = ground_reactions(design, params)
+    return cond
 
-    # tile the cycle over the trial at the analog rate; markers every `step` analog samples
+
+#: analog (force plate) samples per marker frame
+ANALOG_SAMPLES_PER_FRAME = int(round(ANALOG_RATE_HZ / MARKER_RATE_HZ))
+
+
+def tile_cycle(design: GaitDesign, feet_cycle: dict, strides: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """The designed cycle tiled over the trial at the analog rate: from a quarter cycle in to a quarter cycle past
+    ``strides`` + 1 cycles, cut to whole marker frames. Returns each sample's index in the cycle, its time since the
+    cycle's start (s), the coordinates (samples, 27) with the pelvis moved forward a stride per cycle, and each
+    foot's force (N), COP (m, moved forward at the walking speed) and free moment (N·m)."""
     n = design.q.shape[0]
-    step = int(round(ANALOG_RATE_HZ / MARKER_RATE_HZ))
     first, end = int(round(0.25 * n)), int(round((strides + 1.25) * n))
-    j = np.arange(first, end - (end - first) % step)  # whole marker frames: analog = frames × step
+    j = np.arange(first, end - (end - first) % ANALOG_SAMPLES_PER_FRAME)  # analog = frames × samples per frame
     cycle, i = j // n, j % n
     t_abs = j / ANALOG_RATE_HZ
-    t = t_abs - t_abs[0]
     q = design.q[i].copy()
     q[:, 0] += cycle * design.stride_m
     feet = {}
     for s in "rl":
-        cop = feet_c[s]["cop_m"][i].copy()
+        cop = feet_cycle[s]["cop_m"][i].copy()
         cop[:, 0] += design.speed_m_s * t_abs
-        feet[s] = {"force_N": feet_c[s]["force_N"][i], "cop_m": cop, "free_moment_Nm": feet_c[s]["free_moment_Nm"][i]}
+        feet[s] = {"force_N": feet_cycle[s]["force_N"][i], "cop_m": cop,
+                   "free_moment_Nm": feet_cycle[s]["free_moment_Nm"][i]}
+    return i, t_abs, q, feet
 
-    contacts = stance_contacts(design.stance, i)
-    complete = sorted([c for c in contacts if c[1] > 0 and c[2] < j.size], key=lambda c: c[1])
+
+def middle_stances(contacts: list, samples: int, plates: int) -> list:
+    """The ``plates`` consecutive stances (side, first, end) in the middle of the walk, among those that begin and
+    end inside its ``samples``."""
+    complete = sorted([c for c in contacts if c[1] > 0 and c[2] < samples], key=lambda c: c[1])
     middle = len(complete) // 2 - 1
-    chosen = complete[middle:middle + plates]  # consecutive stances in the middle of the walk
+    return complete[middle:middle + plates]
+
+
+def measuring_plates(chosen: list, feet: dict, shared_plate: bool, rng, noise_N: float) -> list[ForcePlate]:
+    """A plate under each chosen stance (``plate1``, ``plate2`` …), or one plate under them all (``shared_plate``)."""
     if shared_plate:
-        plates = [plate_recording("plate1", [(feet[side], a, b) for side, a, b in chosen], rng, plate_noise_N)]
-    else:
-        plates = [plate_recording(f"plate{k + 1}", [(feet[side], a, b)], rng, plate_noise_N)
-                  for k, (side, a, b) in enumerate(chosen)]
+        return [plate_recording("plate1", [(feet[side], a, b) for side, a, b in chosen], rng, noise_N)]
+    return [plate_recording(f"plate{k + 1}", [(feet[side], a, b)], rng, noise_N)
+            for k, (side, a, b) in enumerate(chosen)]
 
-    frames = slice(0, None, step)
-    qm, qd, qdd, tm = q[frames], qd_c[i][frames], qdd_c[i][frames], t[frames]
-    placed, metadata = template, {}
-    if marker_set != "dissertation":  # the same bodies, with the preset's clusters riding on them too
-        from gaitcli.kinematics.markerset import marker_set as preset
 
-        if marker_set == "plug_in_gait":
-            clusters, owner, metadata = plug_in_gait_points(template, cal.joint_centres_m, stature_m)
-            extra = {body: tuple(lab for lab in clusters if owner[lab] == body) for body in set(owner.values())}
-        else:
-            clusters = cluster_template(template, cal.joint_centres_m, marker_set)
-            extra = {body: tuple(lab for lab in clusters if lab in preset(marker_set).tracking[body])
-                     for body in SYNTH_MARKER_SETS[marker_set][1]}
-        placed = {**template, **clusters}
-        markers_cal = calibrate(landmarks_to_markers(placed, rate_hz=MARKER_RATE_HZ), mass_kg=mass_kg,
-                                stature_m=stature_m, sex=sex, extra_tracking_markers=extra,
-                                disturbances=() if condition == "normal" else (condition,), **body)
-        names, exact, bodies = model_markers(qm, markers_cal, extra)
-        dropped = SYNTH_MARKER_SETS[marker_set][0]
-        keep = [k for k, nm in enumerate(names) if nm[:-1] not in dropped]
-        names, exact, bodies = [names[k] for k in keep], exact[:, keep], [bodies[k] for k in keep]
+def placed_markers(q, calibration, template: dict, marker_set: str, subject: dict) -> tuple:
+    """The markers of ``marker_set`` riding on the bodies over ``q``: names (model landmarks or lab labels), exact
+    positions (frames, markers, 3) m, the body of each, every marker's standing position (m) and the C3D's subject
+    parameters. A preset's clusters (or Plug-in Gait's wands, ankle and toe markers) join Table A.6's less the ones
+    it lacks, their reference positions from a calibration of the standing template with them (``subject``: its
+    :func:`~gaitcli.kinematics.calibration.calibrate` options)."""
+    if marker_set == "dissertation":
+        return (*model_markers(q, calibration), template, {})
+    from gaitcli.kinematics.calibration import calibrate
+    from gaitcli.kinematics.markerset import landmarks_to_markers
+    from gaitcli.kinematics.markerset import marker_set as preset
+
+    metadata = {}
+    if marker_set == "plug_in_gait":
+        clusters, owner, metadata = plug_in_gait_points(template, calibration.joint_centres_m, subject["stature_m"])
+        extra = {body: tuple(lab for lab in clusters if owner[lab] == body) for body in set(owner.values())}
     else:
-        names, exact, bodies = model_markers(qm, cal)
-    noisy = exact + white_noise(rng, noise_mm, exact.shape) \
-        + skin_artefact(rng, tm, design.period_s, artefact_mm / 1000.0, bodies)
-    static_positions = np.stack([placed[nm] for nm in names])[None] \
-        + white_noise(rng, noise_mm, (int(MARKER_RATE_HZ), len(names), 3))
-    if marker_set != "dissertation":
-        landmarks = preset(marker_set).landmarks
-        names = [landmarks[nm][0] if nm in landmarks else nm for nm in names]
-    sub_feet = {s: {k: v[frames] for k, v in feet[s].items()} for s in "rl"}
-    convention = "plug_in_gait" if marker_set == "plug_in_gait" else "isb"
-    truth_angles = true_anatomical_angles(qm, cal, template, placed if convention == "plug_in_gait" else None)
-    return SyntheticTrial(markers=Markers(tuple(names), noisy, MARKER_RATE_HZ),
-                          static=Markers(tuple(names), static_positions, MARKER_RATE_HZ), plates=plates, q=qm,
-                          qd=qd, qdd=qdd, feet=sub_feet,
-                          plate_feet=["".join(c[0] for c in chosen)] if shared_plate else [c[0] for c in chosen],
-                          events=contact_events(contacts, chosen, t), calibration=cal, design=design,
-                          joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip,
-                          metadata=metadata, anatomical_angles_rad=truth_angles, angle_convention=convention)
+        clusters = cluster_template(template, calibration.joint_centres_m, marker_set)
+        extra = {body: tuple(lab for lab in clusters if lab in preset(marker_set).tracking[body])
+                 for body in SYNTH_MARKER_SETS[marker_set][1]}
+    placed = {**template, **clusters}
+    markers_cal = calibrate(landmarks_to_markers(placed, rate_hz=MARKER_RATE_HZ), extra_tracking_markers=extra,
+                            **subject)
+    names, exact, bodies = model_markers(q, markers_cal, extra)
+    dropped = SYNTH_MARKER_SETS[marker_set][0]
+    keep = [k for k, nm in enumerate(names) if nm[:-1] not in dropped]
+    return [names[k] for k in keep], exact[:, keep], [bodies[k] for k in keep], placed, metadata
+
+
+def lab_labels(names: list[str], marker_set: str) -> list[str]:
+    """The preset's lab label of each model landmark in ``names`` (cluster labels kept as they are)."""
+    if marker_set == "dissertation":
+        return names
+    from gaitcli.kinematics.markerset import marker_set as preset
+
+    landmarks = preset(marker_set).landmarks
+    return [landmarks[nm][0] if nm in landmarks else nm for nm in names]
