@@ -433,7 +433,7 @@ class FilterOutputs:
     """
 
     def __init__(self, folder: Path, summary: dict, trial):
-        from gaitcli.signal.outputs import load_columns, marker_columns
+        from gaitcli.signal.outputs import events_table, load_columns, marker_columns
 
         self.folder, self.summary, self.trial = Path(folder), summary, trial
         self.markers = _frame(marker_columns(trial.markers))
@@ -442,9 +442,7 @@ class FilterOutputs:
             grf.update(load_columns(f"foot_{side}", load))
             grf[f"foot_{side}_load_known"] = np.asarray(load.known, bool)
         self.grf = _frame(grf)
-        ev = trial.events
-        self.events = _frame({"time_s": ev.time_s, "frame": ev.frame + trial.markers.first_frame, "side": ev.side,
-                              "event": ev.kind, "source": ev.source})
+        self.events = _frame(events_table(trial.events, trial.markers.first_frame))
 
     @classmethod
     def read(cls, path: str | Path) -> FilterOutputs:

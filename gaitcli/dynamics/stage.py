@@ -11,6 +11,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -145,7 +146,7 @@ class IdynResult:
         """side → (n,) that foot's load is known (its leg's moments are meaningful)."""
         return {s: self.trial.load_known(s) for s in SIDES}
 
-    @property
+    @cached_property
     def moment_known(self) -> np.ndarray:
         """(n, 7) whether each joint's moment is meaningful: a leg's joints where its foot's load is known (a
         joint's moment depends only on the bodies distal to it and their loads); the lumbar joint always (the

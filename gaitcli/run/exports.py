@@ -7,7 +7,7 @@ names and in its senses (deg; pelvis translations m); ``grf.mot`` and ``external
 on ``calcn_r``/``calcn_l``; ``joint_moments.sto``, the 27 generalized forces as OpenSim's InverseDynamicsTool names
 them (``hip_flexion_r_moment`` N·m, ``pelvis_tx_force`` N), NaN where the load they depend on is unknown (a leg's
 where its foot's is; the pelvis's where any foot's is). OpenSim's inverse dynamics on model.osim, coordinates.mot
-and external_loads.xml gives joint_moments.sto (tests/cli/test_export_opensim.py).
+and external_loads.xml gives joint_moments.sto (tests/cli/test_export_cli.py, test_export_real.py).
 
 ``c3d`` writes ``gait_out/export/<trial>.c3d`` (:func:`gaitcli.io.exports.export_c3d`).
 """
@@ -38,11 +38,15 @@ OPENSIM_FILES = ("model.osim", "markers.trc", "coordinates.mot", "grf.mot", "joi
                  "external_loads.xml")
 
 
+def body_parameters(model) -> BodyParameters:
+    """The calibrated bodies of an :class:`~gaitcli.io.stage_files.IdynModel`."""
+    return BodyParameters(model.mass_kg, model.inertia_kgm2, model.joint_in_parent_m, model.joint_in_child_m)
+
+
 def known_generalized_forces(model) -> np.ndarray:
     """The 27 generalized forces (frames, 27) of an :class:`~gaitcli.io.stage_files.IdynModel` (3.19), NaN where
     their load is unknown: the pelvis's six where any contact's is, a joint's three where its own is."""
-    params = BodyParameters(model.mass_kg, model.inertia_kgm2, model.joint_in_parent_m, model.joint_in_child_m)
-    forces = generalized_forces(model.q, params, model.joint_moments_global_Nm, model.residual_force_N,
+    forces = generalized_forces(model.q, body_parameters(model), model.joint_moments_global_Nm, model.residual_force_N,
                                 model.residual_moment_Nm)
     known = np.column_stack([np.repeat(model.all_contacts_measured[:, None], 6, axis=1),
                              np.repeat(model.moment_known, 3, axis=1)])
@@ -56,9 +60,9 @@ def export_opensim(out_root: Path) -> tuple[list[Path], list[str]]:
     model = read_idyn_model(out_root / "idyn" / "idyn.h5")
     folder = out_root / "export" / "opensim"
     folder.mkdir(parents=True, exist_ok=True)
-    params = BodyParameters(model.mass_kg, model.inertia_kgm2, model.joint_in_parent_m, model.joint_in_child_m)
     with atomic_path(folder / "model.osim") as tmp:
-        tmp.write_text(osim_model(params, name=f"gaitcli_{model.trial or 'trial'}", gravity_m_s2=model.gravity_m_s2))
+        tmp.write_text(osim_model(body_parameters(model), name=f"gaitcli_{model.trial or 'trial'}",
+                                  gravity_m_s2=model.gravity_m_s2))
     trc, note = write_lab_markers(folder / "markers.trc", trial)
     time = model.time_s
     written = [folder / "model.osim", trc,

@@ -263,6 +263,15 @@ def write_case(folder: Path, result: PredictResult, attrs: dict, extra: dict) ->
     return summary
 
 
+def _write_solved(folder: Path, case: StudyCase, result: PredictResult, pipeline: PipelineConfig, inputs: dict,
+                  key: str, agreed: int, **extra) -> None:
+    """:func:`write_case` of a case just solved: its provenance, configuration, key and labels, and ``extra``."""
+    attrs = provenance(to_yaml(pipeline.replace_section("predict", case.cfg)), inputs, result.history)
+    write_case(folder, result, {**attrs, "predict_config": json.dumps(dataclasses.asdict(case.cfg))},
+               {"case_key": key, **extra, "case": case.name, "condition": case.condition,
+                "weight_set": case.weight_set, "starts": case.cfg.starts, "starts_agreeing": agreed})
+
+
 def stored_case(folder: Path, key: str) -> PredictResult | None:
     """The result in ``folder`` when its summary holds ``key`` (as its own, or as the key of the unconverged
     solve its retry replaced, :func:`retry_case`), else None."""
@@ -356,11 +365,8 @@ def retry_case(case: StudyCase, root: str, params, reference, subject: str, pipe
         result, agreed = _solve_case(again, {start: started[0]}, params, reference)
         if not result.converged:
             return first_try
-        attrs = provenance(to_yaml(pipeline.replace_section("predict", case.cfg)), inputs, result.history)
-        write_case(folder, result, {**attrs, "predict_config": json.dumps(dataclasses.asdict(case.cfg))},
-                   {"case_key": key, "replaces_key": first_try[1], "case": case.name, "condition": case.condition,
-                    "weight_set": case.weight_set, "starts": case.cfg.starts, "starts_agreeing": agreed,
-                    "started_again_from": start})
+        _write_solved(folder, case, result, pipeline, inputs, key, agreed, replaces_key=first_try[1],
+                      started_again_from=start)
     row = case_row(case, result, reused=reused, wall_s=first_try[2]["wall_time_s"] + time.perf_counter() - began)
     return result, key, {**row, "started_again_from": start}
 
@@ -377,10 +383,7 @@ def run_case(case: StudyCase, root: str, params, reference, subject: str, pipeli
     reused = result is not None
     if result is None:
         result, agreed = _solve_case(case, solved, params, reference)
-        attrs = provenance(to_yaml(pipeline.replace_section("predict", case.cfg)), inputs, result.history)
-        write_case(folder, result, {**attrs, "predict_config": json.dumps(dataclasses.asdict(case.cfg))},
-                   {"case_key": key, "case": case.name, "condition": case.condition,
-                    "weight_set": case.weight_set, "starts": case.cfg.starts, "starts_agreeing": agreed})
+        _write_solved(folder, case, result, pipeline, inputs, key, agreed)
     else:
         agreed = int(json.loads((folder / "summary.json").read_text()).get("starts_agreeing", 1))
     return result, key, case_row(case, result, reused=reused, wall_s=time.perf_counter() - start, agreed=agreed)

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcli.core.events import Events
 from gaitcli.core.recording import Markers
 from gaitcli.io.h5 import Dataset, record_datasets, write_h5
 from gaitcli.io.outputs import write_table
@@ -45,9 +46,14 @@ def grf_columns(result: FilterResult) -> dict[str, np.ndarray]:
 
 
 def event_columns(result: FilterResult) -> dict[str, np.ndarray]:
-    ev = result.events
-    return {"time_s": ev.time_s, "frame": ev.frame + result.markers.first_frame, "side": ev.side,
-            "event": ev.kind, "source": ev.source}
+    """``events.csv``: :func:`events_table` of the filtered trial's events."""
+    return events_table(result.events, result.markers.first_frame)
+
+
+def events_table(ev: Events, first_frame: int) -> dict[str, np.ndarray]:
+    """``time_s``, ``frame`` (the file's numbering from ``first_frame``), ``side``, ``event``, ``source``."""
+    return {"time_s": ev.time_s, "frame": ev.frame + first_frame, "side": ev.side, "event": ev.kind,
+            "source": ev.source}
 
 
 def summary(result: FilterResult) -> dict:
