@@ -42,7 +42,7 @@ from gaitcli.predict.variables import (
     LIFTED_SCALE,
     REACTION_SCALE_N,
     Variables,
-    half_spline,
+    segment_counts,
     spline_functions,
     spline_positions,
 )
@@ -217,8 +217,7 @@ def instant_segments(transcriber: Transcriber, layout: DesignLayout, x: np.ndarr
     the full model's "trunk" and "left" (I,)."""
     durations = layout.phase_durations(x)
     fractions = instant_times(transcriber.grid, durations) / durations.sum()
-    intervals = {"cycle": layout.nodes - 1, "left": layout.nodes - 1, "half": half_spline(layout).intervals,
-                 "trunk": 2 * half_spline(layout).intervals}
+    intervals = segment_counts(layout)
     return {key: np.clip(np.floor(position), 0, intervals[key] - 1).astype(int)
             for key, position in spline_positions(layout, fractions).items()}
 

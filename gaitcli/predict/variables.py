@@ -114,6 +114,14 @@ def spline_positions(layout: DesignLayout, fractions) -> dict:
             "left": (fractions - 0.5 + wrap) * n}
 
 
+def segment_counts(layout: DesignLayout) -> dict[str, int]:
+    """The intervals of each segment list of ``layout`` (:func:`spline_positions`' keys)."""
+    n = layout.nodes - 1
+    if layout.symmetric:
+        return {"cycle": n, "half": half_spline(layout).intervals}
+    return {"cycle": n, "trunk": full_trunk_spline(layout.nodes).intervals, "left": n}
+
+
 def half_spline(layout: DesignLayout) -> PeriodicSpline:
     """The trunk's T/2-periodic quartic of the symmetric model (N_h odd intervals)."""
     return quartic(half_cycle_intervals(layout.nodes - 1) + 1)
@@ -172,7 +180,7 @@ class Variables:
         quartic_spline, cubic_spline = transcriber.quartic, transcriber.cubic
         if self.symmetric:
             half = half_spline(self.layout)
-            self.intervals = {"cycle": quartic_spline.intervals, "half": half.intervals}
+            self.intervals = segment_counts(self.layout)
             self.splines = [SplineBlock("trunk", half, sym("Ct", half.intervals, 3), "trunk", "half", "P",
                                         drift=True),
                             SplineBlock("leg", quartic_spline, sym("Cy", n, 3), "right_leg"),
@@ -185,7 +193,7 @@ class Variables:
             self.dynamics_instants, self.muscle_columns, self.energy_factor = range(self.half), slice(0, 8), 2.0
         else:
             trunk = full_trunk_spline(self.layout.nodes)
-            self.intervals = {"cycle": quartic_spline.intervals, "trunk": trunk.intervals, "left": n}
+            self.intervals = segment_counts(self.layout)
             legs, stretch = sym("Cy", n, 6), sym("Cs", n, 16)
             self.splines = [SplineBlock("trunk", trunk, sym("Ct", trunk.intervals, 3), "trunk", "trunk", drift=True),
                             SplineBlock("leg", quartic_spline, legs[:, :3], "right_leg", lifted_offset=3),
