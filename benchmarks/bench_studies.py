@@ -131,7 +131,9 @@ def main() -> None:
         if solved:
             iterations = sum(r["iterations"] for r in solved)
             print(f"  per solved case: {sum(r['wall_time_s'] for r in solved) / len(solved):.0f} s in a worker, "
-                  f"{iterations / len(solved):.0f} IPOPT iterations")
+                  f"{iterations / len(solved):.0f} IPOPT iterations; {sum(r['problems_built'] for r in solved)} "
+                  f"problems built for {len(solved)} cases, {sum(r['build_time_s'] for r in solved):.0f} s of "
+                  f"building in all")
         (prostheses if name == "prostheses" else foot_mass)(rows)
 
 

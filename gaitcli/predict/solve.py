@@ -110,11 +110,13 @@ class _Built:
 
 class NlpCache:
     """The built problems of one runner and their compiled IPOPT solvers (module docstring); the
-    ``kept`` most recently used problems stay, with their solvers."""
+    ``kept`` most recently used problems stay, with their solvers. ``builds`` counts the problems built and
+    ``build_s`` the seconds spent building them and their solvers, since the cache was made."""
 
     def __init__(self, kept: int = BUILT_NLPS_KEPT):
         self.kept = kept
         self._built: OrderedDict[tuple, _Built] = OrderedDict()
+        self.builds, self.build_s = 0, 0.0
 
     def __len__(self) -> int:
         return len(self._built)
@@ -134,8 +136,15 @@ class NlpCache:
         s = settings or PredictSettings()
         reach = s.window_reach if reach is None else reach
         key = nlp_key(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach)
-        return self._entry(key, lambda: build_nlp(transcriber, reference, s, symmetric=symmetric, segments=segments,
-                                                  reach=reach)).nlp
+
+        def make() -> NLP:
+            began = time.perf_counter()
+            built = build_nlp(transcriber, reference, s, symmetric=symmetric, segments=segments, reach=reach)
+            self.builds += 1
+            self.build_s += time.perf_counter() - began
+            return built
+
+        return self._entry(key, make).nlp
 
     def solvers(self, nlp: NLP) -> dict:
         """The compiled solvers of ``nlp`` so far, by their options' key (a copy)."""
@@ -158,6 +167,7 @@ class NlpCache:
         entry = self._entry(nlp.key, lambda: nlp)
         key = repr(sorted(opts.items()))
         if key not in entry.solvers:
+            began = time.perf_counter()
             callback = IterationReport(nlp)
             problem = {"x": nlp.w, "f": nlp.cost, "g": nlp.constraints, "p": nlp.parameters}
             if not entry.derivatives:
@@ -169,6 +179,7 @@ class NlpCache:
             solver = ipopt.build_solver("predict", problem, {**opts, **derivatives, "iteration_callback": callback,
                                                              "no_nlp_grad": True, "calc_lam_p": False})
             entry.solvers[key] = (solver, callback)
+            self.build_s += time.perf_counter() - began
         return entry.solvers[key]
 
 

@@ -288,8 +288,10 @@ def _tau(result: PredictResult, y: float) -> float:
     return float(result.prosthesis.spring_moment_Nm(y)) if result.prosthesis is not None else float("nan")
 
 
-def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: float, agreed: int = 1) -> dict:
-    """One study.csv row: labels, J, Et, Jdev (control points and fine grid), convergence and the device."""
+def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: float, agreed: int = 1,
+             built: tuple[int, float] = (0, 0.0)) -> dict:
+    """One study.csv row: labels, J, Et, Jdev (control points and fine grid), convergence and the device;
+    ``built``: the problems its solve built and the seconds spent building them and their solvers."""
     fine = result.fine_grid or {}
     row = {"case": case.name, "speed_m_s": case.speed_m_s, "weights": case.weight_set, "condition": case.condition,
            "objective": result.objective, "cost_of_transport_J_per_m": result.cost_of_transport_J_per_m,
@@ -299,6 +301,7 @@ def case_row(case: StudyCase, result: PredictResult, *, reused: bool, wall_s: fl
            "fine_deviation": fine.get("deviation"), "converged": bool(result.converged),
            "iterations": int(result.iterations), "solve_time_s": float(result.solve_time_s),
            "wall_time_s": float(wall_s), "reused": bool(reused), "starts_agreeing": int(agreed),
+           "problems_built": int(built[0]), "build_time_s": float(built[1]),
            "tau_s_at_minus_0.1_rad_Nm": _tau(result, -0.1), "tau_s_at_minus_0.2_rad_Nm": _tau(result, -0.2)}
     if result.prosthesis is not None:
         row.update(result.prosthesis.named("prosthesis_"))
@@ -361,13 +364,18 @@ def retry_case(case: StudyCase, root: str, params, reference, subject: str, pipe
     folder = Path(root) / case.name
     result = None if force else stored_case(folder, key)
     reused = result is not None
+    cache, built = prediction_cache(), (0, 0.0)
     if result is None:
+        before = cache.builds, cache.build_s
         result, agreed = _solve_case(again, {start: started[0]}, params, reference)
+        built = cache.builds - before[0], cache.build_s - before[1]
         if not result.converged:
             return first_try
         _write_solved(folder, case, result, pipeline, inputs, key, agreed, replaces_key=first_try[1],
                       started_again_from=start)
-    row = case_row(case, result, reused=reused, wall_s=first_try[2]["wall_time_s"] + time.perf_counter() - began)
+    first_row = first_try[2]
+    row = case_row(case, result, reused=reused, wall_s=first_row["wall_time_s"] + time.perf_counter() - began,
+                   built=(first_row["problems_built"] + built[0], first_row["build_time_s"] + built[1]))
     return result, key, {**row, "started_again_from": start}
 
 
@@ -381,12 +389,16 @@ def run_case(case: StudyCase, root: str, params, reference, subject: str, pipeli
     folder = Path(root) / case.name
     result = None if force else stored_case(folder, key)
     reused = result is not None
+    cache, built = prediction_cache(), (0, 0.0)
     if result is None:
+        before = cache.builds, cache.build_s
         result, agreed = _solve_case(case, solved, params, reference)
+        built = cache.builds - before[0], cache.build_s - before[1]
         _write_solved(folder, case, result, pipeline, inputs, key, agreed)
     else:
         agreed = int(json.loads((folder / "summary.json").read_text()).get("starts_agreeing", 1))
-    return result, key, case_row(case, result, reused=reused, wall_s=time.perf_counter() - start, agreed=agreed)
+    return result, key, case_row(case, result, reused=reused, wall_s=time.perf_counter() - start, agreed=agreed,
+                                 built=built)
 
 
 # ---------------------------------------------------------------------------------------------------- a study

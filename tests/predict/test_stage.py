@@ -71,7 +71,7 @@ def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(cache):
     transcriber = Transcriber(6, model=WalkingModel(cfg.walker_parameters(None)), muscles=walker_muscles(cfg, None))
     x0 = shipped_walk(6, settings, symmetric=True)  # run_predict's default start: the same windows
     segments = instant_segments(transcriber, DesignLayout.build(6, symmetric=True), x0)
-    problems = len(cache)
+    problems, builds = len(cache), cache.builds
     nlp = cache.nlp(transcriber, reference, settings, symmetric=True, segments=segments)
     first = solve(nlp, x0, settings, cache=cache)
     assert set(cache.derivatives(nlp)) == {"grad_f", "jac_g", "hess_lag"}
@@ -83,6 +83,7 @@ def test_a_second_solver_of_one_nlp_takes_the_first_ones_derivatives(cache):
     faster = dataclasses.replace(settings, speed_m_s=1.3, max_iterations=5)  # a parameter, not the structure
     assert cache.nlp(transcriber, reference, faster, symmetric=True, segments=segments) is nlp
     assert len(cache) == problems + (problems == 0)  # this problem, built here or by the tests before
+    assert cache.builds == builds + (problems == 0) and cache.build_s > 0  # a hit is no build
 
     # a start with the right knee hyperextended beyond its bound (0 rad): reported per block of χ, then clipped
     start, rows, _ = DesignLayout.build(6, symmetric=True).blocks["right_leg"]

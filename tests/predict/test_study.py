@@ -250,7 +250,7 @@ def test_an_unconverged_case_starts_again_from_its_nearest_converged_neighbour()
 def test_a_case_started_again_replaces_the_first_try_only_where_it_converges(monkeypatch, tmp_path, converges):
     cases = {c.name: c for chain in studies.study_cases(spec_of("prostheses")) for c in chain}
     case, neighbour = cases["v1.33_a_sach"], "v1.33_b_sach"
-    first_try = (Solved(39.4, False), "first key", {"wall_time_s": 150.0})
+    first_try = (Solved(39.4, False), "first key", {"wall_time_s": 150.0, "problems_built": 1, "build_time_s": 2.0})
     started = (Solved(14.7, True), "neighbour key", {})
     solved, written = [], []
 
@@ -296,7 +296,8 @@ def test_a_study_starts_an_unconverged_case_again_and_lists_it(monkeypatch, tmp_
     monkeypatch.setattr(studies, "write_case", lambda folder, result, attrs, extra: None)
     monkeypatch.setattr(studies, "provenance", lambda *a: {})
     monkeypatch.setattr(studies, "case_row", lambda c, r, **k: {"case": c.name, "converged": r.converged,
-                                                                  "wall_time_s": 1.0})
+                                                                  "wall_time_s": 1.0, "problems_built": 0,
+                                                                  "build_time_s": 0.0})
     import gaitcli.report.study_plots as plots
     monkeypatch.setattr(plots, "study_figures", lambda *a, **k: None)
     rows, folder = studies.run_study(None, tmp_path / "two.yaml", studies.PipelineConfig(), out=tmp_path / "out",
