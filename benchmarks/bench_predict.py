@@ -12,10 +12,9 @@ speed and its group's stride ± 1 SD; ``--bundled``: every prediction tracks the
 default, the stride in the box) by ``run_predict``. The problem and its first
 IPOPT solver are built first into the run's cache (``construct s``: CasADi's expressions, then IPOPT's
 derivative functions), so that ``solve s`` is IPOPT's iterations (with the transcription of the result). The
-full model solves the symmetric model first, fits its splines to that solution and projects the fit onto its
-constraints (``run_predict``, ``solve.project``); its ``solve s`` includes the three solves and the full
-problem's construction, its ``construct s`` is the symmetric
-problem's. Printed: IPOPT iterations and solves, J, Et, Jdev, the non-zeros of the constraint Jacobian and
+full model solves the symmetric model first and starts from that solution laid on its own grid, where it is
+exactly a point of the full model (``layout.full_from_symmetric``, ``run_predict``); its ``solve s`` includes
+both solves and the full problem's construction, its ``construct s`` is the symmetric problem's. Printed: IPOPT iterations and solves, J, Et, Jdev, the non-zeros of the constraint Jacobian and
 of the Hessian of the Lagrangian (lower triangle, as IPOPT counts them), the ratio to Table 5.1's hours and
 to Falisse et al.'s 2-D predictions (44–55 s).
 
