@@ -5,12 +5,14 @@ Run from the repository root: ``python benchmarks/bench_pig_features.py [--share
 nothing.
 
 1. Synthetic (``simulate_trial(marker_set="plug_in_gait")``: 1 mm noise, 10 mm skin artefact, the real filter at
-   its defaults): the static as it is; with a knee alignment device instead of the knee markers
-   (``synth/devices.py``); with medial knee and ankle markers (the lateral ones mirrored through the true joint
-   centres, walk and static), and with thigh and shank clusters too; over three plates (``plates=3``), and with
-   the device, medial markers and three plates together; noise-free, filtered, with only the plates filtered,
-   and with nothing filtered (the method's own error; the differences are the filter's and the noise's share).
-   Per side and joint: RMS against the truth (N·m/kg, where the moment is known: the foot's load known,
+   its defaults unless a row says): the static as it is; with a knee alignment device instead of the knee markers
+   (``synth/devices.py``); with medial knee and ankle markers riding thigh and shank with their own noise and
+   artefact (``medial_markers=True``), the same mirrored from the lateral ones through the true joint centres
+   (their noise the lateral's reversed: the earlier benchmark's), and with thigh and shank clusters too; over three
+   plates (``plates=3``); at 120 Hz (plates 1200 Hz, ``marker_rate_hz=120``); all of these together; the plates
+   unfiltered, at 20 Hz, and markers and plates at 8 and 10 Hz; noise-free, filtered, with only the plates
+   filtered, and with nothing filtered (the method's own error; the differences are the filter's and the noise's
+   share). Per side and joint: RMS against the truth (N·m/kg, where the moment is known: the foot's load known,
    outside the filter's edge frames) and the slope of the least-squares line of gaitcli's against the truth.
 2. ``../shared/data/pig`` (Vicon's own moments in the C3D) rewritten with: medial knee and ankle markers
    (the lateral ones mirrored through Vicon's own FEO/TIO), thigh and shank clusters (three markers each, rigid in
@@ -95,32 +97,48 @@ def synthetic() -> None:
     foot's load known, outside the filter's edge frames: ``IdynResult.moment_known``)."""
     trial = simulate_trial(seed=2, marker_set="plug_in_gait")
     three = simulate_trial(seed=2, marker_set="plug_in_gait", plates=3)
+    medial = simulate_trial(seed=2, marker_set="plug_in_gait", medial_markers=True)
+    fast = simulate_trial(seed=2, marker_set="plug_in_gait", marker_rate_hz=120.0)
+    every = simulate_trial(seed=2, marker_set="plug_in_gait", plates=3, medial_markers=True, marker_rate_hz=120.0)
     exact = simulate_trial(seed=2, marker_set="plug_in_gait", noise_mm=0.0, artefact_mm=0.0)
     preset = marker_set("plug_in_gait")
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
                       hip_joint_centre="davis")
     walk_centres = trial.joint_centres_m()
     static_centres = trial.calibration.joint_centres_m
-    medial = with_medial_markers(trial.markers, walk_centres)
-    medial_static = with_medial_markers(trial.static, static_centres)
+    mirrored = with_medial_markers(trial.markers, walk_centres)
+    mirrored_static = with_medial_markers(trial.static, static_centres)
     rng = np.random.default_rng(7)
+
+    def device(source):
+        return with_knee_alignment_device(source.static, source.calibration.joint_centres_m)
+
     variants = {
         "as recorded": (trial, trial.markers, trial.static, FilterConfig()),
-        "knee alignment device": (trial, trial.markers, with_knee_alignment_device(trial.static, static_centres),
-                                  FilterConfig()),
-        "medial markers": (trial, medial, medial_static, FilterConfig()),
-        "medial markers + clusters": (trial, with_clusters(medial, walk_centres, rng),
-                                      with_clusters(medial_static, static_centres, rng), FilterConfig()),
+        "knee alignment device": (trial, trial.markers, device(trial), FilterConfig()),
+        "medial markers": (medial, medial.markers, medial.static, FilterConfig()),
+        "medial markers, mirrored": (trial, mirrored, mirrored_static, FilterConfig()),
+        "medial markers + clusters": (medial, with_clusters(medial.markers, medial.joint_centres_m(), rng),
+                                      with_clusters(medial.static, static_centres, rng), FilterConfig()),
         "three plates": (three, three.markers, three.static, FilterConfig()),
-        "KAD + medial + 3 plates": (three, with_medial_markers(three.markers, three.joint_centres_m()),
-                                    with_knee_alignment_device(with_medial_markers(three.static, static_centres),
-                                                               static_centres), FilterConfig()),
+        "120 Hz (plates 1200 Hz)": (fast, fast.markers, fast.static, FilterConfig()),
+        "all: KAD+med+cl+3pl+120Hz": (every, with_clusters(every.markers, every.joint_centres_m(), rng),
+                                      with_knee_alignment_device(with_clusters(every.static, static_centres, rng),
+                                                                 static_centres), FilterConfig()),
+        "plates unfiltered (6/0 Hz)": (trial, trial.markers, trial.static, FilterConfig(force_cutoff_hz=0.0)),
+        "markers 6, plates 20 Hz": (trial, trial.markers, trial.static, FilterConfig(force_cutoff_hz=20.0)),
+        "markers, plates 8 Hz": (trial, trial.markers, trial.static, FilterConfig(cutoff_hz=8.0,
+                                                                                  force_cutoff_hz=8.0)),
+        "markers, plates 10 Hz": (trial, trial.markers, trial.static, FilterConfig(cutoff_hz=10.0,
+                                                                                   force_cutoff_hz=10.0)),
+        "all, plates unfiltered": (every, every.markers, device(every), FilterConfig(force_cutoff_hz=0.0)),
         "noise-free, filtered": (exact, exact.markers, exact.static, FilterConfig()),
         "noise-free, plates filtered": (exact, exact.markers, exact.static, FilterConfig(cutoff_hz=0.0)),
         "noise-free, not filtered": (exact, exact.markers, exact.static,
                                      FilterConfig(cutoff_hz=0.0, force_cutoff_hz=0.0)),
     }
-    print("Synthetic Plug-in Gait walk: sagittal moments against the truth (RMS N·m/kg, slope)")
+    print("Synthetic Plug-in Gait walk: sagittal moments against the truth (RMS N·m/kg, slope); filter 6 Hz "
+          "markers and plates unless said")
     print(f"{'variant':28s} " + " ".join(f"{j + '_' + s:>15s}" for j, s in SAGITTAL))
     for name, (source, walk, static, cfg) in variants.items():
         truth = moments_to_clinical(source.joint_moments_Nm) / MASS_KG

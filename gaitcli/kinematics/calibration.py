@@ -24,9 +24,11 @@ from ``static.c3d`` or from named frames of the dynamic trial. In it:
 A thigh, shank or foot with only 2 markers of its own is tracked with its proximal joint
 centre as the third point (``chained``), placed in each frame by the parent's pose, as
 Plug-in Gait tracks its thigh (HJC, THI, KNE), shank (KJC, TIB, ANK) and foot (AJC, HEE,
-TOE). A body other than the pelvis with fewer points than 3 is ``locked``: tracked as
-rigidly attached to its parent (zero joint angles), which is recorded and warned about;
-with a marker set that names the leg markers (a preset) a locked leg segment is an error.
+TOE); a segment with a Plug-in Gait wand keeps that joint centre in its cluster when medial
+markers (KNM, MED) add a third marker of its own. A body other than the pelvis with fewer
+points than 3 is ``locked``: tracked as rigidly attached to its parent (zero joint angles),
+which is recorded and warned about; with a marker set that names the leg markers (a
+preset) a locked leg segment is an error.
 """
 
 from __future__ import annotations
@@ -515,8 +517,8 @@ def _tracking_clusters(P: Mapping[str, np.ndarray], jc: Mapping[str, np.ndarray]
                        extra: Mapping[str, Sequence[str]], untracked: Sequence[str], marker_set: MarkerSet | None,
                        source, notes: list[str]) -> tuple[dict, dict, dict, list]:
     """Every body's reference cluster ``r^i_OMj`` (3.2): its landmarks relative to its CoM (m), the landmarks it is
-    tracked by, the proximal joint centre chained in where it has two markers, and the bodies locked to their
-    parent for fewer; appends to ``notes`` and warns for each locked body."""
+    tracked by, the proximal joint centre chained in where it has two markers (or a wand), and the bodies locked to
+    their parent for fewer; appends to ``notes`` and warns for each locked body."""
     landmarks_in_body: dict[str, dict[str, np.ndarray]] = {}
     tracking: dict[str, tuple[str, ...]] = {}
     chained: dict[str, str] = {}
@@ -526,8 +528,13 @@ def _tracking_clusters(P: Mapping[str, np.ndarray], jc: Mapping[str, np.ndarray]
         names = [n for n in dict.fromkeys(candidates) if n in P and n not in untracked]
         landmarks_in_body[b] = {n: P[n] - com[i] for n in names}
         proximal = _PROXIMAL_CENTRE.get(b[:-2], "") + b[-1]
-        if len(names) == MIN_MARKERS - 1 and b not in ("pelvis", "hat") and proximal not in names:
-            chained[b] = proximal  # Plug-in Gait's tracking: two markers and the joint centre above
+        # Plug-in Gait's tracking: two markers and the joint centre above; a segment with a Plug-in Gait wand keeps
+        # the joint centre when medial markers add a third (wand, KNE and KNM alone span ~0.1 m: a hip moment
+        # 0.02 N·m/kg noisier, benchmarks/README.md)
+        wand = marker_set is not None and bool(marker_set.wands.get(b))
+        if (len(names) == MIN_MARKERS - 1 or (wand and len(names) >= MIN_MARKERS - 1)) \
+                and b not in ("pelvis", "hat") and proximal not in names:
+            chained[b] = proximal
             names.append(proximal)
             landmarks_in_body[b][proximal] = jc[proximal] - com[i]
             notes.append(f"{b}: tracked by {', '.join(names[:-1])} and the {proximal} placed by the parent's pose")

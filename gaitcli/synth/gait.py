@@ -379,19 +379,21 @@ def cycle_events(warped: np.ndarray, tau: np.ndarray) -> list:
     return events
 
 
-def balanced_gait(geometry: Geometry, condition: Condition, params, *, iterations: int = 4) -> GaitDesign:
-    """:func:`design_gait`, re-timed until the whole-body COP follows the planned heel → toe path.
+def balanced_gait(geometry: Geometry, condition: Condition, params, *, iterations: int = 4,
+                  samples: int | None = None) -> GaitDesign:
+    """:func:`design_gait` over ``samples`` per cycle (default the period at ``ANALOG_RATE_HZ``), re-timed until
+    the whole-body COP follows the planned heel → toe path.
 
     The pendulum model ignores the segments' angular momentum; each pass measures
     how far the true COP (from :func:`ground_reactions`) runs ahead of the plan and
     shifts the plan the other way.
     """
-    design = design_gait(geometry, condition, params)
+    design = design_gait(geometry, condition, params, samples=samples)
     offset = np.zeros(design.q.shape[0])
     for _ in range(iterations):
         _, _, _, _, cop, plan = ground_reactions(design, params, with_plan=True)
         offset -= cop[:, 0] - plan
-        design = design_gait(geometry, condition, params, cop_offset_m=offset)
+        design = design_gait(geometry, condition, params, samples=samples, cop_offset_m=offset)
     return design
 
 

@@ -108,13 +108,14 @@ def lateral_sway(phase, stance, lane, com_height_m: float, period_s: float):
     return np.fft.irfft(np.fft.rfft(plan) / (1 + com_height_m / GRAVITY_M_S2 * k ** 2), n=n)
 
 
-def predicted_gait(condition: Condition, params, *, stature_m: float, x: np.ndarray | None = None) -> GaitDesign:
+def predicted_gait(condition: Condition, params, *, stature_m: float, x: np.ndarray | None = None,
+                   samples: int | None = None) -> GaitDesign:
     """One periodic cycle of the predicted walk for a subject of ``stature_m`` over ``condition.period_s``,
-    starting at right heel strike, on the analog grid (module docstring)."""
+    starting at right heel strike, on the analog grid (module docstring) or over ``samples`` per cycle."""
     from gaitcli.kinematics.forward import forward_kinematics
 
     T = condition.period_s
-    n = int(round(T * ANALOG_RATE_HZ))
+    n = samples or int(round(T * ANALOG_RATE_HZ))
     phase = np.arange(n) / n
     durations = walk_durations(x)
     own_period = float(np.sum(durations))

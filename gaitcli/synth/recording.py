@@ -137,10 +137,13 @@ def cluster_template(template: dict, joint_centres: dict, marker_set: str) -> di
     return out
 
 
-def plug_in_gait_points(template: dict, joint_centres: dict, stature_m: float) -> tuple[dict, dict, dict]:
+def plug_in_gait_points(template: dict, joint_centres: dict, stature_m: float,
+                        medial_markers: bool = False) -> tuple[dict, dict, dict]:
     """Plug-in Gait's markers beyond Table A.6's as they stand (m): per side the wands THI and TIB lateral of the
     thigh's and shank's mid-points in the leg's frontal plane, ANK at the ankle centre plus ``PIG_ANKLE_OFFSET`` ×
-    stature laterally (so that the chord method's right angle holds exactly), TOE at the mid-metatarsal heads.
+    stature laterally (so that the chord method's right angle holds exactly), TOE at the mid-metatarsal heads;
+    with ``medial_markers`` KNM at the medial epicondyle (MEF: the knee centre is KNE's and KNM's midpoint) and
+    MED where ANK's and MED's midpoint is the malleoli's (LM, MM: the calibration's de Leva ankle centre holds).
     Returns the points by lab label, the body each tracks, and the subject measurements the C3D's PROCESSING
     group carries (widths from the marker offsets: width = 2 × offset − marker diameter, mm; leg lengths)."""
     points, bodies, metadata = {}, {}, {"PROCESSING:MarkerDiameter": 1000.0 * PIG_MARKER_DIAMETER_M}
@@ -154,6 +157,10 @@ def plug_in_gait_points(template: dict, joint_centres: dict, stature_m: float) -
         points[f"{prefix}TOE"] = (template[f"FM{s}"] + template[f"VM{s}"]) / 2
         bodies.update({f"{prefix}THI": f"thigh_{s}", f"{prefix}TIB": f"shank_{s}", f"{prefix}ANK": f"shank_{s}",
                        f"{prefix}TOE": f"foot_{s}"})
+        if medial_markers:
+            points[f"{prefix}KNM"] = template[f"MEF{s}"]
+            points[f"{prefix}MED"] = template[f"LM{s}"] + template[f"MM{s}"] - points[f"{prefix}ANK"]
+            bodies.update({f"{prefix}KNM": f"thigh_{s}", f"{prefix}MED": f"shank_{s}"})
         knee_offset = float(np.linalg.norm(template[f"LEF{s}"] - kjc))
         metadata[f"PROCESSING:{side}KneeWidth"] = 1000.0 * (2 * knee_offset - PIG_MARKER_DIAMETER_M)
         metadata[f"PROCESSING:{side}AnkleWidth"] = 1000.0 * (2 * PIG_ANKLE_OFFSET * stature_m - PIG_MARKER_DIAMETER_M)
@@ -235,13 +242,13 @@ def stance_contacts(stance, samples):
     return contacts
 
 
-def plate_recording(name, stances, rng, noise_N):
+def plate_recording(name, stances, rng, noise_N, rate_hz: float = ANALOG_RATE_HZ):
     """A plate under the stances ``[(foot, first, end), …]`` (a foot's loads over samples ``first:end``): 0.6 m ×
     0.4 m centred ``o`` under a single stance's mean COP, or, under two feet's stances, 0.4 m longer and wider
     than the span of their COPs.
 
     Force ``F`` (N) and moment about its centre ``Σ (c − o) × F + T e_z`` (N·m, ``T``
-    the free moment), plus white noise of σ ``noise_N`` and ``0.05 noise_N``.
+    the free moment), plus white noise of σ ``noise_N`` and ``0.05 noise_N``; sampled at ``rate_hz``.
     """
     cops = np.concatenate([foot["cop_m"][first:end] for foot, first, end in stances])
     low, high = np.nanmin(cops, axis=0), np.nanmax(cops, axis=0)
@@ -260,18 +267,19 @@ def plate_recording(name, stances, rng, noise_N):
     force += rng.normal(0.0, noise_N, force.shape)
     moment += rng.normal(0.0, noise_N * 0.05, moment.shape)
     return ForcePlate(name=name, force_N=force, moment_Nm=moment, centre_m=centre, corners_m=corners,
-                      rate_hz=ANALOG_RATE_HZ)
+                      rate_hz=rate_hz)
 
 
-def contact_events(contacts, on_plates, time_s):
-    """(time_s, marker frame, side, kind, on_plate) of every heel strike and toe off inside the trial, in order."""
+def contact_events(contacts, on_plates, time_s, marker_rate_hz: float = MARKER_RATE_HZ):
+    """(time_s, marker frame at ``marker_rate_hz``, side, kind, on_plate) of every heel strike and toe off inside
+    the trial, in order."""
     events = []
     for side, a, b in contacts:
         on_plate = (side, a, b) in on_plates
         if a > 0:
-            events.append((float(time_s[a]), int(round(time_s[a] * MARKER_RATE_HZ)), side, "heel_strike", on_plate))
+            events.append((float(time_s[a]), int(round(time_s[a] * marker_rate_hz)), side, "heel_strike", on_plate))
         if b < time_s.size:
-            events.append((float(time_s[b - 1]), int(round(time_s[b - 1] * MARKER_RATE_HZ)), side, "toe_off",
+            events.append((float(time_s[b - 1]), int(round(time_s[b - 1] * marker_rate_hz)), side, "toe_off",
                            on_plate))
     events.sort()
     return events
@@ -293,7 +301,8 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
                    artefact_mm: float = 10.0, strides: int = 3, mass_kg: float = 75.0, stature_m: float = 1.78,
                    sex: str = "male", plate_noise_N: float = 1.0, period_s: float | None = None,
                    shared_plate: bool = False, marker_set: str = "dissertation",
-                   gait: str = "normative", plates: int = 2) -> SyntheticTrial:
+                   gait: str = "normative", plates: int = 2, marker_rate_hz: float = MARKER_RATE_HZ,
+                   medial_markers: bool = False) -> SyntheticTrial:
     """Make a synthetic walking trial with known truth (nothing written).
 
     Two plates measure one right and one left stance in the middle of the walk. The stride
@@ -331,12 +340,21 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
         :data:`SYNTH_GAITS`: ``normative``, the normative curves re-timed over the stance foot
         (:mod:`~gaitcli.synth.gait`), or ``predicted``, the shipped muscle-driven prediction
         (:mod:`~gaitcli.synth.predicted`; every joint free, so not with a locked-joint condition).
+    marker_rate_hz : float
+        The markers' sampling rate, Hz (100 or 120 as labs record; 50–500); the plates sample at
+        ``ANALOG_SAMPLES_PER_FRAME`` times it (1000 or 1200 Hz), the designed cycle on that grid.
+    medial_markers : bool
+        Plug-in Gait only: medial knee and ankle markers (RKNM, LKNM, RMED, LMED) on thigh and shank, each with
+        its own noise and artefact (:func:`plug_in_gait_points`).
     """
     from gaitcli.kinematics.calibration import calibrate
     from gaitcli.kinematics.markerset import landmarks_to_markers, standing_template
 
     cond = trial_condition(condition, marker_set=marker_set, gait=gait, plates=plates, shared_plate=shared_plate,
                            noise_mm=noise_mm, artefact_mm=artefact_mm, period_s=period_s, stature_m=stature_m)
+    check_rate_and_medial(marker_rate_hz, medial_markers, marker_set)
+    analog_rate_hz = marker_rate_hz * ANALOG_SAMPLES_PER_FRAME
+    samples = int(round(cond.period_s * analog_rate_hz))  # the cycle on the plates' grid
     rng = np.random.default_rng(seed)
     template = {k: v for k, v in standing_template(stature_m).items() if k in MARKER_BODY}
     joint_centre_options = {}  # how the body's joint centres are placed: the dissertation's (Bell), or Plug-in Gait's
@@ -347,33 +365,33 @@ def simulate_trial(*, condition: str = "normal", seed: int = 0, noise_mm: float 
     cal = calibrate(landmarks_to_markers(template, rate_hz=MARKER_RATE_HZ), **subject)
     params = cal.body
     if gait == "predicted":
-        design = predicted_gait(cond, params, stature_m=stature_m)
+        design = predicted_gait(cond, params, stature_m=stature_m, samples=samples)
     else:
-        design = balanced_gait(Geometry.standing(template, cal.joint_centres_m), cond, params)
+        design = balanced_gait(Geometry.standing(template, cal.joint_centres_m), cond, params, samples=samples)
     qd_c, qdd_c, feet_c, clip = ground_reactions(design, params)
 
-    i, t_abs, q, feet = tile_cycle(design, feet_c, strides)
+    i, t_abs, q, feet = tile_cycle(design, feet_c, strides, analog_rate_hz)
     t = t_abs - t_abs[0]
     contacts = stance_contacts(design.stance, i)
     chosen = middle_stances(contacts, i.size, plates)
-    plate_recordings = measuring_plates(chosen, feet, shared_plate, rng, plate_noise_N)
+    plate_recordings = measuring_plates(chosen, feet, shared_plate, rng, plate_noise_N, analog_rate_hz)
 
     frames = slice(0, None, ANALOG_SAMPLES_PER_FRAME)
     qm, qd, qdd, tm = q[frames], qd_c[i][frames], qdd_c[i][frames], t[frames]
-    names, exact, bodies, placed, metadata = placed_markers(qm, cal, template, marker_set, subject)
+    names, exact, bodies, placed, metadata = placed_markers(qm, cal, template, marker_set, subject, medial_markers)
     noisy = exact + white_noise(rng, noise_mm, exact.shape) \
         + skin_artefact(rng, tm, design.period_s, artefact_mm / 1000.0, bodies)
     static_positions = np.stack([placed[nm] for nm in names])[None] \
-        + white_noise(rng, noise_mm, (int(MARKER_RATE_HZ), len(names), 3))
+        + white_noise(rng, noise_mm, (int(marker_rate_hz), len(names), 3))  # one second standing
     names = lab_labels(names, marker_set)
     sub_feet = {s: {k: v[frames] for k, v in feet[s].items()} for s in "rl"}
     convention = "plug_in_gait" if marker_set == "plug_in_gait" else "isb"
     truth_angles = true_anatomical_angles(qm, cal, template, placed if convention == "plug_in_gait" else None)
-    return SyntheticTrial(markers=Markers(tuple(names), noisy, MARKER_RATE_HZ),
-                          static=Markers(tuple(names), static_positions, MARKER_RATE_HZ), plates=plate_recordings,
+    return SyntheticTrial(markers=Markers(tuple(names), noisy, marker_rate_hz),
+                          static=Markers(tuple(names), static_positions, marker_rate_hz), plates=plate_recordings,
                           q=qm, qd=qd, qdd=qdd, feet=sub_feet,
                           plate_feet=["".join(c[0] for c in chosen)] if shared_plate else [c[0] for c in chosen],
-                          events=contact_events(contacts, chosen, t), calibration=cal, design=design,
+                          events=contact_events(contacts, chosen, t, marker_rate_hz), calibration=cal, design=design,
                           joint_moments_Nm=contact_moments(qm, qd, qdd, params, sub_feet), split_clip=clip,
                           metadata=metadata, anatomical_angles_rad=truth_angles, angle_convention=convention)
 
@@ -404,18 +422,32 @@ def trial_condition(condition: str, *, marker_set: str, gait: str, plates: int, 
 
 #: analog (force plate) samples per marker frame
 ANALOG_SAMPLES_PER_FRAME = int(round(ANALOG_RATE_HZ / MARKER_RATE_HZ))
+#: the marker rates :func:`simulate_trial` samples at, Hz
+MARKER_RATES_HZ = (50.0, 500.0)
 
 
-def tile_cycle(design: GaitDesign, feet_cycle: dict, strides: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
-    """The designed cycle tiled over the trial at the analog rate: from a quarter cycle in to a quarter cycle past
-    ``strides`` + 1 cycles, cut to whole marker frames. Returns each sample's index in the cycle, its time since the
-    cycle's start (s), the coordinates (samples, 27) with the pelvis moved forward a stride per cycle, and each
-    foot's force (N), COP (m, moved forward at the walking speed) and free moment (N·m)."""
+def check_rate_and_medial(marker_rate_hz: float, medial_markers: bool, marker_set: str) -> None:
+    """Refuse a marker rate outside :data:`MARKER_RATES_HZ` and medial markers on a set other than Plug-in Gait."""
+    low, high = MARKER_RATES_HZ
+    if not low <= marker_rate_hz <= high:
+        raise InputError(None, "marker_rate_hz", f"got {marker_rate_hz} Hz (expected {low:g}–{high:g} Hz)")
+    if medial_markers and marker_set != "plug_in_gait":
+        raise InputError(None, "medial_markers", f"marker set {marker_set} (expected plug_in_gait: KNM and MED "
+                                                 "are Plug-in Gait's medial markers)")
+
+
+def tile_cycle(design: GaitDesign, feet_cycle: dict, strides: int,
+               analog_rate_hz: float = ANALOG_RATE_HZ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """The designed cycle tiled over the trial at the analog rate ``analog_rate_hz`` (the design's own): from a
+    quarter cycle in to a quarter cycle past ``strides`` + 1 cycles, cut to whole marker frames. Returns each
+    sample's index in the cycle, its time since the cycle's start (s), the coordinates (samples, 27) with the pelvis
+    moved forward a stride per cycle, and each foot's force (N), COP (m, moved forward at the walking speed) and
+    free moment (N·m)."""
     n = design.q.shape[0]
     first, end = int(round(0.25 * n)), int(round((strides + 1.25) * n))
     j = np.arange(first, end - (end - first) % ANALOG_SAMPLES_PER_FRAME)  # analog = frames × samples per frame
     cycle, i = j // n, j % n
-    t_abs = j / ANALOG_RATE_HZ
+    t_abs = j / analog_rate_hz
     q = design.q[i].copy()
     q[:, 0] += cycle * design.stride_m
     feet = {}
@@ -435,15 +467,17 @@ def middle_stances(contacts: list, samples: int, plates: int) -> list:
     return complete[middle:middle + plates]
 
 
-def measuring_plates(chosen: list, feet: dict, shared_plate: bool, rng, noise_N: float) -> list[ForcePlate]:
+def measuring_plates(chosen: list, feet: dict, shared_plate: bool, rng, noise_N: float,
+                     rate_hz: float = ANALOG_RATE_HZ) -> list[ForcePlate]:
     """A plate under each chosen stance (``plate1``, ``plate2`` …), or one plate under them all (``shared_plate``)."""
     if shared_plate:
-        return [plate_recording("plate1", [(feet[side], a, b) for side, a, b in chosen], rng, noise_N)]
-    return [plate_recording(f"plate{k + 1}", [(feet[side], a, b)], rng, noise_N)
+        return [plate_recording("plate1", [(feet[side], a, b) for side, a, b in chosen], rng, noise_N, rate_hz)]
+    return [plate_recording(f"plate{k + 1}", [(feet[side], a, b)], rng, noise_N, rate_hz)
             for k, (side, a, b) in enumerate(chosen)]
 
 
-def placed_markers(q, calibration, template: dict, marker_set: str, subject: dict) -> tuple:
+def placed_markers(q, calibration, template: dict, marker_set: str, subject: dict,
+                   medial_markers: bool = False) -> tuple:
     """The markers of ``marker_set`` riding on the bodies over ``q``: names (model landmarks or lab labels), exact
     positions (frames, markers, 3) m, the body of each, every marker's standing position (m) and the C3D's subject
     parameters. A preset's clusters (or Plug-in Gait's wands, ankle and toe markers) join Table A.6's less the ones
@@ -457,7 +491,8 @@ def placed_markers(q, calibration, template: dict, marker_set: str, subject: dic
 
     metadata = {}
     if marker_set == "plug_in_gait":
-        clusters, owner, metadata = plug_in_gait_points(template, calibration.joint_centres_m, subject["stature_m"])
+        clusters, owner, metadata = plug_in_gait_points(template, calibration.joint_centres_m, subject["stature_m"],
+                                                        medial_markers)
         extra = {body: tuple(lab for lab in clusters if owner[lab] == body) for body in set(owner.values())}
     else:
         clusters = cluster_template(template, calibration.joint_centres_m, marker_set)
