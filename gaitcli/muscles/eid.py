@@ -165,7 +165,9 @@ def _solve_convex_then_exact(problem: Problem, settings: SolverSettings, smoothi
     x, cost, g = nlp
     x0, lbx, ubx = start
     m, n = problem.models.muscle.m, problem.n
-    hess, curvature = convex_hessian(problem, smoothing, x, cost, g)  # curvature: kept alive while IPOPT calls it
+    weights = quadrature_weights(n, problem.periodic)
+    # curvature: the callback in hess, kept alive here while IPOPT calls it
+    hess, curvature = convex_hessian(problem, smoothing, weights, x, cost, g)
     # a trial's moments the muscles cannot make (a locked joint's, carried by an orthosis) make it infeasible
     solver = build_solver("eid", x, cost, g, settings=settings, may_be_infeasible=True, hess_lag=hess)
     return solve(solver, x0, lbx, ubx, 0.0, 0.0, blocks=_blocks(m, n, 0))

@@ -150,16 +150,15 @@ class ConvexObjectiveCurvature(ca.Callback):
         return [ca.DM(self._pattern, nz)]
 
 
-def convex_hessian(problem, smoothing: float, x, cost, g) -> tuple[ca.Function, ConvexObjectiveCurvature]:
-    """IPOPT's ``hess_lag`` for EID's metabolic NLP (x, cost, g of ``eid._eid_nlp``): the constraints' exact
-    curvature plus :class:`ConvexObjectiveCurvature`. Returns the Function and the callback (keep it alive
-    as long as the solver)."""
-    from .eid import quadrature_weights
-
+def convex_hessian(problem, smoothing: float, weights: np.ndarray, x, cost, g
+                   ) -> tuple[ca.Function, ConvexObjectiveCurvature]:
+    """IPOPT's ``hess_lag`` for EID's metabolic NLP (x, cost, g of ``eid._eid_nlp``, its quadrature ``weights``
+    (n,)): the constraints' exact curvature plus :class:`ConvexObjectiveCurvature`. Returns the Function and the
+    callback (keep it alive as long as the solver)."""
     lam_g = ca.SX.sym("lam_g", g.shape[0])
     constraint_curvature = ca.Function("constraint_curvature", [x, lam_g],
                                        [ca.triu(ca.hessian(ca.dot(lam_g, g), x)[0])])
-    curvature = ConvexObjectiveCurvature(problem, smoothing, quadrature_weights(problem.n, problem.periodic))
+    curvature = ConvexObjectiveCurvature(problem, smoothing, weights)
     xs, p, lam_f, lam_gs = (ca.MX.sym(name, *shape) for name, shape in
                             (("x", x.shape), ("p", (0, 1)), ("lam_f", (1, 1)), ("lam_g", (g.shape[0], 1))))
     hess = constraint_curvature(xs, lam_gs) + curvature(xs, lam_f)

@@ -32,7 +32,7 @@ class SolverSettings:
     constr_viol_tol: float = 1e-8
     max_iter: int = 3000
     print_level: int = 0
-    hessian: str = "exact"
+    hessian: str = "convex"
 
 
 def build_solver(name: str, x, f, g, p=None, settings: SolverSettings | None = None, *,

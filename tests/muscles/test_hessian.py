@@ -54,7 +54,7 @@ def test_ipopts_hessian_is_the_constraints_exact_curvature_plus_a_semi_definite_
     problem = build_problem(motion, Models.build(limb), nodes=9)
     x, cost, g = eid._eid_nlp(problem, "metabolic", 1e-2, None)
     x0, lam = _start(problem), np.random.default_rng(1).normal(size=g.shape[0])
-    hess, curvature = convex_hessian(problem, 1e-2, x, cost, g)
+    hess, curvature = convex_hessian(problem, 1e-2, np.ones(9), x, cost, g)
 
     def full(sigma):
         upper = np.array(ca.densify(hess(x0, [], sigma, lam)))
