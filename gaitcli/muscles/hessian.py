@@ -83,6 +83,9 @@ class ConvexObjectiveCurvature(ca.Callback):
             s, s[:, others[:, 0].tolist()], s[:, others[:, 1].tolist()], a, u, *tiled,
             ca.DM(problem.l_m.T), ca.DM(problem.v_m.T))
         self._blocks = ca.Function("metabolic_rate_hessian_blocks", [x], [ca.vertcat(*map(ca.vec, entries))])
+        self._block_values = np.zeros(15 * m * n)
+        self._buffer, self._buffer_eval = self._blocks.buffer()  # evaluated in place, no DM conversions
+        self._buffer.set_res(0, memoryview(self._block_values))
         self._scale = (problem.dt_s * np.asarray(weights, float))[None, :]  # (1, n)
         muscles, nodes = np.meshgrid(np.arange(m), np.arange(n), indexing="ij")  # (m, n)
         size = m * n
@@ -121,18 +124,39 @@ class ConvexObjectiveCurvature(ca.Callback):
     def get_sparsity_out(self, i):
         return self._pattern
 
+    def _entries(self, x: np.ndarray) -> np.ndarray:
+        """The 15 upper-triangle entries of every block (m, n, 15), evaluated into a preallocated buffer."""
+        m, n = self._m, self._n
+        x = np.ascontiguousarray(x, dtype=float)
+        self._buffer.set_arg(0, memoryview(x))
+        self._buffer_eval()
+        return self._block_values.reshape(15, n, m).transpose(2, 1, 0)
+
     def blocks(self, x: np.ndarray) -> np.ndarray:
         """The exact Hessian blocks (m, n, 5, 5) of Ė_ij in the local variables, W per unit² of the variables."""
         m, n = self._m, self._n
-        entries = np.asarray(self._blocks(x)).reshape(15, n, m).transpose(2, 1, 0)  # (m, n, 15)
+        entries = self._entries(x)
         h = np.zeros((m, n, 5, 5))
         rows, cols = np.triu_indices(5)
         h[:, :, rows, cols] = entries
         h[:, :, cols, rows] = entries
         return h
 
+    def has_eval_buffer(self):
+        return True  # eval_buffer: the arrays in place, without conversions to and from DM
+
+    def eval_buffer(self, arg, res):
+        x = np.frombuffer(arg[0], dtype=float)
+        sigma = np.frombuffer(arg[1], dtype=float)[0]
+        np.frombuffer(res[0], dtype=float)[:] = self.nonzeros(x, sigma)
+        return 0
+
     def eval(self, arg):
-        x, sigma = np.asarray(arg[0]).ravel(), float(arg[1])
+        return [ca.DM(self._pattern, self.nonzeros(np.asarray(arg[0], float).ravel(), float(arg[1])))]
+
+    def nonzeros(self, x: np.ndarray, sigma: float) -> np.ndarray:
+        """The non-zeros of σ·Σ w_j·Δt·[∇²Ė_ij]₊ in the order of the output's sparsity (the exact blocks after
+        :data:`SMALL_STEPS` small steps)."""
         self.calls += 1
         if self._last_x is not None and self.exact_from is None:
             step = np.abs(x - self._last_x).max()
@@ -146,8 +170,7 @@ class ConvexObjectiveCurvature(ca.Callback):
             values, vectors = np.linalg.eigh(h)
             values = np.maximum(values, NEGATIVE_CURVATURE_REFLECTED * np.abs(values))
             h = (vectors * values[..., None, :]) @ vectors.swapaxes(-1, -2)
-        nz = np.bincount(self._position, weights=h.reshape(-1)[self._kept], minlength=self._pattern.nnz())
-        return [ca.DM(self._pattern, nz)]
+        return np.bincount(self._position, weights=h.reshape(-1)[self._kept], minlength=self._pattern.nnz())
 
 
 def convex_hessian(problem, smoothing: float, weights: np.ndarray, x, cost, g
