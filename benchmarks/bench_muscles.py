@@ -34,7 +34,7 @@ from pathlib import Path
 # timing first, before numpy: one thread, Agg backend (its import sets the environment)
 from timing import median_s, one_core, sample_legs
 
-from gaitcli.muscles.solver import HESSIANS
+from gaitcli.muscles.solver import HESSIANS, SolverSettings
 from gaitcli.muscles.stage import run_muscles
 
 SCALING_NODES = (25, 50, 100, 200)
@@ -58,7 +58,7 @@ def main(argv=None) -> int:
     parser.add_argument("--sample", default="normal", help="the bundled sample trial (default normal)")
     parser.add_argument("--scaling", type=int, nargs="*", help=f"EID's growth with its nodes (default "
                         f"{' '.join(map(str, SCALING_NODES))}) instead of the table")
-    parser.add_argument("--hessian", choices=HESSIANS, default="exact",
+    parser.add_argument("--hessian", choices=HESSIANS, default=SolverSettings().hessian,
                         help="IPOPT's Hessian for --scaling")
     args = parser.parse_args(argv)
     one_core()
