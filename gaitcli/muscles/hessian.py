@@ -9,9 +9,10 @@ Hessian it steps with is replaced, as a sequential-convex-programming method doe
 
 The rate at node j of muscle i depends on five variables only: ŝ at j and at the (at most two) other nodes of
 the finite difference of row j (4.10–4.12), a and u at j. Its 5 × 5 Hessian block in these variables is
-computed exactly and its negative eigenvalues are set to zero (the nearest positive semi-definite matrix in the
-Frobenius norm); the objective's curvature is the sum of these blocks, each weighted as in (4.29). The
-constraints' curvature (λᵀ∇²g) is kept exact.
+computed exactly and its negative eigenvalues λ are replaced by :data:`NEGATIVE_CURVATURE_REFLECTED`·|λ|; the
+objective's curvature is the sum of these blocks, each weighted as in (4.29). The constraints' curvature (λᵀ∇²g)
+is kept exact. Near the KKT point (:data:`SMALL_STEPS` small steps) the blocks are passed exact, so that IPOPT
+finishes with Newton's fast local convergence.
 """
 
 from __future__ import annotations
