@@ -15,10 +15,12 @@ the speed-up over the dissertation's times (subject 1: SO 5.3 s, MSO 7.6 s, EID 
 Asserts nothing. (The whole ``gait muscles`` command, end to end: ``benchmarks/bench_cli.py``.)
 
 ``--scaling [N ...]`` (default 25 50 100 200) prints instead how EID grows with its nodes on that stride: per node
-count the NLP's size (variables, constraint-Jacobian and Hessian non-zeros), its construction (s), IPOPT's
-iterations, solve seconds (``Outcome.time_s``) and seconds per iteration, the optimiser's J and the forces' RMS
-difference to the next coarser count's (interpolated); then the least-squares exponent of solve seconds (and of
-iterations) against nodes. ``--hessian limited-memory`` runs the same with IPOPT's L-BFGS Hessian.
+count the NLP's size (variables, constraint-Jacobian and Hessian non-zeros), the whole ``solve_eid`` call
+(construction and solve; wall and CPU seconds), IPOPT's iterations, solve seconds (``Outcome.time_s``) and
+milliseconds per iteration, the optimiser's J and the forces' RMS difference to the next coarser count's
+(interpolated); then the least-squares exponent of solve seconds (and of iterations) against nodes.
+``--hessian limited-memory`` runs the same with IPOPT's L-BFGS Hessian, ``--hessian convex`` with the objective's
+curvature made positive semi-definite, then exact (``gaitcli/muscles/hessian.py``).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from pathlib import Path
 # timing first, before numpy: one thread, Agg backend (its import sets the environment)
 from timing import median_s, one_core, sample_legs
 
+from gaitcli.muscles.solver import HESSIANS, SolverSettings
 from gaitcli.muscles.stage import run_muscles
 
 SCALING_NODES = (25, 50, 100, 200)
@@ -55,7 +58,7 @@ def main(argv=None) -> int:
     parser.add_argument("--sample", default="normal", help="the bundled sample trial (default normal)")
     parser.add_argument("--scaling", type=int, nargs="*", help=f"EID's growth with its nodes (default "
                         f"{' '.join(map(str, SCALING_NODES))}) instead of the table")
-    parser.add_argument("--hessian", choices=("exact", "limited-memory"), default="exact",
+    parser.add_argument("--hessian", choices=HESSIANS, default=SolverSettings().hessian,
                         help="IPOPT's Hessian for --scaling")
     args = parser.parse_args(argv)
     one_core()
@@ -108,43 +111,40 @@ def eid_scaling(leg, node_counts, hessian: str) -> int:
     import casadi as ca
     import numpy as np
 
-    from gaitcli.core.ipopt import solve
     from gaitcli.muscles import eid
     from gaitcli.muscles.problem import Models, build_problem
     from gaitcli.muscles.so import solve_so
-    from gaitcli.muscles.solver import SolverSettings, build_solver
+    from gaitcli.muscles.solver import SolverSettings
 
     models = Models.build(leg.limb)
-    m = models.muscle.m
     print(f"EID scaling on {leg.interval_s[0]:.2f}–{leg.interval_s[1]:.2f} s ({'' if leg.periodic else 'not '}periodic)"
           f", metabolic objective, {hessian} Hessian")
-    header = (f"{'nodes':>5} {'vars':>6} {'jac nnz':>8} {'hess nnz':>9} {'build s':>8} {'iter':>5} {'solve s':>8} "
-              f"{'ms/iter':>8} {'J (J)':>9} {'ΔF RMS (N)':>11}  status")
+    header = (f"{'nodes':>5} {'vars':>6} {'jac nnz':>8} {'hess nnz':>9} {'total s':>8} {'cpu s':>7} {'iter':>5} "
+              f"{'solve s':>8} {'ms/iter':>8} {'J (J)':>9} {'ΔF RMS (N)':>11}  status")
     print(header)
     print("-" * len(header))
     rows, previous = [], None
     for n in node_counts:
         problem = build_problem(leg.motion, models, nodes=n, interval=leg.interval_s, periodic=leg.periodic)
-        so_force, _ = solve_so(problem)
+        so = solve_so(problem)
         x, cost, g = eid._eid_nlp(problem, "metabolic", 1e-2, None)
         jac_nnz = ca.jacobian(g, x).nnz()
         hess_nnz = ca.triu(ca.hessian(cost + ca.dot(ca.SX.sym("lam", g.shape[0]), g), x)[0]).nnz()
-        start = time.perf_counter()
-        solver = build_solver("eid", x, cost, g, settings=SolverSettings(hessian=hessian), may_be_infeasible=True)
-        build_s = time.perf_counter() - start
-        x0, lbx, ubx, _ = eid._bounds_and_start(problem, so_force, 0)
-        out = solve(solver, x0, lbx, ubx, 0.0, 0.0)
-        force = models.muscle.params.max_isometric_force_N * np.clip(out.x[:m * n].reshape(n, m), 0, None) ** 2
+        wall, cpu = time.perf_counter(), time.process_time()
+        solution = eid.solve_eid(problem, SolverSettings(hessian=hessian), warm_start=so)
+        wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+        out, force = solution.outcome, solution.force_N
         diff = "-"
         if previous is not None:  # the coarser solution, periodic-linearly interpolated onto these nodes
             t_prev, f_prev, period = previous
-            coarse = np.array([np.interp(problem.time_s, t_prev, f_prev[:, i], period=period) for i in range(m)]).T
+            coarse = np.array([np.interp(problem.time_s, t_prev, f_prev[:, i], period=period)
+                               for i in range(force.shape[1])]).T
             diff = f"{np.sqrt(np.mean((coarse - force) ** 2)):.1f}"
         previous = (problem.time_s, force, problem.t_end_s - problem.t_start_s)
         rows.append((n, out.iterations, out.time_s))
-        print(f"{n:5d} {x.shape[0]:6d} {jac_nnz:8d} {hess_nnz:9d} {build_s:8.2f} {out.iterations:5d} {out.time_s:8.2f} "
-              f"{1e3 * out.time_s / max(out.iterations, 1):8.2f} {out.objective:9.3f} {diff:>11}  {out.status}",
-              flush=True)
+        print(f"{n:5d} {x.shape[0]:6d} {jac_nnz:8d} {hess_nnz:9d} {wall:8.2f} {cpu:7.2f} {out.iterations:5d} "
+              f"{out.time_s:8.2f} {1e3 * out.time_s / max(out.iterations, 1):8.2f} {out.objective:9.3f} {diff:>11}  "
+              f"{out.status}", flush=True)
     nodes, iters, secs = (np.array(c, float) for c in zip(*rows))
     if nodes.size > 1:
         slope = {name: np.polyfit(np.log(nodes), np.log(v), 1)[0] for name, v in (("solve", secs), ("iter", iters))}
