@@ -14,9 +14,10 @@ IPOPT solver are built first into the run's cache (``construct s``: CasADi's exp
 derivative functions), so that ``solve s`` is IPOPT's iterations (with the transcription of the result). The
 full model solves the symmetric model first and starts from that solution laid on its own grid, where it is
 exactly a point of the full model (``layout.full_from_symmetric``, ``run_predict``); its ``solve s`` includes
-both solves and the full problem's construction, its ``construct s`` is the symmetric problem's. Printed: IPOPT iterations and solves, J, Et, Jdev, the non-zeros of the constraint Jacobian and
-of the Hessian of the Lagrangian (lower triangle, as IPOPT counts them), the ratio to Table 5.1's hours and
-to Falisse et al.'s 2-D predictions (44–55 s).
+both solves and the full problem's construction, its ``construct s`` is the symmetric problem's. Printed:
+IPOPT iterations and solves, J, Et, Jdev, the non-zeros of the constraint Jacobian and of the Hessian of the
+Lagrangian (lower triangle, as IPOPT counts them), the ratio to Table 5.1's hours and to Falisse et al.'s 2-D
+predictions (44–55 s).
 
 ``--stride-sweep SPEED STRIDE…``: the default prediction at SPEED (its reference) with every step fixed at half
 of each STRIDE (m), printing J, Et and Jdev: which stride the cost prefers.
