@@ -54,7 +54,7 @@ def _measure(item, phase: str):
     try:
         return (yield)
     finally:
-        _PHASES[item.nodeid][phase] = [tree_cpu_s() - start_cpu, time.perf_counter() - start_wall]
+        _PHASES[item.nodeid][phase] = [tree_cpu_s() - start_cpu, time.perf_counter() - start_wall, time.time()]
 
 
 @pytest.hookimpl(wrapper=True)
