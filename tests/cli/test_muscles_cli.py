@@ -2,18 +2,20 @@
 
 All invocations run once per session (:func:`build_once`), several processes at a time:
 
-* ``gait muscles normal --method so`` (runs filter and idyn first) and, alongside it, ``gait idyn``
-  on a second copy whose ``idyn.h5`` then gets NaN knee angles inside the analysed stride;
+* ``gait muscles normal --method so --no-plots`` (runs filter and idyn first, whose figures are
+  test_idyn_cli.py's) and, alongside it, ``gait idyn`` on a second copy whose ``idyn.h5`` then gets NaN knee
+  angles inside the analysed stride;
 * then, at once, on copies of the first trial folder (filter and idyn outputs included): a second
-  ``--method so`` run on the same folder (must reuse filter and idyn), ``--method eid`` with each
+  ``--method so`` run on the same folder (must reuse filter and idyn; it draws SO's figures), ``--method eid``
+  with each
   objective (the metabolic one validated over the stride), ``--method mso``, ``--method eid --validate``
   over the swing phase,
   ``--phase swing``, ``--side l``, and the muscles run on the corrupted copy (exit 2, nothing written);
   the runs whose figures no test looks at (the corrupted copy's, Crowninshield–Brand's, the validations',
-  EID's and MSO's of the left leg, the second SO run's) draw none (``--no-plots``: a stage's figures take as
-  long as its solve), nor do SO's over the swing and of the left leg: ``report/plots.muscle_figures`` draws
-  them as the first SO run's (the same branches: no infeasible frames, no cost), over another interval and in
-  the other side's colour;
+  EID's and MSO's of the left leg) draw none (``--no-plots``: a stage's figures take as long as its solve),
+  nor do SO's over the swing and of the left leg: ``report/plots.muscle_figures`` draws them as the second SO
+  run's (the same branches: no infeasible frames, no cost), over another interval and in the other side's
+  colour;
 * ``gait muscles --method eid`` on a ``gait synth`` trial of a 75 kg, 1.78 m subject walking a
   1.20 s cycle (its ``gait idyn`` run first without figures), whose moments the Table A.1 muscles cannot
   follow: exit 3, outputs written with ``converged: false``.
@@ -91,7 +93,7 @@ def _corrupt_knee(h5_path: Path, start_s: float) -> dict:
 def _build(root: Path) -> dict:
     normal = copy_sample("normal", root / "normal")
     nan = copy_sample("normal", root / "nan")
-    started = gait_many({"first": (("muscles", normal, "--method", "so"), root),
+    started = gait_many({"first": (("muscles", normal, "--method", "so", "--no-plots"), root),
                          "idyn": (("idyn", nan, "--no-plots"), root)})
     first, idyn = started["first"], started["idyn"]
     if first.returncode != 0 or idyn.returncode != 0:
@@ -121,7 +123,7 @@ def _build(root: Path) -> dict:
         "mso": (("muscles", root / "mso", "--method", "mso"), root),
         "mso_l": (("muscles", root / "mso_l", "--method", "mso", "--side", "l", "--no-plots"), root),
         "cb": (("muscles", root / "cb", "--method", "eid", "--objective", "crowninshield_brand", "--no-plots"), root),
-        "second": (("muscles", normal, "--method", "so", "--no-plots"), root),  # so_first has the figures
+        "second": (("muscles", normal, "--method", "so"), root),  # SO's figures, filter's and idyn's reused
         "swing": (("muscles", root / "swing", "--method", "so", "--phase", "swing", "--no-plots"), root),
         "left": (("muscles", root / "left", "--method", "so", "--side", "l", "--no-plots"), root),
         "nan": (("muscles", nan, "--method", "so", "--no-plots"), root),
@@ -168,7 +170,10 @@ def test_so_exits_0_and_writes_every_file(runs):
     first = result(runs, "first")
     assert first.returncode == 0, first.describe()
     folder = runs[1] / "so_first"
-    assert_all_files(folder)
+    assert_all_files(folder, plots=False)
+    second = result(runs, "second")
+    assert second.returncode == 0, second.describe()
+    assert_all_files(runs[1] / "normal" / "gait_out" / "muscles" / "so")  # the same SO again, with its figures
     info = summary_of(folder)
     assert set(MUSCLE_SUMMARY_KEYS) <= set(info)
     assert info["method"] == "so" and info["converged"] is True and info["side"] == "r"
