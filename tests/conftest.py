@@ -32,19 +32,19 @@ def shared_pig_dir() -> Path:
     return SHARED_PIG
 
 
-#: the test files that take longest (seconds of test time on 2 cores, as measured), run first and longest
-#: first so that ``pytest -n 2`` (pyproject: ``--dist loadfile --no-loadscope-reorder``, whole files in this order)
-#: ends with short files on both workers rather than one long file on one
+#: the test files that take longest (processor seconds, their gait processes included, as
+#: ``benchmarks/suite_cpu.py`` measures them), run first and longest first so that ``pytest -n 2`` (pyproject:
+#: ``--dist loadfile --no-loadscope-reorder``, whole files in this order) ends with short files on both workers
+#: rather than one long file on one
 HEAVY_FILES = {
-    "tests/cli/test_predict_cli.py": 36, "tests/cli/test_muscles_cli.py": 29, "tests/cli/test_muscles_samples.py": 24,
-    "tests/cli/test_interrupts.py": 19, "tests/io/test_c3d_fuzz.py": 19, "tests/cli/test_batch_cli.py": 16,
-    "tests/cli/test_report_cli.py": 14, "tests/cli/test_emg.py": 20, "tests/io/test_c3d.py": 11,
-    "tests/predict/test_nlp.py": 11,
-    "tests/dynamics/test_stage.py": 10, "tests/cli/test_regression_baseline.py": 10, "tests/muscles/test_methods.py": 9,
-    "tests/cli/test_idyn_cli.py": 9, "tests/io/test_c3d_long.py": 8, "tests/cli/test_session_cli.py": 7,
-    "tests/cli/test_compare_conditions_cli.py": 7, "tests/test_cluster.py": 6, "tests/predict/test_stage.py": 6,
-    "tests/cli/test_qualisys.py": 6, "tests/cli/test_filter_command.py": 5, "tests/cli/test_vsk_session.py": 5,
-    "tests/test_api.py": 7,
+    "tests/cli/test_predict_cli.py": 25, "tests/cli/test_muscles_cli.py": 24, "tests/cli/test_muscles_samples.py": 16,
+    "tests/cli/test_interrupts.py": 15, "tests/cli/test_batch_cli.py": 14, "tests/io/test_c3d_fuzz.py": 12,
+    "tests/cli/test_report_cli.py": 12, "tests/cli/test_emg.py": 10, "tests/cli/test_compare_conditions_cli.py": 10,
+    "tests/cli/test_idyn_cli.py": 9, "tests/muscles/test_methods.py": 9, "tests/dynamics/test_stage.py": 8,
+    "tests/predict/test_nlp.py": 7, "tests/cli/test_qualisys_doc.py": 7, "tests/cli/test_hostile_inputs.py": 7,
+    "tests/predict/test_stage.py": 7, "tests/cli/test_session_cli.py": 6, "tests/test_api.py": 6,
+    "tests/cli/test_regression_baseline.py": 6, "tests/cli/test_nexus_folder.py": 5, "tests/io/test_c3d_long.py": 5,
+    "tests/predict/test_problem.py": 5, "tests/cli/test_filter_command.py": 4, "tests/cli/test_emg_real.py": 4,
 }
 
 

@@ -85,6 +85,21 @@ def test_one_worker_is_this_process():
         assert here.submit(os.getpid).result() == os.getpid()
 
 
+@pytest.mark.skipif(not dask_installed(), reason="no dask installed")
+def test_a_scheduler_not_reached_leaves_no_thread_behind():
+    """distributed's half-made client runs its IO loop in a thread until collected; left running, a C3D reader
+    forked later found the client and waited 20 s to close it (a gait runner's every later read)."""
+    import threading
+
+    from gaitcli.errors import InputError
+
+    before = set(threading.enumerate())
+    with pytest.raises(InputError, match="--scheduler.*unknown address scheme"):
+        with workers(scheduler="nonsense://x"):
+            pass
+    assert set(threading.enumerate()) <= before
+
+
 @pytest.mark.parametrize("dask", BACKENDS)
 def test_workers_run_tasks_in_other_processes(dask):
     with workers(2, dask=dask) as pool:

@@ -19,6 +19,7 @@ remote cluster's tasks are cancelled; one already running there runs to its end.
 
 from __future__ import annotations
 
+import gc
 import logging
 import multiprocessing
 import os
@@ -204,13 +205,19 @@ def _remote(scheduler: str) -> Iterator[Workers]:
     except ImportError:
         raise InputError(None, "--scheduler", "needs Dask's distributed scheduler (expected: pip install "
                                                "'gaitcli[dist]')") from None
+    failure = None
     try:
         client = Client(scheduler, timeout="10s")
     except ValueError as exc:  # distributed's own message names the schemes it knows
-        raise InputError(None, "--scheduler", f"got {scheduler!r}: {exc} (expected an address such as "
-                                               "tcp://HOST:8786)") from None
+        failure = f"got {scheduler!r}: {exc} (expected an address such as tcp://HOST:8786)"
     except (OSError, TimeoutError) as exc:
-        raise InputError(None, "--scheduler", f"cannot reach the Dask scheduler at {scheduler} ({exc})") from None
+        failure = f"cannot reach the Dask scheduler at {scheduler} ({exc})"
+    if failure is not None:
+        # the half-made client keeps its IO-loop thread running until the collector finds it (its traceback's
+        # frames hold it in a cycle); found later, in a C3D reader forked meanwhile where that thread is gone, its
+        # close waits out its 20 s timeout before the read (a process that goes on: gaitcli.api, a test runner)
+        gc.collect()
+        raise InputError(None, "--scheduler", failure)
     executor = client.get_executor(pure=False)
     try:
         services = client.scheduler_info().get("services", {})

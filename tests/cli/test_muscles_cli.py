@@ -2,19 +2,23 @@
 
 All invocations run once per session (:func:`build_once`), several processes at a time:
 
-* ``gait muscles normal --method so`` (runs filter and idyn first) and, alongside it, ``gait idyn``
-  on a second copy whose ``idyn.h5`` then gets NaN knee angles inside the analysed stride;
+* ``gait muscles normal --method so --no-plots`` (runs filter and idyn first, whose figures are
+  test_idyn_cli.py's) and, alongside it, ``gait idyn`` on a second copy whose ``idyn.h5`` then gets NaN knee
+  angles inside the analysed stride;
 * then, at once, on copies of the first trial folder (filter and idyn outputs included): a second
-  ``--method so`` run on the same folder (must reuse filter and idyn), ``--method eid`` with each
+  ``--method so`` run on the same folder (must reuse filter and idyn; it draws SO's figures), ``--method eid``
+  with each
   objective (the metabolic one validated over the stride), ``--method mso``, ``--method eid --validate``
   over the swing phase,
   ``--phase swing``, ``--side l``, and the muscles run on the corrupted copy (exit 2, nothing written);
   the runs whose figures no test looks at (the corrupted copy's, Crowninshield–Brand's, the validations',
-  EID's and MSO's of the left leg: SO's is drawn) draw none (``--no-plots``: a stage's figures take as long
-  as its solve);
+  EID's and MSO's of the left leg) draw none (``--no-plots``: a stage's figures take as long as its solve),
+  nor do SO's over the swing and of the left leg: ``report/plots.muscle_figures`` draws them as the second SO
+  run's (the same branches: no infeasible frames, no cost), over another interval and in the other side's
+  colour;
 * ``gait muscles --method eid`` on a ``gait synth`` trial of a 75 kg, 1.78 m subject walking a
-  1.20 s cycle, whose moments the Table A.1 muscles cannot follow: exit 3, outputs written with
-  ``converged: false``.
+  1.20 s cycle (its ``gait idyn`` run first without figures), whose moments the Table A.1 muscles cannot
+  follow: exit 3, outputs written with ``converged: false``.
 
 Measured on the normal sample trial (right leg, full cycle, 50 EID nodes): EID 223 J (with the
 Crowninshield–Brand objective 279 J), MSO 299 J
@@ -89,7 +93,7 @@ def _corrupt_knee(h5_path: Path, start_s: float) -> dict:
 def _build(root: Path) -> dict:
     normal = copy_sample("normal", root / "normal")
     nan = copy_sample("normal", root / "nan")
-    started = gait_many({"first": (("muscles", normal, "--method", "so"), root),
+    started = gait_many({"first": (("muscles", normal, "--method", "so", "--no-plots"), root),
                          "idyn": (("idyn", nan, "--no-plots"), root)})
     first, idyn = started["first"], started["idyn"]
     if first.returncode != 0 or idyn.returncode != 0:
@@ -101,6 +105,10 @@ def _build(root: Path) -> dict:
     for name in ("eid", "eid_l", "cb", "mso", "mso_l", "validate", "swing", "left"):
         _copy_with_outputs(normal, root / name)
     heavy = gait("synth", root / "heavy", "--seed", "1", "--gait", "normative", cwd=root)
+    if heavy.returncode != 0:
+        return {"failed": [heavy.to_json()]}
+    # its filter and idyn figures are nobody's to look at (the EID's are): made here without them, then reused
+    heavy = gait("idyn", root / "heavy", "--no-plots", cwd=root)
     if heavy.returncode != 0:
         return {"failed": [heavy.to_json()]}
     start_s = json.loads((out / "muscles" / "so" / "summary.json").read_text())["interval_s"][0]
@@ -115,9 +123,9 @@ def _build(root: Path) -> dict:
         "mso": (("muscles", root / "mso", "--method", "mso"), root),
         "mso_l": (("muscles", root / "mso_l", "--method", "mso", "--side", "l", "--no-plots"), root),
         "cb": (("muscles", root / "cb", "--method", "eid", "--objective", "crowninshield_brand", "--no-plots"), root),
-        "second": (("muscles", normal, "--method", "so"), root),
-        "swing": (("muscles", root / "swing", "--method", "so", "--phase", "swing"), root),
-        "left": (("muscles", root / "left", "--method", "so", "--side", "l"), root),
+        "second": (("muscles", normal, "--method", "so"), root),  # SO's figures, filter's and idyn's reused
+        "swing": (("muscles", root / "swing", "--method", "so", "--phase", "swing", "--no-plots"), root),
+        "left": (("muscles", root / "left", "--method", "so", "--side", "l", "--no-plots"), root),
         "nan": (("muscles", nan, "--method", "so", "--no-plots"), root),
     })
     return {"first": first.to_json(), "idyn": idyn.to_json(),
@@ -162,7 +170,10 @@ def test_so_exits_0_and_writes_every_file(runs):
     first = result(runs, "first")
     assert first.returncode == 0, first.describe()
     folder = runs[1] / "so_first"
-    assert_all_files(folder)
+    assert_all_files(folder, plots=False)
+    second = result(runs, "second")
+    assert second.returncode == 0, second.describe()
+    assert_all_files(runs[1] / "normal" / "gait_out" / "muscles" / "so")  # the same SO again, with its figures
     info = summary_of(folder)
     assert set(MUSCLE_SUMMARY_KEYS) <= set(info)
     assert info["method"] == "so" and info["converged"] is True and info["side"] == "r"
@@ -276,7 +287,7 @@ def test_eid_and_mso_converge_with_bounded_excitations(runs, method, side):
     run = result(runs, name)
     assert run.returncode == 0, run.describe()
     folder = runs[1] / name / "gait_out" / "muscles" / name  # each variant its own folder: muscles/eid_l
-    assert_all_files(folder, plots=side == "r")  # the left legs' runs draw none (test_left_side's do)
+    assert_all_files(folder, plots=side == "r")  # the left legs' runs draw none
     info = summary_of(folder)
     assert set(MUSCLE_SUMMARY_KEYS) <= set(info)
     assert info["method"] == method and info["converged"] is True and info["status"] == "Solve_Succeeded"
@@ -395,7 +406,7 @@ def test_swing_phase_interval(runs):
     assert run.returncode == 0, run.describe()
     trial = runs[1] / "swing"
     folder = trial / "gait_out" / "muscles" / "so_swing"
-    assert_all_files(folder)
+    assert_all_files(folder, plots=False)
     info = summary_of(folder)
     start, end = info["interval_s"]
     events = events_of(trial)
@@ -416,7 +427,7 @@ def test_left_side(runs):
     assert run.returncode == 0, run.describe()
     trial = runs[1] / "left"
     folder = trial / "gait_out" / "muscles" / "so_l"
-    assert_all_files(folder)
+    assert_all_files(folder, plots=False)
     info = summary_of(folder)
     assert info["side"] == "l" and info["converged"] is True and info["periodic"] is True
     events = events_of(trial)

@@ -117,12 +117,13 @@ def test_an_unconverged_prediction_writes_everything_exits_3_and_survives_sigter
 
     # SIGTERM during the next run: "gait: interrupted", exit 130, the unconverged result above untouched
     # and no half-written folder. Without an iteration limit the run would go on for minutes. The runner keeps
-    # the problem it built for the run above (its NlpCache), so 3 s on the signal comes in IPOPT's iterations;
-    # an interrupt inside IPOPT is also tests/core/test_ipopt.py's and test_interrupts.py's (EID), every solve
-    # going through core/ipopt.solve.
+    # the problem it built for the run above (its NlpCache) and reuses the trial's idyn, so 1 s on the signal
+    # comes in IPOPT's iterations (each second more is a second of solving for nothing); an interrupt inside
+    # IPOPT is also tests/core/test_ipopt.py's and test_interrupts.py's (EID), every solve going through
+    # core/ipopt.solve.
     earlier = snapshot(tmp_path / "normal" / "gait_out")
     runner.send(trial_args, tmp_path)
-    time.sleep(3.0)
+    time.sleep(1.0)
     assert runner.proc.poll() is None
     runner.proc.send_signal(signal.SIGTERM)
     interrupted = runner.receive(timeout_s=60)

@@ -442,7 +442,9 @@ def test_a_hang_is_stopped_at_the_time_limit(monkeypatch):
 
     import gaitcli.io.c3d as c3d_module
 
-    monkeypatch.setattr(c3d_module, "READ_TIME_S", 0.5)
+    # the wall-time limit at once (no waiting on for a child that computes: this one sleeps), 0.5 s
+    monkeypatch.setattr(c3d_module, "READ_TIME_S", 0.1)
+    monkeypatch.setattr(c3d_module, "READ_WALL_FACTOR", 1.0)
     _misbehaving_reader(monkeypatch, lambda: time.sleep(60))
     with pytest.raises(InputError, match="took longer than"):
         read_c3d(_sample_path())
@@ -491,7 +493,7 @@ def test_a_busy_read_is_stopped_at_its_processor_time(monkeypatch):
         while True:
             pass
 
-    monkeypatch.setattr(c3d_module, "READ_TIME_S", 1.0)
+    monkeypatch.setattr(c3d_module, "READ_TIME_S", 0.01)  # with the file's 0.4 MB: 1 s of processor time
     _misbehaving_reader(monkeypatch, spin)
     with pytest.raises(InputError, match=r"took longer than \d+ s of processor time"):
         read_c3d(_sample_path())

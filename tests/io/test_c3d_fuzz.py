@@ -1,7 +1,12 @@
 """Damaged C3D files (issue 9): seeded single-byte mutations of the header and the parameter section of a
 sample trial and of c3d.org's Eb015pi.c3d (integer storage, another writer), each read by ``read_c3d``. Every
 read must end in a recording or a one-line InputError, within its time limit: no crash (once a segfault of the
-C3D library killed gait), no hang, no runaway allocation (once 12.7 GB for a 0.5 MB file), no other exception."""
+C3D library killed gait), no hang, no runaway allocation (once 12.7 GB for a 0.5 MB file), no other exception.
+
+The mutations of the sample trial go to its first :data:`SHORT_FRAMES` frames, as the sample's writer
+(``io/c3d_write``) writes them: the same header and parameter section but for the frame counts, whose damage is
+the test's, and a tenth of the data to convert on every read (the sample's 428 frames and 4 280 plate samples
+took 150 ms of a read's 160)."""
 
 from __future__ import annotations
 
@@ -19,6 +24,7 @@ from gaitcli.resources import sample_trial
 from ..conftest import SHARED_C3D
 
 MUTATIONS = {"sample": 60, "lab": 140}  # 200 in all; the lab file's part skips without ../shared
+SHORT_FRAMES = 40  # marker frames of the sample trial's mutated copies (400 plate samples)
 CHUNKS = 4  # tests per file, so that pytest-xdist shares the reads out
 LIMIT_S = 10.0
 
@@ -61,10 +67,44 @@ def _read_mutated(source: Path, tmp_path: Path, seed: int, count: int, chunk: in
     return outcomes
 
 
+@pytest.fixture(scope="module")
+def short_sample(tmp_path_factory) -> Path:
+    """The normal sample trial's first SHORT_FRAMES frames and their plate samples, written as the sample was."""
+    from gaitcli.core.recording import ForcePlate, Markers
+    from gaitcli.io.c3d_write import write_c3d
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = read_c3d(sample_trial("normal") / "trial.c3d")
+    m = whole.markers
+    per_frame = [round(p.rate_hz / m.rate_hz) for p in whole.plates]
+    plates = [ForcePlate(p.name, p.force_N[:SHORT_FRAMES * k], p.moment_Nm[:SHORT_FRAMES * k], p.centre_m,
+                         p.corners_m, p.rate_hz, p.plate_type) for p, k in zip(whole.plates, per_frame)]
+    path = tmp_path_factory.mktemp("short_sample") / "trial.c3d"
+    return write_c3d(path, Markers(m.labels, m.positions_m[:SHORT_FRAMES], m.rate_hz, m.first_frame), plates,
+                     model_to_lab=whole.lab_to_model.T)
+
+
+def test_the_short_sample_is_the_samples_start(short_sample):
+    """What the mutations damage: the sample's own parameter layout, and its data, cut short."""
+    import ezc3d
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole, short = read_c3d(sample_trial("normal") / "trial.c3d"), read_c3d(short_sample)
+    np.testing.assert_allclose(short.markers.positions_m, whole.markers.positions_m[:SHORT_FRAMES], atol=1e-6)
+    assert [p.n_samples for p in short.plates] == [10 * SHORT_FRAMES] * len(whole.plates)
+    for p, q in zip(short.plates, whole.plates):
+        np.testing.assert_allclose(p.force_N, q.force_N[:p.n_samples], atol=1e-3)
+    a, b = ezc3d.c3d(str(sample_trial("normal") / "trial.c3d")), ezc3d.c3d(str(short_sample))
+    assert {g: sorted(a["parameters"][g]) for g in a["parameters"]} == \
+        {g: sorted(b["parameters"][g]) for g in b["parameters"]}
+
+
 @pytest.mark.parametrize("chunk", range(CHUNKS))
-def test_mutated_sample_trial(tmp_path, chunk, monkeypatch):
-    outcomes = _read_mutated(sample_trial("normal") / "trial.c3d", tmp_path, seed=9, count=MUTATIONS["sample"],
-                             chunk=chunk, monkeypatch=monkeypatch)
+def test_mutated_sample_trial(tmp_path, chunk, monkeypatch, short_sample):
+    outcomes = _read_mutated(short_sample, tmp_path, seed=9, count=MUTATIONS["sample"], chunk=chunk,
+                             monkeypatch=monkeypatch)
     assert sum(outcomes.values()) == len(range(chunk, MUTATIONS["sample"], CHUNKS))
 
 
@@ -135,7 +175,7 @@ def _same(a: Recording, b: Recording) -> bool:
 
 
 @pytest.mark.parametrize("chunk", range(CHUNKS))
-def test_a_parameter_that_changes_the_datas_meaning_is_refused_or_warned(tmp_path, chunk):
+def test_a_parameter_that_changes_the_datas_meaning_is_refused_or_warned(tmp_path, chunk, short_sample):
     """Seeded mutations of the parameters that say how the data read (rates, scales, frame and point counts,
     units): each read ends in an InputError naming the file, or in the same markers and plates as the unmutated
     file's, or in a warning that says what was assumed. Before issue 53 an analog rate of 0 read as 0 plates
@@ -144,7 +184,7 @@ def test_a_parameter_that_changes_the_datas_meaning_is_refused_or_warned(tmp_pat
 
     from gaitcli.errors import GaitWarning
 
-    source = sample_trial("normal") / "trial.c3d"
+    source = short_sample
     with w.catch_warnings():
         w.simplefilter("ignore")
         base = read_c3d(source)
