@@ -187,6 +187,10 @@ def _stop_processes(executor: ProcessPoolExecutor, before: set) -> None:
     """End the pool's workers now: SIGTERM before the task queue closes (an idle worker reading a closed queue
     dies of EOFError, loudly), the queued tasks cancelled, SIGKILL for any still running after the grace."""
     processes = _started_since(before)
+    # the pool's manager thread, which shutdown(wait=False) lets go on: joined below, once the workers are gone,
+    # so that it has closed its wake-up pipe before the interpreter's exit hook writes to it (CPython's
+    # concurrent.futures at exit: "Exception ignored … Bad file descriptor")
+    manager = getattr(executor, "_executor_manager_thread", None)
     for process in processes:
         process.terminate()
     executor.shutdown(wait=False, cancel_futures=True)
@@ -196,6 +200,8 @@ def _stop_processes(executor: ProcessPoolExecutor, before: set) -> None:
         if process.is_alive():
             process.kill()
             process.join(1.0)
+    if manager is not None:
+        manager.join(STOP_GRACE_S)
 
 
 @contextmanager
