@@ -5,7 +5,8 @@ returns its iterate as an ordinary failure, which was once written as an unconve
 
 from __future__ import annotations
 
-import json
+import os
+import resource
 import signal
 import subprocess
 import sys
@@ -27,32 +28,47 @@ def start_gait(*args, cwd: Path) -> subprocess.Popen:
                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
-def interrupt_after(process: subprocess.Popen, delay_s: float, signum: int) -> str:
-    time.sleep(delay_s)
+def children_cpu_s() -> float:
+    """CPU seconds of this process's finished children (user + system)."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def cpu_s(pid: int) -> float:
+    """CPU seconds (user + system) a running process has used so far, from /proc."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def interrupt_at_cpu(process: subprocess.Popen, cpu_target_s: float, signum: int) -> str:
+    """Send ``signum`` once the process has used ``cpu_target_s`` of CPU: a point in its work that another test
+    worker's load does not move, as a wall-clock delay would."""
+    while process.poll() is None and cpu_s(process.pid) < cpu_target_s:
+        time.sleep(0.01)
     assert process.poll() is None, "the run ended before the signal"
     process.send_signal(signum)
-    _, stderr = process.communicate(timeout=60)  # a run that ignored the signal fails here (TimeoutExpired)
+    _, stderr = process.communicate(timeout=60)
     return stderr
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads a process's CPU time from /proc")
 def test_ctrl_c_during_eid_keeps_the_earlier_converged_result(tmp_path):
-    """A first uninterrupted run finds when the EID solve runs (its wall time and solve time); the second is
-    sent SIGINT a quarter into the solve."""
+    """SO alone, then EID (which starts from SO's solution), each in a new process, give the CPU time up to
+    EID's solve and of the whole run; a third run is sent SIGINT once it has used that much plus half the
+    solve's."""
     trial = copy_sample("normal", tmp_path / "normal")
     assert gait("idyn", trial, "--no-plots", cwd=tmp_path).returncode == 0
-    start = time.perf_counter()
+    used = children_cpu_s()
+    assert gait("muscles", trial, "--no-plots", "--method", "so", cwd=tmp_path, fresh=True).returncode == 0
+    before_eid = children_cpu_s() - used
+    used = children_cpu_s()
     first = gait("muscles", trial, "--no-plots", "--nodes", "90", cwd=tmp_path, fresh=True)
-    wall = time.perf_counter() - start
+    whole = children_cpu_s() - used
     assert first.returncode == 0, first.describe()
-    eid = trial / "gait_out" / "muscles" / "eid"
-    solve_s = json.loads((eid / "summary.json").read_text())["solve_time_s"]
-    assert solve_s > 2.0, f"EID took {solve_s:.1f} s: too short to aim a signal at"
+    assert whole - before_eid > 0.5, f"EID took {whole - before_eid:.2f} s of CPU: too short to aim a signal at"
     before = snapshot(trial / "gait_out")
     process = start_gait("muscles", str(trial), "--no-plots", "--nodes", "90", cwd=tmp_path)
-    # a quarter into the solve, not half-way: the second run can be faster than the first by more than half
-    # the solve when the other test worker's load changes (seen on a clean clone: it ended before the signal);
-    # a signal a little before the solve is an interrupt all the same
-    stderr = interrupt_after(process, wall - 0.75 * solve_s, signal.SIGINT)
+    stderr = interrupt_at_cpu(process, before_eid + 0.5 * (whole - before_eid), signal.SIGINT)
     assert process.returncode == 130 and stderr.strip().splitlines()[-1] == "gait: interrupted", stderr
     assert "converge" not in stderr and "Traceback" not in stderr, stderr
     assert snapshot(trial / "gait_out") == before  # the converged EID as it was, no .part folder left
