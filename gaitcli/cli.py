@@ -378,9 +378,14 @@ def predict_command(console: Console, trial, out, reference, subject, init, work
 @click.option("--emg", is_flag=True,
               help="Also an EMG channel per muscle and leg (mV), modulated by the truth's activations (EID on the "
                    "true motion; truth/activations.csv), mapped in subject.yaml.")
+@click.option("--rate-hz", "marker_rate_hz", type=FiniteFloat(min=50, max=500), default=100.0, show_default=True,
+              help="The markers' sampling rate, Hz (the plates sample 10 times as fast: 120 → 1200 Hz).")
+@click.option("--medial-markers", is_flag=True,
+              help="With --marker-set plug_in_gait: medial knee and ankle markers (RKNM, LKNM, RMED, LMED).")
 @click.pass_obj
 def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact_mm, plate_noise_N, strides,
-                  mass_kg, stature_m, sex, period_s, marker_set, gait_kind, session, walks, emg):
+                  mass_kg, stature_m, sex, period_s, marker_set, gait_kind, session, walks, emg, marker_rate_hz,
+                  medial_markers):
     """Write a synthetic trial folder with known truth (trial.c3d, static.c3d, subject.yaml, truth/), or with
     --session a session folder of several walks."""
     from gaitcli.synth import write_trial
@@ -389,7 +394,8 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
     gait_kind = gait_kind or ("predicted" if condition == "normal" else "normative")
     options = {"condition": condition, "noise_mm": noise_mm, "artefact_mm": artefact_mm,
                "plate_noise_N": plate_noise_N, "strides": strides, "mass_kg": mass_kg, "stature_m": stature_m,
-               "sex": sex, "period_s": period_s, "marker_set": marker_set, "gait": gait_kind}
+               "sex": sex, "period_s": period_s, "marker_set": marker_set, "gait": gait_kind,
+               "marker_rate_hz": marker_rate_hz, "medial_markers": medial_markers}
     if session:
         if emg:
             raise click.UsageError("--emg writes one trial (not with --session)")
@@ -398,7 +404,7 @@ def synth_command(console: Console, out_dir, condition, seed, noise_mm, artefact
                      f"{written[0].design.speed_m_s:.2f} m/s)")
         return
     trial = write_trial(out_dir, seed=seed, emg=emg, **options)
-    console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames, "
+    console.info(f"synth: wrote {out_dir} ({condition}, {trial.markers.n_frames} frames at {marker_rate_hz:g} Hz, "
                  f"{trial.design.speed_m_s:.2f} m/s, {len(trial.plates)} plates{', 16 EMG channels' if emg else ''})")
 
 

@@ -16,7 +16,7 @@ import yaml
 from gaitcli.errors import InputError
 from gaitcli.kinematics.anatomical import ANATOMICAL_ANGLES
 from gaitcli.kinematics.model import COORDINATES, MOMENTS
-from gaitcli.synth.recording import DEFAULT_NOISE_MM, SyntheticTrial, simulate_trial
+from gaitcli.synth.recording import DEFAULT_NOISE_MM, MARKER_RATE_HZ, SyntheticTrial, simulate_trial
 
 #: the side carrying the condition's added masses and locked joints
 DISTURBED_SIDE = "r"
@@ -81,7 +81,8 @@ def write_truth(out: Path, trial: SyntheticTrial) -> None:
 def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0, noise_mm: float = DEFAULT_NOISE_MM,
                 artefact_mm: float = 10.0, plate_noise_N: float = 1.0, strides: int = 3, mass_kg: float = 75.0,
                 stature_m: float = 1.78, sex: str = "male", period_s: float | None = None,
-                marker_set: str = "dissertation", gait: str = "normative", emg: bool = False) -> SyntheticTrial:
+                marker_set: str = "dissertation", gait: str = "normative", emg: bool = False,
+                marker_rate_hz: float = MARKER_RATE_HZ, medial_markers: bool = False) -> SyntheticTrial:
     """``gait synth``: write a trial folder with trial.c3d, static.c3d, subject.yaml and truth/.
 
     The options are those of :func:`~gaitcli.synth.recording.simulate_trial`; ``emg``: the trial also has an
@@ -93,7 +94,8 @@ def write_trial(out_dir: str | Path, *, condition: str = "normal", seed: int = 0
 
     trial = simulate_trial(condition=condition, seed=seed, noise_mm=noise_mm, artefact_mm=artefact_mm,
                            plate_noise_N=plate_noise_N, strides=strides, mass_kg=mass_kg, stature_m=stature_m,
-                           sex=sex, period_s=period_s, marker_set=marker_set, gait=gait)
+                           sex=sex, period_s=period_s, marker_set=marker_set, gait=gait,
+                           marker_rate_hz=marker_rate_hz, medial_markers=medial_markers)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(out, None, "is a file (expected the trial folder to write)")
