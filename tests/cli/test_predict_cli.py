@@ -181,6 +181,8 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     table = pd.read_csv(study / "study.csv")
     assert list(table["condition"]) == ["normal", "sach"] and not table["converged"].any()
     assert not table["reused"].any() and (table["iterations"] == 1).all()
+    # what each case's solve built, with its time (a problem its runner already held is no build)
+    assert (table["build_time_s"][table["problems_built"] > 0] > 0).all() and (table["build_time_s"] >= 0).all()
     first = table["objective"].to_numpy()
     np.testing.assert_allclose(on_cluster["objective"], first[:1], rtol=1e-9)
     assert (study / "study.png").stat().st_size > 1000
@@ -191,6 +193,6 @@ def test_a_study_marks_unconverged_cases_exits_3_and_reuses_them_on_a_rerun(tmp_
     again = gait_many({"study": jobs["study"]}, workers=1)["study"]
     assert again.returncode == 3, again.describe()
     table = pd.read_csv(study / "study.csv")
-    assert table["reused"].all()
+    assert table["reused"].all() and (table["problems_built"] == 0).all() and (table["build_time_s"] == 0).all()
     np.testing.assert_allclose(table["objective"], first, rtol=1e-6)  # CSV's 6 significant digits
     assert snapshot(study / "v1.13_b_sach") == before  # read back, not written again
