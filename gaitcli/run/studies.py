@@ -335,6 +335,16 @@ def _solve_case(case: StudyCase, solved: dict, params, reference) -> tuple[Predi
     return run_predict(case.cfg, params=params, reference=reference, init=init, cache=cache), 1
 
 
+def _solve_counting_builds(case: StudyCase, solved: dict, params, reference
+                           ) -> tuple[PredictResult, int, tuple[int, float]]:
+    """:func:`_solve_case`, with the problems its solve built in this worker's cache and the seconds spent
+    building them and their solvers (study.csv's ``problems_built``, ``build_time_s``)."""
+    cache = prediction_cache()
+    builds, build_s = cache.builds, cache.build_s
+    result, agreed = _solve_case(case, solved, params, reference)
+    return result, agreed, (cache.builds - builds, cache.build_s - build_s)
+
+
 def retry_start(case: StudyCase, cases: list[StudyCase], results: dict[str, PredictResult]) -> str | None:
     """Where an unconverged case of a commercial foot or the normal gait starts again (None: converged, or no
     such start): the nearest converged case of its condition at its speed (the weight sets' order, the later one
@@ -364,11 +374,9 @@ def retry_case(case: StudyCase, root: str, params, reference, subject: str, pipe
     folder = Path(root) / case.name
     result = None if force else stored_case(folder, key)
     reused = result is not None
-    cache, built = prediction_cache(), (0, 0.0)
+    built = (0, 0.0)
     if result is None:
-        before = cache.builds, cache.build_s
-        result, agreed = _solve_case(again, {start: started[0]}, params, reference)
-        built = cache.builds - before[0], cache.build_s - before[1]
+        result, agreed, built = _solve_counting_builds(again, {start: started[0]}, params, reference)
         if not result.converged:
             return first_try
         _write_solved(folder, case, result, pipeline, inputs, key, agreed, replaces_key=first_try[1],
@@ -389,11 +397,9 @@ def run_case(case: StudyCase, root: str, params, reference, subject: str, pipeli
     folder = Path(root) / case.name
     result = None if force else stored_case(folder, key)
     reused = result is not None
-    cache, built = prediction_cache(), (0, 0.0)
+    built = (0, 0.0)
     if result is None:
-        before = cache.builds, cache.build_s
-        result, agreed = _solve_case(case, solved, params, reference)
-        built = cache.builds - before[0], cache.build_s - before[1]
+        result, agreed, built = _solve_counting_builds(case, solved, params, reference)
         _write_solved(folder, case, result, pipeline, inputs, key, agreed)
     else:
         agreed = int(json.loads((folder / "summary.json").read_text()).get("starts_agreeing", 1))
