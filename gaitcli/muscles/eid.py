@@ -145,32 +145,20 @@ def solve_eid(problem: Problem, settings: SolverSettings | None = None, *, objec
     so_force, so_out = warm_start if warm_start is not None else solve_so(problem, settings)
     x, cost, g = _eid_nlp(problem, objective, smoothing, None)
     x0, lbx, ubx, s_max = _bounds_and_start(problem, so_force, 0)
+    hess = None
     if (settings or SolverSettings()).hessian == "convex" and objective == "metabolic":
-        out = _solve_convex_then_exact(problem, settings, smoothing, (x, cost, g), (x0, lbx, ubx))
-    else:
-        # a trial's moments the muscles cannot make (a locked joint's, carried by an orthosis) make it infeasible
-        solver = build_solver("eid", x, cost, g, settings=settings, may_be_infeasible=True)
-        out = solve(solver, x0, lbx, ubx, 0.0, 0.0, blocks=_blocks(m, n, 0))
+        # IPOPT steps on a positive semi-definite curvature of the objective until its steps become small, then
+        # on the exact one: the same NLP and KKT points (hessian.py; benchmarks/README.md, "EID's growth with its
+        # nodes"); ``curvature``, the callback, stays alive in this frame while IPOPT calls it
+        hess, curvature = convex_hessian(problem, smoothing, quadrature_weights(n, problem.periodic), x, cost, g)
+    # a trial's moments the muscles cannot make (a locked joint's, carried by an orthosis) make it infeasible
+    solver = build_solver("eid", x, cost, g, settings=settings, may_be_infeasible=True, hess_lag=hess)
+    out = solve(solver, x0, lbx, ubx, 0.0, 0.0, blocks=_blocks(m, n, 0))
     blocks = out.x.reshape(3, n, m)
     s_opt = np.clip(blocks[0], 0.0, s_max)  # IPOPT's bound relaxation is 1e-8 of the bound
     return EidSolution(force_N=force_from_stretch(s_opt, par.max_isometric_force_N), activation=blocks[1],
                        excitation=blocks[2], outcome=out, warm_start_outcome=so_out, warm_start_force_N=so_force,
                        node_weights=quadrature_weights(n, problem.periodic))
-
-
-def _solve_convex_then_exact(problem: Problem, settings: SolverSettings, smoothing: float, nlp, start) -> Outcome:
-    """EID's metabolic NLP solved with a positive semi-definite curvature of the objective (``hessian.py``) until
-    IPOPT's steps become small, then with the exact one: the same NLP and KKT points, finished by the exact
-    Hessian's fast local convergence (benchmarks/README.md, "EID's growth with its nodes")."""
-    x, cost, g = nlp
-    x0, lbx, ubx = start
-    m, n = problem.models.muscle.m, problem.n
-    weights = quadrature_weights(n, problem.periodic)
-    # curvature: the callback in hess, kept alive here while IPOPT calls it
-    hess, curvature = convex_hessian(problem, smoothing, weights, x, cost, g)
-    # a trial's moments the muscles cannot make (a locked joint's, carried by an orthosis) make it infeasible
-    solver = build_solver("eid", x, cost, g, settings=settings, may_be_infeasible=True, hess_lag=hess)
-    return solve(solver, x0, lbx, ubx, 0.0, 0.0, blocks=_blocks(m, n, 0))
 
 
 @dataclass(frozen=True)
