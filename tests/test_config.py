@@ -36,7 +36,7 @@ def test_every_parameter_has_a_default():
             assert f.default is not dataclasses.MISSING or f.default_factory is not dataclasses.MISSING, \
                 f"{cls.__name__}.{f.name}"
     cfg = PipelineConfig()
-    assert cfg.filter.cutoff_hz == 6.0 and cfg.filter.force_cutoff_hz == 6.0 and cfg.filter.order == 2
+    assert cfg.filter.cutoff_hz == "auto" and cfg.filter.force_cutoff_hz == "auto" and cfg.filter.order == 2
     assert cfg.stages == ("filter", "idyn")
 
 
@@ -227,3 +227,9 @@ def test_the_predict_section_is_parsed_once_into_numbers_and_pairs():
     assert cfg.predict.weights == (8 / 5, 2 / 5) and cfg.predict.monotone_range_deg == (-20.0, 5.0)
     assert cfg.predict.foot_mass_at == (0.1, 0.02) and cfg.predict.prosthesis == "sach"
     assert pipeline_from_dict(yaml.safe_load(to_yaml(cfg))) == cfg
+
+
+@pytest.mark.parametrize("value,kept", [("auto", "auto"), (" Auto", "auto"), (0, 0.0), ("8", 8.0), (12.5, 12.5)])
+def test_a_cut_off_is_hz_or_auto(value, kept):
+    cfg = pipeline_from_dict({"filter": {"cutoff_hz": value, "force_cutoff_hz": value}})
+    assert cfg.filter.cutoff_hz == kept and cfg.filter.force_cutoff_hz == kept

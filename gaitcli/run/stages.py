@@ -37,7 +37,7 @@ from gaitcli.signal.stage import FilterConfig, filter_trial
 
 
 def _filter(ctx: StageContext, cfg: FilterConfig):
-    return filter_trial(ctx.recording(), cfg, path=ctx.trial_path)
+    return filter_trial(ctx.recording(), cfg, marker_set=ctx.subject.marker_set, path=ctx.trial_path)
 
 
 def _idyn(ctx: StageContext, cfg: IdynConfig):

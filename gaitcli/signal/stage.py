@@ -45,16 +45,41 @@ DEFAULT_MARKER_DIAMETER_M = 0.014
 #: most NEAR_HEIGHT_M above or below its top
 NEAR_M, NEAR_HEIGHT_M = 0.1, 0.3
 EVENT_CHOICES = ("auto", "file", "detect")
+#: what ``auto`` cut-offs stand for, (markers, plates) in Hz: the dissertation's 6 Hz for both (3.1.4); in a
+#: Plug-in Gait session 8 and 20 Hz, the pair nearest Vicon's own kinetics and the synthetic truth
+#: (docs/decisions.md, "Plug-in Gait sessions filter at 8 Hz markers, 20 Hz plates")
+AUTO_CUTOFFS_HZ = {"plug_in_gait": (8.0, 20.0)}
+DEFAULT_CUTOFFS_HZ = (6.0, 6.0)
+CUTOFF_EXPECTED = "a cut-off in Hz ≥ 0 (0: no filtering), or auto"
+
+
+def cutoff(value) -> float | str:
+    """A cut-off as a pipeline file or the command line gives it: ``auto`` or a finite number of Hz ≥ 0."""
+    if isinstance(value, str) and value.strip().lower() == "auto":
+        return "auto"
+    if isinstance(value, bool):
+        raise ValueError(value)
+    try:
+        number = float(value)
+    except TypeError:  # a list, a mapping
+        raise ValueError(value) from None
+    if not (np.isfinite(number) and number >= 0):
+        raise ValueError(value)
+    return number
 
 
 @dataclass(frozen=True)
 class FilterConfig:
     """Parameters of ``gait filter`` (3.1.4)."""
 
-    cutoff_hz: float = parameter(6.0, low=0.0, help="Net cut-off of the zero-lag filter for markers, Hz "
-                                                    "(0: no filtering).")
-    force_cutoff_hz: float = parameter(6.0, low=0.0, help="The same for the force-plate signals, before the COP "
-                                                          "is formed, Hz (0: no filtering).")
+    cutoff_hz: float | str = parameter(
+        "auto", parse=cutoff, expected=CUTOFF_EXPECTED, metavar="HZ|auto",
+        help="Net cut-off of the zero-lag filter for markers, Hz (0: no filtering); auto: 6 Hz, 8 Hz in a Plug-in "
+             "Gait session.")
+    force_cutoff_hz: float | str = parameter(
+        "auto", parse=cutoff, expected=CUTOFF_EXPECTED, metavar="HZ|auto",
+        help="The same for the force-plate signals, before the COP is formed, Hz (0: no filtering); auto: 6 Hz, "
+             "20 Hz in a Plug-in Gait session.")
     order: int = parameter(2, low=1, high=8, help="Butterworth order of one pass.")
     max_gap_frames: int = parameter(10, low=0, help="Longer marker gaps stay NaN.")
     force_threshold_N: float = parameter(20.0, low=0.0, low_open=True,
@@ -162,6 +187,14 @@ def filter_markers(markers: Markers, cfg: FilterConfig) -> tuple[Markers, list[G
     smooth = lowpass(filled, rate_hz=markers.rate_hz, cutoff_hz=cfg.cutoff_hz, order=cfg.order, axis=0) \
         if cfg.cutoff_hz else filled  # 0 turns the filter off (exact synthetic data)
     return Markers(markers.labels, smooth, markers.rate_hz, markers.first_frame), gaps
+
+
+def with_cutoffs(cfg: FilterConfig, marker_set: str | None) -> FilterConfig:
+    """``cfg`` with its ``auto`` cut-offs replaced by the numbers they stand for with ``marker_set``
+    (:data:`AUTO_CUTOFFS_HZ`)."""
+    markers, plates = AUTO_CUTOFFS_HZ.get(marker_set or "", DEFAULT_CUTOFFS_HZ)
+    return dataclasses.replace(cfg, cutoff_hz=markers if cfg.cutoff_hz == "auto" else cfg.cutoff_hz,
+                               force_cutoff_hz=plates if cfg.force_cutoff_hz == "auto" else cfg.force_cutoff_hz)
 
 
 def check_cutoffs(cfg: FilterConfig, recording: Recording, path=None) -> None:
@@ -356,11 +389,14 @@ def checked_walking_events(events: Events, first_frame: int, rate_hz: float, pat
     return kept
 
 
-def filter_trial(recording: Recording, cfg: FilterConfig, *, path=None) -> FilterResult:
+def filter_trial(recording: Recording, cfg: FilterConfig, *, marker_set: str | None = None,
+                 path=None) -> FilterResult:
     """Run the filter stage on a recording whose labels are model landmarks where mapped.
 
-    ``path`` names the trial file in error messages.
+    ``marker_set`` (the subject's) sets what ``auto`` cut-offs stand for (:func:`with_cutoffs`); the result's
+    ``config`` holds the numbers used. ``path`` names the trial file in error messages.
     """
+    cfg = with_cutoffs(cfg, marker_set)
     check_cutoffs(cfg, recording, path)
     markers, gaps = filter_markers(recording.markers, cfg)
     long_gaps = [g for g in gaps if not g.filled]
