@@ -5,16 +5,16 @@ Run from the repository root: ``python benchmarks/bench_pig_features.py [--share
 nothing.
 
 1. Synthetic (``simulate_trial(marker_set="plug_in_gait")``: 1 mm noise, 10 mm skin artefact, the real filter at its
-   defaults, a Plug-in Gait session's 8 Hz markers and 20 Hz plates, unless a row says; seeds 0, 1, 2): the static as
-   it is; with a knee alignment device instead of the knee markers (``synth/devices.py``); with medial knee and ankle
-   markers riding thigh and shank with their own noise and artefact (``medial_markers=True``), the same mirrored from
-   the lateral ones through the true joint centres (their noise the lateral's reversed: the earlier benchmark's), and
-   with thigh and shank clusters too; over three plates (``plates=3``); at 120 Hz (plates 1200 Hz,
-   ``marker_rate_hz=120``); all of these together; other cut-offs (markers/plates Hz: the dissertation's 6/6 among
-   them); noise-free, filtered, with only the plates filtered, and with nothing filtered (the method's own error; the
-   differences are the filter's and the noise's share). Per side and joint: RMS against the truth (N·m/kg, where the
-   moment is known: the foot's load known, outside the filter's edge frames) and the slope of the least-squares line
-   of gaitcli's against the truth.
+   defaults, a Plug-in Gait session's 8 Hz markers and Nexus's plates (unfiltered, each frame the mean of its
+   samples), unless a row says; seeds 0, 1, 2): the static as it is; with a knee alignment device instead of the knee
+   markers (``synth/devices.py``); with medial knee and ankle markers riding thigh and shank with their own noise and
+   artefact (``medial_markers=True``), the same mirrored from the lateral ones through the true joint centres (their
+   noise the lateral's reversed: the earlier benchmark's), and with thigh and shank clusters too; over three plates
+   (``plates=3``); at 120 Hz (plates 1200 Hz, ``marker_rate_hz=120``); all of these together; other cut-offs
+   (markers/plates Hz: the dissertation's 6/6 among them); noise-free, filtered, with only the plates filtered, and
+   with nothing filtered (the method's own error; the differences are the filter's and the noise's share). Per side
+   and joint: RMS against the truth (N·m/kg, where the moment is known: the foot's load known, outside the filter's
+   edge frames) and the slope of the least-squares line of gaitcli's against the truth.
 2. ``../shared/data/pig`` (Vicon's own moments in the C3D) rewritten with: medial knee and ankle markers
    (the lateral ones mirrored through Vicon's own FEO/TIO), thigh and shank clusters (three markers each, rigid in
    Vicon's femur and tibia frames FEO/FEA/FEL/FEP, TIO/…), a sacral marker in place of the PSIS markers, and a
@@ -131,19 +131,20 @@ def synthetic(seed: int) -> None:
         "6/0 Hz (plates unfiltered)": (trial, trial.markers, trial.static, FilterConfig(cutoff_hz=6.0,
                                                                                         force_cutoff_hz=0.0)),
         "8/8 Hz": (trial, trial.markers, trial.static, FilterConfig(cutoff_hz=8.0, force_cutoff_hz=8.0)),
-        "8/0 Hz": (trial, trial.markers, trial.static, FilterConfig(force_cutoff_hz=0.0)),
+        "8/20 Hz": (trial, trial.markers, trial.static, FilterConfig(force_cutoff_hz=20.0)),
+        "8/0 Hz, plates sampled": (trial, trial.markers, trial.static, FilterConfig(plate_frames="sample")),
         "10/30 Hz": (trial, trial.markers, trial.static, FilterConfig(cutoff_hz=10.0, force_cutoff_hz=30.0)),
         "all, 6/6 Hz": (every, with_clusters(every.markers, every.joint_centres_m(), rng),
                         with_knee_alignment_device(with_clusters(every.static, static_centres, rng), static_centres),
                         FilterConfig(cutoff_hz=6.0, force_cutoff_hz=6.0)),
         "noise-free, filtered": (exact, exact.markers, exact.static, FilterConfig()),
         "noise-free, 6/6 Hz": (exact, exact.markers, exact.static, FilterConfig(cutoff_hz=6.0, force_cutoff_hz=6.0)),
-        "noise-free, 0/20 Hz": (exact, exact.markers, exact.static, FilterConfig(cutoff_hz=0.0)),
+        "noise-free, 0 Hz markers": (exact, exact.markers, exact.static, FilterConfig(cutoff_hz=0.0)),
         "noise-free, not filtered": (exact, exact.markers, exact.static,
                                      FilterConfig(cutoff_hz=0.0, force_cutoff_hz=0.0)),
     }
     print(f"Synthetic Plug-in Gait walk, seed {seed}: sagittal moments against the truth (RMS N·m/kg, slope); "
-          "filter 8 Hz markers, 20 Hz plates (auto) unless said")
+          "filter auto (8 Hz markers, Nexus's plates) unless said")
     print(f"{'variant':28s} " + " ".join(f"{j + '_' + s:>15s}" for j, s in SAGITTAL))
     for name, (source, walk, static, cfg) in variants.items():
         truth = moments_to_clinical(source.joint_moments_Nm) / MASS_KG

@@ -133,8 +133,29 @@ def resample_to_frames(x, /, *, source_rate_hz: float, rate_hz: float) -> np.nda
     return out.reshape((n_frames,) + x.shape[1:])
 
 
+def _frame_means(x, /, *, source_rate_hz: float, rate_hz: float) -> np.ndarray:
+    """Each frame's mean of the samples of ``x`` (samples, ...) centred on its time ``k / rate_hz``: with an integer
+    ratio ``r = source_rate_hz / rate_hz`` the ``r`` samples from ``k·r − r//2`` (fewer at the record's ends), as
+    Vicon Nexus forms its per-frame ground reaction from unfiltered plates; otherwise :func:`resample_to_frames`."""
+    x = np.asarray(x, dtype=float)
+    ratio = source_rate_hz / rate_hz
+    step = round(ratio)
+    if step < 2 or abs(ratio - step) > 1e-9 * ratio:
+        return resample_to_frames(x, source_rate_hz=source_rate_hz, rate_hz=rate_hz)
+    n_frames = int(np.floor((x.shape[0] - 1) / ratio + 1e-9)) + 1 if x.shape[0] else 0
+    # frame k's window is padded[k·step : (k+1)·step], the samples before the first and after the last counting 0
+    padded = np.zeros((n_frames * step,) + x.shape[1:])
+    counted = np.zeros(n_frames * step)
+    begin = step // 2
+    kept = min(x.shape[0], n_frames * step - begin)
+    padded[begin:begin + kept], counted[begin:begin + kept] = x[:kept], 1.0
+    sums = padded.reshape((n_frames, step) + x.shape[1:]).sum(axis=1)
+    counts = counted.reshape(n_frames, step).sum(axis=1)
+    return sums / counts.reshape((-1,) + (1,) * (x.ndim - 1))
+
+
 def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
-               rate_hz: float | None = None) -> PlateLoad:
+               rate_hz: float | None = None, frame_means: bool = False) -> PlateLoad:
     """Filter a plate's wrench at the analog rate, then form COP and free moment where loaded (3.1.4).
 
     Parameters
@@ -147,6 +168,8 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
         Vertical force above which the plate counts as loaded, N.
     rate_hz : float, optional
         The marker rate to resample to, Hz (None keeps the plate's own rate).
+    frame_means : bool
+        Each frame's value the mean of the samples centred on it (:func:`_frame_means`), not the sample at it.
 
     Returns
     -------
@@ -174,7 +197,8 @@ def plate_load(plate: ForcePlate, /, *, cutoff_hz: float, threshold_N: float,
     wrench = np.where(off_plate[:, None], 0.0, wrench)
     if cutoff_hz:  # 0 or None: unfiltered (exact synthetic data)
         wrench = lowpass(wrench, rate_hz=plate.rate_hz, cutoff_hz=cutoff_hz)
-    wrench = resample_to_frames(wrench, source_rate_hz=plate.rate_hz, rate_hz=out_rate)
+    wrench = (_frame_means if frame_means else resample_to_frames)(wrench, source_rate_hz=plate.rate_hz,
+                                                                    rate_hz=out_rate)
     force_f, moment_f = wrench[:, :3], wrench[:, 3:]
     touched = resample_to_frames((~off_plate).astype(float), source_rate_hz=plate.rate_hz, rate_hz=out_rate) > 0
     loaded = _runs_touching(np.nan_to_num(force_f[:, 2], nan=-np.inf) > LOADED_FRACTION * threshold_N, touched)

@@ -68,6 +68,7 @@ def summary(result: FilterResult) -> dict:
         "cutoff_hz": result.config.cutoff_hz,
         "design_cutoff_hz": result.design_cutoff_hz,
         "force_cutoff_hz": result.config.force_cutoff_hz,
+        "plate_frames": result.config.plate_frames,
         "gaps_filled": sum(1 for g in result.gaps if g.filled),
         "gaps_unfilled": sum(1 for g in result.gaps if not g.filled),
         "events": rows,

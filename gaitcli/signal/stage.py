@@ -45,11 +45,13 @@ DEFAULT_MARKER_DIAMETER_M = 0.014
 #: most NEAR_HEIGHT_M above or below its top
 NEAR_M, NEAR_HEIGHT_M = 0.1, 0.3
 EVENT_CHOICES = ("auto", "file", "detect")
-#: what ``auto`` cut-offs stand for, (markers, plates) in Hz: the dissertation's 6 Hz for both (3.1.4); in a
-#: Plug-in Gait session 8 and 20 Hz, the pair nearest Vicon's own kinetics and the synthetic truth
-#: (docs/decisions.md, "Plug-in Gait sessions filter at 8 Hz markers, 20 Hz plates")
-AUTO_CUTOFFS_HZ = {"plug_in_gait": (8.0, 20.0)}
-DEFAULT_CUTOFFS_HZ = (6.0, 6.0)
+PLATE_FRAMES = ("auto", "sample", "mean")
+#: what the filter's ``auto`` settings stand for: the dissertation's 6 Hz for markers and plates, the plates
+#: sampled at the frames (3.1.4); in a Plug-in Gait session Vicon Nexus's plates (unfiltered, each frame the mean
+#: of its samples) and 8 Hz markers, nearest Vicon's own kinetics and the synthetic truth (docs/decisions.md,
+#: "Plug-in Gait sessions: Nexus's plates, 8 Hz markers")
+AUTO_SETTINGS = {None: {"cutoff_hz": 6.0, "force_cutoff_hz": 6.0, "plate_frames": "sample"},
+                 "plug_in_gait": {"cutoff_hz": 8.0, "force_cutoff_hz": 0.0, "plate_frames": "mean"}}
 CUTOFF_EXPECTED = "a cut-off in Hz ≥ 0 (0: no filtering), or auto"
 
 
@@ -79,7 +81,11 @@ class FilterConfig:
     force_cutoff_hz: float | str = parameter(
         "auto", parse=cutoff, expected=CUTOFF_EXPECTED, metavar="HZ|auto",
         help="The same for the force-plate signals, before the COP is formed, Hz (0: no filtering); auto: 6 Hz, "
-             "20 Hz in a Plug-in Gait session.")
+             "unfiltered in a Plug-in Gait session.")
+    plate_frames: str = parameter(
+        "auto", choices=PLATE_FRAMES,
+        help="The plates' value at a marker frame: their sample at its time (sample) or the mean of the samples "
+             "centred on it, as Vicon Nexus (mean); auto: mean in a Plug-in Gait session, else sample.")
     order: int = parameter(2, low=1, high=8, help="Butterworth order of one pass.")
     max_gap_frames: int = parameter(10, low=0, help="Longer marker gaps stay NaN.")
     force_threshold_N: float = parameter(20.0, low=0.0, low_open=True,
@@ -189,12 +195,10 @@ def filter_markers(markers: Markers, cfg: FilterConfig) -> tuple[Markers, list[G
     return Markers(markers.labels, smooth, markers.rate_hz, markers.first_frame), gaps
 
 
-def with_cutoffs(cfg: FilterConfig, marker_set: str | None) -> FilterConfig:
-    """``cfg`` with its ``auto`` cut-offs replaced by the numbers they stand for with ``marker_set``
-    (:data:`AUTO_CUTOFFS_HZ`)."""
-    markers, plates = AUTO_CUTOFFS_HZ.get(marker_set or "", DEFAULT_CUTOFFS_HZ)
-    return dataclasses.replace(cfg, cutoff_hz=markers if cfg.cutoff_hz == "auto" else cfg.cutoff_hz,
-                               force_cutoff_hz=plates if cfg.force_cutoff_hz == "auto" else cfg.force_cutoff_hz)
+def with_session_defaults(cfg: FilterConfig, marker_set: str | None) -> FilterConfig:
+    """``cfg`` with each ``auto`` replaced by what it stands for with ``marker_set`` (:data:`AUTO_SETTINGS`)."""
+    auto = AUTO_SETTINGS.get(marker_set, AUTO_SETTINGS[None])
+    return dataclasses.replace(cfg, **{k: v for k, v in auto.items() if getattr(cfg, k) == "auto"})
 
 
 def check_cutoffs(cfg: FilterConfig, recording: Recording, path=None) -> None:
@@ -308,8 +312,8 @@ def warn_resting_offsets(recording: Recording, plates: list[PlateLoad], markers:
         if load.corners_m is None:
             continue
         fz = np.nan_to_num(np.asarray(raw.force_N, float)[:, 2])
-        if cfg.force_cutoff_hz:
-            fz = lowpass(fz, rate_hz=raw.rate_hz, cutoff_hz=cfg.force_cutoff_hz)
+        # the plates' cut-off, or where they are not filtered the dissertation's, to average the noise out
+        fz = lowpass(fz, rate_hz=raw.rate_hz, cutoff_hz=cfg.force_cutoff_hz or AUTO_SETTINGS[None]["force_cutoff_hz"])
         fz = resample_to_frames(fz, source_rate_hz=raw.rate_hz, rate_hz=rate)[:n]
         top = float(np.mean(load.corners_m[:, 2]))
         near = np.zeros(fz.size, bool)
@@ -345,7 +349,7 @@ def separated_plates(recording: Recording, plates: list[PlateLoad], contacts: li
                 force[lo:hi], moment[lo:hi] = np.nan, np.nan
         out[index] = _frames(plate_load(dataclasses.replace(raw, force_N=force, moment_Nm=moment),
                                         cutoff_hz=cfg.force_cutoff_hz, threshold_N=cfg.force_threshold_N,
-                                        rate_hz=rate), n)
+                                        rate_hz=rate, frame_means=cfg.plate_frames == "mean"), n)
     return out
 
 
@@ -393,10 +397,10 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, marker_set: str | N
                  path=None) -> FilterResult:
     """Run the filter stage on a recording whose labels are model landmarks where mapped.
 
-    ``marker_set`` (the subject's) sets what ``auto`` cut-offs stand for (:func:`with_cutoffs`); the result's
-    ``config`` holds the numbers used. ``path`` names the trial file in error messages.
+    ``marker_set`` (the subject's) sets what ``auto`` settings stand for (:func:`with_session_defaults`); the
+    result's ``config`` holds what was used. ``path`` names the trial file in error messages.
     """
-    cfg = with_cutoffs(cfg, marker_set)
+    cfg = with_session_defaults(cfg, marker_set)
     check_cutoffs(cfg, recording, path)
     markers, gaps = filter_markers(recording.markers, cfg)
     long_gaps = [g for g in gaps if not g.filled]
@@ -411,7 +415,8 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, marker_set: str | N
     n = markers.n_frames
     plates_analog = [plate_load(p, cutoff_hz=cfg.force_cutoff_hz, threshold_N=cfg.force_threshold_N)
                      for p in recording.plates]
-    plates = [_frames(plate_load(p, cutoff_hz=cfg.force_cutoff_hz, threshold_N=cfg.force_threshold_N, rate_hz=rate),
+    plates = [_frames(plate_load(p, cutoff_hz=cfg.force_cutoff_hz, threshold_N=cfg.force_threshold_N, rate_hz=rate,
+                                 frame_means=cfg.plate_frames == "mean"),
                       n) for p in recording.plates]
 
     feet = {}
@@ -464,7 +469,9 @@ def filter_trial(recording: Recording, cfg: FilterConfig, *, marker_set: str | N
                f"markers: gaps up to {cfg.max_gap_frames} frames filled by cubic interpolation, "
                + (f"order-{cfg.order} Butterworth forward and backward at {design:.3f} Hz "
                   f"(net cut-off {cfg.cutoff_hz:g} Hz)" if design else "not filtered"),
-               f"plates: {len(plates)}, filtered at net {cfg.force_cutoff_hz:g} Hz, COP above "
+               f"plates: {len(plates)}, "
+               + (f"filtered at net {cfg.force_cutoff_hz:g} Hz" if cfg.force_cutoff_hz else "not filtered")
+               + (", each frame the mean of its samples" if cfg.plate_frames == "mean" else "") + ", COP above "
                f"{cfg.force_threshold_N:g} N; events from "
                + ("the trial file's EVENT group" if from_file else "plates and foot markers"))
     feet_loads = foot_loads(per_foot, detection.events, markers.time_s)

@@ -250,11 +250,11 @@ def test_auto_static_frames_on_qualisys_pick_the_frame_the_worked_example_chose(
     import yaml
 
     from gaitcli.io.c3d import read_c3d
-    from gaitcli.signal.stage import FilterConfig, filter_markers, with_cutoffs
+    from gaitcli.signal.stage import FilterConfig, filter_markers, with_session_defaults
 
     subject = yaml.safe_load((Path(__file__).resolve().parents[2] / "docs" / "examples" / "qualisys"
                               / "subject.yaml").read_text())
     markers, _ = filter_markers(marker_set("cast").apply(read_c3d(shared_c3d_dir / "Qualisys.c3d").markers),
-                                with_cutoffs(FilterConfig(), "cast"))  # as the idyn stage sees them
+                                with_session_defaults(FilterConfig(), "cast"))  # as the idyn stage sees them
     frames, _ = least_flexed_frames(markers)
     assert [int(frames[0]) + markers.first_frame] * 2 == subject["static_frames"]  # chosen by hand: [992, 992]

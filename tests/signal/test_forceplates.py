@@ -7,6 +7,7 @@ import pytest
 
 from gaitcli.core.recording import ForcePlate
 from gaitcli.errors import InputError
+from gaitcli.signal import forceplates
 from gaitcli.signal.butterworth import lowpass
 from gaitcli.signal.events import detect_events
 from gaitcli.signal.forceplates import (
@@ -142,6 +143,23 @@ def test_native_rate_and_resampling():
     y = resample_to_frames(np.stack([x, 2 * x], 1), source_rate_hz=250.0, rate_hz=60.0)
     np.testing.assert_allclose(y[:, 0], np.arange(y.shape[0]) * 250.0 / 60.0)
     np.testing.assert_allclose(y[:, 1], 2 * y[:, 0])
+
+
+def test_frame_means_average_the_samples_centred_on_each_frame():
+    """Nexus's per-frame load: frame k is the mean of the r = analog/marker-rate samples from k·r − r//2 (fewer at
+    the ends); a NaN sample makes only its own frame unknown."""
+    t, force, free = _known_wrench()
+    plate = _plate_from(np.broadcast_to(CENTRE[:2], (len(t), 2)), force, free)
+    unfiltered = plate_load(plate, cutoff_hz=0.0, threshold_N=20.0, rate_hz=MARKER_HZ, frame_means=True)
+    fz = np.asarray(force)[:, 2]
+    for k in (40, 55, 70):  # loaded frames: the mean of samples 10k−5 … 10k+4
+        assert unfiltered.force_N[k, 2] == pytest.approx(fz[10 * k - 5:10 * k + 5].mean(), rel=1e-12)
+    x = np.arange(40.0)
+    np.testing.assert_allclose(forceplates._frame_means(x, source_rate_hz=900.0, rate_hz=100.0),
+                               [2.0, 9.0, 18.0, 27.0, 35.5])  # 0…4, 5…13, 14…22, 23…31, 32…39
+    x[12] = np.nan
+    got = forceplates._frame_means(x, source_rate_hz=900.0, rate_hz=100.0)
+    assert np.isnan(got[1]) and np.isfinite(np.delete(got, 1)).all()
 
 
 def test_moment_about_origin_reproduces_the_plate_wrench():

@@ -20,7 +20,6 @@ stage drops kinematic events within 0.35 s of a plate event, the events still al
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
 
 import numpy as np
@@ -33,7 +32,7 @@ from gaitcli.resources import sample_trial
 from gaitcli.run.pipeline import load_recording
 from gaitcli.run.trial import open_trial
 from gaitcli.signal.outputs import event_columns, grf_columns
-from gaitcli.signal.stage import FilterConfig, filter_trial, with_cutoffs
+from gaitcli.signal.stage import FilterConfig, filter_trial, with_session_defaults
 from tests.cli.truth import (
     COP_M,
     FREE_MOMENT_NM,
@@ -160,20 +159,22 @@ def test_result_shapes_and_summary_fields(samples):
     # the design frequency of the 6 Hz zero-lag cascade at 100 Hz (3.1.4): (fs/π) atan(tan(π fc/fs)/0.802)
     c = (np.sqrt(2) - 1) ** 0.25
     assert r.design_cutoff_hz == pytest.approx(100 / np.pi * np.arctan(np.tan(np.pi * 6 / 100) / c), rel=1e-12)
-    assert r.config == dataclasses.replace(FilterConfig(), cutoff_hz=6.0, force_cutoff_hz=6.0)
+    assert r.config == FilterConfig(cutoff_hz=6.0, force_cutoff_hz=6.0, plate_frames="sample")
 
 
-@pytest.mark.parametrize("marker_set,expected", [(None, (6.0, 6.0)), ("dissertation", (6.0, 6.0)),
-                                                 ("cast", (6.0, 6.0)), ("plug_in_gait", (8.0, 20.0))])
-def test_auto_cut_offs_are_the_sessions_and_numbers_stay(marker_set, expected):
-    """``auto`` stands for 6/6 Hz (3.1.4), in a Plug-in Gait session 8 Hz markers and 20 Hz plates; a number given
-    is kept whatever the marker set."""
-    resolved = with_cutoffs(FilterConfig(), marker_set)
-    assert (resolved.cutoff_hz, resolved.force_cutoff_hz) == expected
-    given = with_cutoffs(FilterConfig(cutoff_hz=7.0, force_cutoff_hz=0.0), marker_set)
-    assert (given.cutoff_hz, given.force_cutoff_hz) == (7.0, 0.0)
-    half = with_cutoffs(FilterConfig(cutoff_hz=10.0), marker_set)
-    assert (half.cutoff_hz, half.force_cutoff_hz) == (10.0, expected[1])
+@pytest.mark.parametrize("marker_set,expected", [(None, (6.0, 6.0, "sample")), ("dissertation", (6.0, 6.0, "sample")),
+                                                 ("cast", (6.0, 6.0, "sample")), ("plug_in_gait", (8.0, 0.0, "mean"))])
+def test_auto_settings_are_the_sessions_and_given_ones_stay(marker_set, expected):
+    """``auto`` stands for 6/6 Hz with the plates sampled at the frames (3.1.4), in a Plug-in Gait session for 8 Hz
+    markers and Nexus's plates (unfiltered, each frame the mean of its samples); a setting given is kept whatever
+    the marker set."""
+    def settings(cfg):
+        return cfg.cutoff_hz, cfg.force_cutoff_hz, cfg.plate_frames
+
+    assert settings(with_session_defaults(FilterConfig(), marker_set)) == expected
+    given = FilterConfig(cutoff_hz=7.0, force_cutoff_hz=10.0, plate_frames="sample")
+    assert settings(with_session_defaults(given, marker_set)) == (7.0, 10.0, "sample")
+    assert settings(with_session_defaults(FilterConfig(cutoff_hz=10.0), marker_set)) == (10.0, *expected[1:])
 
 
 # ----------------------------------------------------------------- synthetic walk (conftest)
