@@ -428,6 +428,14 @@ def side_rows(strides) -> list[list[str]]:
             for label, values, normal, digits in rows]
 
 
+def _plates_filter(filtered: dict) -> str:
+    """How the filter stage's summary says the plates were treated: "6 Hz forces", "forces unfiltered, each frame
+    the mean of its samples"."""
+    cutoff = filtered.get("force_cutoff_hz", "—")
+    text = "forces unfiltered" if cutoff == 0 else f"{cutoff} Hz forces"
+    return text + (", each frame the mean of its samples" if filtered.get("plate_frames") == "mean" else "")
+
+
 def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str, Path]) -> str:
     """The session's page (``root``: its ``gait_out``): subject and session, every walk's warnings, Table 3.1
     per walk beside normal walking, the strides used and rejected, the Gait Profile Score, the mean ± SD
@@ -449,8 +457,7 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
              ("walks", f"{len(names)}: " + ", ".join(names)),
              ("marker set", first.get("marker_set", "—")), ("hip joint centres", first.get("hip_joint_centre", "—")),
              ("static", first.get("static") or "none (standing frames of the walk)"),
-             ("filter cut-off", f"{filtered.get('cutoff_hz', '—')} Hz markers, {filtered.get('force_cutoff_hz', '—')} "
-                                "Hz forces"),
+             ("filter cut-off", f"{filtered.get('cutoff_hz', '—')} Hz markers, " + _plates_filter(filtered)),
              ("angles", f"{first.get('angles', '—')} ({first.get('angle_frames', '—')}); moments "
                         f"{first.get('moment_convention', '—')}")]
     parts = [f"<h1>Session {html.escape(folder.name)}</h1>",
