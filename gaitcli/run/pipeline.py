@@ -37,6 +37,7 @@ from gaitcli.io.outputs import stage_folder, write_json
 from gaitcli.resources import sample_trial
 from gaitcli.run.config import PipelineConfig, section_dict, to_yaml
 from gaitcli.run.trial import TrialFolder, open_trial, sha256
+from gaitcli.signal.stage import with_session_defaults
 
 #: bump when a stage's output files change, so that older outputs count as stale
 OUTPUT_FORMAT = 3  # 3: idyn.h5's gait_cycle table; filter.h5's lab marker labels and filter edge frames
@@ -99,6 +100,14 @@ def load_static(trial: TrialFolder, lab_to_model) -> Recording | None:
     return with_subject_measurements(static, trial)
 
 
+def session_config(cfg: PipelineConfig, trial: TrialFolder | None) -> PipelineConfig:
+    """``cfg`` with the filter's ``auto`` settings replaced by what they stand for in ``trial``'s session (its
+    subject's marker set), so that the outputs record, and freshness compares, what was used."""
+    if trial is None or "filter" not in cfg.sections:
+        return cfg
+    return cfg.replace_section("filter", with_session_defaults(cfg.section("filter"), trial.subject.marker_set))
+
+
 class TrialRun:
     """One run: its trial (None for stages that need none), output root, resolved configuration and the files
     named for it; freshness, provenance, inputs read once. Without a trial, stages that need one run on the
@@ -111,7 +120,7 @@ class TrialRun:
         if out is None:
             out = Path.cwd() / "gait_out" if bundled else self.trial.out_root
         self.out_root = Path(out)
-        self.cfg = cfg
+        self.cfg = session_config(cfg, self.trial)
         self.files = {k: Path(v) for k, v in (files or {}).items() if v is not None}
         self.inputs = {p.name: sha256(p) for p in self.trial.input_files()} if self.trial is not None else {}
         self.read: dict[str, dict[str, str]] = {}  # per stage: the further files it read (StageContext.uses)
@@ -366,7 +375,7 @@ def run_stages(trial: Path | None, names, cfg: PipelineConfig, *, out: Path | No
                           input_paths={d: sources[d] for d in st.depends}, static_recording=static_recording,
                           progress=progress, plots=plots, workers=workers, scheduler=scheduler, written=write_early)
         with recorded_warnings() as said:
-            result = st.run(ctx, cfg.section(name))
+            result = st.run(ctx, run.cfg.section(name))
         handoffs[name], sources[name] = st.handoff(result), run.trial.trial_path if run.trial else None
         computed[name] = (result, time.perf_counter() - started, said)
 

@@ -63,7 +63,7 @@ def cutoff(value) -> float | str:
         raise ValueError(value)
     try:
         number = float(value)
-    except TypeError:  # a list, a mapping
+    except (TypeError, OverflowError):  # a list, a mapping; an integer of 400 digits
         raise ValueError(value) from None
     if not (np.isfinite(number) and number >= 0):
         raise ValueError(value)

@@ -199,8 +199,7 @@ def test_h5_provenance_and_units(runs):
             assert key in attrs, key
         assert attrs["gaitcli_version"] == __version__
         config = yaml.safe_load(attrs["config_yaml"])
-        assert config["filter"]["cutoff_hz"] == "auto" and config["filter"]["force_cutoff_hz"] == "auto"
-        assert h5["trial/markers/positions_m"].attrs["cutoff_hz"] == 6.0  # what auto stood for
+        assert config["filter"]["cutoff_hz"] == 6.0 and config["filter"]["force_cutoff_hz"] == 6.0  # auto's
         hashes = json.loads(attrs["input_sha256"])
         for name in ("trial.c3d", "subject.yaml"):
             assert hashes[name] == hashlib.sha256((runs.normal / name).read_bytes()).hexdigest()
@@ -326,8 +325,8 @@ def test_a_stage_run_again_for_other_settings_says_why(tmp_path):
     assert gait("filter", trial, "--cutoff", "8", "--no-plots", cwd=tmp_path).returncode == 0
     idyn = gait("idyn", trial, "--no-plots", cwd=tmp_path)
     assert idyn.returncode == 0, idyn.describe()
-    assert ("gait: warning: filter: filter.cutoff_hz 8.0 in the existing output, auto asked; "
-            "filter.force_cutoff_hz 8.0 in the existing output, auto asked: running filter again") in idyn.stderr_lines
+    assert ("gait: warning: filter: filter.cutoff_hz 8.0 in the existing output, 6.0 asked; "
+            "filter.force_cutoff_hz 8.0 in the existing output, 6.0 asked: running filter again") in idyn.stderr_lines
     again = gait("idyn", trial, "--no-plots", cwd=tmp_path)
     assert again.returncode == 0 and "running filter again" not in again.stderr, again.describe()
 

@@ -66,10 +66,11 @@ def test_noise_free_synthetic_angles_are_the_truths_anatomical_angles(tmp_path, 
 
 
 def test_a_120_hz_plug_in_gait_walk_with_medial_markers_gives_the_true_sagittal_moments(tmp_path):
-    """`gait synth --rate-hz 120 --medial-markers` (issue 52: a lab's 120-Hz walk with medial knee and ankle
-    markers), then `gait idyn`: markers at 120 Hz, plates at 1200 Hz, the medial markers in the file, filtered as
-    a Plug-in Gait session's (8 Hz markers, plates unfiltered and averaged over each frame), and every sagittal moment within 0.05 N·m/kg RMS of the
-    truth where gaitcli reports it, the slope within 0.95–1.05 (the issue's bounds)."""
+    """`gait synth --rate-hz 120 --medial-markers` (issue 52: a lab's 120-Hz walk with medial knee and ankle markers),
+    then `gait idyn`: markers at 120 Hz, plates at 1200 Hz, the medial markers in the file, filtered as a Plug-in
+    Gait session's (8 Hz markers, plates unfiltered and averaged over each frame), and every sagittal moment
+    within 0.05 N·m/kg RMS of the truth where gaitcli reports it, the slope within 0.95–1.05 (the issue's
+    bounds)."""
     trial = tmp_path / "walk"
     run = gait("synth", trial, "--marker-set", "plug_in_gait", "--rate-hz", "120", "--medial-markers",
                "--strides", "2", cwd=tmp_path)

@@ -139,11 +139,12 @@ def _vicon(path: Path) -> dict[str, np.ndarray]:
 
 
 def test_the_session_agrees_with_vicons_own_outputs(session, shared_pig_dir):
-    """Issue 34's bar on the .vsk-only session: every anatomical angle within 2° RMS of Vicon's (no offset
-    removed) and r ≥ 0.95; sagittal moments r ≥ 0.85 and powers r ≥ 0.8 where both have the foot's load
-    (Vicon's ground reaction of that side non-zero), their slope against Vicon's 0.93–1.05 (Plug-in Gait's auto
-    filter: 8 Hz markers, Nexus's plates; 0.88–0.98 at 6/6 Hz). Measured: angles RMS ≤ 0.24°, r 1.000; sagittal moments r 0.971–0.998,
-    slopes 0.942 (right hip) – 0.999; powers r 0.978–0.998 (benchmarks/bench_pig.py prints every component)."""
+    """Issue 34's bar on the .vsk-only session: every anatomical angle within 2° RMS of Vicon's (no offset removed) and
+    r ≥ 0.95; sagittal moments r ≥ 0.85 and powers r ≥ 0.8 where both have the foot's load (Vicon's ground
+    reaction of that side non-zero), their slope against Vicon's 0.93–1.05 (Plug-in Gait's auto filter: 8 Hz
+    markers, Nexus's plates; 0.88–0.98 at 6/6 Hz). Measured: angles RMS ≤ 0.24°, r 1.000; sagittal moments r
+    0.981–1.000, slopes 0.945 (right hip) – 1.004; powers r 0.988–1.000 (benchmarks/bench_pig.py prints every
+    component)."""
     root, runs = session
     assert runs["vsk"].returncode == 0
     out = root / "pig" / "gait_out" / "idyn"
