@@ -52,7 +52,7 @@ PLATE_FRAMES = ("auto", "sample", "mean")
 #: "Plug-in Gait sessions: Nexus's plates, 8 Hz markers")
 AUTO_SETTINGS = {None: {"cutoff_hz": 6.0, "force_cutoff_hz": 6.0, "plate_frames": "sample"},
                  "plug_in_gait": {"cutoff_hz": 8.0, "force_cutoff_hz": 0.0, "plate_frames": "mean"}}
-CUTOFF_EXPECTED = "a cut-off in Hz ≥ 0 (0: no filtering), or auto"
+CUTOFF_EXPECTED = "a finite number of Hz ≥ 0 (0: no filtering), or auto"
 
 
 def cutoff(value) -> float | str:
