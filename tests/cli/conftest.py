@@ -270,6 +270,19 @@ def stopped_prediction(tmp_path_factory) -> tuple[Path, Result]:
     return root / "pr", Result.from_json(record)
 
 
+def _synth_emg(root: Path) -> dict:
+    return gait("synth", root / "trial", "--emg", cwd=root).to_json()
+
+
+@pytest.fixture(scope="session")
+def synth_emg(tmp_path_factory) -> tuple[Path, Result]:
+    """``gait synth trial --emg``: the default synthetic walk with its 16 EMG channels, made once per session for
+    test_emg.py and test_hostile_inputs.py (its truth activations are two EID solves, 2–4 s). Returns (the trial
+    folder, the run); copy the folder before writing into it."""
+    root, record = build_once(tmp_path_factory, "synth_emg", _synth_emg)
+    return root / "trial", Result.from_json(record)
+
+
 # ------------------------------------------------------------------ a real Dask scheduler and workers
 
 def _free_port() -> int:

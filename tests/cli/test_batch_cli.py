@@ -114,11 +114,13 @@ def test_workers_and_scheduler_exclude_each_other_and_a_missing_lab_is_exit_2(tm
 # ------------------------------------------------------------------ a real scheduler and workers on loopback
 
 def test_a_batch_on_an_existing_scheduler(dask_cluster, tmp_path):
+    # one good trial among the bad ones (a second good one was the same task on the same cluster)
     address, _ = dask_cluster
-    lab = _lab(tmp_path, samples=("normal", "ankle_weight"))
+    lab = _lab(tmp_path, samples=("normal",))
     r = gait("batch", lab, "--scheduler", address, "--no-plots", cwd=tmp_path, timeout_s=300)
     assert r.returncode == 0, r.describe()
-    assert _counts(r)[:3] == (2, BAD, 0)
+    assert _counts(r)[:3] == (1, BAD, 0)
+    assert (lab / "walks" / "normal" / "gait_out" / "idyn" / "joint_moments.csv").is_file()
 
 
 def test_a_worker_killed_mid_trial_leaves_no_half_written_output(dask_cluster, tmp_path):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -22,22 +23,23 @@ from gaitcli.io.h5 import read_result
 from gaitcli.muscles.stage import MuscleResult
 from gaitcli.signal.cycles import CYCLE_PCT
 
-from .conftest import MINIMAL_SUBJECT, build_once, copy_sample, gait, gait_many, snapshot
+from .conftest import MINIMAL_SUBJECT, Result, build_once, copy_sample, gait, gait_many, snapshot
 
 
-def _build(root):
-    trial = root / "synth"
-    steps = {}
+def _build(root, synthetic: Path, synthesised: Result):
+    """On a copy of the session's ``gait synth --emg`` trial (conftest): run, EID, the report."""
+    trial = shutil.copytree(synthetic, root / "synth")
+    steps = {"synth": synthesised.to_json()}
     # figures only where the page draws them (the report), to keep the suite short
-    for args in (("synth", trial, "--emg"), ("run", trial, "--no-plots"),
-                 ("muscles", trial, "--method", "eid", "--no-plots"), ("report", trial)):
+    for args in (("run", trial, "--no-plots"), ("muscles", trial, "--method", "eid", "--no-plots"),
+                 ("report", trial)):
         steps[args[0]] = gait(*args, cwd=root).to_json()
     return steps
 
 
 @pytest.fixture(scope="module")
-def synth(tmp_path_factory):
-    root, steps = build_once(tmp_path_factory, "cli_emg", _build)
+def synth(tmp_path_factory, synth_emg):
+    root, steps = build_once(tmp_path_factory, "cli_emg", lambda root: _build(root, *synth_emg))
     for name, step in steps.items():
         assert step["returncode"] == 0, (name, step["stderr"])
     return root / "synth", steps

@@ -33,10 +33,11 @@ DIGITS_400 = "1" + "0" * 399
 
 @dataclass
 class Case:
-    build: Callable[[Path], None]  # fills the case folder (the working directory)
+    build: Callable[..., None]  # fills the case folder (the working directory)
     args: tuple
     names: str  # the file the message must name
     says: tuple = ()  # further text the message must contain
+    emg_trial: bool = False  # ``build`` also takes the session's ``gait synth --emg`` trial (conftest's synth_emg)
 
 
 def _trial(subject: str = SUBJECT, c3d: bool = True) -> Callable[[Path], None]:
@@ -174,14 +175,12 @@ def _analog_rate_zero(case: Path) -> None:
     path.write_bytes(bytes(data))
 
 
-def _emg_label_twice(case: Path) -> None:
-    """A synthetic walk with EMG whose second channel carries the first one's label (issue 53, item 3: before,
-    one of them silently never read)."""
+def _emg_label_twice(case: Path, emg_trial: Path) -> None:
+    """A synthetic walk with EMG (a copy of the session's) whose second channel carries the first one's label
+    (issue 53, item 3: before, one of them silently never read)."""
     import ezc3d
 
-    from gaitcli.synth import write_trial
-
-    write_trial(case / "trial", strides=1, emg=True)
+    shutil.copytree(emg_trial, case / "trial")
     path = case / "trial" / "trial.c3d"
     c = ezc3d.c3d(str(path))
     labels = list(c["parameters"]["ANALOG"]["LABELS"]["value"])
@@ -297,7 +296,8 @@ CASES = {
                               ("speeds_m_s", "1.2 is given twice")),
     "folder_with_a_newline": Case(lambda case: None, ("filter", "no\nsuch"), "no\\nsuch", ("trial folder not found",)),
     "c3d_analog_rate_0": Case(_analog_rate_zero, FILTER, "trial.c3d", ("ANALOG:RATE", "got 0", "expected 1000 Hz")),
-    "emg_label_twice": Case(_emg_label_twice, ("emg", "trial"), "trial.c3d", ("ANALOG:LABELS", "both labelled 'R TA'")),
+    "emg_label_twice": Case(_emg_label_twice, ("emg", "trial"), "trial.c3d", ("ANALOG:LABELS", "both labelled 'R TA'"),
+                            emg_trial=True),
     "random_events": Case(_random_events, FILTER, "trial.c3d", ("EVENT", "strides cannot be walking")),
     "batch_scheduler_nonsense": Case(_lab, ("batch", "lab", "--scheduler", "nonsense://x"), "--scheduler",
                                      ("nonsense://x", "tcp://")),
@@ -325,12 +325,15 @@ def _snapshot(folder: Path) -> dict[str, str]:
     return out
 
 
-def _build(root: Path) -> dict:
+def _build(root: Path, emg_trial: Path) -> dict:
     jobs, before = {}, {}
     for name, case in CASES.items():
         folder = root / name
         folder.mkdir()
-        case.build(folder)
+        if case.emg_trial:
+            case.build(folder, emg_trial)
+        else:
+            case.build(folder)
         before[name] = _snapshot(folder)
         jobs[name] = (case.args, folder)
     results = gait_many(jobs)
@@ -339,8 +342,8 @@ def _build(root: Path) -> dict:
 
 
 @pytest.fixture(scope="module")
-def outcomes(tmp_path_factory):
-    _, record = build_once(tmp_path_factory, "hostile_inputs", _build)
+def outcomes(tmp_path_factory, synth_emg):
+    _, record = build_once(tmp_path_factory, "hostile_inputs", lambda root: _build(root, synth_emg[0]))
     record["results"] = {k: Result.from_json(v) for k, v in record["results"].items()}
     return record
 

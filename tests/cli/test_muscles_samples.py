@@ -1,7 +1,11 @@
-"""``gait run --pipeline muscles_eid`` and ``gait muscles --method so|mso`` on every bundled sample trial.
+"""``gait run --pipeline muscles_eid`` and ``gait muscles --method so|mso`` on every bundled sample trial but
+ankle_weight.
 
-The 15 runs go through ``pipeline.run_stages`` in the test process (the function every command
-calls), without figures; the commands themselves are run as processes in test_muscles_cli.py.
+The 12 runs go through ``pipeline.run_stages`` in the test process (the function every command
+calls), without figures; the commands themselves are run as processes in test_muscles_cli.py. ankle_weight is
+left out: every method converges on it as on the normal trial (measured: EID in 105 IPOPT iterations, SO in 25,
+MSO in every frame; normal 126, 21, every frame), so its runs take the normal trial's branches, 2.2 s of
+processor time more; ankle_fixed, its sibling (the same subject and gait), stays for MSO's unconverged frames.
 
 Every run writes the stage's files and summary keys; on the normal trial all three methods converge
 (exit 0), on the disturbed ones a method may end unconverged (exit 3, ``converged: false``) where a
@@ -21,6 +25,8 @@ from gaitcli.errors import GaitWarning
 from .conftest import MUSCLE_FILES, MUSCLE_SUMMARY_KEYS, SAMPLES, build_once, copy_sample
 
 METHODS = ("so", "mso", "eid")
+#: the sample trials run here (module docstring)
+TRIALS = tuple(name for name in SAMPLES if name != "ankle_weight")
 
 
 def _build(root: Path) -> dict:
@@ -31,7 +37,7 @@ def _build(root: Path) -> dict:
     record = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", GaitWarning)  # the disturbed trials warn; tests/cli/test_warnings.py checks
-        for name in SAMPLES:
+        for name in TRIALS:
             trial = copy_sample(name, root / name)
             for method in ("eid", "so", "mso"):
                 if method == "eid":  # gait run --pipeline muscles_eid: filter, idyn, EID
@@ -53,7 +59,7 @@ def runs(tmp_path_factory):
 
 
 @pytest.mark.parametrize("method", METHODS)
-@pytest.mark.parametrize("name", SAMPLES)
+@pytest.mark.parametrize("name", TRIALS)
 def test_every_method_runs_on_every_sample_trial(runs, name, method):
     record, root = runs
     run = record[f"{name}/{method}"]

@@ -53,10 +53,11 @@ def _build(shared_c3d_dir: Path, root: Path) -> dict:
     shutil.copy(EXAMPLE / "subject.yaml", trial / "subject.yaml")
     detect = root / "detect.yaml"  # gaitcli's own events, compared below with the lab's (the file's EVENT group)
     detect.write_text("filter:\n  events: detect\n")
-    runs = gait_many({"filter": (("filter", trial, "--pipeline", detect), root),
-                      "idyn": (("idyn", trial, "--pipeline", detect, "--export", "c3d"), root),
-                      "eid": (("muscles", trial, "--method", "eid", "--side", "r", "--pipeline", detect), root)},
-                     workers=1)
+    # no figures: nothing here looks at them, and test_qualisys_doc.py's run draws every stage's of this trial
+    runs = gait_many({"filter": (("filter", trial, "--pipeline", detect, "--no-plots"), root),
+                      "idyn": (("idyn", trial, "--pipeline", detect, "--export", "c3d", "--no-plots"), root),
+                      "eid": (("muscles", trial, "--method", "eid", "--side", "r", "--pipeline", detect, "--no-plots"),
+                              root)}, workers=1)
     return {"results": [runs["filter"].to_json(), runs["idyn"].to_json()], "eid": runs["eid"].to_json()}
 
 

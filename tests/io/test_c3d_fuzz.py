@@ -6,7 +6,9 @@ C3D library killed gait), no hang, no runaway allocation (once 12.7 GB for a 0.5
 The mutations of the sample trial go to its first :data:`SHORT_FRAMES` frames, as the sample's writer
 (``io/c3d_write``) writes them: the same header and parameter section but for the frame counts, whose damage is
 the test's, and a tenth of the data to convert on every read (the sample's 428 frames and 4 280 plate samples
-took 150 ms of a read's 160)."""
+took 150 ms of a read's 160). Those of Eb015pi.c3d go to its first SHORT_FRAMES frames too, cut from its bytes
+(:func:`_cut_bytes`): its own header and parameter section, integer data and all, but for the two frame counts
+(its 450 frames took half of each mutated read's 50 ms of processor time)."""
 
 from __future__ import annotations
 
@@ -85,6 +87,56 @@ def short_sample(tmp_path_factory) -> Path:
                      model_to_lab=whole.lab_to_model.T)
 
 
+def _cut_bytes(source: Path, frames: int, target: Path) -> Path:
+    """``source``'s first ``frames`` frames, byte for byte: its header and parameter section with the header's last
+    frame and POINT:FRAMES set to them, and the data section cut after them (an Intel file's, as Eb015pi.c3d)."""
+    import struct
+
+    from gaitcli.io.c3d.header import check_parameters
+
+    data = bytearray(source.read_bytes())
+    points, analogs, first = struct.unpack("<3H", data[2:8])
+    scale, data_block = struct.unpack("<f", data[12:16])[0], struct.unpack("<H", data[16:18])[0]
+    frame_bytes = (4 * points + analogs) * (2 if scale > 0 else 4)  # integer or float storage
+    data[8:10] = struct.pack("<H", first + frames - 1)
+    record = check_parameters(source, (data[0] - 1) * 512, data[(data[0] - 1) * 512 + 2], len(data))["POINT", "FRAMES"]
+    assert record.kind == 2
+    data[record.data_offset:record.data_offset + 2] = struct.pack("<H", frames)
+    end = (data_block - 1) * 512 + frames * frame_bytes
+    target.write_bytes(bytes(data[:end]) + bytes(-end % 512))
+    return target
+
+
+@pytest.fixture(scope="module")
+def short_lab(tmp_path_factory) -> Path:
+    """Eb015pi.c3d's first SHORT_FRAMES frames (:func:`_cut_bytes`); skipped without ../shared."""
+    if not SHARED_C3D.is_dir():
+        pytest.skip("../shared/data/c3d is absent")
+    return _cut_bytes(SHARED_C3D / "Eb015pi.c3d", SHORT_FRAMES, tmp_path_factory.mktemp("short_lab") / "Eb015pi.c3d")
+
+
+def test_the_short_lab_file_is_the_lab_files_start(short_lab):
+    """What the lab file's mutations damage: its own bytes up to the data but for the frame counts, and its
+    markers and plates, cut short (in the lab's axes: the walking direction of 40 frames is another matter)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = read_c3d(SHARED_C3D / "Eb015pi.c3d", to_model_axes=False)
+        short = read_c3d(short_lab, to_model_axes=False)
+    assert whole.markers.n_frames == 450 and short.markers.n_frames == SHORT_FRAMES
+    assert short.markers.labels == whole.markers.labels and short.markers.rate_hz == whole.markers.rate_hz
+    np.testing.assert_array_equal(short.markers.positions_m, whole.markers.positions_m[:SHORT_FRAMES])
+    assert len(short.plates) == len(whole.plates) == 2
+    for p, q in zip(short.plates, whole.plates):
+        assert p.n_samples == 4 * SHORT_FRAMES and p.rate_hz == q.rate_hz
+        np.testing.assert_allclose(p.force_N, q.force_N[:p.n_samples], atol=1e-9)
+        np.testing.assert_allclose(p.corners_m, q.corners_m)
+    whole_bytes, short_bytes = (SHARED_C3D / "Eb015pi.c3d").read_bytes(), short_lab.read_bytes()
+    start = (whole_bytes[16] + 256 * whole_bytes[17] - 1) * 512  # the data section's
+    differ = [k for k in range(start) if whole_bytes[k] != short_bytes[k]]
+    assert differ == [8, 9, 4481, 4482], differ  # the header's last frame and POINT:FRAMES (450 → 40)
+    assert short_bytes[8:10] == short_bytes[4481:4483] == SHORT_FRAMES.to_bytes(2, "little")
+
+
 def test_the_short_sample_is_the_samples_start(short_sample):
     """What the mutations damage: the sample's own parameter layout, and its data, cut short."""
     import ezc3d
@@ -109,10 +161,8 @@ def test_mutated_sample_trial(tmp_path, chunk, monkeypatch, short_sample):
 
 
 @pytest.mark.parametrize("chunk", range(CHUNKS))
-def test_mutated_lab_file(tmp_path, chunk, monkeypatch):
-    if not SHARED_C3D.is_dir():
-        pytest.skip("../shared/data/c3d is absent")
-    outcomes = _read_mutated(SHARED_C3D / "Eb015pi.c3d", tmp_path, seed=10, count=MUTATIONS["lab"], chunk=chunk,
+def test_mutated_lab_file(tmp_path, chunk, monkeypatch, short_lab):
+    outcomes = _read_mutated(short_lab, tmp_path, seed=10, count=MUTATIONS["lab"], chunk=chunk,
                              monkeypatch=monkeypatch)
     assert sum(outcomes.values()) == len(range(chunk, MUTATIONS["lab"], CHUNKS))
 
@@ -246,24 +296,34 @@ def _event_mutations(rows: list, seed: int, count: int) -> list[list]:
     return out
 
 
+@pytest.fixture(scope="module")
+def true_events(tmp_path_factory):
+    """The sample walk's true events (truth/events.csv) as rows, and the events the filter stage takes from the
+    sample with those rows as its EVENT group."""
+    import pandas as pd
+
+    from gaitcli.signal.stage import FilterConfig, filter_trial
+
+    truth = pd.read_csv(sample_trial("normal") / "truth" / "events.csv")
+    rows = [(float(t), str(s), str(k)) for t, s, k in zip(truth.time_s, truth.side, truth.event)]
+    path = _with_events(sample_trial("normal") / "trial.c3d", tmp_path_factory.mktemp("events") / "base.c3d", rows)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return rows, filter_trial(read_c3d(path), FilterConfig()).trial.events
+
+
 @pytest.mark.parametrize("chunk", range(CHUNKS))
-def test_damaged_events_are_refused_or_set_aside_with_a_warning(tmp_path, chunk):
+def test_damaged_events_are_refused_or_set_aside_with_a_warning(tmp_path, chunk, true_events):
     """The sample walk with its true events as the lab's EVENT group, then seeded damage (above): the filter
     stage either refuses the file (one line) or uses the true events, or warns of the strides it set aside. A
     damaged EVENT group never walks silently into the strides."""
     import warnings as w
 
-    import pandas as pd
-
     from gaitcli.errors import GaitWarning
     from gaitcli.signal.stage import FilterConfig, filter_trial
 
     source = sample_trial("normal") / "trial.c3d"
-    truth = pd.read_csv(sample_trial("normal") / "truth" / "events.csv")
-    rows = [(float(t), str(s), str(k)) for t, s, k in zip(truth.time_s, truth.side, truth.event)]
-    with w.catch_warnings():
-        w.simplefilter("ignore")
-        base = filter_trial(read_c3d(_with_events(source, tmp_path / "base.c3d", rows)), FilterConfig()).trial.events
+    rows, base = true_events
     silent = []
     for damaged in _event_mutations(rows, seed=54, count=EVENT_MUTATIONS)[chunk::CHUNKS]:
         path = _with_events(source, tmp_path / "damaged.c3d", damaged)
