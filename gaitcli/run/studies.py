@@ -3,17 +3,20 @@ and the best of ``gait predict --starts N``.
 
 A study file (``gait predict --study FILE.yaml``; ``pipelines/study_*.yaml``) names speeds (m/s) × weight sets ×
 conditions and the settings every case shares; each value is checked as the predict stage's own
-(:func:`gaitcli.core.validate.check_parameter`), an error naming the file and its key. :func:`study_cases`
-orders the cases in chains, one per speed: per weight set the normal case first (from the previous weight
-set's normal solution; the chain's first from ``gait predict``'s default start, the shipped walk), every other
-case warm started from it, except the commercial feet: the first foot from the previous weight set's first
-foot when that converged (the chain's first from the normal solution), the second and third from the first
-foot's solution when it converged (else from the normal one), and the optimal prosthesis last from the feet
-and the normal solution. Why the feet from a foot: the normal gait's ankle angles put Seattle's τ_s (a_p =
-−34020 N·m/rad³) hundreds of N·m off, where IPOPT spends its iterations in inertia corrections; from the SACH
-solution it converges many times faster, and SACH at 1.00 m/s, c), from the SACH solution of b) in 139
-iterations where from the normal solution it stalled at J 119 (``benchmarks/README.md``, "Prediction").
-Once every chain is done, a case of a foot or of the normal gait that did not converge is solved once more from
+(:func:`gaitcli.core.validate.check_parameter`), an error naming the file and its key. :func:`study_cases` orders
+the cases in chains, one per speed: per weight set the normal case first (from the previous weight set's normal
+solution; the chain's first from ``gait predict``'s default start, the shipped walk), every other case warm started
+from it, except the added foot mass and the commercial feet: the foot mass and the first foot from the previous
+weight set's foot mass or first foot when that converged (the chain's first from the normal solution), the second
+and third feet from the first foot's solution when it converged (else from the normal one), and the optimal
+prosthesis last from the feet and the normal solution. Why the feet from a foot: the normal gait's ankle angles put
+Seattle's τ_s (a_p = −34020 N·m/rad³) hundreds of N·m off, where IPOPT spends its iterations in inertia corrections;
+from the SACH solution it converges many times faster, and SACH at 1.00 m/s, c), from the SACH solution of b) in 139
+iterations where from the normal solution it stalled at J 119; d) with 2 kg per foot from d)'s normal solution
+stopped at the 150-s limit, from c)'s 2 kg solution it converged in 83 iterations (``benchmarks/README.md``,
+"Prediction").
+
+Once every chain is done, a case other than the optimal device that did not converge is solved once more from
 the nearest converged case of its condition (:func:`retry_start`: another weight set at its speed, else its
 weight set at another speed), a start its chain did not have; the new result replaces the first where it
 converges (:func:`retry_case`). At 1.33 m/s, weights a), SACH from the normal solution stopped at the 150-s limit
@@ -195,7 +198,7 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
     """The study's cases in chains, one per speed, in the order of the module docstring."""
     chains = []
     for speed in spec.speeds_m_s:
-        chain, previous, previous_foot = [], None, None
+        chain, previous, previous_foot, previous_mass = [], None, None, None
         for label, weights in spec.weights:
             base = dataclasses.replace(spec.base, speed_m_s=speed, weights=weights)
             prefix = f"v{speed:.2f}_{label.replace(',', '-').replace('/', '_')}"
@@ -205,8 +208,10 @@ def study_cases(spec: StudySpec) -> list[list[StudyCase]]:
             for condition in order:
                 if condition == "normal":
                     cfg, starts = base, (() if previous is None else (previous,))
-                elif condition == "foot_mass":
-                    cfg, starts = dataclasses.replace(base, foot_mass_kg=spec.foot_mass_kg), (normal,)
+                elif condition == "foot_mass":  # as the first foot: from the last weight set's, else the normal
+                    cfg = dataclasses.replace(base, foot_mass_kg=spec.foot_mass_kg)
+                    starts = (normal,) if previous_mass is None else (previous_mass, normal)
+                    previous_mass = f"{prefix}_{condition}"
                 elif condition == "optimal":
                     cfg = dataclasses.replace(base, prosthesis="optimal")
                     starts = tuple(f"{prefix}_{f}" for f in COMMERCIAL_FEET) + (normal,)
@@ -346,7 +351,7 @@ def _solve_counting_builds(case: StudyCase, solved: dict, params, reference
 
 
 def retry_start(case: StudyCase, cases: list[StudyCase], results: dict[str, PredictResult]) -> str | None:
-    """Where an unconverged case of a commercial foot or the normal gait starts again (None: converged, or no
+    """Where an unconverged case (not the optimal device's) starts again (None: converged, or no
     such start): the nearest converged case of its condition at its speed (the weight sets' order, the later one
     first: the chain solved it after this case, so it is a start this case did not have), else at the nearest
     other speed with its weight set. The optimal device starts from the feet (:func:`predict_optimal`)."""
