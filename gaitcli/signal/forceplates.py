@@ -114,6 +114,14 @@ def centre_of_pressure(force_N, moment_Nm, point_m) -> tuple[np.ndarray, np.ndar
     return cop, free
 
 
+def _frames_and_step(n_samples: int, ratio: float) -> tuple[int, int]:
+    """The frames at ``k / rate_hz`` within ``n_samples`` samples ``ratio`` = source rate / frame rate apart, and
+    the ratio as a whole number of samples (0 where it is not one)."""
+    n_frames = int(np.floor((n_samples - 1) / ratio + 1e-9)) + 1 if n_samples else 0
+    step = round(ratio)
+    return n_frames, step if step >= 1 and abs(ratio - step) <= 1e-9 * ratio else 0
+
+
 def resample_to_frames(x, /, *, source_rate_hz: float, rate_hz: float) -> np.ndarray:
     """Values of ``x`` (samples, ...) at the frame times ``k / rate_hz`` inside the record.
 
@@ -122,9 +130,8 @@ def resample_to_frames(x, /, *, source_rate_hz: float, rate_hz: float) -> np.nda
     """
     x = np.asarray(x, dtype=float)
     ratio = source_rate_hz / rate_hz
-    n_frames = int(np.floor((x.shape[0] - 1) / ratio + 1e-9)) + 1 if x.shape[0] else 0
-    step = round(ratio)
-    if step >= 1 and abs(ratio - step) <= 1e-9 * ratio:
+    n_frames, step = _frames_and_step(x.shape[0], ratio)
+    if step:
         return x[::step][:n_frames].copy()
     source_t = np.arange(x.shape[0]) / source_rate_hz
     frame_t = np.arange(n_frames) / rate_hz
@@ -138,11 +145,9 @@ def _frame_means(x, /, *, source_rate_hz: float, rate_hz: float) -> np.ndarray:
     ratio ``r = source_rate_hz / rate_hz`` the ``r`` samples from ``k·r − r//2`` (fewer at the record's ends), as
     Vicon Nexus forms its per-frame ground reaction from unfiltered plates; otherwise :func:`resample_to_frames`."""
     x = np.asarray(x, dtype=float)
-    ratio = source_rate_hz / rate_hz
-    step = round(ratio)
-    if step < 2 or abs(ratio - step) > 1e-9 * ratio:
+    n_frames, step = _frames_and_step(x.shape[0], source_rate_hz / rate_hz)
+    if step < 2:
         return resample_to_frames(x, source_rate_hz=source_rate_hz, rate_hz=rate_hz)
-    n_frames = int(np.floor((x.shape[0] - 1) / ratio + 1e-9)) + 1 if x.shape[0] else 0
     # frame k's window is padded[k·step : (k+1)·step], the samples before the first and after the last counting 0
     padded = np.zeros((n_frames * step,) + x.shape[1:])
     counted = np.zeros(n_frames * step)

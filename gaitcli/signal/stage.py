@@ -18,7 +18,7 @@ from gaitcli.core.container import FootLoad, Trial, load_known_frames
 from gaitcli.core.events import SIDE_NAMES, SIDES, Events
 from gaitcli.core.numerics import frame_spans
 from gaitcli.core.recording import Markers, Recording
-from gaitcli.core.validate import parameter
+from gaitcli.core.validate import number, parameter
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.signal.butterworth import design_frequency_hz, design_sos, edge_frames, lowpass
 from gaitcli.signal.contacts import (
@@ -57,17 +57,14 @@ CUTOFF_EXPECTED = "a finite number of Hz ≥ 0 (0: no filtering), or auto"
 
 def cutoff(value) -> float | str:
     """A cut-off as a pipeline file or the command line gives it: ``auto`` or a finite number of Hz ≥ 0."""
-    if isinstance(value, str) and value.strip().lower() == "auto":
-        return "auto"
-    if isinstance(value, bool):
-        raise ValueError(value)
+    if isinstance(value, str):
+        if value.strip().lower() == "auto":
+            return "auto"
+        value = float(value)  # the command line's text; ValueError for other words
     try:
-        number = float(value)
-    except (TypeError, OverflowError):  # a list, a mapping; an integer of 400 digits
+        return number(value, where=None, low=0.0)
+    except InputError:
         raise ValueError(value) from None
-    if not (np.isfinite(number) and number >= 0):
-        raise ValueError(value)
-    return number
 
 
 @dataclass(frozen=True)
