@@ -1,17 +1,17 @@
 """gaitcli against Vicon's own Plug-in Gait outputs on a real session (``../shared/data/pig/``).
 
-Run from the repository root: ``python benchmarks/bench_pig.py [--session yaml|vsk] [--shared PATH] [--keep DIR]``.
+Run from the repository root: ``python benchmarks/bench_pig.py [--session yaml|vsk] [--shared PATH] [--keep DIR]
+[--segment-inertias de_leva|plug_in_gait] [--pipeline FILE]``.
 
 The session is run as a new user would: a trial folder with the movement trial, the static, the .vsk and (``yaml``,
 the default) a subject.yaml holding ``marker_set: plug_in_gait``, the mass, stature and the .vsk's knee and ankle
 widths, or (``vsk``) the .vsk alone describing the subject, through ``gait idyn``. Its kinematics.csv,
 joint_moments.csv and joint_powers.csv are compared with the points Vicon Nexus stored in the same C3D
 (``RHipAngles`` …, ``RHipMoment`` in N·mm/kg, ``RHipPower`` in W/kg in Z), frame by frame: per variable the
-correlation r, the RMS difference and the mean offset (gaitcli − Vicon). Angles over every frame; moments and
-powers over the frames where both have that foot's load (Vicon's ground reaction of that side non-zero and
-gaitcli's moment known). pyCGM's angles are compared too where the package is installed (``pip install pycgm``;
-not a gaitcli dependency). Prints; asserts nothing.
-"""
+correlation r, the RMS difference, the mean offset (gaitcli − Vicon) and the slope of gaitcli's on Vicon's (least
+squares). Angles over every frame; moments and powers over the frames where both have that foot's load (Vicon's
+ground reaction of that side non-zero and gaitcli's moment known). pyCGM's angles are compared too where the package
+is installed (``pip install pycgm``; not a gaitcli dependency). Prints; asserts nothing."""
 
 from __future__ import annotations
 
@@ -73,10 +73,11 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
 def row(name: str, ours: np.ndarray, theirs: np.ndarray, mask=None) -> str:
     ok = np.isfinite(ours) & np.isfinite(theirs) & (True if mask is None else mask)
     if ok.sum() < 3:
-        return f"{name:34s} {'—':>6s} {'—':>8s} {'—':>8s} {int(ok.sum()):6d}"
+        return f"{name:34s} {'—':>6s} {'—':>8s} {'—':>8s} {'—':>6s} {int(ok.sum()):6d}"
     d = ours[ok] - theirs[ok]
     r = np.corrcoef(ours[ok], theirs[ok])[0, 1]
-    return f"{name:34s} {r:6.3f} {np.sqrt(np.mean(d ** 2)):8.3f} {d.mean():8.3f} {int(ok.sum()):6d}"
+    slope = np.polyfit(theirs[ok], ours[ok], 1)[0]
+    return f"{name:34s} {r:6.3f} {np.sqrt(np.mean(d ** 2)):8.3f} {d.mean():8.3f} {slope:6.3f} {int(ok.sum()):6d}"
 
 
 PYCGM_ANGLES = {"pelvis": 0, "hip_r": 1, "hip_l": 2, "knee_r": 3, "knee_l": 4, "ankle_r": 5, "ankle_l": 6,
@@ -112,7 +113,8 @@ def pycgm_angles(shared: Path) -> dict[str, np.ndarray] | None:
     return out
 
 
-def run_session(shared: Path, root: Path, *, with_subject_yaml: bool) -> Path:
+def run_session(shared: Path, root: Path, *, with_subject_yaml: bool, extra: str = "",
+                pipeline: Path | None = None) -> Path:
     """``gait idyn`` on a folder holding the movement trial, the static and the .vsk (and ``SUBJECT`` as
     subject.yaml when ``with_subject_yaml``); its idyn output folder."""
     trial = root / ("pig_yaml" if with_subject_yaml else "pig_vsk")
@@ -121,9 +123,9 @@ def run_session(shared: Path, root: Path, *, with_subject_yaml: bool) -> Path:
     shutil.copy(shared / "Static_trial.c3d", trial / "static.c3d")
     shutil.copy(shared / "Test.vsk", trial / "Test.vsk")
     if with_subject_yaml:
-        (trial / "subject.yaml").write_text(SUBJECT)
-    run = subprocess.run([sys.executable, "-m", "gaitcli", "-q", "idyn", str(trial), "--no-plots"],
-                         capture_output=True, text=True)
+        (trial / "subject.yaml").write_text(SUBJECT + extra)
+    run = subprocess.run([sys.executable, "-m", "gaitcli", "-q", "idyn", str(trial), "--no-plots"]
+                         + (["--pipeline", str(pipeline)] if pipeline else []), capture_output=True, text=True)
     if run.returncode != 0:
         sys.exit(f"gait idyn failed ({run.returncode}): {run.stderr.strip()}")
     return trial / "gait_out" / "idyn"
@@ -135,17 +137,22 @@ def main() -> None:
     parser.add_argument("--keep", type=Path, default=None, help="run in this folder and keep it")
     parser.add_argument("--session", choices=("yaml", "vsk"), default="yaml",
                         help="yaml: subject.yaml + .vsk (default); vsk: the .vsk alone describes the subject")
+    parser.add_argument("--segment-inertias", choices=("de_leva", "plug_in_gait"), default=None,
+                        help="subject.yaml's segment_inertias (default: by the marker set, Plug-in Gait's)")
+    parser.add_argument("--pipeline", type=Path, default=None, help="a pipeline YAML for gait idyn (filter settings)")
     args = parser.parse_args()
     if not (args.shared / "Movement_trial.c3d").exists():
         sys.exit(f"no Plug-in Gait session at {args.shared}")
     root = args.keep or Path(tempfile.mkdtemp(prefix="bench_pig_"))
-    out = run_session(args.shared, root, with_subject_yaml=args.session == "yaml")
+    extra = f"segment_inertias: {args.segment_inertias}\n" if args.segment_inertias else ""
+    out = run_session(args.shared, root, with_subject_yaml=args.session == "yaml", extra=extra,
+                      pipeline=args.pipeline and args.pipeline.resolve())
     kin, mom, power = (read_csv(out / f"{n}.csv") for n in ("kinematics", "joint_moments", "joint_powers"))
     vicon = vicon_points(args.shared / "Movement_trial.c3d")
     pycgm = pycgm_angles(args.shared)
     stance = {s: np.nan_to_num(vicon[f"{S}GroundReactionForce"][:, 2]) > 0.5 for s, S in SIDES}
     print(f"session: {'subject.yaml + Test.vsk' if args.session == 'yaml' else 'Test.vsk alone'}")
-    header = f"{'variable (gaitcli vs Vicon)':34s} {'r':>6s} {'RMS':>8s} {'offset':>8s} {'frames':>6s}"
+    header = f"{'variable (gaitcli vs Vicon)':34s} {'r':>6s} {'RMS':>8s} {'offset':>8s} {'slope':>6s} {'frames':>6s}"
     print("Angles (deg), every frame\n" + header + ("   | vs pyCGM: r, RMS, offset" if pycgm else ""))
     for name, label, c in ANGLES:  # the ankle inversion is Vicon's AnkleAngles Y as written (kinematics.conventions)
         line = row(name, kin[name], vicon[label][:, c])

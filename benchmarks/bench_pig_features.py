@@ -14,11 +14,13 @@ nothing.
    (markers/plates Hz: the dissertation's 6/6 among them); noise-free, filtered, with only the plates filtered, and
    with nothing filtered (the method's own error; the differences are the filter's and the noise's share). Per side
    and joint: RMS against the truth (N·m/kg, where the moment is known: the foot's load known, outside the filter's
-   edge frames) and the slope of the least-squares line of gaitcli's against the truth.
+   edge frames) and the slope of the least-squares line of gaitcli's against the truth. The synthetic body's
+   segments are de Leva's, and so are the subject's (``segment_inertias: de_leva``, as ``gait synth`` writes it).
 2. ``../shared/data/pig`` (Vicon's own moments in the C3D) rewritten with: medial knee and ankle markers
    (the lateral ones mirrored through Vicon's own FEO/TIO), thigh and shank clusters (three markers each, rigid in
    Vicon's femur and tibia frames FEO/FEA/FEL/FEP, TIO/…), a sacral marker in place of the PSIS markers, and a
-   knee alignment device in the static; each through ``gait idyn`` (``bench_pig.run_session``). Per joint: r,
+   knee alignment device in the static; each through ``gait idyn`` (``bench_pig.run_session``; the legs' segments
+   Plug-in Gait's, the default of such a session). Per joint: r,
    slope and RMS against Vicon over the frames where both have the foot's load. Vicon processed this session
    without a device (Test.vsk: thigh and shank rotations 0), so the device's row is not like for like: its
    shank rotation offsets (the tibial wand against the device's knee axis) turn the shank's frame, and the knee
@@ -104,7 +106,7 @@ def synthetic(seed: int) -> None:
     exact = simulate_trial(seed=seed, marker_set="plug_in_gait", noise_mm=0.0, artefact_mm=0.0)
     preset = marker_set("plug_in_gait")
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
-                      hip_joint_centre="davis")
+                      hip_joint_centre="davis", segment_inertias="de_leva")  # the synthetic body's, as gait synth's
     walk_centres = trial.joint_centres_m()
     static_centres = trial.calibration.joint_centres_m
     mirrored = with_medial_markers(trial.markers, walk_centres)

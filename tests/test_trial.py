@@ -161,7 +161,7 @@ def test_segment_lengths(key, value):
 
 @pytest.mark.parametrize("key,value", [("leg_length_m", 90), ("leg_length_m", 0.1), ("hip_joint_centre", "davies"),
                                        ("hip_joint_centre", "Bell"), ("marker_set", "plug_in_gait_v9"),
-                                       ("marker_map", {"RTHI": "thigh"})])
+                                       ("marker_map", {"RTHI": "thigh"}), ("segment_inertias", "dempster")])
 def test_marker_set_and_hip_centre_keys(key, value):
     assert _error(_with(**{key: value})).field.startswith(key)
 
@@ -174,6 +174,17 @@ def test_marker_set_hip_centre_and_static_frames_are_read():
     assert s.markers.landmarks["LEFr"] == ("RKNX",) and "RTHI" in s.markers.tracking["thigh_r"]
     plain = subject_from_dict(_with())
     assert (plain.marker_set, plain.hip_joint_centre, plain.markers.name) == (None, "bell", "dissertation")
+
+
+def test_segment_inertias_follow_the_marker_set_unless_given():
+    """A Plug-in Gait session's legs are Plug-in Gait's (its moments Vicon's), every other session's de Leva's
+    (3.2.2); ``segment_inertias`` says otherwise for either."""
+    table = {(marker_set, given): subject_from_dict(_with(**{k: v for k, v in (("marker_set", marker_set),
+                                                                              ("segment_inertias", given)) if v}))
+             .segment_table for marker_set in (None, "plug_in_gait") for given in (None, "de_leva", "plug_in_gait")}
+    assert table == {(None, None): "de_leva", (None, "de_leva"): "de_leva", (None, "plug_in_gait"): "plug_in_gait",
+                     ("plug_in_gait", None): "plug_in_gait", ("plug_in_gait", "de_leva"): "de_leva",
+                     ("plug_in_gait", "plug_in_gait"): "plug_in_gait"}
 
 
 @pytest.mark.parametrize("frames", [[10, 5], [0, 5], [1], [1, 5.5], "1-10", [True, 5]])

@@ -213,7 +213,8 @@ def summary(result: IdynResult) -> dict:
     posture = result.reference_posture
     if posture is not None:
         info.update({"mass_estimate_kg": posture.mass_estimate_kg, "marker_set": posture.marker_set,
-                     "hip_joint_centre": posture.hip_joint_centre, "static": posture.static,
+                     "hip_joint_centre": posture.hip_joint_centre, "segment_inertias": posture.segment_inertias,
+                     "static": posture.static,
                      "static_frames": None if posture.static_frames is None else list(posture.static_frames)})
         if posture.hip_score_residual_mm:
             info["hip_score_residual_mm"] = dict(posture.hip_score_residual_mm)

@@ -84,7 +84,7 @@ FOOT_BODY = {"r": BODIES.index("foot_r"), "l": BODIES.index("foot_l")}
 class ReferencePosture:
     """How the model was calibrated: ``static`` (the static's file name, "subject.yaml" or "auto: …"), the file frames
     used (None: all of static.c3d), the marker set, the hip-centre method, the plates' stride estimate of the
-    body mass (kg, None without one), and SCORE's residual per side."""
+    body mass (kg, None without one), SCORE's residual per side and the legs' segment table."""
 
     static: str
     static_frames: tuple[int, int] | None
@@ -92,6 +92,7 @@ class ReferencePosture:
     hip_joint_centre: str
     mass_estimate_kg: float | None
     hip_score_residual_mm: dict = field(default_factory=dict)  # side → SCORE's RMS residual (hip_joint_centre: score)
+    segment_inertias: str = "de_leva"  # Subject.segment_table
 
 
 @dataclass
@@ -414,7 +415,8 @@ def static_calibration(markers: Markers, frames: np.ndarray | None, subject: Sub
                      sex=subject.sex, thigh_length_m=subject.thigh_length_m, shank_length_m=subject.shank_length_m,
                      disturbances=subject.disturbances, extra_tracking_markers=markers_set.tracking,
                      marker_set=markers_set, hip_method=hip_method or HIP_METHOD[subject.hip_joint_centre],
-                     leg_length_m=leg_length, widths=widths, untracked=untracked)
+                     leg_length_m=leg_length, widths=widths, untracked=untracked,
+                     segment_inertias=subject.segment_table)
 
 
 def virtual_centres_only_in_static(static: Markers, frames: np.ndarray | None, trial: Markers) -> tuple[str, ...]:
@@ -640,7 +642,7 @@ def run_idyn(trial: Trial, static: Recording | None, subject: Subject, cfg: Idyn
     first = markers.first_frame
     result.reference_posture = ReferencePosture(
         how, None if frames is None else (int(frames[0]) + first, int(frames[-1]) + first),
-        subject.markers.name, subject.hip_joint_centre, estimate, residuals)
+        subject.markers.name, subject.hip_joint_centre, estimate, residuals, subject.segment_table)
     return result
 
 

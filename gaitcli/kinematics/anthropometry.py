@@ -1,4 +1,4 @@
-"""Segment masses, centres of mass and inertias from de Leva (1996), 3.2.2.
+"""Segment masses, centres of mass and inertias from de Leva (1996), 3.2.2, or Plug-in Gait's legs.
 
 mass = fraction · body mass; CoM at a fraction of the segment length from the first
 (origin) endpoint; I = m (r L)² about each segment axis (upright posture: x forward,
@@ -13,6 +13,9 @@ and both arms crossed over the chest (upper arms hanging from shoulder centres
 chest at elbow height), its mass the remainder of the body mass. Sources, the reading of
 the radii's axes and what this reproduces of Tables A.4–A.5: docs/model_constants.md §1.
 The added masses of the experiments are in :mod:`gaitcli.kinematics.disturbances`.
+
+A Plug-in Gait session's legs may take Plug-in Gait's own parameters instead (:data:`PLUG_IN_GAIT_LEGS`), so that
+its joint moments are the ones Vicon Nexus reports; docs/model_constants.md §1 says where they come from.
 """
 
 from __future__ import annotations
@@ -77,6 +80,24 @@ DE_LEVA = {
     }),
 }
 REFERENCE_STATURE_M = {"male": 1.741, "female": 1.735}
+#: the tables a subject's segments may come from (subject.yaml's ``segment_inertias``)
+SEGMENT_TABLES = ("de_leva", "plug_in_gait")
+
+
+@dataclass(frozen=True)
+class PlugInGaitSegment:
+    """One leg segment as Plug-in Gait computes its kinetics: percentages of body mass and of segment length."""
+
+    mass_pct: float
+    com_pct: float  # from the proximal joint centre (the foot: from the ankle centre towards the toe marker)
+    radius_pct: float  # radius of gyration about the CoM, both transverse axes; none about the long axis
+
+
+#: Plug-in Gait's legs as Vicon Nexus computes their kinetics: Dempster's masses and CoMs; as the radius about the
+#: CoM, Dempster's radius about the proximal end for thigh and foot and about the CoM for the shank, the radii that
+#: reproduce Vicon's own moments in ../shared/data/pig (benchmarks/fit_pig_inertias.py; docs/model_constants.md §1)
+PLUG_IN_GAIT_LEGS = {"thigh": PlugInGaitSegment(10.0, 43.3, 54.0), "shank": PlugInGaitSegment(4.65, 43.3, 30.2),
+                     "foot": PlugInGaitSegment(1.45, 50.0, 69.0)}
 #: shoulder joint centres either side of the midline, as a fraction of stature (fits Table A.4)
 SHOULDER_HALF_WIDTH_PER_STATURE = 0.112
 
@@ -179,9 +200,20 @@ def _hat(table: dict[str, DeLevaSegment], mass_kg: float, scale: float, shoulder
                            f"(shoulder joint centres ±{shoulder_half_width_m:.3f} m)",))
 
 
+def plug_in_gait_limb(key: str, mass_kg: float, length_m: float, axis: np.ndarray, origin: str,
+                      how: str) -> SegmentInertia:
+    """A thigh, shank or foot by :data:`PLUG_IN_GAIT_LEGS`: ``length_m`` from ``origin`` along ``axis`` (unit)."""
+    row = PLUG_IN_GAIT_LEGS[key]
+    m = row.mass_pct / 100.0 * mass_kg
+    axis = np.asarray(axis, dtype=float)
+    inertia = m * (row.radius_pct / 100.0 * length_m) ** 2 * (np.eye(3) - np.outer(axis, axis))
+    return SegmentInertia(m, row.com_pct / 100.0 * length_m * axis, inertia, length_m, axis, origin,
+                          (f"{key} length {length_m:.4f} m ({how}), Plug-in Gait's mass, CoM and radius",))
+
+
 def segment_parameters(mass_kg: float, stature_m: float, sex: str = "male", *,
                        thigh_length_m=None, shank_length_m=None, foot_length_m=None,
-                       shoulder_width_m: float | None = None) -> dict[str, SegmentInertia]:
+                       shoulder_width_m: float | None = None, legs: str = "de_leva") -> dict[str, SegmentInertia]:
     """Mass, CoM and inertia of the 8 bodies in segment axes of the upright posture (3.2.2).
 
     Parameters
@@ -195,6 +227,9 @@ def segment_parameters(mass_kg: float, stature_m: float, sex: str = "male", *,
         None: de Leva's mean length × stature / reference stature.
     shoulder_width_m : float, optional
         Distance between the shoulder joint centres, m (default 2 × 0.112 × stature).
+    legs : str
+        ``"de_leva"`` or ``"plug_in_gait"`` (:data:`PLUG_IN_GAIT_LEGS`; its foot here runs from the heel along
+        the foot, :func:`~gaitcli.kinematics.calibration.calibrate` places it between ankle centre and toe).
 
     Returns
     -------
@@ -204,6 +239,8 @@ def segment_parameters(mass_kg: float, stature_m: float, sex: str = "male", *,
     mass_kg = _positive(mass_kg, "mass_kg")
     stature_m = _positive(stature_m, "stature_m")
     sex = normalise_sex(sex)
+    if legs not in SEGMENT_TABLES:
+        raise ValueError(f"legs: {legs!r} (expected one of {SEGMENT_TABLES})")
     table = DE_LEVA[sex]
     scale = stature_m / REFERENCE_STATURE_M[sex]
     lengths = {"thigh": _per_side(thigh_length_m, "thigh_length_m"),
@@ -216,24 +253,26 @@ def segment_parameters(mass_kg: float, stature_m: float, sex: str = "male", *,
     def limb(key: str, measured: float | None, origin: str, axis: np.ndarray) -> SegmentInertia:
         row = table[key]
         L = measured if measured is not None else row.length_mm / 1000.0 * scale
+        how = "measured" if measured is not None else "scaled by stature"
+        if legs == "plug_in_gait" and key in PLUG_IN_GAIT_LEGS:
+            return plug_in_gait_limb(key, mass_kg, L, axis, origin, how)
         m = row.mass_pct / 100.0 * mass_kg
         radii = (row.r_sag_pct, row.r_trans_pct, row.r_long_pct)
         if key == "foot":  # the dissertation's Table A.5 assignment (x along the foot)
             radii = (row.r_long_pct, row.r_sag_pct, row.r_trans_pct)
-        how = "measured" if measured is not None else "scaled by stature"
         return SegmentInertia(m, row.com_pct / 100.0 * L * axis, principal_inertia(m, L, radii), L, axis,
                               origin, (f"{key} length {L:.4f} m ({how})",))
 
     out: dict[str, SegmentInertia] = {}
     out["pelvis"] = limb("lower_trunk", None, "OMPH", down)
-    legs = {}
+    leg_segments = {}
     for i, s in enumerate(("r", "l")):
-        legs[f"thigh_{s}"] = limb("thigh", lengths["thigh"][i], "HJC", down)
-        legs[f"shank_{s}"] = limb("shank", lengths["shank"][i], "KJC", down)
-        legs[f"foot_{s}"] = limb("foot", lengths["foot"][i], "HEEL", forward)
-    hat_mass = mass_kg - out["pelvis"].mass_kg - sum(seg.mass_kg for seg in legs.values())
+        leg_segments[f"thigh_{s}"] = limb("thigh", lengths["thigh"][i], "HJC", down)
+        leg_segments[f"shank_{s}"] = limb("shank", lengths["shank"][i], "KJC", down)
+        leg_segments[f"foot_{s}"] = limb("foot", lengths["foot"][i], "HEEL", forward)
+    hat_mass = mass_kg - out["pelvis"].mass_kg - sum(seg.mass_kg for seg in leg_segments.values())
     out["hat"] = _hat(table, mass_kg, scale, half_width, hat_mass)
-    out.update(legs)
+    out.update(leg_segments)
     return {b: out[b] for b in BODIES}
 
 

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -46,7 +46,14 @@ from gaitcli.core.recording import Markers
 from gaitcli.core.validate import one_of
 from gaitcli.errors import GaitWarning, InputError
 from gaitcli.kinematics import joint_centres as jcm
-from gaitcli.kinematics.anthropometry import SegmentInertia, normalise_sex, rotate_segment, segment_parameters
+from gaitcli.kinematics.anthropometry import (
+    SEGMENT_TABLES,
+    SegmentInertia,
+    normalise_sex,
+    plug_in_gait_limb,
+    rotate_segment,
+    segment_parameters,
+)
 from gaitcli.kinematics.disturbances import Disturbance, apply_disturbances, resolve_disturbances
 from gaitcli.kinematics.markerset import (
     LANDMARKS,
@@ -303,7 +310,7 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
               ankle_method: str = "de_leva", extra_tracking_markers: Mapping[str, Sequence[str]] | None = None,
               marker_set: MarkerSet | None = None, leg_length_m: float | None = None,
               widths: jcm.JointWidths | None = None, untracked: Sequence[str] = (),
-              source: str | Path | None = None) -> StaticCalibration:
+              segment_inertias: str = "de_leva", source: str | Path | None = None) -> StaticCalibration:
     """Calibrate the 8-body model on the reference posture ``static`` (averaged over ``frames``).
 
     Parameters
@@ -337,6 +344,9 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
         Knee and ankle widths, marker diameter and wands for Plug-in Gait's chord method.
     untracked : sequence of str
         Landmarks that place joint centres but track no body (a virtual point the walking trial lacks).
+    segment_inertias : str
+        ``"de_leva"`` (3.2.2) or ``"plug_in_gait"``: the legs' masses, CoMs and inertias as Plug-in Gait's
+        (:data:`~gaitcli.kinematics.anthropometry.PLUG_IN_GAIT_LEGS`; the foot from the ankle centre to the toe).
     source : str or Path, optional
         The static file, for messages.
 
@@ -355,12 +365,18 @@ def calibrate(static: Markers, *, mass_kg: float, stature_m: float, sex: str = "
                            ankle_method=ankle_method, sex=sex, leg_length=leg_length_m, widths=widths, source=source)
     chord, toe = chord_and_toe_sides(P, widths, marker_set)
     notes = _joint_centre_notes(P, chord, hip_method, ankle_method)
+    one_of(segment_inertias, SEGMENT_TABLES, where="segment_inertias", path=source)
     segs = _measured_segments(jc, mass_kg, stature_m, sex, thigh_length_m=thigh_length_m,
                               shank_length_m=shank_length_m, foot_length_m=foot_length_m,
-                              shoulder_width_m=shoulder_width_m)
-    notes.insert(0, f"de Leva (1996) {sex} table; body mass {float(mass_kg):.2f} kg, stature {float(stature_m):.3f} m")
+                              shoulder_width_m=shoulder_width_m, legs=segment_inertias)
+    notes.insert(0, f"de Leva (1996) {sex} table"
+                 + ("; the legs Plug-in Gait's" if segment_inertias == "plug_in_gait" else "")
+                 + f"; body mass {float(mass_kg):.2f} kg, stature {float(stature_m):.3f} m")
     lumbar = (jc["HJCr"] + jc["HJCl"]) / 2 + segs["pelvis"].length_m * np.array([0.0, 0.0, 1.0])  # OMPH (3.2.1)
     rotation, origin, anatomical, from_landmarks = _segment_frames(P, jc, chord, toe, lumbar)
+    if segment_inertias == "plug_in_gait":
+        segs = {**segs, **{f"foot_{s}": _plug_in_gait_foot(mass_kg, P, jc, rotation[f"foot_{s}"], s)
+                           for s in "rl" if f"MT2{s}" in P}}
     for b, ok in from_landmarks.items():
         if not ok:
             notes.append(f"{b}: anatomical frame incomplete (landmarks missing), global axes used instead")
@@ -427,15 +443,28 @@ def _joint_centre_notes(P: Mapping[str, np.ndarray], chord: tuple, hip_method: s
 
 
 def _measured_segments(jc: Mapping[str, np.ndarray], mass_kg: float, stature_m: float, sex: str, *,
-                       thigh_length_m, shank_length_m, foot_length_m, shoulder_width_m) -> dict[str, SegmentInertia]:
-    """de Leva's segments (3.2.2) with the thigh (HJC–KJC) and shank (KJC–AJC) lengths measured per side (m)
-    between the static's joint centres where not given."""
+                       thigh_length_m, shank_length_m, foot_length_m, shoulder_width_m,
+                       legs: str) -> dict[str, SegmentInertia]:
+    """de Leva's segments (3.2.2; the legs ``legs``'s) with the thigh (HJC–KJC) and shank (KJC–AJC) lengths
+    measured per side (m) between the static's joint centres where not given."""
     measured_thigh = tuple(float(np.linalg.norm(jc[f"HJC{s}"] - jc[f"KJC{s}"])) for s in "rl")
     measured_shank = tuple(float(np.linalg.norm(jc[f"KJC{s}"] - jc[f"AJC{s}"])) for s in "rl")
     return segment_parameters(mass_kg, stature_m, sex,
                               thigh_length_m=measured_thigh if thigh_length_m is None else thigh_length_m,
                               shank_length_m=measured_shank if shank_length_m is None else shank_length_m,
-                              foot_length_m=foot_length_m, shoulder_width_m=shoulder_width_m)
+                              foot_length_m=foot_length_m, shoulder_width_m=shoulder_width_m, legs=legs)
+
+
+def _plug_in_gait_foot(mass_kg: float, P: Mapping[str, np.ndarray], jc: Mapping[str, np.ndarray],
+                       rotation: np.ndarray, s: str) -> SegmentInertia:
+    """Side ``s``'s foot as Plug-in Gait's for body mass ``mass_kg``: from the ankle centre to the toe marker
+    (MT2), in the foot's segment axes (``rotation`` turns them into the reference axes) from its model origin, the
+    heel (CA)."""
+    ankle_to_toe = P[f"MT2{s}"] - jc[f"AJC{s}"]
+    length = float(np.linalg.norm(ankle_to_toe))
+    foot = plug_in_gait_limb("foot", mass_kg, length, rotation.T @ (ankle_to_toe / length), "HEEL",
+                             "ankle centre to toe, measured")
+    return replace(foot, com_m=rotation.T @ (jc[f"AJC{s}"] - P[f"CA{s}"]) + foot.com_m)
 
 
 def _segment_frames(P: Mapping[str, np.ndarray], jc: Mapping[str, np.ndarray], chord: tuple, toe: tuple,

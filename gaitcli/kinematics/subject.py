@@ -22,6 +22,7 @@ from gaitcli.emg.channels import sided_muscle
 from gaitcli.errors import InputError, shown
 from gaitcli.io.vsk import VskSubject
 from gaitcli.io.yamlfile import read_yaml
+from gaitcli.kinematics.anthropometry import SEGMENT_TABLES
 from gaitcli.kinematics.disturbances import Disturbance
 from gaitcli.kinematics.markerset import MarkerSet, marker_set, marker_set_names
 
@@ -49,6 +50,7 @@ class Subject:
     disturbances: tuple[Disturbance, ...] = ()  # added masses (Tables A.2–A.3), in segment axes
     marker_set: str | None = None  # a bundled preset (markerset.marker_set_names()); None: Table A.6 labels
     hip_joint_centre: str = "bell"
+    segment_inertias: str | None = None  # de_leva or plug_in_gait; None: by the marker set (:attr:`segment_table`)
     # Plug-in Gait's chord method, mm: {"r": ..., "l": ...} (None: from the C3D's PROCESSING group)
     knee_width_mm: dict[str, float] | None = None
     ankle_width_mm: dict[str, float] | None = None
@@ -67,10 +69,18 @@ class Subject:
         """The preset with ``marker_map`` merged over it: which lab label is which landmark or tracks which body."""
         return marker_set(self.marker_set, self.marker_map)
 
+    @property
+    def segment_table(self) -> str:
+        """Where the legs' masses, CoMs and inertias come from: ``segment_inertias``, or Plug-in Gait's in a Plug-in
+        Gait session (so that its moments are Vicon's) and de Leva's otherwise (3.2.2)."""
+        if self.segment_inertias is not None:
+            return self.segment_inertias
+        return "plug_in_gait" if self.marker_set == "plug_in_gait" else "de_leva"
+
 
 KEYS = ("mass_kg", "stature_m", "sex", "thigh_length_m", "shank_length_m", "leg_length_m", "trial", "static",
-        "static_frames", "marker_set", "marker_map", "hip_joint_centre", "disturbances", "knee_width_mm",
-        "ankle_width_mm", "marker_diameter_mm", "vsk", "trials", "emg", "emg_mvc")
+        "static_frames", "marker_set", "marker_map", "hip_joint_centre", "segment_inertias", "disturbances",
+        "knee_width_mm", "ankle_width_mm", "marker_diameter_mm", "vsk", "trials", "emg", "emg_mvc")
 #: hip joint centre methods (``hip_joint_centre:``): Bell et al. (1990), as the dissertation; Harrington et al.
 #: (2007); Hara et al. (2016); Davis et al. (1991, Plug-in Gait's); functional (SCORE, Ehrig et al. 2006, from the
 #: trial's hip motion); the lab's points
@@ -166,6 +176,9 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml", vsk: VskSubj
         preset = one_of(preset, marker_set_names(), where="marker_set", path=path)
     marker_set(preset, marker_map, source=path)  # every landmark and body of the map named, or one error
     hip = one_of(data.get("hip_joint_centre", "bell"), HIP_JOINT_CENTRES, where="hip_joint_centre", path=path)
+    inertias = data.get("segment_inertias")
+    if inertias is not None:
+        inertias = one_of(inertias, SEGMENT_TABLES, where="segment_inertias", path=path)
     disturbances = []
     items = data.get("disturbances") or []
     if not isinstance(items, list):
@@ -199,7 +212,8 @@ def subject_from_dict(data: Any, path: str | Path = "subject.yaml", vsk: VskSubj
     emg = {label.strip(): sided_muscle(muscle, f"emg.{label}", path) for label, muscle in emg.items()}
     return Subject(mass_kg=mass, stature_m=stature, sex=sex, trial=data.get("trial"), static=data.get("static"),
                    trials=tuple(trials or ()), vsk=data.get("vsk"), static_frames=frames, marker_map=dict(marker_map),
-                   disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip, emg=emg,
+                   disturbances=tuple(disturbances), marker_set=preset, hip_joint_centre=hip,
+                   segment_inertias=inertias, emg=emg,
                    emg_mvc=data.get("emg_mvc"), **lengths, **widths,
                    notes=tuple(filled.values()))
 

@@ -70,6 +70,11 @@ class Page:
     status: str = ""
 
 
+#: summary.json's segment_inertias as the report says it
+SEGMENT_TABLES_SHOWN = {"de_leva": "de Leva (1996)",
+                        "plug_in_gait": "Plug-in Gait's legs (Dempster's, as Vicon Nexus), de Leva's trunk"}
+
+
 def _data_uri(path: Path) -> str:
     kind = {".png": "image/png", ".gif": "image/gif"}[path.suffix.lower()]
     return f"data:{kind};base64,{base64.b64encode(path.read_bytes()).decode('ascii')}"
@@ -456,6 +461,7 @@ def session_body(root: Path, band: Band | None, work: Path, walk_pages: dict[str
     facts = [("subject", subject or f"body mass {first.get('mass_kg', '—')} kg"),
              ("walks", f"{len(names)}: " + ", ".join(names)),
              ("marker set", first.get("marker_set", "—")), ("hip joint centres", first.get("hip_joint_centre", "—")),
+             ("segment inertias", SEGMENT_TABLES_SHOWN.get(first.get("segment_inertias"), "—")),
              ("static", first.get("static") or "none (standing frames of the walk)"),
              ("filter cut-off", f"{filtered.get('cutoff_hz', '—')} Hz markers, " + _plates_filter(filtered)),
              ("angles", f"{first.get('angles', '—')} ({first.get('angle_frames', '—')}); moments "

@@ -34,6 +34,7 @@ def subject_yaml(trial: SyntheticTrial, *, condition: str, mass_kg: float, statu
         data["marker_set"] = marker_set
     if marker_set == "plug_in_gait":  # the subject's hip centres are Davis's (synth.recording.plug_in_gait_body)
         data["hip_joint_centre"] = "davis"
+        data["segment_inertias"] = "de_leva"  # the body's, as everywhere in synth (not Plug-in Gait's default)
     comment = f"# condition: {condition}"
     if condition != "normal":
         comment += f" (disturbed side: {DISTURBED_SIDE})"

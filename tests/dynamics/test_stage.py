@@ -538,7 +538,7 @@ def test_a_nexus_static_with_a_raw_walk_falls_back_to_the_tools_own_centres(plug
     static's hip centres stay and each thigh is tracked with its hip centre placed by the pelvis."""
     trial, filtered = plug_in_gait_walk
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
-                      hip_joint_centre=hip)
+                      hip_joint_centre=hip, segment_inertias="de_leva")
     with pytest.warns(GaitWarning, match="virtual joint centres in the static trial but not in the walking trial"):
         result = run_idyn(filtered, _nexus_static(trial, 0.015), subject, IdynConfig())
     assert np.isfinite(result.q).all()
@@ -564,7 +564,7 @@ def test_no_moment_is_known_where_the_filters_start_up_reverses_the_acceleration
     0.056/0.059, knee 0.029/0.029, ankle 0.035/0.035)."""
     trial, filtered = plug_in_gait_walk
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
-                      hip_joint_centre="davis")
+                      hip_joint_centre="davis", segment_inertias="de_leva")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         result = run_idyn(filtered, Recording(marker_set("plug_in_gait").apply(trial.static), [],
@@ -591,7 +591,7 @@ def test_the_notes_name_one_source_per_joint_centre(plug_in_gait_walk):
     lateral marker: 0.6°; measured at most 0.49°, the right shank)."""
     trial, _ = plug_in_gait_walk
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
-                      hip_joint_centre="davis")
+                      hip_joint_centre="davis", segment_inertias="de_leva")
     preset = marker_set("plug_in_gait")
     with_points = static_calibration(_nexus_static(trial, 0.0).markers, None, subject, MASS_KG, source=None,
                                      metadata=trial.metadata)
@@ -668,7 +668,7 @@ def test_a_knee_alignment_device_makes_the_wands_placement_irrelevant():
     trial = simulate_trial(seed=2, marker_set="plug_in_gait", noise_mm=0.0, artefact_mm=0.0)
     preset = marker_set("plug_in_gait")
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
-                      hip_joint_centre="davis")
+                      hip_joint_centre="davis", segment_inertias="de_leva")
     walk_centres = trial.joint_centres_m()
     static_centres = trial.calibration.joint_centres_m
 
@@ -720,9 +720,10 @@ def test_a_stride_from_a_plates_heel_strike_to_the_markers_next_one_is_not_its_p
 
 # --- anatomical angles against the synthetic body's truth; the static's heading -----------------------
 def subject_of(name: str) -> Subject:
-    """The subject ``gait synth --marker-set name`` writes: a Plug-in Gait subject's hips are Davis's."""
+    """The subject ``gait synth --marker-set name`` writes: a Plug-in Gait subject's hips are Davis's, its segments
+    de Leva's as the synthetic body's."""
     return Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set=name,
-                   hip_joint_centre="davis" if name == "plug_in_gait" else "bell")
+                   hip_joint_centre="davis" if name == "plug_in_gait" else "bell", segment_inertias="de_leva")
 
 
 @pytest.mark.parametrize("name", ["plug_in_gait", "dissertation", "cleveland", "cast"])
@@ -815,7 +816,7 @@ def test_medial_markers_leave_plug_in_gaits_tracking_its_joint_centre():
     trial = simulate_trial(seed=2, marker_set="plug_in_gait", medial_markers=True)
     preset = marker_set("plug_in_gait")
     subject = Subject(mass_kg=MASS_KG, stature_m=STATURE_M, sex="male", marker_set="plug_in_gait",
-                      hip_joint_centre="davis")
+                      hip_joint_centre="davis", segment_inertias="de_leva")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         filtered = filter_trial(Recording(preset.apply(trial.markers), trial.plates, subject_metadata=trial.metadata),

@@ -77,3 +77,23 @@ def test_rotation_keeps_principal_moments():
     rot = rotate_segment(seg, R)
     np.testing.assert_allclose(np.linalg.eigvalsh(rot.inertia_kgm2), np.sort(np.diag(seg.inertia_kgm2)))
     np.testing.assert_allclose(np.linalg.norm(rot.com_m), np.linalg.norm(seg.com_m))
+
+
+def test_plug_in_gaits_legs_take_its_masses_coms_and_radii():
+    """``legs="plug_in_gait"``: thigh, shank and foot by Plug-in Gait's table (mass % of body mass, CoM % of the
+    length from the proximal end, one transverse radius of gyration, none about the long axis), computed here
+    from the numbers themselves; pelvis and HAT stay de Leva's and the masses still sum to the body's."""
+    segs = segment_parameters(**SUBJECT1, thigh_length_m=0.475, shank_length_m=0.43, legs="plug_in_gait")
+    plain = segment_parameters(**SUBJECT1, thigh_length_m=0.475, shank_length_m=0.43)
+    for key, length, mass_pct, com_pct, radius_pct in (("thigh_r", 0.475, 10.0, 43.3, 54.0),
+                                                       ("shank_l", 0.43, 4.65, 43.3, 30.2)):
+        seg, m = segs[key], mass_pct / 100 * 73.0
+        assert seg.mass_kg == pytest.approx(m)
+        np.testing.assert_allclose(seg.com_m, [0.0, 0.0, -com_pct / 100 * length])  # down from HJC / KJC
+        np.testing.assert_allclose(np.diag(seg.inertia_kgm2), [m * (radius_pct / 100 * length) ** 2] * 2 + [0.0],
+                                   atol=1e-15)
+    assert segs["foot_r"].mass_kg == pytest.approx(0.0145 * 73.0)
+    assert segs["pelvis"].mass_kg == plain["pelvis"].mass_kg
+    assert sum(s.mass_kg for s in segs.values()) == pytest.approx(73.0, abs=1e-12)
+    with pytest.raises(ValueError, match="legs"):
+        segment_parameters(**SUBJECT1, legs="dempster")

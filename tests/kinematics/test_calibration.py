@@ -258,3 +258,34 @@ def test_auto_static_frames_on_qualisys_pick_the_frame_the_worked_example_chose(
                                 with_session_defaults(FilterConfig(), "cast"))  # as the idyn stage sees them
     frames, _ = least_flexed_frames(markers)
     assert [int(frames[0]) + markers.first_frame] * 2 == subject["static_frames"]  # chosen by hand: [992, 992]
+
+
+def test_plug_in_gaits_foot_runs_from_the_ankle_centre_to_the_toe():
+    """``segment_inertias="plug_in_gait"``: each foot's CoM halfway between the ankle centre and the toe marker
+    (MT2), no inertia about that line and m (0.69 L)² about every line across it (L = ankle centre to toe); the
+    thigh's CoM 43.3 % of the way from hip to knee centre; the body's joints where de Leva's body has them."""
+    t = standing_template(1.792)
+    for s in "rl":
+        t[f"MT2{s}"] = (t[f"FM{s}"] + t[f"VM{s}"]) / 2 + [0.0, 0.0, 0.01]
+    pig = calibrate(landmarks_to_markers(t), **SUBJECT, segment_inertias="plug_in_gait")
+    plain = calibrate(landmarks_to_markers(t), **SUBJECT)
+    c = pig.joint_centres_m
+    for s in "rl":
+        foot = BODIES.index(f"foot_{s}")
+        toe = pig.static_landmarks_m[f"MT2{s}"]
+        np.testing.assert_allclose(pig.com_m[foot], (c[f"AJC{s}"] + toe) / 2, atol=1e-15)
+        along = (toe - c[f"AJC{s}"]) / np.linalg.norm(toe - c[f"AJC{s}"])
+        inertia, m, length = pig.body.inertia_kgm2[foot], pig.body.mass_kg[foot], np.linalg.norm(toe - c[f"AJC{s}"])
+        assert along @ inertia @ along == pytest.approx(0.0, abs=1e-15)
+        across = np.cross(along, [0.0, 0.0, 1.0])
+        across /= np.linalg.norm(across)
+        assert across @ inertia @ across == pytest.approx(m * (0.69 * length) ** 2)
+        thigh = BODIES.index(f"thigh_{s}")
+        np.testing.assert_allclose(pig.com_m[thigh], c[f"HJC{s}"] + 0.433 * (c[f"KJC{s}"] - c[f"HJC{s}"]),
+                                   atol=1e-15)
+    for name in c:
+        np.testing.assert_allclose(c[name], plain.joint_centres_m[name], atol=1e-15)
+    assert pig.body.total_mass_kg == pytest.approx(73.0, abs=1e-12)
+    assert any("the legs Plug-in Gait's" in n for n in pig.notes)
+    with pytest.raises(InputError, match="segment_inertias"):
+        calibrate(landmarks_to_markers(t), **SUBJECT, segment_inertias="dempster")
