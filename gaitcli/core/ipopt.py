@@ -18,6 +18,7 @@ import casadi as ca
 import numpy as np
 
 from gaitcli.core.interrupts import interrupts_raised
+from gaitcli.core.native import prepare_solvers
 
 #: a start component counts as outside its bounds beyond this fraction of max(1, |bound|): IPOPT's own
 #: relaxation of the bounds (``bound_relax_factor``), within which its solutions (warm starts) may lie
@@ -116,7 +117,9 @@ def options(*, tol: float, max_iter: int, print_level: int = 0, **extra) -> dict
 
 def build_solver(name: str, problem: dict, opts: dict) -> ca.Function:
     """An IPOPT ``nlpsol`` for ``problem`` ({"x", "f", "g"[, "p"]}: min f(x, p) s.t. lbg ≤ g(x, p) ≤ ubg,
-    lbx ≤ x ≤ ubx) with the options ``opts`` (:func:`options`)."""
+    lbx ≤ x ≤ ubx) with the options ``opts`` (:func:`options`), in a process prepared for MUMPS
+    (:func:`gaitcli.core.native.prepare_solvers`)."""
+    prepare_solvers()
     return ca.nlpsol(name, "ipopt", problem, opts)
 
 
