@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 
 # timing first, before numpy: one thread, Agg backend (its import sets the environment)
-from timing import median_s, one_core, sample_legs
+from timing import median_s, one_core, sample_legs, solver_libraries
 
 from gaitcli.muscles.solver import HESSIANS, SolverSettings
 from gaitcli.muscles.stage import run_muscles
@@ -66,7 +66,9 @@ def main(argv=None) -> int:
         subject, legs = sample_legs(Path(tmp), args.side, ("cycle", "swing"), sample=args.sample)
     cycle = legs["cycle"]
     if args.scaling is not None:
-        return eid_scaling(cycle, tuple(args.scaling) or SCALING_NODES, args.hessian)
+        status = eid_scaling(cycle, tuple(args.scaling) or SCALING_NODES, args.hessian)
+        print(solver_libraries())
+        return status
     start, end = cycle.interval_s
     print(f"sample_trials/{args.sample} ({subject.mass_kg:g} kg, {subject.stature_m:g} m), side {args.side}, stride "
           f"{start:.2f}–{end:.2f} s; one core, median of {args.repeat}")

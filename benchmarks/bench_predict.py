@@ -41,7 +41,7 @@ import dataclasses
 import time
 
 import numpy as np
-from timing import one_core
+from timing import one_core, solver_libraries
 
 from gaitcli.predict.layout import DesignLayout
 from gaitcli.predict.model import WalkerParameters
@@ -200,6 +200,7 @@ def main() -> None:
         stride_sweep(args.stride_sweep[0], args.stride_sweep[1:], given, args.iterations)
     if args.stride_follows:
         stride_follows(*args.stride_follows, given, args.iterations)
+    print(solver_libraries())
 
 
 def tracking(cfg: PredictConfig, reference=None):

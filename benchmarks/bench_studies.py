@@ -21,6 +21,8 @@ import argparse
 import time
 from pathlib import Path
 
+from timing import solver_libraries
+
 from gaitcli.resources import study_file
 from gaitcli.run.config import configure
 from gaitcli.run.studies import run_study
@@ -135,6 +137,7 @@ def main() -> None:
                   f"problems built for {len(solved)} cases, {sum(r['build_time_s'] for r in solved):.0f} s of "
                   f"building in all")
         (prostheses if name == "prostheses" else foot_mass)(rows)
+    print(solver_libraries() + " (the workers prepare themselves the same way)")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,8 @@ Import this module before numpy (every script does so first): it limits BLAS/Ope
 (``OMP_NUM_THREADS=1`` etc., inherited by the ``gait`` processes the scripts start) and selects
 matplotlib's Agg backend. :func:`one_core` also pins the process (and its children) to one core.
 
-Helpers: :func:`median_s` (median wall time of repeated calls), :func:`copy_sample` (a bundled sample
+Helpers: :func:`solver_libraries` (the line saying which native libraries IPOPT's MUMPS ran on),
+:func:`median_s` (median wall time of repeated calls), :func:`copy_sample` (a bundled sample
 trial without its outputs), :func:`sample_outputs` (run stages on such a copy through
 ``gaitcli.run.pipeline.run_stages``), :func:`sample_legs` (one leg's muscle-stage inputs from a sample's
 idyn.h5), :func:`gait_argv`/:func:`time_gait` (the ``gait`` command in a new
@@ -43,6 +44,17 @@ def one_core() -> None:
         if chosen not in allowed:
             raise SystemExit(f"BENCH_CORE={chosen}: not one of this process's cores {sorted(allowed)}")
         os.sched_setaffinity(0, {chosen})
+
+
+def solver_libraries() -> str:
+    """"solver libraries: …": what ``gaitcli.core.native.prepare_solvers`` did in this process (call it after the
+    solves) and which OpenBLAS MUMPS is bound to; ``GAITCLI_NATIVE=casadi`` runs with CasADi's own."""
+    from gaitcli.core import native
+
+    done = native.prepare_solvers()
+    return (f"solver libraries: MUMPS on {native.solver_libraries()}"
+            + (f" ({'; '.join(done)})" if done else f" (as CasADi sets them up; {native.SWITCH}="
+                                                    f"{os.environ.get(native.SWITCH, '')})"))
 
 
 def median_s(func, repeat: int):
