@@ -85,12 +85,14 @@ class IterationReport(ca.Callback):
 
 
 def ipopt_options(settings: PredictSettings, warm: bool) -> dict:
-    """IPOPT's options for ``settings`` (a warm start's when ``warm``): MUMPS with METIS ordering and without
-    its own row/column scaling, the fastest measured on this KKT system (``benchmarks/README.md``)."""
+    """IPOPT's options for ``settings`` (a warm start's when ``warm``): MUMPS with METIS ordering, without its
+    own row/column scaling and with a pivot tolerance of 1e-8 (IPOPT raises it where a factorisation looks
+    inaccurate), the fastest measured on this KKT system (``benchmarks/README.md``)."""
     s = settings
     opts = ipopt.options(tol=s.tolerance, max_iter=s.max_iterations, print_level=s.print_level,
                          **{"ipopt.mumps_pivot_order": 5, "ipopt.mumps_permuting_scaling": 0,
-                            "ipopt.mumps_scaling": 0, "ipopt.acceptable_tol": s.acceptable_tolerance,
+                            "ipopt.mumps_pivtol": 1e-8, "ipopt.mumps_scaling": 0,
+                            "ipopt.acceptable_tol": s.acceptable_tolerance,
                             "ipopt.acceptable_iter": s.acceptable_iterations,
                             "ipopt.acceptable_obj_change_tol": s.acceptable_objective_change})
     if warm:
