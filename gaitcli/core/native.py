@@ -64,12 +64,10 @@ def prepare_solvers() -> tuple[str, ...]:
 
 def solver_libraries() -> str:
     """Which BLAS MUMPS binds to in this process: "SciPy's OpenBLAS", "CasADi's OpenBLAS" or "not loaded"."""
-    maps = _loaded_paths()
-    if any(Path(p).name == CASADI_BLAS_SONAME and "gaitcli" in p for p in maps):
-        return "SciPy's OpenBLAS"
-    if any(Path(p).name.startswith("libcasadi-tp-openblas") for p in maps):
-        return "CasADi's OpenBLAS"
-    return "not loaded"
+    loaded = _loaded_blas()
+    if loaded is None:
+        return "not loaded"
+    return "SciPy's OpenBLAS" if loaded.is_relative_to(cache_dir().resolve()) else "CasADi's OpenBLAS"
 
 
 def _libc():
@@ -79,18 +77,20 @@ def _libc():
         return None
 
 
-def _loaded_paths() -> list[str]:
+def _loaded_blas() -> Path | None:
+    """The library this process has loaded under CasADi's BLAS soname (CasADi's own or ours), if any."""
     try:
         lines = Path("/proc/self/maps").read_text().splitlines()
     except OSError:
-        return []
-    return sorted({line.split()[-1] for line in lines if line.count("/") and line.split()[-1].startswith("/")})
+        return None
+    return next((Path(line.split()[-1]) for line in lines
+                 if line.split()[-1].startswith("/") and Path(line.split()[-1]).name.startswith(
+                     "libcasadi-tp-openblas")), None)
 
 
 def _load_scipy_blas() -> str:
     """Build (once) and load the library passing CasADi's BLAS calls to SciPy's OpenBLAS; "" where not."""
-    if platform.machine() not in ("x86_64", "AMD64") or any(
-            Path(p).name.startswith("libcasadi-tp-openblas") for p in _loaded_paths()):
+    if platform.machine() not in ("x86_64", "AMD64") or _loaded_blas() is not None:
         return ""
     scipy_blas, casadi_blas = _scipy_openblas(), _casadi_openblas()
     compiler, nm = shutil.which("cc") or shutil.which("gcc"), shutil.which("nm")
