@@ -87,11 +87,9 @@ def default_prediction(extra: dict) -> str:
 
 def first_kkt(library: Path, scratch: Path) -> tuple:
     """The default prediction's first search direction's KKT matrix and right-hand side as IPOPT hands them to
-    PARDISO (one-based
-    upper-triangle CSR), and the number of constraints (the negative pivots IPOPT requires)."""
-    import numpy as np
-
+    PARDISO (one-based upper-triangle CSR), and the number of constraints (the negative pivots IPOPT requires)."""
     import bench_predict
+    import numpy as np
 
     from gaitcli.core import ipopt
     from gaitcli.predict.stage import PredictConfig
