@@ -2,7 +2,7 @@
 
 Run from the repository root: ``python benchmarks/bench_pardiso_mkl.py --mkl PATH [--no-predictions]``, PATH
 either PyPI's ``mkl`` wheel (``pip download mkl --no-deps -d DIR``) or a folder holding its ``libmkl_*.so.*``;
-a C compiler builds the interface library. The script starts itself again with that folder on
+a C compiler builds the interface library. The script runs itself again with that folder on
 ``LD_LIBRARY_PATH`` (MKL finds its parts there). Prints:
 
 * the default prediction's first KKT matrix (IPOPT dumps it, ``IPOPT_WRITE_MAT``), factorised by PARDISO with
@@ -158,12 +158,17 @@ def main() -> None:
     ap.add_argument("--folder", type=Path, help=argparse.SUPPRESS)  # the restarted process's MKL folder
     args = ap.parse_args()
     if args.folder is None:
-        scratch = Path(tempfile.mkdtemp(prefix="pardiso_mkl_"))
-        folder = mkl_folder(args.mkl.resolve(), scratch)
-        env = {**os.environ, "LD_LIBRARY_PATH": f"{folder}:{os.environ.get('LD_LIBRARY_PATH', '')}"}
-        os.execve(sys.executable, [sys.executable, *sys.argv, "--folder", str(folder)], env)
+        with tempfile.TemporaryDirectory(prefix="pardiso_mkl_") as scratch:
+            folder = mkl_folder(args.mkl.resolve(), Path(scratch))
+            env = {**os.environ, "LD_LIBRARY_PATH": f"{folder}:{os.environ.get('LD_LIBRARY_PATH', '')}"}
+            raise SystemExit(subprocess.run([sys.executable, *sys.argv, "--folder", str(folder)], env=env).returncode)
     one_core()
-    scratch = Path(tempfile.mkdtemp(prefix="pardiso_mkl_"))
+    with tempfile.TemporaryDirectory(prefix="pardiso_mkl_") as scratch:
+        measure(args, Path(scratch))
+
+
+def measure(args, scratch: Path) -> None:
+    """The matrix's factorisations and the predictions (module docstring), the library built in ``scratch``."""
     library = build(args.folder, scratch)
     ia, ja, a, b, constraints = first_kkt(library, scratch)
     print(f"first KKT matrix: order {ia.size - 1:,}, {ja.size:,} entries in its upper triangle")
