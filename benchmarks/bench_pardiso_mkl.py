@@ -32,7 +32,9 @@ from pathlib import Path
 from timing import one_core
 
 HERE = Path(__file__).resolve().parent
-PARDISO_MODES = {"matching": {"PARDISO_MKL_MATCHING": "1"},
+#: pardiso_mkl.c's settings: IPOPT's own (weighted matching and scaling, pivots perturbed by 10⁻¹²), or neither
+#: matching nor scaling and pivots perturbed by 10⁻⁸ (MKL's default for symmetric indefinite matrices)
+PARDISO_MODES = {"matching": {"PARDISO_MKL_MATCHING": "1", "PARDISO_MKL_PERTURBATION": "12"},
                  "no matching": {"PARDISO_MKL_MATCHING": "0", "PARDISO_MKL_PERTURBATION": "8"}}
 
 
@@ -125,7 +127,8 @@ def factorise(library: Path, ia, ja, a, b, constraints: int, mode: dict) -> str:
     dparm, error = (ctypes.c_double * 64)(), ctypes.c_int(0)
     mtype, one, zero = ctypes.c_int(-2), ctypes.c_int(1), ctypes.c_int(0)
     lib.pardisoinit(pt, ctypes.byref(mtype), ctypes.byref(zero), iparm, dparm, ctypes.byref(error))
-    for k, v in {0: 1, 1: 2, 5: 1, 9: 12, 10: 2, 12: 2, 17: -1, 18: -1, 20: 3}.items():  # IPOPT's, as it sets them
+    # IPOPT's settings as it makes them; -1 in [17] and [18]: report the factor's entries and MFlop
+    for k, v in {0: 1, 1: 2, 5: 1, 9: 12, 10: 2, 12: 2, 17: -1, 18: -1, 20: 3}.items():
         iparm[k] = v
     x, rhs = np.zeros(n), b.copy()
     pointer = ctypes.POINTER
