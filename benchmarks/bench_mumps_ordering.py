@@ -32,7 +32,7 @@ import sys
 import tempfile
 import time
 
-from timing import one_core
+from timing import one_core, prediction_options
 
 os.environ.setdefault("GFORTRAN_UNBUFFERED_PRECONNECTED", "y")  # MUMPS's reports reach the captured stdout in order
 
@@ -100,19 +100,16 @@ def default_prediction(stats: bool, options: dict) -> None:
     top of the prediction's; ``stats``: MUMPS's reports."""
     import bench_predict
 
-    from gaitcli.predict import solve
     from gaitcli.predict.stage import PredictConfig
 
     if stats:
         options = {**options, "ipopt.print_timing_statistics": "yes", "ipopt.print_level": 5,
                    "ipopt.mumps_print_level": 2}
-    plain = solve.ipopt_options
-    solve.ipopt_options = lambda settings, warm: {**plain(settings, warm), **options}
     cfg, tracked, _ = bench_predict.tracking(PredictConfig())
     library = mumps_ordering.loaded()
     before = library.counts() if library else None
     cpu = time.process_time()
-    with CapturedStdout() as captured:
+    with CapturedStdout() as captured, prediction_options(options):
         run = bench_predict.predict(cfg, tracked)
     cpu = time.process_time() - cpu
     r = run["result"]

@@ -29,7 +29,7 @@ import time
 import zipfile
 from pathlib import Path
 
-from timing import one_core
+from timing import one_core, prediction_options
 
 HERE = Path(__file__).resolve().parent
 #: pardiso_mkl.c's settings: IPOPT's own (weighted matching and scaling, pivots perturbed by 10⁻¹²), or neither
@@ -57,32 +57,15 @@ def build(folder: Path, scratch: Path) -> Path:
     return library
 
 
-def with_options(extra: dict):
-    """Every IPOPT solver built from now on also gets ``extra``."""
-    from gaitcli.core import ipopt
-
-    original = ipopt.options
-
-    def options(**kwargs):
-        return {**original(**kwargs), **extra}
-
-    ipopt.options = options
-    return original
-
-
 def default_prediction(extra: dict) -> str:
     """The default prediction (``bench_predict.py``'s) with the IPOPT options ``extra``: one line."""
     import bench_predict
 
-    from gaitcli.core import ipopt
     from gaitcli.predict.stage import PredictConfig
 
-    original = with_options(extra)
-    try:
-        cfg, tracked, _ = bench_predict.tracking(dataclasses.replace(PredictConfig(), max_iterations=400))
+    cfg, tracked, _ = bench_predict.tracking(dataclasses.replace(PredictConfig(), max_iterations=400))
+    with prediction_options(extra):
         out = bench_predict.predict(cfg, tracked)
-    finally:
-        ipopt.options = original
     r = out["result"]
     return f"{r.iterations:5d} {out['solve_s']:8.1f} {str(r.converged):>5} {r.objective:.10f}"
 
@@ -93,17 +76,16 @@ def first_kkt(library: Path, scratch: Path) -> tuple:
     import bench_predict
     import numpy as np
 
-    from gaitcli.core import ipopt
     from gaitcli.predict.stage import PredictConfig
 
+    cfg, tracked, _ = bench_predict.tracking(PredictConfig())
     os.environ.update({"IPOPT_WRITE_MAT": "1", "IPOPT_WRITE_PREFIX": str(scratch / "kkt")})
-    original = with_options({"ipopt.linear_solver": "pardiso", "ipopt.pardisolib": str(library), "ipopt.max_iter": 1})
     try:
-        cfg, tracked, _ = bench_predict.tracking(PredictConfig())
-        constraints = bench_predict.predict(cfg, tracked)["result"].constraint_multipliers.size
+        with prediction_options({"ipopt.linear_solver": "pardiso", "ipopt.pardisolib": str(library),
+                                 "ipopt.max_iter": 1}):
+            constraints = bench_predict.predict(cfg, tracked)["result"].constraint_multipliers.size
     finally:
         del os.environ["IPOPT_WRITE_MAT"]
-        ipopt.options = original
     # IPOPT numbers the files by factorisation and writes one at each solve: the first is the multipliers'
     # least-squares system, the next the first search direction's (after any factorisation of wrong inertia)
     lines = sorted(scratch.glob("kkt_000-*.iajaa"))[1].read_text().split()

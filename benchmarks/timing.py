@@ -4,7 +4,8 @@ Import this module before numpy (every script does so first): it limits BLAS/Ope
 (``OMP_NUM_THREADS=1`` etc., inherited by the ``gait`` processes the scripts start) and selects
 matplotlib's Agg backend. :func:`one_core` also pins the process (and its children) to one core.
 
-Helpers: :func:`solver_libraries` (the line saying which native libraries IPOPT's MUMPS ran on),
+Helpers: :func:`prediction_options` (IPOPT options added to the predictions'),
+:func:`solver_libraries` (the line saying which native libraries IPOPT's MUMPS ran on),
 :func:`median_s` (median wall time of repeated calls), :func:`copy_sample` (a bundled sample
 trial without its outputs), :func:`sample_outputs` (run stages on such a copy through
 ``gaitcli.run.pipeline.run_stages``), :func:`sample_legs` (one leg's muscle-stage inputs from a sample's
@@ -32,6 +33,20 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
+
+
+@contextmanager
+def prediction_options(extra: dict):
+    """Inside the block every prediction's IPOPT solver (``gaitcli.predict.solve.ipopt_options``) also gets the
+    options ``extra`` (CasADi's names)."""
+    from gaitcli.predict import solve
+
+    plain = solve.ipopt_options
+    solve.ipopt_options = lambda settings, warm: {**plain(settings, warm), **extra}
+    try:
+        yield
+    finally:
+        solve.ipopt_options = plain
 
 
 def one_core() -> None:
